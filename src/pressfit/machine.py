@@ -1,0 +1,257 @@
+"""The machine as data: load and validate ``models/*.toml`` into frozen, typed objects.
+
+Every quantity is SI and names its unit. A malformed file raises :class:`ModelFileError` naming the
+file, the key and what was expected.
+"""
+
+from __future__ import annotations
+
+import math
+import tomllib
+from functools import cached_property
+from pathlib import Path
+from typing import Annotated, Any
+
+import numpy as np
+from pydantic import BaseModel, ConfigDict, Field, ValidationError, field_validator, model_validator
+
+from .errors import ModelFileError
+
+MODELS_DIR = Path(__file__).resolve().parents[2] / "models"
+DEFAULT_MODEL = MODELS_DIR / "pressfit_4upu.toml"
+
+Positive = Annotated[float, Field(gt=0, allow_inf_nan=False)]
+NonNegative = Annotated[float, Field(ge=0, allow_inf_nan=False)]
+Finite = Annotated[float, Field(allow_inf_nan=False)]
+Vector3 = Annotated[list[Finite], Field(min_length=3, max_length=3)]
+
+
+class _Strict(BaseModel):
+    model_config = ConfigDict(extra="forbid", frozen=True, strict=False)
+
+
+class Geometry(_Strict):
+    base_half_side_m: Positive
+    plate_half_side_m: Positive
+
+    @model_validator(mode="after")
+    def _plate_inside_base(self) -> Geometry:
+        if self.plate_half_side_m >= self.base_half_side_m:
+            raise ValueError("plate_half_side_m must be smaller than base_half_side_m")
+        return self
+
+
+class LegLayout(_Strict):
+    radial_direction: Vector3
+    cardan_axis: Vector3
+    beta_axis: Vector3
+
+    @field_validator("radial_direction", "cardan_axis", "beta_axis")
+    @classmethod
+    def _unit(cls, v: list[float]) -> list[float]:
+        if abs(math.sqrt(sum(c * c for c in v)) - 1.0) > 1e-9:
+            raise ValueError("must be a unit vector")
+        return v
+
+    @model_validator(mode="after")
+    def _axes_perpendicular(self) -> LegLayout:
+        if abs(float(np.dot(self.radial_direction, self.cardan_axis))) > 1e-9:
+            raise ValueError("cardan_axis must be perpendicular to radial_direction")
+        if abs(abs(float(np.dot(self.beta_axis, self.cardan_axis))) - 1.0) > 1e-9:
+            raise ValueError("beta_axis must be +/- cardan_axis")
+        return self
+
+
+class Limits(_Strict):
+    leg_length_min_m: Positive
+    leg_length_max_m: Positive
+    alpha_min_rad: Finite
+    alpha_max_rad: Finite
+    beta_min_rad: Finite
+    beta_max_rad: Finite
+
+    @model_validator(mode="after")
+    def _ordered(self) -> Limits:
+        for lo, hi in (("leg_length_min_m", "leg_length_max_m"), ("alpha_min_rad", "alpha_max_rad"),
+                       ("beta_min_rad", "beta_max_rad")):
+            if getattr(self, lo) >= getattr(self, hi):
+                raise ValueError(f"{lo} must be smaller than {hi}")
+        return self
+
+
+class Workspace(_Strict):
+    x_half_width_m: Positive
+    z_half_width_m: Positive
+    height_min_m: Positive
+
+
+class Material(_Strict):
+    youngs_modulus_pa: Positive
+    shear_modulus_pa: Positive
+
+
+class Cylinder(_Strict):
+    length_m: Positive
+    outer_diameter_m: Positive
+    wall_thickness_m: Positive
+
+    @model_validator(mode="after")
+    def _wall(self) -> Cylinder:
+        if 2 * self.wall_thickness_m > self.outer_diameter_m:
+            raise ValueError("wall_thickness_m must be at most half of outer_diameter_m")
+        return self
+
+
+class Stem(_Strict):
+    diameter_m: Positive
+
+
+class Actuator(_Strict):
+    axial_stiffness_n_per_m: Positive
+
+
+class Joints(_Strict):
+    cardan_radial_clearance_m: NonNegative = 0.0
+    cardan_rotational_stiffness_nm_per_rad: Positive | None = None
+
+
+class ModelOptions(_Strict):
+    springs_per_segment: Annotated[int, Field(ge=1, le=64)] = 4
+
+
+class Collision(_Strict):
+    cylinder_radius_m: Positive
+    stem_radius_m: Positive
+    plate_thickness_m: Positive
+    base_thickness_m: Positive
+    safety_margin_m: NonNegative = 0.0
+
+
+class Section(BaseModel):
+    """Cross-section properties of a leg segment (SI)."""
+
+    model_config = ConfigDict(frozen=True)
+    area_m2: float
+    second_moment_m4: float  # bending, about any diameter
+    polar_moment_m4: float  # torsion constant (circular section: 2 I)
+
+
+class Machine(_Strict):
+    """A validated 4-UPU machine description. Lengths m, angles rad, forces N, stiffness SI."""
+
+    name: str
+    description: str = ""
+    geometry: Geometry
+    legs: Annotated[list[LegLayout], Field(min_length=4, max_length=4)]
+    limits: Limits
+    workspace: Workspace
+    material: Material
+    cylinder: Cylinder
+    stem: Stem
+    actuator: Actuator
+    joints: Joints = Joints()
+    model: ModelOptions = ModelOptions()
+    collision: Collision
+    source: str = ""
+
+    @model_validator(mode="after")
+    def _cylinder_shorter_than_legs(self) -> Machine:
+        if self.cylinder.length_m >= self.limits.leg_length_min_m:
+            raise ValueError("cylinder.length_m must be shorter than limits.leg_length_min_m")
+        return self
+
+    # --- derived geometry (arrays, SI) -------------------------------------------------------
+    @cached_property
+    def base_points_m(self) -> np.ndarray:
+        """(4, 3) base cardan centres B_i in the world frame, m."""
+        return self.geometry.base_half_side_m * np.array([leg.radial_direction for leg in self.legs])
+
+    @cached_property
+    def plate_offsets_m(self) -> np.ndarray:
+        """(4, 3) plate cardan centres relative to the plate centre, d_i, m."""
+        return self.geometry.plate_half_side_m * np.array([leg.radial_direction for leg in self.legs])
+
+    @cached_property
+    def cardan_axes(self) -> np.ndarray:
+        """(4, 3) unit first axes a_i of the cardans."""
+        return np.array([leg.cardan_axis for leg in self.legs], dtype=float)
+
+    @cached_property
+    def beta_axes(self) -> np.ndarray:
+        """(4, 3) unit axes s_i with sin(beta_i) = s_i . u_i / l_i (equation 1)."""
+        return np.array([leg.beta_axis for leg in self.legs], dtype=float)
+
+    @cached_property
+    def inward_directions(self) -> np.ndarray:
+        """(4, 3) horizontal unit vectors from B_i toward the base centre."""
+        return -np.array([leg.radial_direction for leg in self.legs], dtype=float)
+
+    @cached_property
+    def cylinder_section(self) -> Section:
+        do, t = self.cylinder.outer_diameter_m, self.cylinder.wall_thickness_m
+        di = do - 2 * t
+        i = math.pi / 64 * (do**4 - di**4)
+        return Section(area_m2=math.pi / 4 * (do**2 - di**2), second_moment_m4=i, polar_moment_m4=2 * i)
+
+    @cached_property
+    def stem_section(self) -> Section:
+        d = self.stem.diameter_m
+        i = math.pi / 64 * d**4
+        return Section(area_m2=math.pi / 4 * d**2, second_moment_m4=i, polar_moment_m4=2 * i)
+
+    def axial_compliance_m_per_n(self, leg_length_m: np.ndarray | float) -> np.ndarray:
+        """Series axial compliance of a leg of length l: actuator + cylinder + stem, m/N."""
+        e = self.material.youngs_modulus_pa
+        lc = self.cylinder.length_m
+        return (1.0 / self.actuator.axial_stiffness_n_per_m + lc / (e * self.cylinder_section.area_m2)
+                + (np.asarray(leg_length_m) - lc) / (e * self.stem_section.area_m2))
+
+    def with_overrides(self, overrides: dict[str, Any], source: str = "<overrides>") -> Machine:
+        """A copy with nested keys replaced (e.g. ``{"actuator": {"axial_stiffness_n_per_m": 1e8}}``)."""
+        data = _merge(self.model_dump(exclude={"source"}), overrides)
+        return _validate(data, source)
+
+
+def _merge(base: dict[str, Any], new: dict[str, Any]) -> dict[str, Any]:
+    out = dict(base)
+    for k, v in new.items():
+        out[k] = _merge(out[k], v) if isinstance(v, dict) and isinstance(out.get(k), dict) else v
+    return out
+
+
+def _validate(data: dict[str, Any], source: str) -> Machine:
+    try:
+        return Machine.model_validate({**data, "source": source})
+    except ValidationError as exc:
+        raise validation_error(source, exc) from None
+
+
+def validation_error(path: object, exc: ValidationError) -> ModelFileError:
+    """Turn pydantic's first error into a :class:`ModelFileError` naming the key and expectation."""
+    err = exc.errors()[0]
+    key = ".".join(str(p) for p in err["loc"]) or "<top level>"
+    got = err.get("input")
+    expected = err["msg"] if err["type"] != "extra_forbidden" else "unknown key (not part of the schema)"
+    if err["type"] != "missing" and not isinstance(got, dict):
+        expected += f" (got {got!r})"
+    return ModelFileError(path, key, expected)
+
+
+def read_toml(path: Path | str) -> dict[str, Any]:
+    """Parse a TOML file; a missing file or bad syntax becomes a :class:`ModelFileError`."""
+    path = Path(path)
+    try:
+        with path.open("rb") as f:
+            return tomllib.load(f)
+    except FileNotFoundError:
+        raise ModelFileError(path, "<file>", "file does not exist") from None
+    except tomllib.TOMLDecodeError as exc:
+        raise ModelFileError(path, "<syntax>", f"valid TOML ({exc})") from None
+
+
+def load_machine(path: Path | str = DEFAULT_MODEL, overrides: dict[str, Any] | None = None) -> Machine:
+    """Load and validate a machine description, optionally with nested parameter overrides."""
+    data = read_toml(path)
+    if overrides:
+        data = _merge(data, overrides)
+    return _validate(data, str(path))
