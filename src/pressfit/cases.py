@@ -1,0 +1,203 @@
+"""Case files (``cases/**/*.toml``): a machine, poses, loads, preload, clearances and an envelope.
+
+A case is validated strictly into frozen objects; unknown keys, wrong types, NaN and non-physical
+values raise :class:`ModelFileError` naming the file, the key and the expectation. All values SI.
+The schema is documented with a complete example in README.md ("Case files").
+"""
+
+from __future__ import annotations
+
+import math
+from pathlib import Path
+from typing import Annotated, Any, Literal
+
+import numpy as np
+from pydantic import BaseModel, ConfigDict, Field, ValidationError, model_validator
+
+from .errors import ModelFileError
+from .machine import DEFAULT_MODEL, Machine, load_machine, read_toml, validation_error
+
+Finite = Annotated[float, Field(allow_inf_nan=False)]
+Positive = Annotated[float, Field(gt=0, allow_inf_nan=False)]
+NonNegative = Annotated[float, Field(ge=0, allow_inf_nan=False)]
+Vec3 = Annotated[list[Finite], Field(min_length=3, max_length=3)]
+MAX_FORCE_N = 1e7  # a press-fit machine load above 10 MN is a typo, not a load case
+MAX_POSES = 2_000_000
+
+
+class _Strict(BaseModel):
+    model_config = ConfigDict(extra="forbid", frozen=True)
+
+
+class Axis(_Strict):
+    """A range of one coordinate: ``count`` points from ``min_m`` to ``max_m`` (m)."""
+
+    min_m: Finite
+    max_m: Finite
+    count: Annotated[int, Field(ge=1, le=2000)]
+
+    @model_validator(mode="after")
+    def _order(self) -> Axis:
+        if self.max_m < self.min_m or (self.count > 1 and self.max_m == self.min_m):
+            raise ValueError("max_m must be larger than min_m (or count = 1 with min_m = max_m)")
+        return self
+
+    def values(self) -> np.ndarray:
+        return np.linspace(self.min_m, self.max_m, self.count)
+
+
+class Poses(_Strict):
+    """Plate-centre poses (m): an explicit list and/or a grid ``x`` x ``y`` x ``z``."""
+
+    points_m: list[Vec3] = []
+    x: Axis | None = None
+    y: Axis | None = None
+    z: Axis | None = None
+
+    @model_validator(mode="after")
+    def _some(self) -> Poses:
+        grid = [self.x, self.y, self.z]
+        if any(a is not None for a in grid) and not all(a is not None for a in grid):
+            raise ValueError("a grid needs all three axes x, y and z")
+        if not self.points_m and self.x is None:
+            raise ValueError("give points_m or a grid (x, y, z)")
+        if self.x is not None and self.x.count * self.y.count * self.z.count > MAX_POSES:  # type: ignore[union-attr]
+            raise ValueError(f"the grid has more than {MAX_POSES} poses")
+        return self
+
+    def array(self) -> np.ndarray:
+        """All poses, shape (n, 3), m."""
+        pts = [np.asarray(self.points_m, dtype=float).reshape(-1, 3)]
+        if self.x is not None:
+            g = np.meshgrid(self.x.values(), self.y.values(), self.z.values(), indexing="ij")  # type: ignore[union-attr]
+            pts.append(np.stack([a.ravel() for a in g], -1))
+        return np.concatenate(pts)
+
+
+class Loads(_Strict):
+    """Dead wrenches at the plate centre, world axes.
+
+    ``force_n``/``moment_nm`` give one wrench. A press load is ``press_force_n`` (N, magnitude; or
+    ``press_force_range_n`` = [min, max, count]) along ``direction`` (default +y, the press reaction),
+    optionally spread over a cone of half-angle ``cone_half_angle_rad`` sampled by ``cone_directions``.
+    """
+
+    force_n: Vec3 | None = None
+    moment_nm: Vec3 = [0.0, 0.0, 0.0]
+    press_force_n: Annotated[float, Field(ge=0, le=MAX_FORCE_N, allow_inf_nan=False)] | None = None
+    direction: Vec3 = [0.0, 1.0, 0.0]
+    cone_half_angle_rad: Annotated[float, Field(ge=0, le=math.pi / 2, allow_inf_nan=False)] = 0.0
+    cone_directions: Annotated[int, Field(ge=1, le=360)] = 8
+
+    @model_validator(mode="after")
+    def _one(self) -> Loads:
+        if (self.force_n is None) == (self.press_force_n is None):
+            raise ValueError("give exactly one of force_n or press_force_n")
+        if self.force_n is not None and max(abs(c) for c in self.force_n) > MAX_FORCE_N:
+            raise ValueError(f"force components must be at most {MAX_FORCE_N:g} N")
+        if np.linalg.norm(self.direction) < 1e-12:
+            raise ValueError("direction must be a non-zero vector")
+        return self
+
+    def wrenches(self) -> np.ndarray:
+        """All load wrenches (n, 6): force N then moment N m."""
+        m = np.asarray(self.moment_nm, dtype=float)
+        if self.force_n is not None:
+            return np.concatenate([np.asarray(self.force_n, float), m])[None]
+        d = np.asarray(self.direction, float)
+        d /= np.linalg.norm(d)
+        dirs = [d]
+        if self.cone_half_angle_rad > 0:
+            t = np.cross(d, [1.0, 0, 0] if abs(d[0]) < 0.9 else [0, 0, 1.0])
+            t /= np.linalg.norm(t)
+            s = np.cross(d, t)
+            for phi in np.linspace(0, 2 * np.pi, self.cone_directions, endpoint=False):
+                c = self.cone_half_angle_rad
+                dirs.append(np.cos(c) * d + np.sin(c) * (np.cos(phi) * t + np.sin(phi) * s))
+        return np.array([np.concatenate([self.press_force_n * u, m]) for u in dirs])
+
+
+class Preload(_Strict):
+    """Actuator preload a_4 (N) along v_p: ``force`` = force-controlled drives, ``length`` = offsets."""
+
+    a4_n: Annotated[float, Field(le=MAX_FORCE_N, ge=-MAX_FORCE_N, allow_inf_nan=False)] = 0.0
+    mode: Literal["force", "length"] = "force"
+
+
+class Solver(_Strict):
+    linear: bool = False
+    refine_worst: Annotated[int, Field(ge=0, le=100)] = 3
+
+
+class Envelope(_Strict):
+    """Limits a case asserts (all optional; SI). Each becomes one line of the check report."""
+
+    max_tension_n: NonNegative | None = None
+    max_compression_n: NonNegative | None = None
+    max_shear_n: NonNegative | None = None
+    max_bending_nm: NonNegative | None = None
+    max_torsion_nm: NonNegative | None = None
+    max_actuator_force_n: NonNegative | None = None
+    max_plate_deflection_m: NonNegative | None = None
+    max_plate_tilt_rad: NonNegative | None = None
+    min_interference_distance_m: Finite | None = None
+    min_leg_length_margin_m: NonNegative | None = None
+    min_angle_margin_rad: NonNegative | None = None
+    min_buckling_safety_factor: Positive | None = None
+
+
+class Reference(_Strict):
+    """A published table to compare with: values as printed, in the publication's leg order."""
+
+    source: str
+    leg_order: Annotated[list[Annotated[int, Field(ge=1, le=4)]], Field(min_length=4, max_length=4)]
+    axial_sign: Literal[1, -1] = 1
+    values: dict[str, Annotated[list[Finite], Field(min_length=4, max_length=4)]]
+    note: str = ""
+
+
+class Case(_Strict):
+    """A validated case file."""
+
+    name: str
+    description: str = ""
+    model: str = ""  # path of the machine file, relative to the case file; default: the shipped model
+    model_overrides: dict[str, Any] = {}
+    poses: Poses
+    loads: Loads
+    preload: Preload = Preload()
+    solver: Solver = Solver()
+    envelope: Envelope = Envelope()
+    reference: Reference | None = None
+    path: str = ""
+
+    def machine(self) -> Machine:
+        """The case's machine, with its overrides applied (errors name the case file)."""
+        base = (Path(self.path).parent / self.model) if self.model else DEFAULT_MODEL
+        machine = load_machine(base)
+        return machine.with_overrides(self.model_overrides, source=f"{self.path} [model_overrides]") \
+            if self.model_overrides else machine
+
+
+def load_case(path: Path | str) -> Case:
+    """Read and validate one case file."""
+    data = read_toml(path)
+    try:
+        return Case.model_validate({**data, "path": str(path)})
+    except ValidationError as exc:
+        raise validation_error(path, exc) from None
+    except (TypeError, ValueError) as exc:  # e.g. numbers too large for numpy
+        raise ModelFileError(path, "<values>", str(exc)) from None
+
+
+def discover(paths: list[Path | str]) -> list[Path]:
+    """Case files named directly or found recursively (``*.toml``) under directories, sorted."""
+    out: list[Path] = []
+    for p in map(Path, paths):
+        if p.is_dir():
+            out.extend(sorted(p.rglob("*.toml")))
+        elif p.exists():
+            out.append(p)
+        else:
+            raise ModelFileError(p, "<file>", "file or directory does not exist")
+    return out

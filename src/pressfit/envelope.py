@@ -1,0 +1,242 @@
+"""Load envelopes: evaluate a case over its poses and loads and check its ``[envelope]`` limits.
+
+Method: the exact condensed linear-elastic formulation (``pressfit.condensed``) sweeps every pose and
+load (vectorised); the geometrically nonlinear Pinocchio solve (``pressfit.statics``) then refines the
+``solver.refine_worst`` worst (pose, load) pairs of each load quantity; the reported worst value is the
+worse of the two. Shear is zero in the linear rigid-cardan model, so the shear limit is checked on the
+refined nonlinear solutions only (stated in the report). Geometry-only quantities (joint-limit
+margins, interference distance) are exact at every pose.
+"""
+
+from __future__ import annotations
+
+from collections.abc import Callable
+from dataclasses import dataclass, field
+
+import numpy as np
+from tqdm import tqdm
+
+from . import buckling, condensed, kinematics
+from .cases import Case
+from .statics import Equilibrium, solve_equilibrium
+
+SECTIONS = ("base", "actuator", "plate")
+
+
+@dataclass(frozen=True)
+class Limit:
+    """How one ``[envelope]`` key is evaluated: a per-(pose, leg) quantity and its sense."""
+
+    label: str
+    unit: str
+    sense: str  # "max": value must stay <= limit; "min": value must stay >= limit
+    load_dependent: bool = True
+
+
+LIMITS: dict[str, Limit] = {
+    "max_tension_n": Limit("leg axial tension", "N", "max"),
+    "max_compression_n": Limit("leg axial compression", "N", "max"),
+    "max_shear_n": Limit("leg shear |V|", "N", "max"),
+    "max_bending_nm": Limit("leg bending |M_b|", "N m", "max"),
+    "max_torsion_nm": Limit("leg torsion |T|", "N m", "max"),
+    "max_actuator_force_n": Limit("actuator force |F|", "N", "max"),
+    "max_plate_deflection_m": Limit("plate deflection |u|", "m", "max"),
+    "max_plate_tilt_rad": Limit("plate tilt |theta|", "rad", "max"),
+    "min_buckling_safety_factor": Limit("Euler buckling safety factor", "-", "min"),
+    "min_leg_length_margin_m": Limit("leg-length limit margin", "m", "min", False),
+    "min_angle_margin_rad": Limit("cardan-angle limit margin", "rad", "min", False),
+    "min_interference_distance_m": Limit("minimum interference distance", "m", "min", False),
+}
+
+
+@dataclass(frozen=True)
+class LimitResult:
+    """One envelope line: the worst value over the case, where it happens, and the verdict."""
+
+    key: str
+    label: str
+    unit: str
+    limit: float
+    worst: float
+    leg: int | None  # 1..4, None for plate or machine quantities
+    pose_m: list[float]
+    load: list[float]
+    method: str
+    passed: bool
+
+
+@dataclass(frozen=True)
+class CaseResult:
+    """Every envelope line of one case, plus the poses that could not be evaluated."""
+
+    case: str
+    path: str
+    n_poses: int
+    n_loads: int
+    unreachable: list[dict[str, object]] = field(default_factory=list)
+    limits: list[LimitResult] = field(default_factory=list)
+
+    @property
+    def passed(self) -> bool:
+        return not self.unreachable and all(r.passed for r in self.limits)
+
+
+def _axial_quantities(n: np.ndarray, critical: np.ndarray) -> dict[str, np.ndarray]:
+    comp = np.maximum(-n, 0.0)
+    return {"max_tension_n": np.maximum(n, 0.0), "max_compression_n": comp,
+            "max_actuator_force_n": np.abs(n),
+            "min_buckling_safety_factor": np.where(comp > 0, critical / np.where(comp > 0, comp, 1), np.inf)}
+
+
+def condensed_quantities(res: condensed.CondensedResult, critical: np.ndarray) -> dict[str, np.ndarray]:
+    """Per (pose, leg) arrays (P, 4), or (P,) for plate quantities, from the linear condensed solve."""
+    m = res.leg_moments_nm  # (P, 4, 3): M_x, M_y, T in the leg frame
+    out = _axial_quantities(res.axial_forces_n, critical)
+    out.update({"max_bending_nm": np.hypot(m[..., 0], m[..., 1]), "max_torsion_nm": np.abs(m[..., 2]),
+                "max_plate_deflection_m": np.linalg.norm(res.plate_displacement_m, axis=-1),
+                "max_plate_tilt_rad": np.linalg.norm(res.plate_rotation_rad, axis=-1)})
+    return out
+
+
+def equilibrium_quantities(eq: Equilibrium, critical: np.ndarray) -> dict[str, np.ndarray]:
+    """The same quantities from a Pinocchio solve, worst over the base, actuator and plate sections."""
+    s = [[leg.sections[k] for k in SECTIONS] for leg in eq.legs]
+    worst: Callable[[Callable[..., float]], np.ndarray] = lambda f: np.array(  # noqa: E731
+        [[max(f(x) for x in leg) for leg in s]])
+    out = _axial_quantities(np.asarray(eq.actuator_forces_n, float)[None], critical)
+    out.update({"max_shear_n": worst(lambda x: np.hypot(x.V_x, x.V_y)),
+                "max_bending_nm": worst(lambda x: np.hypot(x.M_x, x.M_y)),
+                "max_torsion_nm": worst(lambda x: abs(x.T)),
+                "max_plate_deflection_m": np.array([np.linalg.norm(eq.plate_displacement_m)]),
+                "max_plate_tilt_rad": np.array([np.linalg.norm(eq.plate_rotation_rad)])})
+    return out
+
+
+def _worst(values: np.ndarray, sense: str) -> tuple[float, int, int | None]:
+    """Worst value, its pose index, and its leg (1-based) for (P, 4) arrays."""
+    v = values if sense == "max" else -values
+    flat = int(np.argmax(v))
+    if values.ndim == 1:
+        return float(values[flat]), flat, None
+    p, leg = np.unravel_index(flat, values.shape)
+    return float(values[p, leg]), int(p), int(leg) + 1
+
+
+def evaluate_case(case: Case, progress: bool = False) -> CaseResult:
+    """Evaluate every ``[envelope]`` limit of a case (module docstring for the method)."""
+    machine = case.machine()
+    poses_all, loads = case.poses.array(), case.loads.wrenches()
+    ok = kinematics.is_reachable(machine, poses_all)
+    unreachable = [{"pose_m": h.tolist(), "reason": "; ".join(
+        f"leg {leg}: {what} = {v:.6g} breaks {lim}" for leg, what, v, lim in kinematics.violations(machine, h))
+        or "plate not above the base"} for h in poses_all[~ok]]
+    poses = poses_all[ok]
+    wanted = {k: v for k, v in case.envelope.model_dump().items() if v is not None}
+    result = CaseResult(case.name, case.path, len(poses_all), len(loads), unreachable)
+    if not len(poses):
+        return result
+    critical = buckling.leg_critical_loads_n(machine, kinematics.inverse_kinematics(machine, poses).lengths_m)
+    a4 = case.preload.a4_n
+    vp = kinematics.preload_vector(machine, poses) if a4 else None
+
+    # linear sweep over every pose and load
+    sweep: dict[str, list[np.ndarray]] = {}
+    for w in tqdm(loads, desc=f"{case.name}: linear sweep", disable=not progress, unit="load"):
+        res = condensed.solve_linear(machine, poses, w)
+        if vp is not None:  # force-mode preload superposes exactly in the linear model: N += a4 v_p
+            res = condensed.with_axial_preload(res, a4 * vp)
+        for k, v in condensed_quantities(res, critical).items():
+            sweep.setdefault(k, []).append(v)
+    stacked = {k: np.stack(v) for k, v in sweep.items()}  # (L, P, ...)
+
+    geometry = {k: v for k, v in {
+        "min_leg_length_margin_m": lambda: kinematics.limit_margins(machine, poses)["leg_length_m"],
+        "min_angle_margin_rad": lambda: np.minimum(*[kinematics.limit_margins(machine, poses)[a]
+                                                     for a in ("alpha_rad", "beta_rad")]),
+        "min_interference_distance_m": lambda: _interference(machine, poses, progress),
+    }.items() if k in wanted}
+
+    lines = []
+    for key, limit in wanted.items():
+        spec = LIMITS[key]
+        if not spec.load_dependent:
+            worst, p, leg = _worst(geometry[key](), spec.sense)
+            lines.append(_line(key, spec, limit, worst, leg, poses[p], None, "exact at every pose"))
+            continue
+        lin = stacked.get(key)
+        candidates: list[tuple[int, int]] = []
+        best: tuple[float, int, int, int | None, str] | None = None
+        if lin is not None:
+            flat = lin.reshape(len(loads), len(poses), -1).max(-1) if spec.sense == "max" else \
+                lin.reshape(len(loads), len(poses), -1).min(-1)
+            order = np.argsort(-flat if spec.sense == "max" else flat, axis=None)
+            candidates = [tuple(np.unravel_index(i, flat.shape)) for i in order[:case.solver.refine_worst]]
+            j, p = candidates[0] if candidates else (0, 0)
+            w, _, leg = _worst(lin[j], spec.sense)
+            best = (w, int(j), int(p), leg, f"linear condensed over {len(poses)} poses x {len(loads)} loads")
+        else:  # shear: only the refined nonlinear solutions carry it; refine the worst bending poses
+            b = stacked["max_bending_nm"].reshape(len(loads), len(poses), -1).max(-1)
+            order = np.argsort(-b, axis=None)
+            candidates = [tuple(np.unravel_index(i, b.shape)) for i in order[:max(1, case.solver.refine_worst)]]
+        for j, p in candidates:
+            eq = solve_equilibrium(machine, poses[p], loads[j], linear=case.solver.linear,
+                                   preload=a4 or None)
+            w, _, leg = _worst(equilibrium_quantities(eq, critical[p:p + 1])[key], spec.sense)
+            worse = best is None or (w > best[0] if spec.sense == "max" else w < best[0])
+            if worse:
+                how = "linear" if case.solver.linear else "nonlinear"
+                best = (w, int(j), int(p), leg, f"{how} Pinocchio solve at the {len(candidates)} worst poses")
+        assert best is not None
+        lines.append(_line(key, spec, limit, best[0], best[3], poses[best[2]], loads[best[1]], best[4]))
+    return CaseResult(case.name, case.path, len(poses_all), len(loads), unreachable, lines)
+
+
+def _line(key: str, spec: Limit, limit: float, worst: float, leg: int | None, pose: np.ndarray,
+          load: np.ndarray | None, method: str) -> LimitResult:
+    passed = worst <= limit if spec.sense == "max" else worst >= limit
+    return LimitResult(key, spec.label, spec.unit, float(limit), float(worst), leg,
+                       [float(c) for c in pose], [] if load is None else [float(c) for c in load],
+                       method, bool(passed))
+
+
+def _interference(machine: object, poses: np.ndarray, progress: bool) -> np.ndarray:
+    from . import interference  # Coal is only needed when a case limits interference
+
+    return interference.min_distance_over_poses(machine, poses, progress=progress)
+
+
+def format_table(results: list[CaseResult]) -> str:
+    """A plain-text report: one line per envelope limit, failures marked and explained."""
+    out = []
+    for r in results:
+        out.append(f"{'PASS' if r.passed else 'FAIL'}  {r.case}  ({r.path}; {r.n_poses} poses x {r.n_loads} loads)")
+        for u in r.unreachable:
+            out.append(f"  FAIL unreachable pose {u['pose_m']} m: {u['reason']}")
+        for x in r.limits:
+            where = (f"leg {x.leg} " if x.leg else "") + f"at pose {np.round(x.pose_m, 4).tolist()} m"
+            if x.load:
+                where += f", load {np.round(x.load, 3).tolist()}"
+            op = "<=" if LIMITS[x.key].sense == "max" else ">="
+            verdict = "ok  " if x.passed else "FAIL"
+            out.append(f"  {verdict} {x.label}: worst {x.worst:.6g} {x.unit} {op} limit {x.limit:.6g} {x.unit}"
+                       f"  [{x.key}; {where}; {x.method}]")
+    return "\n".join(out)
+
+
+def junit_xml(results: list[CaseResult]) -> str:
+    """JUnit XML: one test suite per case, one test case per envelope line (and per unreachable pose)."""
+    import xml.etree.ElementTree as ET
+
+    root = ET.Element("testsuites", name="pressfit check")
+    for r in results:
+        cases = [(f"{x.key}", None if x.passed else
+                  f"{x.label}: worst {x.worst:.6g} {x.unit} violates limit {x.limit:.6g} {x.unit} "
+                  f"(leg {x.leg}, pose {x.pose_m} m, load {x.load})") for x in r.limits]
+        cases += [(f"reachable {u['pose_m']}", str(u["reason"])) for u in r.unreachable]
+        suite = ET.SubElement(root, "testsuite", name=r.case, tests=str(len(cases)),
+                              failures=str(sum(m is not None for _, m in cases)), file=r.path)
+        for name, msg in cases:
+            tc = ET.SubElement(suite, "testcase", classname=r.case, name=name)
+            if msg is not None:
+                ET.SubElement(tc, "failure", message=msg).text = msg
+    return ET.tostring(root, encoding="unicode", xml_declaration=True)

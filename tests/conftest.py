@@ -1,0 +1,10 @@
+"""Shared fixtures: the shipped machine."""
+
+import pytest
+
+from pressfit.machine import load_machine
+
+
+@pytest.fixture(scope="session")
+def machine():
+    return load_machine()
