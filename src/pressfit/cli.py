@@ -120,5 +120,139 @@ def check_cmd(paths: tuple[Path, ...], junit_path: Path | None, json_path: Path 
     sys.exit(1 if failed else 0)
 
 
+@main.command("workspace")
+@click.option("--y", "heights", type=float, multiple=True, help="Plate height y_h of a map, m (repeatable; "
+              "default 0.6, the paper's Figures 7-11).")
+@click.option("--out", "out_dir", type=click.Path(path_type=Path), default=Path("out/workspace"),
+              show_default=True, help="Directory for the maps (CSV, PNG) and summary.json.")
+@click.option("--overwrite", is_flag=True, help="Replace existing output files.")
+@click.option("--json", "as_json", is_flag=True, help="Print the summary as JSON.")
+@click.option("--progress/--no-progress", default=True, help="Show a progress bar.")
+@MODEL_OPTION
+@user_errors
+def workspace_cmd(heights: tuple[float, ...], out_dir: Path, overwrite: bool, as_json: bool, progress: bool,
+                  model_path: Path) -> None:
+    """Reachable heights of the required square (0, 45, 90 deg), maps of n, F and dl/dh, statistics."""
+    from . import workspace
+
+    machine = load_machine(model_path)
+    summary, _ = workspace.write_outputs(machine, out_dir, heights or workspace.DEFAULT_HEIGHTS_M,
+                                         overwrite, progress)
+    if as_json:
+        click.echo(to_json(summary))
+        return
+    for r in summary["height_range"]:
+        click.echo(f"square at {r['angle_deg']:g} deg reachable for y_h in [{r['y_min_m']:.5f}, "
+                   f"{r['y_max_m']:.5f}] m (+-{r['tolerance_m']:g} m)")
+    for s in summary["squares"]:
+        click.echo(f"y_h = {s['y_m']:g} m, {s['angle_deg']:g} deg: n in [{s['dexterity_min']:.4f}, "
+                   f"{s['dexterity_max']:.4f}] (variation {s['dexterity_variation']:.1%}), max F_x, F_y, F_z = "
+                   + ", ".join(f"{v:.4f}" for v in s["force_index_max"]))
+    click.echo(f"maps and summary.json written to {out_dir}")
+
+
+@main.command("stiffness")
+@click.argument("x", type=float)
+@click.argument("y", type=float)
+@click.argument("z", type=float)
+@click.option("--json", "as_json", is_flag=True, help="Print JSON (SI units, keys name their units).")
+@click.option("--maps", is_flag=True, help="Instead: maps over the x-z required square at height Y (X, Z unused).")
+@click.option("--out", "out_dir", type=click.Path(path_type=Path), default=Path("out/stiffness"), show_default=True,
+              help="Directory for the maps (PNG, CSV).")
+@click.option("--n", "n_grid", type=click.IntRange(3, 1001), default=51, show_default=True, help="Map grid points per side.")
+@click.option("--overwrite", is_flag=True, help="Replace existing output files.")
+@MODEL_OPTION
+@user_errors
+def stiffness_cmd(x: float, y: float, z: float, as_json: bool, maps: bool, out_dir: Path, n_grid: int,
+                  overwrite: bool, model_path: Path) -> None:
+    """Plate compliance and stiffness at pose X Y Z (m), condensed linear model (rigid free cardans)."""
+    from . import condensed
+
+    machine = load_machine(model_path)
+    if maps:
+        m = condensed.stiffness_maps(machine, y, n_grid)
+        for p in condensed.write_stiffness_maps(m, out_dir, overwrite):
+            click.echo(f"wrote {p}")
+        return
+    out = condensed.stiffness_report(machine, kinematics.require_reachable(machine, [x, y, z]))
+    if as_json:
+        click.echo(to_json(out))
+        return
+    click.echo(f"pose h = ({x:g}, {y:g}, {z:g}) m; plate-centre compliance ({out['compliance_units']}):")
+    for row in out["compliance_6x6"]:
+        click.echo("  " + " ".join(f"{v:+.4e}" for v in row))
+    click.echo("translational stiffness at the centre, plate free to tilt [N/m]:")
+    for row in out["translational_stiffness_n_per_m"]:
+        click.echo("  " + " ".join(f"{v:+.4e}" for v in row))
+    click.echo(f"vertical {out['vertical_stiffness_n_per_m']:.4e} N/m, lateral (weakest horizontal) "
+               f"{out['lateral_stiffness_n_per_m']:.4e} N/m, ratio {out['lateral_to_vertical']:.4f}")
+    click.echo(f"under {out['press_load_n']:g} N (+y): tilt {out['press_tilt_rad']:.4e} rad, displacement "
+               + ", ".join(f"{v:+.4e}" for v in out["press_displacement_m"]) + " m")
+
+
+@main.command("interference", context_settings={"ignore_unknown_options": True})  # negative coordinates
+@click.argument("pose", nargs=-1, type=float)
+@click.option("--workspace", "over_workspace", is_flag=True, help="Sweep the required workspace instead of one pose.")
+@click.option("--margin", "margin_m", type=float, help="Safety margin, m (default: collision.safety_margin_m).")
+@click.option("--points", type=click.IntRange(2, 1001), default=41, show_default=True,
+              help="Grid points per x and z axis (--workspace).")
+@click.option("--heights", type=click.IntRange(1, 1001), default=7, show_default=True,
+              help="Grid heights (--workspace).")
+@click.option("--y-range", "y_range", type=float, nargs=2, help="y_h range, m (default: heights where the whole "
+              "required square is reachable).")
+@click.option("--include", multiple=True, help="Also check pair 'a|b' (repeatable).")
+@click.option("--exclude", multiple=True, help="Do not check pair 'a|b' (repeatable).")
+@click.option("--rig", type=click.Choice(["auto", "model", "closed-form"]), default="auto", show_default=True,
+              help="Pinocchio model that places the shapes.")
+@click.option("--json", "as_json", is_flag=True, help="Print JSON (SI units; keys name their units).")
+@click.option("--out", "out_dir", type=click.Path(path_type=Path), help="Write CSV and a PNG map here (--workspace).")
+@click.option("--overwrite", is_flag=True, help="Replace existing output files.")
+@click.option("--progress/--no-progress", default=True, help="Show a progress bar.")
+@MODEL_OPTION
+@user_errors
+def interference_cmd(pose: tuple[float, ...], over_workspace: bool, margin_m: float | None, points: int, heights: int,
+                     y_range: tuple[float, float] | None, include: tuple[str, ...], exclude: tuple[str, ...], rig: str,
+                     as_json: bool, out_dir: Path | None, overwrite: bool, progress: bool, model_path: Path) -> None:
+    """Signed clearance (m) of legs, plate, base and extra bodies at pose X Y Z or over --workspace.
+
+    Exit 0 when every checked pair keeps the safety margin, 1 when one does not, 2 on bad input.
+    """
+    from . import interference
+
+    if over_workspace == (len(pose) == 3) or len(pose) not in (0, 3):
+        raise PressfitError("give either a pose X Y Z (m) or --workspace")
+    machine = load_machine(model_path)
+    im = interference.build_interference(machine, rig, include, exclude)
+    if not over_workspace:
+        pc = interference.clearance_at(im, kinematics.require_reachable(machine, pose), margin_m)
+        if as_json:
+            click.echo(to_json(pc.to_dict() | {"kinematics": im.kinematics, "notes": list(im.notes)}))
+        else:
+            click.echo(f"pose h = ({pose[0]:g}, {pose[1]:g}, {pose[2]:g}) m; margin {pc.margin_m * 1e3:g} mm")
+            for p in sorted(pc.pairs, key=lambda p: p.distance_m):
+                click.echo(f"  {p.distance_m * 1e3:+9.2f} mm  {p.kind:<10} {p.pair}")
+            click.echo(f"excluded (touch by design or overridden): {', '.join(pc.excluded)}")
+            click.echo(f"{'PASS' if pc.passed else 'FAIL'}: worst {pc.worst.pair} {pc.worst.distance_m * 1e3:+.2f} mm")
+        sys.exit(0 if pc.passed else 1)
+    res = interference.workspace_sweep(im, points, heights, y_range, margin_m, progress)
+    summary = res.to_dict() | {"kinematics": im.kinematics, "notes": list(im.notes),
+                               "y_range_m": [float(res.grid_axes_m[1][0]), float(res.grid_axes_m[1][-1])]}
+    written = interference.write_workspace(res, out_dir, overwrite) if out_dir is not None else []
+    if as_json:
+        click.echo(to_json(summary | {"outputs": [str(p) for p in written]}))
+    else:
+        y0, y1 = summary["y_range_m"]
+        click.echo(f"{len(res.poses_m)} poses (x, z in the required square, y_h in [{y0:.4f}, {y1:.4f}] m), "
+                   f"{res.n_skipped} unreachable skipped; margin {res.margin_m * 1e3:g} mm")
+        for kind, v in summary["by_kind"].items():
+            click.echo(f"  {kind:<10} min {v['distance_m'] * 1e3:+9.2f} mm  {v['pair']:<28} at "
+                       + "(" + ", ".join(f"{c:.4f}" for c in v["pose_m"]) + ") m")
+        w = summary["worst"]
+        click.echo(f"{'PASS' if res.passed else 'FAIL'}: worst {w['pair']} {w['distance_m'] * 1e3:+.2f} mm")
+        for p in written:
+            click.echo(f"wrote {p}")
+    sys.exit(0 if res.passed else 1)
+
+
 if __name__ == "__main__":
     main()

@@ -104,54 +104,110 @@ def jacobian(machine: Machine, pose_m: np.ndarray) -> np.ndarray:
     return inverse_kinematics(machine, pose_m).unit_vectors
 
 
-def _det3(m: np.ndarray) -> np.ndarray:
-    """Determinant of stacked 3x3 matrices, explicit (much faster than batched LAPACK)."""
-    return (m[..., 0, 0] * (m[..., 1, 1] * m[..., 2, 2] - m[..., 1, 2] * m[..., 2, 1])
-            - m[..., 0, 1] * (m[..., 1, 0] * m[..., 2, 2] - m[..., 1, 2] * m[..., 2, 0])
-            + m[..., 0, 2] * (m[..., 1, 0] * m[..., 2, 1] - m[..., 1, 1] * m[..., 2, 0]))
+# --- shared core of equations 4-10: one pass computes A, (A A^T)^-1 and everything built on them ----
+# Quantities are kept per component ("structure of arrays"): e[k] has shape (4, m) for the world axis k,
+# so every step is an elementwise numpy operation on contiguous rows (this is what makes >1e6 poses/s).
+
+_SINGULAR_DET = 1e-12  # det(A A^T) below this: A has rank < 3 (A A^T has trace 4, entries O(1))
+_CHUNK = 4096  # poses per block: the working set stays in the CPU cache
 
 
-def _inv_sym3(m: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
-    """Inverse and determinant of stacked symmetric 3x3 matrices by cofactors."""
-    a, b, c = m[..., 0, 0], m[..., 0, 1], m[..., 0, 2]
-    d, e, f = m[..., 1, 1], m[..., 1, 2], m[..., 2, 2]
-    c00, c01, c02 = d * f - e * e, c * e - b * f, b * e - c * d
-    c11, c12, c22 = a * f - c * c, b * c - a * e, a * d - b * b
-    det = a * c00 + b * c01 + c * c02
-    inv = np.stack([np.stack([c00, c01, c02], -1), np.stack([c01, c11, c12], -1),
-                    np.stack([c02, c12, c22], -1)], -2) / det[..., None, None]
-    return inv, det
+@dataclass(frozen=True)
+class Indices:
+    """Equations 4-10 at an array of poses (NaN where A is singular, see ``singular``)."""
+
+    dexterity: np.ndarray  # n = sigma_min / sigma_max of dl/dh (eq. 4), (...,)
+    force_indices: np.ndarray  # (F_x, F_y, F_z) (eqs. 6-8), N per N, (..., 3)
+    preload_vector: np.ndarray  # v_p, unit null vector of A with v_1 < 0 (eqs. 9-10, Table 4), (..., 4)
+    singular: np.ndarray  # det(A A^T) < 1e-12, (...,)
 
 
-def _eig_sym3(m: np.ndarray) -> np.ndarray:
-    """Eigenvalues (ascending) of stacked symmetric 3x3 matrices, closed form (trigonometric)."""
-    q = np.trace(m, axis1=-2, axis2=-1) / 3.0
-    off = m[..., 0, 1] ** 2 + m[..., 0, 2] ** 2 + m[..., 1, 2] ** 2
-    p2 = (m[..., 0, 0] - q) ** 2 + (m[..., 1, 1] - q) ** 2 + (m[..., 2, 2] - q) ** 2 + 2 * off
-    p = np.sqrt(p2 / 6.0)
+@dataclass(frozen=True)
+class _Core:
+    e: np.ndarray  # leg unit vectors = columns of A = rows of dl/dh, (3, 4, m)
+    det: np.ndarray  # det(A A^T), (m,)
+    pinv: np.ndarray  # A^+ = A^T (A A^T)^-1 per plate-force axis j: pinv[j] = column j, (3, 4, m)
+    gram: tuple[np.ndarray, ...]  # A A^T as (g00, g01, g02, g11, g12, g22), each (m,)
+
+
+def _core(machine: Machine, poses: np.ndarray) -> _Core:
+    """A (eq. 5), G = A A^T, its cofactor inverse and A^+ for poses of shape (m, 3)."""
+    u = np.ascontiguousarray(np.moveaxis(leg_vectors(machine, poses), (0, 1, 2), (2, 1, 0)))
+    e = u / np.sqrt(u[0] * u[0] + u[1] * u[1] + u[2] * u[2])
+    g00, g01, g02 = [(e[0] * e[k]).sum(0) for k in range(3)]
+    g11, g12, g22 = (e[1] * e[1]).sum(0), (e[1] * e[2]).sum(0), (e[2] * e[2]).sum(0)
+    c00, c01, c02 = g11 * g22 - g12 * g12, g02 * g12 - g01 * g22, g01 * g12 - g02 * g11
+    c11, c12, c22 = g00 * g22 - g02 * g02, g01 * g02 - g00 * g12, g00 * g11 - g01 * g01
+    det = g00 * c00 + g01 * c01 + g02 * c02
+    inv_det = 1.0 / np.where(det < _SINGULAR_DET, np.nan, det)
+    pinv = np.stack([e[0] * (c * inv_det) + e[1] * (d * inv_det) + e[2] * (f * inv_det)
+                     for c, d, f in ((c00, c01, c02), (c01, c11, c12), (c02, c12, c22))])
+    return _Core(e, det, pinv, (g00, g01, g02, g11, g12, g22))
+
+
+def _dexterity(gram: tuple[np.ndarray, ...]) -> np.ndarray:
+    """sqrt(lambda_min / lambda_max) of the symmetric 3x3 G (closed-form trigonometric eigenvalues).
+
+    Near a repeated eigenvalue arccos loses half the digits: n is good to about 1e-8 relative.
+    """
+    g00, g01, g02, g11, g12, g22 = gram
+    q = (g00 + g11 + g22) / 3.0
+    a, d, f = g00 - q, g11 - q, g22 - q
+    p = np.sqrt((a * a + d * d + f * f + 2.0 * (g01 * g01 + g02 * g02 + g12 * g12)) / 6.0)
+    det_shifted = a * (d * f - g12 * g12) - g01 * (g01 * f - g12 * g02) + g02 * (g01 * g12 - d * g02)
     safe_p = np.where(p > 0, p, 1.0)
-    bm = (m - q[..., None, None] * np.eye(3)) / safe_p[..., None, None]
-    r = np.clip(_det3(bm) / 2.0, -1.0, 1.0)
-    phi = np.arccos(r) / 3.0
-    e_max = q + 2 * p * np.cos(phi)
-    e_min = q + 2 * p * np.cos(phi + 2 * np.pi / 3)
-    return np.stack([e_min, 3 * q - e_max - e_min, e_max], -1)
+    phi = np.arccos(np.clip(det_shifted / (2.0 * safe_p**3), -1.0, 1.0)) / 3.0
+    lam_max = q + 2.0 * p * np.cos(phi)
+    lam_min = q + 2.0 * p * np.cos(phi + 2.0 * np.pi / 3.0)
+    return np.sqrt(np.clip(lam_min, 0.0, None) / lam_max)
+
+
+def _preload(e: np.ndarray) -> np.ndarray:
+    """Null vector of A by cofactors, v_k = (-1)^k det(A without column k), unit, v_1 < 0, (4, m)."""
+    c23 = (e[1, 2] * e[2, 3] - e[2, 2] * e[1, 3], e[2, 2] * e[0, 3] - e[0, 2] * e[2, 3],
+           e[0, 2] * e[1, 3] - e[1, 2] * e[0, 3])  # e_3 x e_4 (legs numbered from 1)
+    c01 = (e[1, 0] * e[2, 1] - e[2, 0] * e[1, 1], e[2, 0] * e[0, 1] - e[0, 0] * e[2, 1],
+           e[0, 0] * e[1, 1] - e[1, 0] * e[0, 1])  # e_1 x e_2
+    v = np.stack([sum(e[k, 1] * c23[k] for k in range(3)), -sum(e[k, 0] * c23[k] for k in range(3)),
+                  sum(e[k, 3] * c01[k] for k in range(3)), -sum(e[k, 2] * c01[k] for k in range(3))])
+    with np.errstate(invalid="ignore", divide="ignore"):  # singular A: 0/0 -> NaN, flagged by the caller
+        v /= np.where(v[0] > 0, -1.0, 1.0) * np.sqrt((v * v).sum(0))
+    return v
+
+
+def indices(machine: Machine, pose_m: np.ndarray) -> Indices:
+    """Dexterity n (eq. 4), force indices F_x, F_y, F_z (eqs. 6-8) and v_p (eqs. 9-10) in one pass.
+
+    A (eq. 5) and (A A^T)^-1 are computed once per pose and shared; poses (..., 3) in m.
+    Where A is singular, F and v_p are NaN and ``singular`` is True (no exception: maps keep going).
+    """
+    h = np.asarray(pose_m, dtype=float)
+    flat = h.reshape(-1, 3)
+    m = flat.shape[0]
+    n, f, v, sing = np.empty(m), np.empty((3, m)), np.empty((4, m)), np.empty(m, dtype=bool)
+    for s in range(0, m, _CHUNK):
+        c = _core(machine, flat[s:s + _CHUNK])
+        t = slice(s, s + _CHUNK)
+        n[t], sing[t] = _dexterity(c.gram), c.det < _SINGULAR_DET
+        f[:, t] = np.abs(c.pinv).max(axis=1)
+        v[:, t] = _preload(c.e)
+        v[:, t][:, sing[t]] = np.nan
+    shape = h.shape[:-1]
+    return Indices(n.reshape(shape), f.T.reshape(*shape, 3), v.T.reshape(*shape, 4), sing.reshape(shape))
 
 
 def dexterity(machine: Machine, pose_m: np.ndarray) -> np.ndarray:
     """Equation 4: n = sigma_min / sigma_max of the Jacobian dl/dh (dimensionless, (...,))."""
-    a = static_matrix(machine, pose_m)
-    ev = np.clip(_eig_sym3(a @ np.swapaxes(a, -1, -2)), 0.0, None)
-    return np.sqrt(ev[..., 0] / ev[..., 2])
+    return indices(machine, pose_m).dexterity
 
 
 def pseudo_inverse(machine: Machine, pose_m: np.ndarray) -> np.ndarray:
-    """Moore-Penrose inverse A^+ = A^T (A A^T)^-1 of equation 5, shape (..., 4, 3)."""
-    a = static_matrix(machine, pose_m)
-    inv, det = _inv_sym3(a @ np.swapaxes(a, -1, -2))
-    if np.any(np.abs(det) < 1e-12):
+    """Moore-Penrose inverse A^+ = A^T (A A^T)^-1 of equation 5, shape (..., 4, 3), 1/1 (N per N)."""
+    h = np.asarray(pose_m, dtype=float)
+    c = _core(machine, h.reshape(-1, 3))
+    if np.any(c.det < _SINGULAR_DET):
         raise SingularPoseError("the static matrix A is singular (legs cannot balance every force)")
-    return np.swapaxes(a, -1, -2) @ inv
+    return np.moveaxis(c.pinv, (0, 1, 2), (2, 1, 0)).reshape(*h.shape[:-1], 4, 3)
 
 
 def actuator_forces_min_norm(machine: Machine, pose_m: np.ndarray, plate_force_n: np.ndarray) -> np.ndarray:
@@ -163,20 +219,23 @@ def actuator_forces_min_norm(machine: Machine, pose_m: np.ndarray, plate_force_n
 
 
 def force_indices(machine: Machine, pose_m: np.ndarray) -> np.ndarray:
-    """Equations 6-8: (F_x, F_y, F_z) = max_i |F_i| per unit plate force along x, y, z, shape (..., 3)."""
-    return np.max(np.abs(pseudo_inverse(machine, pose_m)), axis=-2)
+    """Equations 6-8: (F_x, F_y, F_z) = max_i |F_i| per unit plate force along x, y, z, shape (..., 3).
+
+    Raises :class:`SingularPoseError` where A is singular (use :func:`indices` for NaN instead).
+    """
+    out = indices(machine, pose_m)
+    if np.any(out.singular):
+        raise SingularPoseError("the static matrix A is singular (legs cannot balance every force)")
+    return out.force_indices
 
 
 def preload_vector(machine: Machine, pose_m: np.ndarray) -> np.ndarray:
     """v_p (equations 9-10, Table 4): unit null vector of A with v_1 < 0, shape (..., 4).
 
-    Computed as the generalised cross product of A's rows (cofactors); for this machine it is
-    proportional to (-l_1, l_2, -l_3, l_4).
+    Computed as the generalised cross product of A's columns (cofactors); for this machine it is
+    proportional to (-l_1, l_2, -l_3, l_4). NaN where A is singular.
     """
-    a = static_matrix(machine, pose_m)
-    v = np.stack([(-1) ** k * _det3(a[..., [j for j in range(4) if j != k]]) for k in range(4)], -1)
-    v = v / np.linalg.norm(v, axis=-1, keepdims=True)
-    return np.where(v[..., :1] > 0, -v, v)
+    return indices(machine, pose_m).preload_vector
 
 
 def leg_frames(machine: Machine, pose_m: np.ndarray) -> np.ndarray:

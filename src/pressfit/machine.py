@@ -10,7 +10,7 @@ import math
 import tomllib
 from functools import cached_property
 from pathlib import Path
-from typing import Annotated, Any
+from typing import Annotated, Any, Literal
 
 import numpy as np
 from pydantic import BaseModel, ConfigDict, Field, ValidationError, field_validator, model_validator
@@ -27,7 +27,7 @@ Vector3 = Annotated[list[Finite], Field(min_length=3, max_length=3)]
 
 
 class _Strict(BaseModel):
-    model_config = ConfigDict(extra="forbid", frozen=True, strict=False)
+    model_config = ConfigDict(extra="forbid", frozen=True, strict=True)
 
 
 class Geometry(_Strict):
@@ -119,12 +119,55 @@ class ModelOptions(_Strict):
     springs_per_segment: Annotated[int, Field(ge=1, le=64)] = 4
 
 
+class ExtraBody(_Strict):
+    """A body for interference checks: a mesh file (STL/OBJ/..., convex hull used) or a box.
+
+    ``frame`` 'world' places it in the world frame, 'plate' relative to the plate centre h (it moves
+    with the plate). Pose: x = R t + translation_m with R = Rz(yaw) Ry(pitch) Rx(roll) from
+    ``rotation_rpy_rad``. Mesh coordinates are multiplied by ``mesh_scale`` (0.001 for files in mm);
+    a relative ``mesh_path`` is resolved from the machine (or case) file's directory.
+    """
+
+    name: Annotated[str, Field(min_length=1, pattern=r"^[A-Za-z0-9_\-]+$")]
+    frame: Literal["world", "plate"] = "world"
+    mesh_path: str | None = None
+    mesh_scale: Positive = 1.0
+    box_size_m: Annotated[list[Positive], Field(min_length=3, max_length=3)] | None = None  # full sides
+    translation_m: Vector3 = [0.0, 0.0, 0.0]
+    rotation_rpy_rad: Vector3 = [0.0, 0.0, 0.0]
+
+    @model_validator(mode="after")
+    def _one_shape(self) -> ExtraBody:
+        if (self.mesh_path is None) == (self.box_size_m is None):
+            raise ValueError("give exactly one of mesh_path and box_size_m")
+        return self
+
+
 class Collision(_Strict):
+    """Interference shapes (capsules for the legs, boxes for plate and base) and pair overrides.
+
+    Pairs are named 'body_a|body_b' with bodies leg1.cylinder ... leg4.stem, plate, base and the
+    extra bodies' names (see :mod:`pressfit.interference`).
+    """
+
     cylinder_radius_m: Positive
     stem_radius_m: Positive
     plate_thickness_m: Positive
     base_thickness_m: Positive
     safety_margin_m: NonNegative = 0.0
+    base_half_extent_m: Positive | None = None  # half-side of the base box in x and z; default p
+    extra_bodies: list[ExtraBody] = []
+    include_pairs: list[str] = []  # checked in addition to the default pairs
+    exclude_pairs: list[str] = []  # removed from the default pairs
+
+    @model_validator(mode="after")
+    def _stem_inside_cylinder(self) -> Collision:
+        if self.stem_radius_m > self.cylinder_radius_m:
+            raise ValueError("stem_radius_m must not exceed cylinder_radius_m (the rod slides inside)")
+        names = [b.name for b in self.extra_bodies]
+        if len(set(names)) != len(names):
+            raise ValueError("extra_bodies names must be unique")
+        return self
 
 
 class Section(BaseModel):

@@ -1,0 +1,71 @@
+"""Unit tests of pressfit.machine: the shipped model, derived geometry, and malformed model files."""
+
+import numpy as np
+import pytest
+
+from pressfit.errors import ModelFileError
+from pressfit.machine import DEFAULT_MODEL, load_machine
+
+
+def test_default_model(machine):
+    """Table 3's geometry and limits, and the legs of DESIGN.md's table."""
+    assert machine.geometry.base_half_side_m == 0.442 and machine.geometry.plate_half_side_m == 0.082
+    assert (machine.limits.leg_length_min_m, machine.limits.leg_length_max_m) == (0.5, 1.0)
+    assert machine.limits.beta_max_rad == pytest.approx(np.pi / 4, rel=1e-15)
+    np.testing.assert_allclose(machine.base_points_m, 0.442 * np.array(
+        [[0, 0, -1], [1, 0, 0], [0, 0, 1], [-1, 0, 0]]), atol=0)
+    np.testing.assert_allclose(machine.plate_offsets_m, machine.base_points_m * 0.082 / 0.442, rtol=1e-15)
+
+
+def test_overrides_are_validated(machine):
+    m = machine.with_overrides({"actuator": {"axial_stiffness_n_per_m": 1e8}})
+    assert m.actuator.axial_stiffness_n_per_m == 1e8
+    with pytest.raises(ModelFileError, match="actuator.axial_stiffness_n_per_m"):
+        machine.with_overrides({"actuator": {"axial_stiffness_n_per_m": -1.0}})
+
+
+def _write(tmp_path, old, new):
+    text = DEFAULT_MODEL.read_text(encoding="utf-8")
+    assert old in text
+    path = tmp_path / "bad.toml"
+    path.write_text(text.replace(old, new, 1), encoding="utf-8")
+    return path
+
+
+BAD_FILES = {  # id: (replace, by, expected key, words in the expectation)
+    "missing key": ("base_half_side_m = 0.442", "", "geometry.base_half_side_m", "required"),
+    "unknown key": ("[geometry]", "[geometry]\nbase_radius_m = 0.4", "geometry.base_radius_m", "unknown key"),
+    "wrong type": ("base_half_side_m = 0.442", 'base_half_side_m = "wide"', "geometry.base_half_side_m",
+                   "valid number"),
+    "table for number": ("leg_length_max_m = 1.0", "leg_length_max_m = {value = 1.0}",
+                         "limits.leg_length_max_m", "valid number"),
+    "negative length": ("base_half_side_m = 0.442", "base_half_side_m = -0.442", "geometry.base_half_side_m",
+                        "greater than 0"),
+    "l_min >= l_max": ("leg_length_min_m = 0.5", "leg_length_min_m = 1.0", "limits",
+                       "leg_length_min_m must be smaller than leg_length_max_m"),
+    "three legs": ("[[legs]]\nradial_direction = [-1.0", "[[other]]\nradial_direction = [-1.0", "legs",
+                   "at least 4 items"),
+    "bad TOML syntax": ("[geometry]", "[geometry", "<syntax>", "valid TOML"),
+}
+
+
+@pytest.mark.parametrize("case", BAD_FILES, ids=list(BAD_FILES))
+def test_bad_model_file(tmp_path, case):
+    """Every malformed file raises ModelFileError naming the file, the key and the expectation."""
+    old, new, key, words = BAD_FILES[case]
+    path = _write(tmp_path, old, new)
+    with pytest.raises(ModelFileError) as info:
+        load_machine(path)
+    assert info.value.key == key
+    assert str(path) in str(info.value) and f"'{key}'" in str(info.value) and words in str(info.value)
+
+
+def test_missing_file(tmp_path):
+    with pytest.raises(ModelFileError, match="does not exist"):
+        load_machine(tmp_path / "nope.toml")
+
+
+@pytest.mark.parametrize("value", ["true", '"0.442"'])
+def test_wrong_scalar_type_is_rejected(tmp_path, value):
+    with pytest.raises(ModelFileError, match="base_half_side_m"):
+        load_machine(_write(tmp_path, "base_half_side_m = 0.442", f"base_half_side_m = {value}"))
