@@ -40,7 +40,7 @@ def main() -> None:
     """Structural load and compliance analyzer for the 4-UPU press-fit manipulator (SI units)."""
 
 
-@main.command("kinematics")
+@main.command("kinematics", context_settings={"ignore_unknown_options": True})  # negative coordinates
 @click.argument("x", type=float)
 @click.argument("y", type=float)
 @click.argument("z", type=float)

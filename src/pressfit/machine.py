@@ -156,6 +156,7 @@ class Collision(_Strict):
     base_thickness_m: Positive
     safety_margin_m: NonNegative = 0.0
     base_half_extent_m: Positive | None = None  # half-side of the base box in x and z; default p
+    leg_shape: Literal["capsule", "cylinder"] = "capsule"  # capsule: conservative by a radius at the ends
     extra_bodies: list[ExtraBody] = []
     include_pairs: list[str] = []  # checked in addition to the default pairs
     exclude_pairs: list[str] = []  # removed from the default pairs
