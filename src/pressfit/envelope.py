@@ -143,7 +143,8 @@ def evaluate_case(case: Case, progress: bool = False) -> CaseResult:
     sweep: dict[str, list[np.ndarray]] = {}
     for w in tqdm(loads, desc=f"{case.name}: linear sweep", disable=not progress, unit="load"):
         res = condensed.solve_linear(machine, poses, w)
-        if vp is not None:  # force-mode preload superposes exactly in the linear model: N += a4 v_p
+        if vp is not None:  # a force-mode preload is a self-stress along v_p with no couples and no
+            # plate motion: it superposes exactly in the linear model (length mode: see README)
             res = condensed.with_axial_preload(res, a4 * vp)
         for k, v in condensed_quantities(res, critical).items():
             sweep.setdefault(k, []).append(v)
