@@ -217,7 +217,8 @@ def format_table(results: list[CaseResult]) -> str:
             where = (f"leg {x.leg} " if x.leg else "") + f"at pose {np.round(x.pose_m, 4).tolist()} m"
             if x.load:
                 where += f", load {np.round(x.load, 3).tolist()}"
-            op = "<=" if LIMITS[x.key].sense == "max" else ">="
+            sense = LIMITS[x.key].sense
+            op = ("<=" if sense == "max" else ">=") if x.passed else ("EXCEEDS" if sense == "max" else "BELOW")
             verdict = "ok  " if x.passed else "FAIL"
             out.append(f"  {verdict} {x.label}: worst {x.worst:.6g} {x.unit} {op} limit {x.limit:.6g} {x.unit}"
                        f"  [{x.key}; {where}; {x.method}]")
