@@ -254,5 +254,22 @@ def interference_cmd(pose: tuple[float, ...], over_workspace: bool, margin_m: fl
     sys.exit(0 if res.passed else 1)
 
 
+@main.command("report")
+@click.option("--out", "out_dir", type=click.Path(path_type=Path), default=Path("report"), show_default=True,
+              help="Output directory.")
+@click.option("--overwrite", is_flag=True, help="Replace existing output files.")
+@click.option("--quick", is_flag=True, help="Coarse grids (a preview in seconds).")
+@MODEL_OPTION
+@user_errors
+def report_cmd(out_dir: Path, overwrite: bool, quick: bool, model_path: Path) -> None:
+    """Reproduce Tables 5 and 6 and write the full Markdown report (maps, envelope, stiffness, ...)."""
+    from . import tables
+    from .report import write_report
+
+    click.echo(tables.to_markdown(tables.paper_tables()))
+    path = write_report(load_machine(model_path), out_dir, overwrite=overwrite, quick=quick)
+    click.echo(f"report written to {path}")
+
+
 if __name__ == "__main__":
     main()

@@ -1,0 +1,104 @@
+"""``pressfit report``: one Markdown report of everything pressfit computes for a machine.
+
+Sections: the paper's Tables 5-6 beside pressfit, the kinematic maps and workspace claims, the
+workspace load envelope (design loads), stiffness maps, the clearance-vs-preload study, and the leg
+interference summary. Every number comes from the same library functions the CLI and tests call.
+"""
+
+from __future__ import annotations
+
+from pathlib import Path
+
+import numpy as np
+from tqdm import tqdm
+
+from . import condensed, interference, tables, workspace
+from .io import write_csv, write_json, write_text
+from .machine import Machine
+
+
+def _md_table(header: list[str], rows: list[list[object]]) -> str:
+    fmt = lambda v: f"{v:.4g}" if isinstance(v, float) else str(v)  # noqa: E731
+    return "\n".join(["| " + " | ".join(header) + " |", "|" + "---|" * len(header)]
+                     + ["| " + " | ".join(fmt(v) for v in r) + " |" for r in rows])
+
+
+def write_report(machine: Machine, out_dir: Path | str, overwrite: bool = False, quick: bool = False,
+                 progress: bool = True) -> Path:
+    """Compute every section and write ``report.md`` with its figures, CSV and JSON into ``out_dir``.
+
+    ``quick`` uses coarser grids (for tests and previews); the default grids are the design ones.
+    """
+    out = Path(out_dir)
+    steps = tqdm(total=6, desc="report", disable=not progress, unit="section")
+    md = [f"# pressfit report: {machine.name}", "", f"Machine file: `{machine.source}`. SI units throughout.", ""]
+
+    entries = tables.paper_tables()
+    write_text(out / "tables.md", tables.to_markdown(entries), overwrite)
+    write_csv(out / "tables.csv", *tables.to_rows(entries), overwrite=overwrite)
+    md += ["## 1. The paper's Tables 5 and 6", "",
+           "Cases A, B, C of `cases/paper/` (700 N press reaction, +y, at the plate centre), actuator section. "
+           "The map from the paper's CAD legs, signs and axes to ours is stated in `pressfit/tables.py`; "
+           "why B and C differ from the paper is explained in README.md (\"Tables 5 and 6\").", "",
+           tables.to_markdown(entries)]
+    steps.update()
+
+    heights = [0.6] if quick else list(workspace.DEFAULT_HEIGHTS_M)
+    summ, _ = workspace.write_outputs(machine, out / "kinematics", heights, overwrite=overwrite)
+    rng = summ["height_range"][0]
+    md += ["## 2. Kinematics and workspace (paper section 4.1)", "",
+           f"The required {2 * machine.workspace.x_half_width_m * 1000:g} x "
+           f"{2 * machine.workspace.z_half_width_m * 1000:g} mm square is reachable for y_h in "
+           f"[{rng['y_min_m']:.5f}, {rng['y_max_m']:.5f}] m.", "",
+           _md_table(["y_h [m]", "square rotation [deg]", "n min", "n max", "n variation", "F_y max"],
+                     [[s["y_m"], s["angle_deg"], s["dexterity_min"], s["dexterity_max"],
+                       s["dexterity_variation"], s["force_index_max"][1]] for s in summ["squares"]]), ""]
+    md += [f"![maps y={y:.3f}](kinematics/maps_y{y:.3f}.png)" for y in heights] + [""]
+    steps.update()
+
+    ys = np.linspace(0.5, 0.75, 3 if quick else 11)
+    env = condensed.load_envelope(machine, ys, n_xz=11 if quick else 41,
+                                  loads_n=condensed.press_loads(700.0, np.radians(5.0)), progress=False)
+    condensed.write_load_envelope(env, out / "envelope", overwrite)
+    header, rows = condensed.envelope_rows(env)
+    md += ["## 3. Workspace load envelope (design loads)", "",
+           f"700 N press reaction within a 5 degree cone, over the required square at y_h = {ys[0]:g} ... "
+           f"{ys[-1]:g} m; exact condensed linear model (DESIGN.md). Use `pressfit check` with a case "
+           "file to refine the worst poses with the nonlinear solver.", "", _md_table(header, rows), ""]
+    md += [f"![{p.name}](envelope/{p.name})" for p in sorted((out / "envelope").glob("*.png"))] + [""]
+    steps.update()
+
+    md += ["## 4. Stiffness", ""]
+    for y in (0.6, 0.72):
+        maps = condensed.stiffness_maps(machine, y, n=21 if quick else 51)
+        paths = condensed.write_stiffness_maps(maps, out / "stiffness", overwrite)
+        md += [f"![{p.name}](stiffness/{p.name})" for p in paths if p.suffix == ".png"]
+    md += [""]
+    steps.update()
+
+    md += _preload_section(machine, out, overwrite, quick)
+    steps.update()
+
+    im = interference.build_interference(machine)
+    sweep = interference.workspace_sweep(im, points=11 if quick else 41, heights=3 if quick else 9)
+    interference.write_workspace(sweep, out / "interference", overwrite)
+    md += ["## 6. Leg interference (Coal)", "",
+           f"Minimum signed distance per pair kind over the required workspace (capsule legs; margin "
+           f"{sweep.margin_m * 1000:g} mm: {'PASS' if sweep.passed else 'FAIL'}).", "",
+           _md_table(["pair kind", "min distance [m]", "pair", "pose [m]"],
+                     [[k, v["distance_m"], v["pair"], np.round(v["pose_m"], 4).tolist()]
+                      for k, v in sweep.kind_minima().items()]), ""]
+    md += [f"![{p.name}](interference/{p.name})" for p in sorted((out / "interference").glob("*.png"))] + [""]
+    steps.update()
+    steps.close()
+    write_json(out / "summary.json", {"workspace": summ, "interference": sweep.kind_minima()}, overwrite)
+    return write_text(out / "report.md", "\n".join(md) + "\n", overwrite)
+
+
+def _preload_section(machine: Machine, out: Path, overwrite: bool, quick: bool) -> list[str]:
+    """Clearance vs preload at pose A (filled by pressfit.clearance when available)."""
+    try:
+        from . import clearance
+    except ImportError:
+        return ["## 5. Clearance and preload", "", "(pressfit.clearance is not available.)", ""]
+    return clearance.report_section(machine, out / "preload", overwrite=overwrite, quick=quick)
