@@ -156,6 +156,40 @@ class Reference(_Strict):
     note: str = ""
 
 
+class ClearanceSpec(_Strict):
+    """Axial plays of the eight cardans (:mod:`pressfit.clearance`): ``gaps_m`` (8 values: leg 1 base, leg 1
+    plate, leg 2 base, ...) or ``random_m`` = [low, high] with ``seed``; default: the machine's uniform
+    clearance. Contact stiffness N/m and smoothing width m default to the machine's and 1e-9 m."""
+
+    gaps_m: Annotated[list[Annotated[float, Field(ge=0, le=1e-2, allow_inf_nan=False)]],
+                      Field(min_length=8, max_length=8)] | None = None
+    random_m: Annotated[list[Annotated[float, Field(ge=0, le=1e-2, allow_inf_nan=False)]],
+                        Field(min_length=2, max_length=2)] | None = None
+    seed: int = 0
+    contact_stiffness_n_per_m: Positive | None = None
+    smoothing_m: Annotated[float, Field(gt=0, le=1e-5, allow_inf_nan=False)] = 1e-9
+
+    @model_validator(mode="after")
+    def _one(self) -> ClearanceSpec:
+        if self.gaps_m is not None and self.random_m is not None:
+            raise ValueError("give at most one of gaps_m and random_m")
+        if self.random_m is not None and self.random_m[0] > self.random_m[1]:
+            raise ValueError("random_m must be [low, high] with low <= high")
+        return self
+
+
+class Study(_Strict):
+    """A preload study (``pressfit study preload CASE.toml``): the first pose of [poses], the load
+    ``[loads] press_force_n`` (N, the largest load) along ``[loads] direction``, ``[preload] mode``.
+    ``clearances_m``: uniform plays to compare (default: the one of [clearance] or the machine)."""
+
+    kind: Literal["preload"] = "preload"
+    clearances_m: list[Annotated[float, Field(ge=0, le=1e-2, allow_inf_nan=False)]] = []
+    preloads: Annotated[list[Annotated[float, Field(ge=-MAX_FORCE_N, le=MAX_FORCE_N, allow_inf_nan=False)]],
+                        Field(min_length=1, max_length=1000)]  # N (force mode) or m (length mode)
+    steps: Annotated[int, Field(ge=2, le=10000)] = 50
+
+
 class Case(_Strict):
     """A validated case file."""
 
@@ -169,6 +203,8 @@ class Case(_Strict):
     solver: Solver = Solver()
     envelope: Envelope = Envelope()
     reference: Reference | None = None
+    clearance: ClearanceSpec | None = None
+    study: Study | None = None
     path: str = ""
 
     def machine(self) -> Machine:

@@ -64,6 +64,48 @@ def kinematics_cmd(x: float, y: float, z: float, as_json: bool, model_path: Path
                + ", ".join(f"{v:.4f}" for v in out["force_indices"]))
 
 
+@main.command("solve", context_settings={"ignore_unknown_options": True})  # negative numbers
+@click.argument("values", nargs=-1, type=float)
+@click.option("--load", "has_load", is_flag=True,
+              help="Followed by FX FY FZ [MX MY MZ]: plate wrench at the plate centre, world axes (N, N m).")
+@click.option("--preload", "a4", type=float, default=None, help="Actuator preload a4 along v_p (N; m in length mode).")
+@click.option("--preload-mode", type=click.Choice(["force", "length"]), default="force", show_default=True,
+              help="force: offsets giving actuator forces a4 v_p at no load; length: offsets -a4 v_p (m).")
+@click.option("--linear", is_flag=True, help="Small-displacement (linear) solve instead of the nonlinear default.")
+@click.option("--json", "as_json", is_flag=True, help="Print JSON (keys documented in README).")
+@MODEL_OPTION
+@user_errors
+def solve_cmd(values: tuple[float, ...], has_load: bool, a4: float | None, preload_mode: str, linear: bool,
+              as_json: bool, model_path: Path) -> None:
+    """Static equilibrium at pose X Y Z (m): pressfit solve X Y Z --load FX FY FZ [MX MY MZ]."""
+    from .statics import SECTIONS, solve_equilibrium
+
+    if not has_load or len(values) not in (6, 9):
+        raise click.UsageError("expected X Y Z --load FX FY FZ [MX MY MZ]")
+    wrench = np.zeros(6)
+    wrench[:len(values) - 3] = values[3:]
+    machine = load_machine(model_path)
+    eq = solve_equilibrium(machine, values[:3], wrench, preload=a4, preload_mode=preload_mode, linear=linear)
+    if as_json:
+        click.echo(to_json(eq.to_dict()))
+        return
+    kind = "linear (small displacements)" if linear else f"nonlinear, {eq.iterations} Newton iterations"
+    fmt = lambda v: "(" + ", ".join(f"{c:g}" for c in v) + ")"  # noqa: E731
+    click.echo(f"pose h = {fmt(values[:3])} m, load F = {fmt(wrench[:3])} N, M = {fmt(wrench[3:])} N m; {kind}")
+    click.echo("leg  section       N [N]      V_x [N]    V_y [N]    M_x [N m]  M_y [N m]  T [N m]")
+    for i, leg in enumerate(eq.legs):
+        for name in SECTIONS:
+            s = leg.sections[name]
+            click.echo(f"{i + 1:>3}  {name:<9} " + " ".join(f"{v:+10.4f}" for v in (s.N, s.V_x, s.V_y, s.M_x, s.M_y, s.T)))
+    click.echo("actuator forces [N]: " + ", ".join(f"{v:+.4f}" for v in eq.actuator_forces_n))
+    click.echo("plate displacement [m]: " + ", ".join(f"{v:+.4e}" for v in eq.plate_displacement_m)
+               + "; rotation [rad]: " + ", ".join(f"{v:+.4e}" for v in eq.plate_rotation_rad))
+    r = eq.residuals
+    click.echo(f"residuals (relative): plate F {r.plate_force:.1e} M {r.plate_moment:.1e}; machine F "
+               f"{r.machine_force:.1e} M {r.machine_moment:.1e}; closure {r.closure_m:.1e} m {r.closure_rad:.1e} rad; "
+               f"stationarity {r.stationarity:.1e}")
+
+
 @main.command("tables")
 @click.option("--json", "as_json", is_flag=True, help="Print the entries as JSON.")
 @click.option("--out", "out_dir", type=click.Path(path_type=Path), help="Write tables.md and tables.csv here.")
@@ -269,6 +311,64 @@ def report_cmd(out_dir: Path, overwrite: bool, quick: bool, model_path: Path) ->
     click.echo(tables.to_markdown(tables.paper_tables()))
     path = write_report(load_machine(model_path), out_dir, overwrite=overwrite, quick=quick)
     click.echo(f"report written to {path}")
+
+
+@main.group("study")
+def study_group() -> None:
+    """Parameter studies: ``pressfit study preload``."""
+
+
+def _floats(text: str | None, what: str) -> list[float]:
+    try:
+        return [float(v) for v in text.split(",") if v.strip()] if text else []
+    except ValueError:
+        raise PressfitError(f"{what} must be comma-separated numbers, got {text!r}") from None
+
+
+@study_group.command("preload", context_settings={"ignore_unknown_options": True})  # negative numbers
+@click.argument("case_file", required=False, type=click.Path(path_type=Path))
+@click.option("--pose", nargs=3, type=float, help="Plate pose X Y Z, m (without CASE_FILE).")
+@click.option("--clearance", "clearances", help="Cardan axial clearances g, m, comma-separated (default: the model's).")
+@click.option("--preload", "preloads", help="Preloads a4 along v_p, comma-separated: N (force mode) or m (length).")
+@click.option("--mode", "preload_mode", type=click.Choice(["force", "length"]), default="force", show_default=True)
+@click.option("--load-max", "load_max", type=float, default=700.0, show_default=True, help="Largest load, N.")
+@click.option("--steps", type=click.IntRange(2, 10000), default=50, show_default=True, help="Load steps.")
+@click.option("--direction", nargs=3, type=float, default=(0.0, 1.0, 0.0), show_default=True, help="Load direction.")
+@click.option("--out", "out_dir", type=click.Path(path_type=Path), default=Path("out/study_preload"), show_default=True,
+              help="Directory for preload_study.csv/.json and the PNG plots.")
+@click.option("--overwrite", is_flag=True, help="Replace existing output files.")
+@click.option("--json", "as_json", is_flag=True, help="Print the study as JSON.")
+@click.option("--progress/--no-progress", default=True, help="Show a progress bar.")
+@MODEL_OPTION
+@user_errors
+def study_preload_cmd(case_file: Path | None, pose: tuple[float, ...] | None, clearances: str | None,
+                      preloads: str | None, preload_mode: str, load_max: float, steps: int,
+                      direction: tuple[float, ...], out_dir: Path, overwrite: bool, as_json: bool, progress: bool,
+                      model_path: Path) -> None:
+    """How much preload keeps every cardan closed up to the load, and what stiffness it buys (SI)."""
+    from . import clearance
+
+    if case_file is not None:
+        if pose or clearances or preloads:
+            raise PressfitError("give either CASE_FILE or --pose/--clearance/--preload")
+        from .cases import load_case
+
+        kw = clearance.study_from_case(load_case(case_file))
+    else:
+        if not pose or not preloads:
+            raise PressfitError("give CASE_FILE, or --pose X Y Z and --preload P1,P2,...")
+        machine = load_machine(model_path)
+        kw = {"machine": machine, "pose_m": list(pose), "clearances_m": _floats(clearances, "--clearance"),
+              "preloads": _floats(preloads, "--preload"), "load_max_n": load_max, "steps": steps,
+              "direction": direction, "preload_mode": preload_mode}
+    study = clearance.preload_study(**kw, progress=progress)
+    written = clearance.write_study(study, out_dir, overwrite)
+    if as_json:
+        click.echo(to_json(study.to_dict() | {"outputs": [str(p) for p in written]}))
+        return
+    click.echo(clearance.format_answers(study))
+    for p in written:
+        click.echo(f"wrote {p}")
 
 
 if __name__ == "__main__":

@@ -112,6 +112,7 @@ class Actuator(_Strict):
 
 class Joints(_Strict):
     cardan_radial_clearance_m: NonNegative = 0.0
+    cardan_contact_stiffness_n_per_m: Positive = 1.0e9  # per cardan, along the leg (pressfit.clearance)
     cardan_rotational_stiffness_nm_per_rad: Positive | None = None
 
 

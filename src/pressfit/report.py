@@ -96,9 +96,19 @@ def write_report(machine: Machine, out_dir: Path | str, overwrite: bool = False,
 
 
 def _preload_section(machine: Machine, out: Path, overwrite: bool, quick: bool) -> list[str]:
-    """Clearance vs preload at pose A (filled by pressfit.clearance when available)."""
-    try:
-        from . import clearance
-    except ImportError:
-        return ["## 5. Clearance and preload", "", "(pressfit.clearance is not available.)", ""]
-    return clearance.report_section(machine, out / "preload", overwrite=overwrite, quick=quick)
+    """Clearance vs preload at pose A and off-centre: the stiffness that preload buys back."""
+    from . import clearance
+
+    md = ["## 5. Clearance and preload", "",
+          "Axial play g at each cardan (smoothed dead zone, contact stiffness from the machine file), "
+          "actuator preload a4 along v_p (force mode), then the press load 0 ... 700 N (+y). The critical "
+          "preload is the smallest that keeps every cardan closed up to 700 N.", ""]
+    preloads = [0.0, 200.0, 400.0, 600.0] if quick else [0.0, 100.0, 200.0, 300.0, 400.0, 500.0, 600.0, 800.0,
+                                                         1000.0, 1200.0]
+    for name, pose in (("pose_A", (0.0, 0.72, 0.0)), ("off_centre", (0.2, 0.6, -0.2))):
+        study = clearance.preload_study(machine, pose, [0.0, 10e-6, 20e-6, 40e-6], preloads, 700.0,
+                                        10 if quick else 50, progress=False)
+        paths = clearance.write_study(study, out / "preload" / name, overwrite)
+        md += [f"### {name.replace('_', ' ')} {list(pose)} m", "", "```", clearance.format_answers(study), "```", ""]
+        md += [f"![{p.name}](preload/{name}/{p.name})" for p in paths if p.suffix == ".png"] + [""]
+    return md

@@ -1,0 +1,788 @@
+r"""Cardan clearance and actuator preload: load-deflection curves, lost motion, the preload that keeps
+every joint closed (paper section 4.1's promise, quantified). SI units throughout.
+
+Clearance law (:class:`DeadZone`)
+--------------------------------
+Each cardan gets an **axial** play along its leg: a virtual translation x (m, > 0 = the leg lengthens)
+between the cardan and the leg segment with the smoothed dead-zone force
+
+    f(x) = k_c (s(x - g) - s(-x - g)),   s(u) = (u + sqrt(u^2 + w^2)) / 2,
+
+g the clearance (m), k_c the contact stiffness (N/m), w the smoothing width (m); the energy
+E(x) = k_c (S(x - g) + S(-x - g)), S(u) = u s(u) / 2 + w^2 asinh(u / w) / 4, and the tangent
+f'(x) = k_c (s'(x - g) + s'(-x - g)) are consistent (tested against finite differences). As w -> 0 the
+law tends to the sharp dead zone; the force at the contact edge x = g is k_c w / 2 (0.5 N with the
+defaults), which bounds the smoothing error of every contact-state result. A joint is **closed** (in
+contact) when |x| >= g.
+
+Why only the axial play: a UPU leg carries its axial force and one couple along c_i = a_i x b_i, and
+no shear (DESIGN.md "Facts"). The play along the leg is in series with the axial spring and is what
+produces lost motion: a leg of two cardans has 2g of play from the centred state (4g end to end), and
+the plate moves by 2g / sin(alpha) at pose A before the legs engage. Lateral plays carry no load in the
+small-displacement model (no shear), so they cause no lost motion; in the nonlinear state the shears are
+below 1 N at 700 N, and a lateral shift s <= g of a leg end changes its length by s^2 / l (nm): they are
+left out. The play of the rotation about c_i (``rotation_gaps_rad``) is optional: in series with the
+leg's couple stiffness k_r, it lets the plate rock before torsion takes the moment.
+
+Preload (:func:`preload_offsets`)
+---------------------------------
+Actuator rest-length offsets along v_p (:func:`pressfit.kinematics.preload_vector`), applied before the
+load. ``force`` mode: a4 in N, offsets o_i = -(a4 v_i / k_a,i + x_b,i + x_p,i) with x the joint
+coordinates that carry a4 v_i, so that with no load the actuator forces are exactly a4 v_p (tension > 0)
+and every joint with v_i != 0 is closed; the offsets are then held (position-held after setting).
+``length`` mode: a4 in m, offsets -a4 v_p (:func:`pressfit.statics.preload_offsets`).
+
+Two solvers
+-----------
+``method="small"`` (default for curves and studies): small displacements, the clearance nonlinearity
+kept, exact for this structure: each leg is its axial spring in series with its two axial plays (and its
+couple spring in series with the optional rotational plays), and about the concurrency point P* the
+plate's translation and rotation decouple (:mod:`pressfit.condensed`). Each load step is a damped Newton
+on the convex energy, batched over many (clearance, preload) pairs. ``method="nonlinear"``: the Pinocchio
+VJM model with the axial plays as virtual prismatic joints (:func:`pressfit.model.build_model`),
+geometrically nonlinear Newton (:func:`pressfit.statics.solve_equilibrium`), each load step started from
+the previous solution. The two agree to the geometric nonlinearity (about 1e-3 at 700 N, tested).
+"""
+
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass, field
+from pathlib import Path
+from typing import Any
+
+import numpy as np
+from tqdm import tqdm
+
+from . import condensed, io, kinematics
+from .errors import ConvergenceError, PressfitError
+from .machine import Machine
+
+ENDS = ("base", "plate")
+DEFAULT_SMOOTHING_M = 1e-9
+NEWTON_TOL = 1e-10  # relative force residual of the small-displacement solve
+
+
+class ClearanceError(PressfitError):
+    """Bad clearance or preload input (negative gap, unknown mode, no closing preload found, ...)."""
+
+
+# --- the law -----------------------------------------------------------------------------------------------
+def _s(u: np.ndarray, w: float) -> np.ndarray:
+    """(u + sqrt(u^2 + w^2)) / 2 without cancellation for u < 0."""
+    r = np.sqrt(u * u + w * w)
+    return np.where(u >= 0, 0.5 * (u + r), 0.5 * w * w / (r - u))
+
+
+def _ds(u: np.ndarray, w: float) -> np.ndarray:
+    r = np.sqrt(u * u + w * w)
+    return np.where(u >= 0, 0.5 * (1.0 + u / r), 0.5 * w * w / (r * (r - u)))
+
+
+def _big_s(u: np.ndarray, w: float) -> np.ndarray:
+    return 0.5 * u * _s(u, w) + 0.25 * w * w * np.arcsinh(u / w)
+
+
+@dataclass(frozen=True)
+class DeadZone:
+    """Smoothed dead zone of +-gap (m) with contact stiffness (N/m or N m/rad) and smoothing width (m or
+    rad); a :class:`pressfit.model.SpringLaw`, vectorised over numpy arrays. gap = 0 gives k x exactly."""
+
+    gap: float
+    stiffness: float
+    width: float = DEFAULT_SMOOTHING_M
+
+    def energy(self, x: Any) -> Any:
+        return self.stiffness * (_big_s(x - self.gap, self.width) + _big_s(-x - self.gap, self.width))
+
+    def force(self, x: Any) -> Any:
+        return self.stiffness * (_s(x - self.gap, self.width) - _s(-x - self.gap, self.width))
+
+    def tangent(self, x: Any) -> Any:
+        return self.stiffness * (_ds(x - self.gap, self.width) + _ds(-x - self.gap, self.width))
+
+
+def _laws_force(x: np.ndarray, g: np.ndarray, k: float, w: float) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    """Energy, force and tangent of dead zones with per-entry gaps g (same shape as x)."""
+    a, b = x - g, -x - g
+    return (k * (_big_s(a, w) + _big_s(b, w)), k * (_s(a, w) - _s(b, w)), k * (_ds(a, w) + _ds(b, w)))
+
+
+def invert_law(force: np.ndarray, gap: np.ndarray, stiffness: float, width: float) -> np.ndarray:
+    """The joint coordinate x (m) whose dead-zone force is ``force`` (N), elementwise (safeguarded Newton)."""
+    f = np.asarray(force, dtype=float)
+    g = np.broadcast_to(np.asarray(gap, dtype=float), f.shape)
+    hi = g + np.abs(f) / stiffness + width + 1e-30  # f(hi) >= |f|, f(-hi) <= -|f|
+    lo, hi = -hi, hi.copy()
+    x = np.sign(f) * (g + np.abs(f) / stiffness)
+    for _ in range(200):
+        _, fx, tx = _laws_force(x, g, stiffness, width)
+        r = fx - f
+        if np.all(np.abs(r) <= 1e-12 * (np.abs(f) + stiffness * width)):
+            return x
+        lo, hi = np.where(r < 0, x, lo), np.where(r > 0, x, hi)
+        step = x - r / tx
+        x = np.where((step >= lo) & (step <= hi), step, 0.5 * (lo + hi))
+    raise ConvergenceError("dead-zone inversion", float(np.max(np.abs(r))), 1e-12, 200)
+
+
+# --- clearance description ---------------------------------------------------------------------------------
+@dataclass(frozen=True)
+class Clearance:
+    """Axial plays of the eight cardans and their contact law (SI).
+
+    ``gaps_m`` (4, 2): [leg 0..3, end 'base' | 'plate'], m. ``rotation_gaps_rad`` (4, 2) or None (rigid):
+    the play of the rotation about c_i, rad, with ``rotation_stiffness_nm_per_rad``.
+    """
+
+    gaps_m: np.ndarray
+    contact_stiffness_n_per_m: float
+    smoothing_m: float = DEFAULT_SMOOTHING_M
+    rotation_gaps_rad: np.ndarray | None = None
+    rotation_stiffness_nm_per_rad: float = 1e7
+    rotation_smoothing_rad: float = 1e-8
+
+    def __post_init__(self) -> None:
+        g = np.broadcast_to(np.asarray(self.gaps_m, dtype=float), (4, 2)).copy()
+        if not np.all(np.isfinite(g)) or np.any(g < 0) or np.any(g > 1e-2):
+            raise ClearanceError(f"clearances must be in [0, 0.01] m, got {g.ravel().tolist()}")
+        if not (self.contact_stiffness_n_per_m > 0 and self.smoothing_m > 0):
+            raise ClearanceError("contact stiffness and smoothing width must be positive")
+        object.__setattr__(self, "gaps_m", g)
+        if self.rotation_gaps_rad is not None:
+            r = np.broadcast_to(np.asarray(self.rotation_gaps_rad, dtype=float), (4, 2)).copy()
+            if not np.all(np.isfinite(r)) or np.any(r < 0):
+                raise ClearanceError("rotation clearances must be non-negative")
+            object.__setattr__(self, "rotation_gaps_rad", r)
+
+    @classmethod
+    def uniform(cls, machine: Machine, gap_m: float | None = None, **kw: Any) -> Clearance:
+        """Every cardan with the same play (default: the machine's ``joints.cardan_radial_clearance_m``)."""
+        g = machine.joints.cardan_radial_clearance_m if gap_m is None else gap_m
+        kw.setdefault("contact_stiffness_n_per_m", machine.joints.cardan_contact_stiffness_n_per_m)
+        return cls(np.full((4, 2), float(g)), **kw)
+
+    @classmethod
+    def per_joint(cls, machine: Machine, gaps_m: list[float], **kw: Any) -> Clearance:
+        """Eight plays ordered leg 1 base, leg 1 plate, leg 2 base, ..., m."""
+        if len(gaps_m) != 8:
+            raise ClearanceError(f"give 8 clearances (leg 1 base, leg 1 plate, ...), got {len(gaps_m)}")
+        kw.setdefault("contact_stiffness_n_per_m", machine.joints.cardan_contact_stiffness_n_per_m)
+        return cls(np.asarray(gaps_m, dtype=float).reshape(4, 2), **kw)
+
+    @classmethod
+    def random(cls, machine: Machine, low_m: float, high_m: float, seed: int, **kw: Any) -> Clearance:
+        """Plays drawn uniformly from [low_m, high_m] (numpy default_rng(seed)), m."""
+        if not 0 <= low_m <= high_m:
+            raise ClearanceError(f"need 0 <= low_m <= high_m, got {low_m}, {high_m}")
+        kw.setdefault("contact_stiffness_n_per_m", machine.joints.cardan_contact_stiffness_n_per_m)
+        return cls(np.random.default_rng(seed).uniform(low_m, high_m, (4, 2)), **kw)
+
+    def with_gap(self, gap_m: float) -> Clearance:
+        return Clearance(np.full((4, 2), float(gap_m)), self.contact_stiffness_n_per_m, self.smoothing_m,
+                         self.rotation_gaps_rad, self.rotation_stiffness_nm_per_rad, self.rotation_smoothing_rad)
+
+    def law(self, leg: int, end: int) -> DeadZone:
+        return DeadZone(float(self.gaps_m[leg, end]), self.contact_stiffness_n_per_m, self.smoothing_m)
+
+    def rotation_law(self, leg: int, end: int) -> DeadZone | None:
+        if self.rotation_gaps_rad is None:
+            return None
+        return DeadZone(float(self.rotation_gaps_rad[leg, end]), self.rotation_stiffness_nm_per_rad,
+                        self.rotation_smoothing_rad)
+
+    def cardan_compliance(self) -> dict:
+        """The ``cardan_compliance`` argument of :func:`pressfit.model.build_model`."""
+        from .model import CardanCompliance
+
+        return {(i, e): CardanCompliance(axial=self.law(i, j), rotation=self.rotation_law(i, j))
+                for i in range(4) for j, e in enumerate(ENDS)}
+
+    def to_dict(self) -> dict[str, Any]:
+        return {"gaps_m": self.gaps_m.tolist(), "contact_stiffness_n_per_m": self.contact_stiffness_n_per_m,
+                "smoothing_m": self.smoothing_m,
+                "rotation_gaps_rad": None if self.rotation_gaps_rad is None else self.rotation_gaps_rad.tolist()}
+
+
+def preload_offsets(machine: Machine, pose_m: np.ndarray, clearance: Clearance, a4: float,
+                    mode: str = "force") -> np.ndarray:
+    """Actuator rest-length offsets (4,) in m for a preload a4 along v_p (module doc).
+
+    ``force``: a4 in N; with no load the actuator forces are a4 v_p and the joints closed. ``length``:
+    a4 in m (offsets -a4 v_p).
+    """
+    from . import statics
+
+    if mode == "length":
+        return statics.preload_offsets(machine, pose_m, a4, "length")
+    if mode != "force":
+        raise ClearanceError(f"preload mode must be 'force' or 'length', got {mode!r}")
+    n = a4 * kinematics.preload_vector(machine, pose_m)
+    c_ax = machine.axial_compliance_m_per_n(kinematics.inverse_kinematics(machine, pose_m).lengths_m)
+    x = invert_law(np.repeat(n[:, None], 2, 1), clearance.gaps_m, clearance.contact_stiffness_n_per_m,
+                   clearance.smoothing_m)
+    return -(n * c_ax + x.sum(1))
+
+
+# --- small-displacement solver, batched --------------------------------------------------------------------
+@dataclass(frozen=True)
+class _Chain:
+    """One decoupled block: 4 legs with direction u_i (4, 3), spring k_i (4,) in series with two plays."""
+
+    u: np.ndarray
+    k: np.ndarray
+    gaps: np.ndarray | None  # (B, 4, 2) or None (no play: linear block)
+    kc: float
+    w: float
+
+    def solve(self, load: np.ndarray, offsets: np.ndarray, z0: np.ndarray | None,
+              tol: float = NEWTON_TOL, max_iter: int = 200) -> tuple[np.ndarray, np.ndarray, float]:
+        """Minimise sum k/2 (u.d - x_b - x_p - o)^2 + E(x) - load.d over (d (B, 3), x (B, 4, 2)).
+
+        Returns z = (d, x flattened) (B, 11), the spring forces (B, 4) and the worst relative residual.
+        """
+        b = load.shape[0]
+        kuu = np.einsum("i,ij,ik->jk", self.k, self.u, self.u)
+        if self.gaps is None:
+            d = np.linalg.solve(kuu, (load + np.einsum("bi,i,ij->bj", offsets, self.k, self.u)).T).T
+            return d, self.k * (d @ self.u.T - offsets), 0.0
+        z = np.zeros((b, 11)) if z0 is None else z0.copy()
+        hess = np.zeros((b, 11, 11))
+        hess[:, :3, :3] = kuu
+        ku = -(self.k[:, None] * self.u)  # (4, 3)
+        idx = np.arange(8)
+        hess[:, :3, 3:] = np.repeat(ku, 2, 0).T
+        hess[:, 3:, :3] = np.repeat(ku, 2, 0)
+        blk = np.kron(np.eye(4), np.ones((2, 2))) * np.repeat(self.k, 2)[:, None]
+        f_ref = np.maximum(np.linalg.norm(load, axis=1), np.abs(offsets) @ self.k / 4 + 1.0)
+        radius = max(0.5 * float(self.gaps.max()), 100 * self.w)
+
+        def parts(zz: np.ndarray) -> tuple[np.ndarray, ...]:
+            d, x = zz[:, :3], zz[:, 3:].reshape(b, 4, 2)
+            stretch = d @ self.u.T - x.sum(2) - offsets
+            n = self.k * stretch
+            e, f, t = _laws_force(x, self.gaps, self.kc, self.w)
+            energy = 0.5 * (n * stretch).sum(1) + e.sum((1, 2)) - (load * d).sum(1)
+            grad = np.concatenate([n @ self.u - load, (f - n[:, :, None]).reshape(b, 8)], 1)
+            return energy, grad, t.reshape(b, 8), n
+
+        energy, grad, t, n = parts(z)
+        for _ in range(max_iter):
+            res = np.max(np.abs(grad), 1) / f_ref
+            if np.all(res <= tol):
+                return z, n, float(res.max())
+            hess[:, 3:, 3:] = blk
+            hess[:, 3 + idx, 3 + idx] += t
+            dz = -np.linalg.solve(hess, grad[:, :, None])[:, :, 0]
+            alpha = np.minimum(1.0, radius / np.maximum(np.max(np.abs(dz[:, 3:]), 1), 1e-300))
+            slope = (grad * dz).sum(1)
+            for _ in range(60):  # backtracking on the convex energy (Armijo), per batch member
+                zt = z + alpha[:, None] * dz
+                et, gt, tt, nt = parts(zt)
+                ok = ((et <= energy + 1e-4 * alpha * slope) | (res <= tol)
+                      | (np.max(np.abs(gt), 1) <= 0.5 * np.max(np.abs(grad), 1)))  # below energy round-off
+                if np.all(ok):
+                    break
+                alpha = np.where(ok, alpha, 0.5 * alpha)
+            z, energy, grad, t, n = zt, et, gt, tt, nt
+        res = np.max(np.abs(grad), 1) / f_ref
+        raise ConvergenceError("clearance equilibrium (small-displacement Newton)", float(res.max()), tol, max_iter)
+
+
+@dataclass(frozen=True)
+class _SmallModel:
+    """The condensed legs at one pose with B clearance/preload variants."""
+
+    pose: np.ndarray
+    trans: _Chain
+    rot: _Chain
+    rho: np.ndarray  # h - P*, m
+    offsets: np.ndarray  # (B, 4) actuator rest-length offsets, m
+
+    @classmethod
+    def build(cls, machine: Machine, pose: np.ndarray, clearances: list[Clearance], offsets: np.ndarray) -> _SmallModel:
+        core = condensed._core(machine, pose[None])
+        cl0 = clearances[0]
+        for c in clearances[1:]:
+            if (c.contact_stiffness_n_per_m, c.smoothing_m, c.rotation_gaps_rad is None) != \
+                    (cl0.contact_stiffness_n_per_m, cl0.smoothing_m, cl0.rotation_gaps_rad is None):
+                raise ClearanceError("a batch needs the same contact law for every clearance")
+        gaps = np.array([c.gaps_m for c in clearances])
+        trans = _Chain(core.e[:, :, 0].T, core.k_a[:, 0], gaps, cl0.contact_stiffness_n_per_m, cl0.smoothing_m)
+        rg = None if cl0.rotation_gaps_rad is None else np.array([c.rotation_gaps_rad for c in clearances])
+        rot = _Chain(core.c[:, :, 0].T, core.k_r[:, 0], rg, cl0.rotation_stiffness_nm_per_rad, cl0.rotation_smoothing_rad)
+        return cls(pose, trans, rot, core.rho[:, 0], np.asarray(offsets, dtype=float))
+
+    def solve(self, wrench: np.ndarray, state: tuple | None) -> tuple[dict[str, np.ndarray], tuple]:
+        """wrench (B, 6) at the plate centre; returns per-member results and the state for the next step."""
+        f, m = wrench[:, :3], wrench[:, 3:]
+        zt, n, rt = self.trans.solve(f, self.offsets, None if state is None else state[0])
+        zr, cpl, rr = self.rot.solve(m + np.cross(self.rho, f), np.zeros_like(self.offsets),
+                                     None if state is None else state[1])
+        phi = zr[:, :3]
+        disp = zt[:, :3] - np.cross(self.rho, phi)
+        nb = len(wrench)
+        out = {"displacement_m": disp, "rotation_rad": phi, "axial_forces_n": n, "couples_nm": cpl,
+               "joint_axial_m": zt[:, 3:].reshape(nb, 4, 2), "residual": np.full(nb, max(rt, rr))}
+        return out, (zt if zt.shape[1] == 11 else None, zr if zr.shape[1] == 11 else None)
+
+
+# --- load-deflection ---------------------------------------------------------------------------------------
+@dataclass(frozen=True)
+class Branch:
+    """States along one loading direction of a load-deflection curve (step k at ``loads_n[k]``)."""
+
+    loads_n: np.ndarray  # (n,) load magnitude along the direction, N
+    displacement_m: np.ndarray  # (n, 3) plate-centre translation, world
+    rotation_rad: np.ndarray  # (n, 3) plate rotation vector
+    axial_forces_n: np.ndarray  # (n, 4) leg/actuator forces, > 0 tension
+    joint_axial_m: np.ndarray  # (n, 4, 2) axial play coordinates [leg, base|plate], m
+    residual: np.ndarray  # (n,) relative residual of each solve
+
+
+@dataclass(frozen=True)
+class LoadDeflection:
+    """A load-deflection curve at one pose (SI). ``unloading`` is stored in the order of ``loading``
+    (its state k is at loads_n[k], reached from above). Derived quantities are along ``direction``."""
+
+    pose_m: np.ndarray
+    direction: np.ndarray  # unit load direction, world
+    preload: float  # a4: N (force mode) or m (length mode)
+    preload_mode: str
+    method: str  # 'small' | 'nonlinear'
+    clearance: Clearance
+    loading: Branch
+    unloading: Branch | None
+
+    @property
+    def loads_n(self) -> np.ndarray:
+        return self.loading.loads_n
+
+    @property
+    def deflection_m(self) -> np.ndarray:
+        """(n,) plate-centre displacement along the load direction relative to the preloaded, unloaded state."""
+        d = self.loading.displacement_m @ self.direction
+        return d - d[0] if self.loads_n[0] == 0 else d
+
+    def closed(self, branch: str = "loading") -> np.ndarray:
+        """(n, 4, 2) True where the joint is in contact (|x| >= gap)."""
+        x = getattr(self, branch).joint_axial_m
+        return np.abs(x) >= self.clearance.gaps_m
+
+    @property
+    def lost_motion_m(self) -> float:
+        """Intercept at zero load of the line through the first two loaded steps (m): the play taken up."""
+        f, d = self.loads_n, self.deflection_m
+        return float(d[1] - f[1] * (d[2] - d[1]) / (f[2] - f[1]))
+
+    @property
+    def small_load_stiffness_n_per_m(self) -> float:
+        """Secant stiffness over the first load step, N/m."""
+        return float((self.loads_n[1] - self.loads_n[0]) / (self.deflection_m[1] - self.deflection_m[0]))
+
+    @property
+    def press_stiffness_n_per_m(self) -> float:
+        """Tangent stiffness at the largest load (backward difference over the last step), N/m."""
+        return float((self.loads_n[-1] - self.loads_n[-2]) / (self.deflection_m[-1] - self.deflection_m[-2]))
+
+    @property
+    def press_secant_stiffness_n_per_m(self) -> float:
+        """Largest load over the deflection it causes (includes lost motion), N/m."""
+        return float((self.loads_n[-1] - self.loads_n[0]) / (self.deflection_m[-1] - self.deflection_m[0]))
+
+    @property
+    def opening_loads_n(self) -> np.ndarray:
+        """(4, 2) load at which each joint first opens on loading (|x| < g), N: 0 if open without load, NaN
+        if it stays closed. Between the last closed step and the first open one, the joint force (linear in
+        the load while closed) is extrapolated from the closed steps to the contact-edge force k_c w / 2."""
+        cl = self.clearance
+        x = self.loading.joint_axial_m
+        f = np.abs(_laws_force(x, cl.gaps_m, cl.contact_stiffness_n_per_m, cl.smoothing_m)[1])
+        edge = np.abs(_laws_force(cl.gaps_m, cl.gaps_m, cl.contact_stiffness_n_per_m, cl.smoothing_m)[1])
+        is_open, ld = ~self.closed(), self.loads_n
+        out = np.full((4, 2), np.nan)
+        for i, j in np.ndindex(4, 2):
+            k = np.flatnonzero(is_open[:, i, j])
+            if not k.size:
+                continue
+            k0 = int(k[0])
+            a = k0 - 2 if k0 >= 2 else k0 - 1  # two closed steps (or the last closed and the first open)
+            if k0 == 0:
+                out[i, j] = ld[0]
+                continue
+            fa, fb = f[a, i, j], f[k0 - 1 if k0 >= 2 else k0, i, j]
+            la, lb = ld[a], ld[k0 - 1 if k0 >= 2 else k0]
+            cross = la + (lb - la) * (fa - edge[i, j]) / (fa - fb) if fa != fb else lb
+            out[i, j] = float(np.clip(cross, ld[k0 - 1], ld[k0]))
+        return out
+
+    def summary(self) -> dict[str, Any]:
+        op = self.opening_loads_n
+        return {"pose_m": self.pose_m.tolist(), "direction": self.direction.tolist(), "preload": self.preload,
+                "preload_mode": self.preload_mode, "method": self.method, "clearance": self.clearance.to_dict(),
+                "load_max_n": float(self.loads_n[-1]), "lost_motion_m": self.lost_motion_m,
+                "small_load_stiffness_n_per_m": self.small_load_stiffness_n_per_m,
+                "press_stiffness_n_per_m": self.press_stiffness_n_per_m,
+                "press_secant_stiffness_n_per_m": self.press_secant_stiffness_n_per_m,
+                "deflection_at_max_m": float(self.deflection_m[-1]),
+                "opening_loads_n": [[None if np.isnan(v) else float(v) for v in row] for row in op],
+                "max_residual": float(np.max(self.loading.residual))}
+
+
+def _direction(direction: Any) -> np.ndarray:
+    d = np.asarray(direction, dtype=float).reshape(3)
+    nd = np.linalg.norm(d)
+    if not np.isfinite(nd) or nd == 0:
+        raise ClearanceError(f"the load direction must be a finite non-zero vector, got {direction!r}")
+    return d / nd
+
+
+def _loads(loads: Any) -> np.ndarray:
+    f = np.asarray(loads, dtype=float).reshape(-1)
+    if f.size < 3 or not np.all(np.isfinite(f)) or f[0] != 0 or np.any(np.diff(f) <= 0):
+        raise ClearanceError("loads must start at 0 N and increase strictly, with at least 3 values")
+    return f
+
+
+def _branch(loads: np.ndarray, states: list[dict[str, np.ndarray]], member: int) -> Branch:
+    keys = ("displacement_m", "rotation_rad", "axial_forces_n", "joint_axial_m", "residual")
+    return Branch(loads, *(np.array([s[k][member] for s in states]) for k in keys))
+
+
+def _sweep_small(machine: Machine, pose: np.ndarray, direction: np.ndarray, loads: np.ndarray,
+                 clearances: list[Clearance], offsets: np.ndarray, unload: bool) -> tuple[list, list]:
+    """Loading (and unloading) states of B variants at once; each step starts from the previous one."""
+    model = _SmallModel.build(machine, pose, clearances, offsets)
+    nb = len(clearances)
+    state, up, down = None, [], []
+    for f in loads:
+        out, state = model.solve(np.tile(np.concatenate([f * direction, np.zeros(3)]), (nb, 1)), state)
+        up.append(out)
+    if unload:
+        for f in loads[::-1]:
+            out, state = model.solve(np.tile(np.concatenate([f * direction, np.zeros(3)]), (nb, 1)), state)
+            down.append(out)
+        down = down[::-1]
+    return up, down
+
+
+def _sweep_nonlinear(machine: Machine, pose: np.ndarray, direction: np.ndarray, loads: np.ndarray,
+                     clearance: Clearance, offsets: np.ndarray, unload: bool) -> tuple[list, list]:
+    from . import statics
+    from .model import build_model
+
+    mm = build_model(machine, pose, cardan_compliance=clearance.cardan_compliance())
+    idx = np.zeros((4, 2), dtype=int)
+    for s in mm.springs:
+        if s.name.endswith("_cardan.axial"):
+            idx[s.leg, ENDS.index(s.name.split("_")[0])] = s.idx_q
+    radius = max(0.5 * float(clearance.gaps_m.max()), 100 * clearance.smoothing_m)
+    v_idx = idx - 1  # joint coordinates of 1-DOF joints: idx_v = idx_q - 1 (the free flyer has nq = nv + 1)
+
+    def limit(dv: np.ndarray) -> float:
+        return min(1.0, radius / max(float(np.max(np.abs(dv[v_idx]))), 1e-300))
+
+    prev = None
+
+    def solve(f: float) -> dict[str, np.ndarray]:
+        nonlocal prev
+        eq = statics.solve_equilibrium(mm, pose, np.concatenate([f * direction, np.zeros(3)]),
+                                       preload_offsets_m=offsets, start=prev, step_limit=limit, max_iter=200)
+        prev = eq
+        return {"displacement_m": eq.plate_displacement_m[None], "rotation_rad": eq.plate_rotation_rad[None],
+                "axial_forces_n": eq.actuator_forces_n[None], "joint_axial_m": eq.q[idx][None],
+                "residual": np.array([eq.residuals.worst()])}
+
+    up = [solve(f) for f in loads]
+    down = [solve(f) for f in loads[::-1]][::-1] if unload else []
+    return up, down
+
+
+def load_deflection(machine: Machine, pose_m: Any, direction: Any, loads_n: Any, clearance: Clearance | None = None,
+                    preload: float = 0.0, preload_mode: str = "force", *, method: str = "small",
+                    unload: bool = True) -> LoadDeflection:
+    """Load-deflection curve of the plate at a reachable pose (m) under loads_n (N, from 0, increasing)
+    along ``direction`` (world, at the plate centre), after the preload a4 (N, or m in length mode).
+
+    ``clearance`` defaults to the machine's uniform clearance (:meth:`Clearance.uniform`). Loading, then
+    (``unload``) unloading by continuation. ``method``: 'small' or 'nonlinear' (module doc).
+    """
+    pose = kinematics.require_reachable(machine, pose_m)
+    d, loads = _direction(direction), _loads(loads_n)
+    cl = clearance or Clearance.uniform(machine)
+    offsets = preload_offsets(machine, pose, cl, float(preload), preload_mode)
+    if method == "small":
+        up, down = _sweep_small(machine, pose, d, loads, [cl], offsets[None], unload)
+    elif method == "nonlinear":
+        up, down = _sweep_nonlinear(machine, pose, d, loads, cl, offsets, unload)
+    else:
+        raise ClearanceError(f"method must be 'small' or 'nonlinear', got {method!r}")
+    return LoadDeflection(pose, d, float(preload), preload_mode, method, cl, _branch(loads, up, 0),
+                          _branch(loads, down, 0) if unload else None)
+
+
+# --- critical preload --------------------------------------------------------------------------------------
+@dataclass(frozen=True)
+class CriticalPreload:
+    """Smallest preload keeping every joint closed (|x| >= g) at every load step up to the press load."""
+
+    preload: float  # upper end of the final bracket (closed): N (force mode) or m (length mode)
+    lower: float  # largest tried preload that lets a joint open
+    tolerance: float  # bracket width reached
+    preload_mode: str
+    press_load_n: float
+    evaluations: int
+
+
+def _all_closed(machine: Machine, pose: np.ndarray, d: np.ndarray, loads: np.ndarray, cls: list[Clearance],
+                a4: np.ndarray, mode: str) -> np.ndarray:
+    offsets = np.array([preload_offsets(machine, pose, c, float(a), mode) for c, a in zip(cls, a4)])
+    up, _ = _sweep_small(machine, pose, d, loads, cls, offsets, unload=False)
+    gaps = np.array([c.gaps_m for c in cls])
+    return np.array([np.all(np.abs(s["joint_axial_m"]) >= gaps, axis=(1, 2)) for s in up]).all(0)
+
+
+def critical_preloads(machine: Machine, pose_m: Any, direction: Any, press_load_n: float,
+                      clearances: list[Clearance], preload_mode: str = "force", steps: int = 50,
+                      tol: float | None = None) -> list[CriticalPreload]:
+    """:func:`critical_preload` for several clearances at once (batched bisections)."""
+    pose = kinematics.require_reachable(machine, pose_m)
+    d = _direction(direction)
+    loads = np.linspace(0.0, float(press_load_n), steps + 1)
+    scale = float(press_load_n) if preload_mode == "force" else float(press_load_n) * float(
+        machine.axial_compliance_m_per_n(kinematics.inverse_kinematics(machine, pose).lengths_m).max())
+    tol = tol if tol is not None else 1e-4 * scale
+    nb = len(clearances)
+    lo, hi = np.zeros(nb), np.full(nb, scale)
+    n_eval = 0
+    closed0 = _all_closed(machine, pose, d, loads, clearances, lo, preload_mode)
+    for _ in range(30):  # grow the upper bound until every joint stays closed
+        ok = _all_closed(machine, pose, d, loads, clearances, hi, preload_mode)
+        n_eval += 1
+        if np.all(ok):
+            break
+        lo, hi = np.where(ok, lo, hi), np.where(ok, hi, 2 * hi)
+    else:
+        raise ClearanceError("no preload up to 2^30 times the press load keeps every joint closed")
+    while np.max(hi - lo) > tol:
+        mid = 0.5 * (lo + hi)
+        ok = _all_closed(machine, pose, d, loads, clearances, mid, preload_mode)
+        n_eval += 1
+        lo, hi = np.where(ok, lo, mid), np.where(ok, mid, hi)
+    hi = np.where(closed0, 0.0, hi)
+    return [CriticalPreload(float(h), float(lw), float(h - lw), preload_mode, float(press_load_n), n_eval)
+            for h, lw in zip(hi, lo)]
+
+
+def critical_preload(machine: Machine, pose_m: Any, direction: Any, press_load_n: float,
+                     clearance: Clearance | None = None, preload_mode: str = "force", steps: int = 50,
+                     tol: float | None = None) -> CriticalPreload:
+    """The smallest preload a4 (N in force mode, m in length mode) that keeps every cardan closed
+    (|x| >= g) at each of ``steps`` load steps up to press_load_n (N) along ``direction``.
+
+    Bisection on the small-displacement model; ``tol`` (default 1e-4 of the press load in N, or of the
+    press load times the largest axial compliance in m) is the final bracket width. The smoothing adds a
+    bias of about k_c w / |v_i| (the contact-edge force k_c w / 2 at each end of the worst leg).
+    """
+    cl = clearance or Clearance.uniform(machine)
+    return critical_preloads(machine, pose_m, direction, press_load_n, [cl], preload_mode, steps, tol)[0]
+
+
+# --- the preload study -------------------------------------------------------------------------------------
+@dataclass(frozen=True)
+class PreloadStudy:
+    """Stiffness and lost motion over a (clearance x preload) grid at one pose; arrays (G, P) (SI)."""
+
+    pose_m: np.ndarray
+    direction: np.ndarray
+    preload_mode: str
+    clearances_m: np.ndarray  # (G,) mean play of each clearance variant, m
+    preloads: np.ndarray  # (P,) N (force) or m (length)
+    loads_n: np.ndarray  # (n,)
+    deflection_m: np.ndarray  # (G, P, n) along the direction, loading
+    small_load_stiffness_n_per_m: np.ndarray
+    press_stiffness_n_per_m: np.ndarray
+    press_secant_stiffness_n_per_m: np.ndarray
+    lost_motion_m: np.ndarray
+    first_opening_load_n: np.ndarray  # lowest load at which some joint is open (NaN: none opens)
+    critical_preload: np.ndarray  # (G,)
+    reference_stiffness_n_per_m: float  # the same machine without clearance (g = 0), first step
+    max_residual: float
+    contact_stiffness_n_per_m: float
+    smoothing_m: float
+
+    def rows(self) -> tuple[list[str], list[list[Any]]]:
+        header = ["clearance_m", f"preload_{'n' if self.preload_mode == 'force' else 'm'}",
+                  "small_load_stiffness_n_per_m", "press_stiffness_n_per_m", "press_secant_stiffness_n_per_m",
+                  "lost_motion_m", "deflection_at_max_m", "first_opening_load_n", "critical_preload",
+                  "stiffness_gain_vs_no_preload"]
+        rows = []
+        for g, p in np.ndindex(len(self.clearances_m), len(self.preloads)):
+            rows.append([float(self.clearances_m[g]), float(self.preloads[p]),
+                         float(self.small_load_stiffness_n_per_m[g, p]), float(self.press_stiffness_n_per_m[g, p]),
+                         float(self.press_secant_stiffness_n_per_m[g, p]), float(self.lost_motion_m[g, p]),
+                         float(self.deflection_m[g, p, -1]), _opt(self.first_opening_load_n[g, p]),
+                         float(self.critical_preload[g]), float(self.small_load_stiffness_n_per_m[g, p]
+                                                               / self.small_load_stiffness_n_per_m[g, 0])])
+        return header, rows
+
+    def to_dict(self) -> dict[str, Any]:
+        header, rows = self.rows()
+        return {"pose_m": self.pose_m.tolist(), "direction": self.direction.tolist(),
+                "preload_mode": self.preload_mode, "load_max_n": float(self.loads_n[-1]),
+                "steps": len(self.loads_n) - 1, "contact_stiffness_n_per_m": self.contact_stiffness_n_per_m,
+                "smoothing_m": self.smoothing_m, "reference_stiffness_n_per_m": self.reference_stiffness_n_per_m,
+                "max_residual": self.max_residual, "answers": self.answers(),
+                "table": [dict(zip(header, r)) for r in rows]}
+
+    def answers(self) -> list[dict[str, Any]]:
+        """Per clearance: the critical preload, and the small-load and press-load stiffness it buys."""
+        out = []
+        for g, gap in enumerate(self.clearances_m):
+            ok = np.flatnonzero(self.preloads >= self.critical_preload[g])
+            best = int(ok[0]) if ok.size else None
+            out.append({
+                "clearance_m": float(gap), "critical_preload": float(self.critical_preload[g]),
+                "lost_motion_without_preload_m": float(self.lost_motion_m[g, 0]),
+                "small_load_stiffness_without_preload_n_per_m": float(self.small_load_stiffness_n_per_m[g, 0]),
+                "press_secant_without_preload_n_per_m": float(self.press_secant_stiffness_n_per_m[g, 0]),
+                "first_sufficient_preload": None if best is None else float(self.preloads[best]),
+                "small_load_stiffness_with_it_n_per_m": None if best is None
+                else float(self.small_load_stiffness_n_per_m[g, best]),
+                "press_secant_with_it_n_per_m": None if best is None
+                else float(self.press_secant_stiffness_n_per_m[g, best]),
+            })
+        return out
+
+
+def _opt(v: float) -> float | str:
+    return "" if np.isnan(v) else float(v)
+
+
+def preload_study(machine: Machine, pose_m: Any, clearances_m: Any, preloads: Any, load_max_n: float = 700.0,
+                  steps: int = 50, *, direction: Any = (0.0, 1.0, 0.0), preload_mode: str = "force",
+                  template: Clearance | None = None, progress: bool = True) -> PreloadStudy:
+    """Load-deflection curves (loading, small-displacement solver) for every clearance (a number: m, uniform
+    on the eight cardans with the contact law of ``template`` or the machine; or a :class:`Clearance`; an
+    empty list: ``template`` itself) and preload (N, or m in length mode),
+    0..load_max_n (N) in ``steps`` steps along ``direction``; plus the critical preload per clearance."""
+    pose = kinematics.require_reachable(machine, pose_m)
+    d = _direction(direction)
+    pre = np.atleast_1d(np.asarray(preloads, float))
+    base = template or Clearance.uniform(machine)
+    variants = [c if isinstance(c, Clearance) else base.with_gap(float(c)) for c in clearances_m] or [base]
+    gaps = np.array([float(c.gaps_m.mean()) for c in variants])
+    if pre.size == 0 or not np.all(np.isfinite(pre)):
+        raise ClearanceError("give at least one finite preload")
+    if not (load_max_n > 0 and steps >= 2):
+        raise ClearanceError("load_max_n must be positive and steps >= 2")
+    loads = np.linspace(0.0, float(load_max_n), int(steps) + 1)
+    curves, res = [], 0.0
+    for var in tqdm(variants, desc="preload study", unit="clearance", disable=not progress):
+        cls = [var] * len(pre)
+        offsets = np.array([preload_offsets(machine, pose, var, float(a), preload_mode) for a in pre])
+        up, _ = _sweep_small(machine, pose, d, loads, cls, offsets, unload=False)
+        curves.append([LoadDeflection(pose, d, float(a), preload_mode, "small", cls[0], _branch(loads, up, p), None)
+                       for p, a in enumerate(pre)])
+        res = max(res, max(float(s["residual"].max()) for s in up))
+    crit = critical_preloads(machine, pose, d, load_max_n, variants, preload_mode, steps)
+    ref = load_deflection(machine, pose, d, loads[:3], base.with_gap(0.0), unload=False)
+
+    def grid(f: Any) -> np.ndarray:
+        return np.array([[f(c) for c in row] for row in curves])
+
+    return PreloadStudy(
+        pose, d, preload_mode, gaps, pre, loads, grid(lambda c: c.deflection_m),
+        grid(lambda c: c.small_load_stiffness_n_per_m), grid(lambda c: c.press_stiffness_n_per_m),
+        grid(lambda c: c.press_secant_stiffness_n_per_m), grid(lambda c: c.lost_motion_m),
+        grid(lambda c: np.nanmin(c.opening_loads_n) if np.any(~np.isnan(c.opening_loads_n)) else np.nan),
+        np.array([c.preload for c in crit]), ref.small_load_stiffness_n_per_m, res,
+        base.contact_stiffness_n_per_m, base.smoothing_m)
+
+
+def write_study(study: PreloadStudy, out_dir: Path | str, overwrite: bool = False) -> list[Path]:
+    """preload_study.csv, preload_study.json and two PNGs (stiffness vs preload, curves) in out_dir."""
+    import matplotlib.pyplot as plt
+
+    from . import plots  # noqa: F401  (selects the Agg backend)
+
+    out = Path(out_dir)
+    header, rows = study.rows()
+    paths = [io.write_csv(out / "preload_study.csv", header, rows, overwrite),
+             io.write_json(out / "preload_study.json", study.to_dict(), overwrite)]
+    unit = "N" if study.preload_mode == "force" else "m"
+    fig, axes = plt.subplots(1, 2, figsize=(11, 4.2), layout="constrained")
+    try:
+        for g, gap in enumerate(study.clearances_m):
+            lab = f"g = {gap * 1e6:g} um"
+            line, = axes[0].plot(study.preloads, study.small_load_stiffness_n_per_m[g], "o-", ms=3, label=lab)
+            axes[1].plot(study.preloads, study.press_secant_stiffness_n_per_m[g], "o-", ms=3, color=line.get_color(),
+                         label=lab)
+            axes[1].plot(study.preloads, study.press_stiffness_n_per_m[g], "x:", ms=3, color=line.get_color())
+            for ax in axes:
+                ax.axvline(study.critical_preload[g], color=line.get_color(), lw=0.6, ls="--")
+        for ax in axes:
+            ax.axhline(study.reference_stiffness_n_per_m, color="k", lw=0.8, label="no clearance")
+            ax.set(xlabel=f"preload a4 [{unit}] (dashed: critical preload)", ylabel="stiffness [N/m]", yscale="log")
+        axes[0].set_title("small-load stiffness (first step secant)")
+        axes[1].set_title(f"at {study.loads_n[-1]:g} N: secant (o-) and tangent (x:)")
+        axes[0].legend(fontsize=7)
+        fig.suptitle(f"pose {study.pose_m.tolist()} m, load along {np.round(study.direction, 3).tolist()}")
+        paths.append(io.save_figure(fig, out / "preload_stiffness.png", overwrite))
+    finally:
+        plt.close(fig)
+    fig, axes = plt.subplots(1, len(study.clearances_m), figsize=(4.2 * len(study.clearances_m), 3.8),
+                             squeeze=False, layout="constrained")
+    try:
+        for g, ax in enumerate(axes[0]):
+            for p, a in enumerate(study.preloads):
+                ax.plot(study.deflection_m[g, p] * 1e6, study.loads_n, lw=1, label=f"a4 = {a:g} {unit}")
+            ax.set(title=f"g = {study.clearances_m[g] * 1e6:g} um", xlabel="deflection along the load [um]",
+                   ylabel="load [N]")
+        axes[0][0].legend(fontsize=6)
+        paths.append(io.save_figure(fig, out / "load_deflection.png", overwrite))
+    finally:
+        plt.close(fig)
+    return paths
+
+
+def study_from_case(case: Any) -> dict[str, Any]:
+    """Keyword arguments of :func:`preload_study` (plus ``machine``) from a case with a ``[study]`` table."""
+    if case.study is None:
+        raise ClearanceError(f"{case.path}: no [study] table")
+    if case.loads.press_force_n is None or len(case.poses.array()) != 1:
+        raise ClearanceError(f"{case.path}: a preload study needs one pose in [poses] and [loads] press_force_n")
+    machine = case.machine()
+    spec = case.clearance
+    kw: dict[str, Any] = {"smoothing_m": spec.smoothing_m if spec else DEFAULT_SMOOTHING_M}
+    if spec and spec.contact_stiffness_n_per_m:
+        kw["contact_stiffness_n_per_m"] = spec.contact_stiffness_n_per_m
+    if spec and spec.gaps_m:
+        template = Clearance.per_joint(machine, spec.gaps_m, **kw)
+    elif spec and spec.random_m:
+        template = Clearance.random(machine, *spec.random_m, seed=spec.seed, **kw)
+    else:
+        template = Clearance.uniform(machine, **kw)
+    return {"machine": machine, "pose_m": case.poses.array()[0], "clearances_m": list(case.study.clearances_m),
+            "preloads": list(case.study.preloads), "load_max_n": case.loads.press_force_n,
+            "steps": case.study.steps, "direction": case.loads.direction, "preload_mode": case.preload.mode,
+            "template": template}
+
+
+def format_answers(study: PreloadStudy) -> str:
+    """The user's question answered per clearance, one line each (SI)."""
+    unit = "N" if study.preload_mode == "force" else "m"
+    lines = [f"pose {study.pose_m.tolist()} m, load 0..{study.loads_n[-1]:g} N along "
+             f"{np.round(study.direction, 4).tolist()}; no-clearance stiffness {study.reference_stiffness_n_per_m:.4g} N/m"]
+    for a in study.answers():
+        s = (f"g = {a['clearance_m'] * 1e6:g} um: critical preload {a['critical_preload']:.4g} {unit}; without "
+             f"preload lost motion {a['lost_motion_without_preload_m'] * 1e6:.3g} um, small-load stiffness "
+             f"{a['small_load_stiffness_without_preload_n_per_m']:.3g} N/m, secant at the load "
+             f"{a['press_secant_without_preload_n_per_m']:.3g} N/m")
+        if a["first_sufficient_preload"] is not None:
+            s += (f"; with a4 = {a['first_sufficient_preload']:g} {unit}: {a['small_load_stiffness_with_it_n_per_m']:.3g}"
+                  f" N/m and {a['press_secant_with_it_n_per_m']:.3g} N/m")
+        else:
+            s += "; no preload in the list is sufficient"
+        lines.append(s)
+    return "\n".join(lines)
