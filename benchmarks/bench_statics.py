@@ -1,0 +1,116 @@
+"""Per-pose time of the Pinocchio equilibrium solve (``statics.solve_equilibrium``), one core.
+
+Run: ``python benchmarks/bench_statics.py [--poses 1000] [--springs 4]``. Random reachable poses in the
+required workspace (x, z in +-0.25 m, y in [0.5, 0.75] m), a 700 N press load plus a small off-axis
+wrench; one model is built once and retargeted per pose (as a sweep would). Prints the median time per
+pose and the throughput for the linear and the nonlinear solve, then an instrumented run that splits
+the time into Pinocchio calls, LAPACK / numpy.linalg calls and the rest (Python and small numpy
+operations). Not a test. Goals (issue 3): linear <= 25 us, nonlinear <= 250 us.
+"""
+
+from __future__ import annotations
+
+import argparse
+import os
+import statistics
+import time
+
+os.environ.setdefault("OMP_NUM_THREADS", "1")
+os.environ.setdefault("OPENBLAS_NUM_THREADS", "1")
+
+import numpy as np  # noqa: E402
+import pinocchio as pin  # noqa: E402
+
+from pressfit import kinematics, load_machine, statics  # noqa: E402
+from pressfit.model import build_model  # noqa: E402
+
+PIN_CALLS = ("computeJointJacobians", "forwardKinematics", "rnea", "integrate", "log3", "getConstraintsJacobian")
+
+
+def poses_and_loads(machine, n: int, rng: np.random.Generator) -> tuple[np.ndarray, np.ndarray]:
+    out = []
+    while len(out) < n:
+        h = np.array([rng.uniform(-0.25, 0.25), rng.uniform(0.5, 0.75), rng.uniform(-0.25, 0.25)])
+        if kinematics.is_reachable(machine, h):
+            out.append(h)
+    loads = np.column_stack([rng.normal(0, 30, n), np.full(n, 700.0), rng.normal(0, 30, n), rng.normal(0, 5, (n, 3))])
+    return np.array(out), loads
+
+
+def run(mm, poses, loads, linear: bool) -> tuple[list[float], list[int]]:
+    times, iters = [], []
+    for h, w in zip(poses, loads):
+        t0 = time.perf_counter()
+        eq = statics.solve_equilibrium(mm, h, w, linear=linear)
+        times.append(time.perf_counter() - t0)
+        iters.append(eq.iterations)
+        assert eq.is_valid(1e-9), eq.residuals
+    return times, iters
+
+
+class Clock:
+    """Accumulates the time spent inside wrapped functions."""
+
+    def __init__(self) -> None:
+        self.total = 0.0
+
+    def wrap(self, f):
+        def g(*a, **k):
+            t0 = time.perf_counter()
+            try:
+                return f(*a, **k)
+            finally:
+                self.total += time.perf_counter() - t0
+        return g
+
+
+def breakdown(mm, poses, loads, linear: bool) -> dict[str, float]:
+    pin_clock, la_clock = Clock(), Clock()
+    saved = {name: getattr(pin, name) for name in PIN_CALLS}
+    saved_la = (statics._getrf, statics._getrs, np.linalg.svd)
+    try:
+        for name in PIN_CALLS:
+            setattr(pin, name, pin_clock.wrap(saved[name]))
+        statics._getrf, statics._getrs = la_clock.wrap(saved_la[0]), la_clock.wrap(saved_la[1])
+        np.linalg.svd = la_clock.wrap(saved_la[2])
+        t0 = time.perf_counter()
+        run(mm, poses, loads, linear)
+        total = time.perf_counter() - t0
+    finally:
+        for name, f in saved.items():
+            setattr(pin, name, f)
+        statics._getrf, statics._getrs, np.linalg.svd = saved_la
+    n = len(poses)
+    return {"total": total / n, "pinocchio": pin_clock.total / n, "linalg": la_clock.total / n,
+            "python+numpy": (total - pin_clock.total - la_clock.total) / n}
+
+
+def main() -> None:
+    parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    parser.add_argument("--poses", type=int, default=1000)
+    parser.add_argument("--springs", type=int, default=None, help="springs per segment (default: the model's)")
+    args = parser.parse_args()
+    machine = load_machine()
+    rng = np.random.default_rng(0)
+    poses, loads = poses_and_loads(machine, args.poses, rng)
+    mm = build_model(machine, poses[0], springs_per_segment=args.springs)
+    print(f"model: nq = {mm.model.nq}, nv = {mm.model.nv}, {mm.springs_per_segment} springs per segment, "
+          f"{len(poses)} poses")
+    run(mm, poses[:20], loads[:20], True)  # warm-up
+    for linear in (True, False):
+        times, iters = run(mm, poses, loads, linear)
+        med = statistics.median(times)
+        name = "linear   " if linear else "nonlinear"
+        print(f"{name}: median {med * 1e6:8.1f} us/pose, throughput {1 / med:8.0f} poses/s "
+              f"(p10 {np.percentile(times, 10) * 1e6:.1f}, p90 {np.percentile(times, 90) * 1e6:.1f} us; "
+              f"Newton iterations median {statistics.median(iters):g}, max {max(iters)})")
+    print("instrumented breakdown (mean per pose; the wrappers add ~1 us per call):")
+    for linear in (True, False):
+        b = breakdown(mm, poses[:300], loads[:300], linear)
+        print(f"  {'linear   ' if linear else 'nonlinear'}: total {b['total'] * 1e6:7.1f} us = Pinocchio "
+              f"{b['pinocchio'] * 1e6:6.1f} + LAPACK {b['linalg'] * 1e6:6.1f} + Python/numpy "
+              f"{b['python+numpy'] * 1e6:6.1f} us")
+
+
+if __name__ == "__main__":
+    main()
