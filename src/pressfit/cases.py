@@ -118,10 +118,28 @@ class Loads(_Strict):
 
 
 class Preload(_Strict):
-    """Actuator preload a_4 (N) along v_p: ``force`` = force-controlled drives, ``length`` = offsets."""
+    """Actuator preload a_4 along v_p, applied before the load.
+
+    ``mode = "force"`` (force-controlled drives): ``a4_n`` (N), the actuator forces at no load are a4 v_p.
+    ``mode = "length"`` (position-held drives): ``a4_m`` (m), actuator rest-length offsets -a4 v_p.
+    """
 
     a4_n: Annotated[float, Field(le=MAX_FORCE_N, ge=-MAX_FORCE_N, allow_inf_nan=False)] = 0.0
+    a4_m: Annotated[float, Field(le=0.01, ge=-0.01, allow_inf_nan=False)] | None = None
     mode: Literal["force", "length"] = "force"
+
+    @model_validator(mode="after")
+    def _unit_matches_mode(self) -> Preload:
+        if self.mode == "length" and (self.a4_m is None or self.a4_n != 0.0):
+            raise ValueError('mode = "length" takes a4_m (m), not a4_n')
+        if self.mode == "force" and self.a4_m is not None:
+            raise ValueError('mode = "force" takes a4_n (N), not a4_m')
+        return self
+
+    @property
+    def a4(self) -> float:
+        """The preload coordinate in the mode's unit (N or m)."""
+        return self.a4_m if self.mode == "length" else self.a4_n  # type: ignore[return-value]
 
 
 class Solver(_Strict):

@@ -65,7 +65,7 @@ def kinematics_cmd(x: float, y: float, z: float, as_json: bool, model_path: Path
 
 
 @main.command("solve", context_settings={"ignore_unknown_options": True})  # negative numbers
-@click.argument("values", nargs=-1, type=float)
+@click.argument("values", nargs=-1)
 @click.option("--load", "has_load", is_flag=True,
               help="Followed by FX FY FZ [MX MY MZ]: plate wrench at the plate centre, world axes (N, N m).")
 @click.option("--preload", "a4", type=float, default=None, help="Actuator preload a4 along v_p (N; m in length mode).")
@@ -75,23 +75,45 @@ def kinematics_cmd(x: float, y: float, z: float, as_json: bool, model_path: Path
 @click.option("--json", "as_json", is_flag=True, help="Print JSON (keys documented in README).")
 @MODEL_OPTION
 @user_errors
-def solve_cmd(values: tuple[float, ...], has_load: bool, a4: float | None, preload_mode: str, linear: bool,
+def solve_cmd(values: tuple[str, ...], has_load: bool, a4: float | None, preload_mode: str, linear: bool,
               as_json: bool, model_path: Path) -> None:
-    """Static equilibrium at pose X Y Z (m): pressfit solve X Y Z --load FX FY FZ [MX MY MZ]."""
-    from .statics import SECTIONS, solve_equilibrium
+    """Static equilibrium: pressfit solve X Y Z --load FX FY FZ [MX MY MZ], or pressfit solve CASE.toml."""
+    from .statics import solve_equilibrium
 
-    if not has_load or len(values) not in (6, 9):
-        raise click.UsageError("expected X Y Z --load FX FY FZ [MX MY MZ]")
-    wrench = np.zeros(6)
-    wrench[:len(values) - 3] = values[3:]
-    machine = load_machine(model_path)
-    eq = solve_equilibrium(machine, values[:3], wrench, preload=a4, preload_mode=preload_mode, linear=linear)
+    if len(values) == 1 and values[0].endswith(".toml"):
+        from .cases import load_case
+
+        case = load_case(values[0])
+        machine = case.machine()
+        a4, preload_mode = (case.preload.a4 or None), case.preload.mode
+        linear = linear or case.solver.linear
+        jobs = [(h, w) for h in case.poses.array() for w in case.loads.wrenches()]
+    else:
+        try:
+            numbers = [float(v) for v in values]
+        except ValueError:
+            raise click.UsageError("expected X Y Z --load FX FY FZ [MX MY MZ] (numbers) or CASE.toml") from None
+        if not has_load or len(numbers) not in (6, 9):
+            raise click.UsageError("expected X Y Z --load FX FY FZ [MX MY MZ]")
+        wrench = np.zeros(6)
+        wrench[:len(numbers) - 3] = numbers[3:]
+        machine = load_machine(model_path)
+        jobs = [(np.array(numbers[:3]), wrench)]
+    results = [solve_equilibrium(machine, h, w, preload=a4, preload_mode=preload_mode, linear=linear)
+               for h, w in jobs]
     if as_json:
-        click.echo(to_json(eq.to_dict()))
+        click.echo(to_json(results[0].to_dict() if len(results) == 1 else [r.to_dict() for r in results]))
         return
-    kind = "linear (small displacements)" if linear else f"nonlinear, {eq.iterations} Newton iterations"
+    for eq in results:
+        _print_equilibrium(eq)
+
+
+def _print_equilibrium(eq: Any) -> None:
+    from .statics import SECTIONS
+
+    kind = "linear (small displacements)" if eq.linear else f"nonlinear, {eq.iterations} Newton iterations"
     fmt = lambda v: "(" + ", ".join(f"{c:g}" for c in v) + ")"  # noqa: E731
-    click.echo(f"pose h = {fmt(values[:3])} m, load F = {fmt(wrench[:3])} N, M = {fmt(wrench[3:])} N m; {kind}")
+    click.echo(f"pose h = {fmt(eq.pose_m)} m, load F = {fmt(eq.load[:3])} N, M = {fmt(eq.load[3:])} N m; {kind}")
     click.echo("leg  section       N [N]      V_x [N]    V_y [N]    M_x [N m]  M_y [N m]  T [N m]")
     for i, leg in enumerate(eq.legs):
         for name in SECTIONS:
@@ -103,7 +125,7 @@ def solve_cmd(values: tuple[float, ...], has_load: bool, a4: float | None, prelo
     r = eq.residuals
     click.echo(f"residuals (relative): plate F {r.plate_force:.1e} M {r.plate_moment:.1e}; machine F "
                f"{r.machine_force:.1e} M {r.machine_moment:.1e}; closure {r.closure_m:.1e} m {r.closure_rad:.1e} rad; "
-               f"stationarity {r.stationarity:.1e}")
+               f"stationarity {r.stationarity:.1e}\n")
 
 
 @main.command("tables")
@@ -113,14 +135,12 @@ def solve_cmd(values: tuple[float, ...], has_load: bool, a4: float | None, prelo
 @user_errors
 def tables_cmd(as_json: bool, out_dir: Path | None, overwrite: bool) -> None:
     """Reproduce the paper's Tables 5 and 6 (cases/paper/A, B, C) beside pressfit's solution."""
-    from dataclasses import asdict
-
     from . import tables
     from .io import write_csv, write_text
 
     entries = tables.paper_tables()
     if as_json:
-        click.echo(to_json([asdict(e) for e in entries]))
+        click.echo(to_json([e.as_dict() for e in entries]))
     else:
         click.echo(tables.to_markdown(entries))
     if out_dir is not None:

@@ -18,6 +18,7 @@ from tqdm import tqdm
 
 from . import buckling, condensed, kinematics
 from .cases import Case
+from .errors import PressfitError
 from .statics import Equilibrium, solve_equilibrium
 
 SECTIONS = ("base", "actuator", "plate")
@@ -136,6 +137,9 @@ def evaluate_case(case: Case, progress: bool = False) -> CaseResult:
     if not len(poses):
         return result
     critical = buckling.leg_critical_loads_n(machine, kinematics.inverse_kinematics(machine, poses).lengths_m)
+    if case.preload.mode == "length" and case.preload.a4:
+        raise PressfitError(f"{case.path}: [preload] mode = \"length\" is not supported by the envelope check "
+                            "(its linear sweep superposes force-mode preload only); give a4_n with mode = \"force\"")
     a4 = case.preload.a4_n
     vp = kinematics.preload_vector(machine, poses) if a4 else None
 

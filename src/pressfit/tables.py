@@ -52,6 +52,12 @@ class TableEntry:
     def table(self) -> str:
         return "Table 5" if self.quantity.startswith("F") else "Table 6"
 
+    def as_dict(self) -> dict[str, object]:
+        """JSON-ready; ``relative_error`` is null where it is not defined (negligible or not compared)."""
+        d = asdict(self)
+        d["relative_error"] = None if np.isnan(self.relative_error) else self.relative_error
+        return d
+
     @property
     def verdict(self) -> str:
         if not self.compared:
