@@ -213,7 +213,7 @@ def workspace_cmd(heights: tuple[float, ...], out_dir: Path, overwrite: bool, as
     click.echo(f"maps and summary.json written to {out_dir}")
 
 
-@main.command("stiffness")
+@main.command("stiffness", context_settings={"ignore_unknown_options": True})  # negative coordinates
 @click.argument("x", type=float)
 @click.argument("y", type=float)
 @click.argument("z", type=float)
@@ -227,8 +227,9 @@ def workspace_cmd(heights: tuple[float, ...], out_dir: Path, overwrite: bool, as
 @user_errors
 def stiffness_cmd(x: float, y: float, z: float, as_json: bool, maps: bool, out_dir: Path, n_grid: int,
                   overwrite: bool, model_path: Path) -> None:
-    """Plate compliance and stiffness at pose X Y Z (m), condensed linear model (rigid free cardans)."""
-    from . import condensed
+    """Plate compliance and stiffness at pose X Y Z (m): condensed linear model, cross-checked against the
+    Pinocchio model, plus the tangent compliance of the nonlinear equilibrium under the press load."""
+    from . import compliance, condensed
 
     machine = load_machine(model_path)
     if maps:
@@ -236,7 +237,16 @@ def stiffness_cmd(x: float, y: float, z: float, as_json: bool, maps: bool, out_d
         for p in condensed.write_stiffness_maps(m, out_dir, overwrite):
             click.echo(f"wrote {p}")
         return
-    out = condensed.stiffness_report(machine, kinematics.require_reachable(machine, [x, y, z]))
+    h = kinematics.require_reachable(machine, [x, y, z])
+    out = condensed.stiffness_report(machine, h)
+    c_pin = compliance.plate_compliance(machine, h)
+    c_tan = compliance.plate_compliance(machine, h, load=np.array([0.0, out["press_load_n"], 0, 0, 0, 0]))
+    scale = np.abs(c_pin).max()
+    out["pinocchio_linear_compliance_6x6"] = c_pin.tolist()
+    out["condensed_vs_pinocchio_max_difference_relative"] = float(
+        np.abs(np.array(out["compliance_6x6"]) - c_pin).max() / scale)
+    out["tangent_compliance_6x6_under_press_load"] = c_tan.tolist()
+    out["tangent_vertical_stiffness_under_press_load_n_per_m"] = float(1 / c_tan[1, 1])
     if as_json:
         click.echo(to_json(out))
         return
@@ -250,6 +260,10 @@ def stiffness_cmd(x: float, y: float, z: float, as_json: bool, maps: bool, out_d
                f"{out['lateral_stiffness_n_per_m']:.4e} N/m, ratio {out['lateral_to_vertical']:.4f}")
     click.echo(f"under {out['press_load_n']:g} N (+y): tilt {out['press_tilt_rad']:.4e} rad, displacement "
                + ", ".join(f"{v:+.4e}" for v in out["press_displacement_m"]) + " m")
+    click.echo(f"Pinocchio model: compliance agrees with the condensed one to "
+               f"{out['condensed_vs_pinocchio_max_difference_relative']:.1e} (relative to its largest entry); "
+               f"tangent vertical stiffness under the press load (nonlinear) "
+               f"{out['tangent_vertical_stiffness_under_press_load_n_per_m']:.4e} N/m")
 
 
 @main.command("interference", context_settings={"ignore_unknown_options": True})  # negative coordinates
