@@ -110,3 +110,18 @@ def test_shipped_cases_pass_and_example_fails():
     assert runner.invoke(main, ["check", str(ROOT / "cases"), "--no-progress"]).exit_code == 0
     res = runner.invoke(main, ["check", str(ROOT / "docs/examples/too_tight.toml"), "--no-progress"])
     assert res.exit_code == 1 and "FAIL plate tilt" in res.output
+
+
+def test_clearance_case_sheds_load_from_opened_legs(tmp_path):
+    """Pose A, preload a4 = 200 N along v_p = (-1, 1, -1, 1)/2, 20 um axial plays, 700 N up: legs 1 and 3
+    (compressed by the preload) open at 2 a4 sin(alpha) = 358 N < 700 N, after which legs 2 and 4 carry
+    everything: N = 700 / (2 sin(alpha)) = 391.3 N (closed form; 0.5% covers the smoothing and the
+    contact law). Without [clearance] the linear superposition gives 100 + 700 / (4 sin(alpha)) N."""
+    env, pose_a, preload = {"max_tension_n": 1e6}, {"points_m": [[0.0, 0.72, 0.0]]}, {"a4_n": 200.0}
+    s = math.sin(math.atan(2.0))
+    plain = evaluate_case(load_case(case_file(tmp_path, env, pose_a, "p.toml", preload=preload)))
+    assert plain.limits[0].worst == pytest.approx(100 + 700 / (4 * s), rel=1e-9)
+    res = evaluate_case(load_case(case_file(tmp_path, env, pose_a, "c.toml", preload=preload,
+                                            clearance={"gaps_m": [20e-6] * 8})))
+    assert res.limits[0].worst == pytest.approx(700 / (2 * s), rel=5e-3)
+    assert "clearance" in res.limits[0].method

@@ -746,6 +746,19 @@ def write_study(study: PreloadStudy, out_dir: Path | str, overwrite: bool = Fals
     return paths
 
 
+def clearance_from_case(case: Any, machine: Machine) -> Clearance:
+    """The cardan clearances a case's ``[clearance]`` table describes (default: the machine's uniform one)."""
+    spec = case.clearance
+    kw: dict[str, Any] = {"smoothing_m": spec.smoothing_m if spec else DEFAULT_SMOOTHING_M}
+    if spec and spec.contact_stiffness_n_per_m:
+        kw["contact_stiffness_n_per_m"] = spec.contact_stiffness_n_per_m
+    if spec and spec.gaps_m:
+        return Clearance.per_joint(machine, spec.gaps_m, **kw)
+    if spec and spec.random_m:
+        return Clearance.random(machine, *spec.random_m, seed=spec.seed, **kw)
+    return Clearance.uniform(machine, **kw)
+
+
 def study_from_case(case: Any) -> dict[str, Any]:
     """Keyword arguments of :func:`preload_study` (plus ``machine``) from a case with a ``[study]`` table."""
     if case.study is None:
@@ -753,20 +766,10 @@ def study_from_case(case: Any) -> dict[str, Any]:
     if case.loads.press_force_n is None or len(case.poses.array()) != 1:
         raise ClearanceError(f"{case.path}: a preload study needs one pose in [poses] and [loads] press_force_n")
     machine = case.machine()
-    spec = case.clearance
-    kw: dict[str, Any] = {"smoothing_m": spec.smoothing_m if spec else DEFAULT_SMOOTHING_M}
-    if spec and spec.contact_stiffness_n_per_m:
-        kw["contact_stiffness_n_per_m"] = spec.contact_stiffness_n_per_m
-    if spec and spec.gaps_m:
-        template = Clearance.per_joint(machine, spec.gaps_m, **kw)
-    elif spec and spec.random_m:
-        template = Clearance.random(machine, *spec.random_m, seed=spec.seed, **kw)
-    else:
-        template = Clearance.uniform(machine, **kw)
     return {"machine": machine, "pose_m": case.poses.array()[0], "clearances_m": list(case.study.clearances_m),
             "preloads": list(case.study.preloads), "load_max_n": case.loads.press_force_n,
             "steps": case.study.steps, "direction": case.loads.direction, "preload_mode": case.preload.mode,
-            "template": template}
+            "template": clearance_from_case(case, machine)}
 
 
 def format_answers(study: PreloadStudy) -> str:
