@@ -46,8 +46,7 @@ the previous solution. The two agree to the geometric nonlinearity (about 1e-3 a
 
 from __future__ import annotations
 
-import math
-from dataclasses import dataclass, field
+from dataclasses import dataclass
 from pathlib import Path
 from typing import Any
 
