@@ -64,3 +64,10 @@ def test_report_quick_writes_every_section(tmp_path):
         assert f"## {n}." in text
     for link in [line.split("](")[1][:-1] for line in text.splitlines() if line.startswith("![")]:
         assert (tmp_path / link).exists(), link
+
+
+def test_list_shows_models_and_every_shipped_case():
+    res = run("list")
+    assert res.exit_code == 0, res.output
+    for name in ("pressfit_4upu.toml", "paper/A.toml", "paper/B.toml", "paper/C.toml", "press_workspace.toml"):
+        assert name in res.output

@@ -64,6 +64,27 @@ def kinematics_cmd(x: float, y: float, z: float, as_json: bool, model_path: Path
                + ", ".join(f"{v:.4f}" for v in out["force_indices"]))
 
 
+@main.command("list")
+@user_errors
+def list_cmd() -> None:
+    """The shipped machine descriptions (models/) and case files (cases/), with what each case holds."""
+    from .cases import discover, load_case
+    from .machine import MODELS_DIR
+
+    root = MODELS_DIR.parent
+    click.echo("models:")
+    for path in sorted(MODELS_DIR.glob("*.toml")):
+        m = load_machine(path)
+        click.echo(f"  {path.relative_to(root)}  {m.name}: {m.description}")
+    click.echo("cases:")
+    for path in discover([root / "cases"]):
+        c = load_case(path)
+        kinds = [k for k, v in (("reference table", c.reference), ("envelope", c.envelope.model_dump(exclude_none=True)),
+                                ("study", getattr(c, "study", None))) if v]
+        click.echo(f"  {path.relative_to(root)}  {c.name} [{', '.join(kinds) or 'loads'}]: "
+                   f"{' '.join(c.description.split())[:90]}")
+
+
 @main.command("solve", context_settings={"ignore_unknown_options": True})  # negative numbers
 @click.argument("values", nargs=-1)
 @click.option("--load", "has_load", is_flag=True,
