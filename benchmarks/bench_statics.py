@@ -2,10 +2,15 @@
 
 Run: ``python benchmarks/bench_statics.py [--poses 1000] [--springs 4]``. Random reachable poses in the
 required workspace (x, z in +-0.25 m, y in [0.5, 0.75] m), a 700 N press load plus a small off-axis
-wrench; one model is built once and retargeted per pose (as a sweep would). Prints the median time per
-pose and the throughput for the linear and the nonlinear solve, then an instrumented run that splits
-the time into Pinocchio calls, LAPACK / numpy.linalg calls and the rest (Python and small numpy
-operations). Not a test. Goals (issue 3): linear <= 25 us, nonlinear <= 250 us.
+wrench; one model is built once and retargeted per pose (as a sweep would), and the same loads are also
+solved at one fixed pose (no retarget: the solver alone). Prints the median time per pose and the
+throughput for the linear and the nonlinear solve, then an instrumented run that splits the time into
+Pinocchio calls, LAPACK / numpy.linalg calls and the rest (Python and small numpy operations, including
+the retarget and the result objects). Not a test. Goals (issue 3): linear <= 25 us, nonlinear <= 250 us.
+
+Before/after: the script only uses the public API (the breakdown wraps whichever LAPACK entry points
+``pressfit.statics`` imports), so ``PYTHONPATH=<older checkout>/src python benchmarks/bench_statics.py``
+times an older version under the same conditions.
 """
 
 from __future__ import annotations
@@ -37,9 +42,13 @@ def poses_and_loads(machine, n: int, rng: np.random.Generator) -> tuple[np.ndarr
     return np.array(out), loads
 
 
-def run(mm, poses, loads, linear: bool) -> tuple[list[float], list[int]]:
+LAPACK = ("_getrf", "_getrs", "_gesv", "_gesdd")
+
+
+def run(mm, poses, loads, linear: bool, fixed: bool = False) -> tuple[list[float], list[int]]:
     times, iters = [], []
     for h, w in zip(poses, loads):
+        h = poses[0] if fixed else h
         t0 = time.perf_counter()
         eq = statics.solve_equilibrium(mm, h, w, linear=linear)
         times.append(time.perf_counter() - t0)
@@ -67,19 +76,23 @@ class Clock:
 def breakdown(mm, poses, loads, linear: bool) -> dict[str, float]:
     pin_clock, la_clock = Clock(), Clock()
     saved = {name: getattr(pin, name) for name in PIN_CALLS}
-    saved_la = (statics._getrf, statics._getrs, np.linalg.svd)
+    saved_la = {name: getattr(statics, name) for name in LAPACK if hasattr(statics, name)}
+    saved_svd = np.linalg.svd
     try:
         for name in PIN_CALLS:
             setattr(pin, name, pin_clock.wrap(saved[name]))
-        statics._getrf, statics._getrs = la_clock.wrap(saved_la[0]), la_clock.wrap(saved_la[1])
-        np.linalg.svd = la_clock.wrap(saved_la[2])
+        for name, f in saved_la.items():
+            setattr(statics, name, la_clock.wrap(f))
+        np.linalg.svd = la_clock.wrap(saved_svd)
         t0 = time.perf_counter()
         run(mm, poses, loads, linear)
         total = time.perf_counter() - t0
     finally:
         for name, f in saved.items():
             setattr(pin, name, f)
-        statics._getrf, statics._getrs, np.linalg.svd = saved_la
+        for name, f in saved_la.items():
+            setattr(statics, name, f)
+        np.linalg.svd = saved_svd
     n = len(poses)
     return {"total": total / n, "pinocchio": pin_clock.total / n, "linalg": la_clock.total / n,
             "python+numpy": (total - pin_clock.total - la_clock.total) / n}
@@ -97,14 +110,16 @@ def main() -> None:
     print(f"model: nq = {mm.model.nq}, nv = {mm.model.nv}, {mm.springs_per_segment} springs per segment, "
           f"{len(poses)} poses")
     run(mm, poses[:20], loads[:20], True)  # warm-up
-    for linear in (True, False):
-        times, iters = run(mm, poses, loads, linear)
-        med = statistics.median(times)
-        name = "linear   " if linear else "nonlinear"
-        print(f"{name}: median {med * 1e6:8.1f} us/pose, throughput {1 / med:8.0f} poses/s "
-              f"(p10 {np.percentile(times, 10) * 1e6:.1f}, p90 {np.percentile(times, 90) * 1e6:.1f} us; "
-              f"Newton iterations median {statistics.median(iters):g}, max {max(iters)})")
-    print("instrumented breakdown (mean per pose; the wrappers add ~1 us per call):")
+    for fixed in (False, True):
+        print("one fixed pose, no retarget:" if fixed else "a new pose per solve (retarget included):")
+        for linear in (True, False):
+            times, iters = run(mm, poses, loads, linear, fixed)
+            med = statistics.median(times)
+            name = "linear   " if linear else "nonlinear"
+            print(f"  {name}: median {med * 1e6:8.1f} us/pose, throughput {1 / med:8.0f} poses/s "
+                  f"(p10 {np.percentile(times, 10) * 1e6:.1f}, p90 {np.percentile(times, 90) * 1e6:.1f} us; "
+                  f"Newton iterations median {statistics.median(iters):g}, max {max(iters)})")
+    print("instrumented breakdown, new pose per solve (mean per pose; the wrappers add ~1 us per call):")
     for linear in (True, False):
         b = breakdown(mm, poses[:300], loads[:300], linear)
         print(f"  {'linear   ' if linear else 'nonlinear'}: total {b['total'] * 1e6:7.1f} us = Pinocchio "

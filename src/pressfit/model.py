@@ -141,13 +141,22 @@ class MachineModel:
     _rigid_idx: dict[str, np.ndarray] = field(repr=False, default_factory=dict)
     _stem_first: list[int] = field(repr=False, default_factory=list)
     cardan_compliance: object = None
+    spring_k: np.ndarray = field(default_factory=lambda: np.zeros(0))  # per spring: linear k, NaN if nonlinear
+    spring_rest: np.ndarray = field(default_factory=lambda: np.zeros(0))  # per spring: rest value
+    _spring_q: np.ndarray = field(repr=False, default_factory=lambda: np.zeros(0, int))  # idx_q per spring
+    _variable_springs: tuple = field(repr=False, default=())  # (spring index, kind 0 act / 1 bend / 2 tors, leg)
+    _stem_springs: list = field(repr=False, default_factory=list)  # per leg: [(Spring, is torsion)]
+    _actuator_springs: list = field(repr=False, default_factory=list)  # per leg
+    _rest_springs: list = field(repr=False, default_factory=list)  # springs on coordinates with q0 != 0
     version: int = 0  # bumped by retarget(); solvers cache per-model data under (id, version)
 
     # --- configurations ----------------------------------------------------------------------------
     def configuration_at(self, pose_m: np.ndarray) -> np.ndarray:
         """Rigid closed-form q (nq,) at a reachable pose (m): springs 0, joints from equation 1."""
         h = kinematics.require_reachable(self.machine, pose_m)
-        ik = kinematics.inverse_kinematics(self.machine, h)
+        return self._configuration(h, kinematics.inverse_kinematics(self.machine, h))
+
+    def _configuration(self, h: np.ndarray, ik: kinematics.LegKinematics) -> np.ndarray:
         q = np.zeros(self.model.nq)
         q[0:3] = h
         q[6] = 1.0
@@ -210,28 +219,43 @@ class MachineModel:
     # --- pose-dependent data ---------------------------------------------------------------------
     def retarget(self, pose_m: np.ndarray) -> MachineModel:
         """Move the model's reference pose in place (stem spring positions and stiffnesses, actuator
-        stiffness, rest values, q0); returns self. Rigid kinematics is unchanged by this."""
+        stiffness, rest values, q0); returns self. Rigid kinematics is unchanged by this.
+
+        Spring laws are re-read from ``springs`` only at build; afterwards retarget replaces the stem and
+        actuator laws (shared :class:`LinearSpring` objects per leg) and keeps ``spring_k`` (N/m or N m/rad,
+        NaN for a nonlinear law) and ``spring_rest`` (m or rad), aligned with ``springs``, up to date."""
         m = self.machine
-        h = kinematics.require_reachable(m, pose_m)
+        h = np.asarray(pose_m, dtype=float).reshape(3)
         ik = kinematics.inverse_kinematics(m, h)
+        lim = m.limits
+        if not (h[1] > 0 and np.all((ik.lengths_m >= lim.leg_length_min_m) & (ik.lengths_m <= lim.leg_length_max_m)
+                                    & (ik.alpha_rad >= lim.alpha_min_rad) & (ik.alpha_rad <= lim.alpha_max_rad)
+                                    & (ik.beta_rad >= lim.beta_min_rad) & (ik.beta_rad <= lim.beta_max_rad))):
+            h = kinematics.require_reachable(m, h)  # raises the named error (fast path above: same limits)
         n, lc = self.springs_per_segment, m.cylinder.length_m
         e, g, sec = m.material.youngs_modulus_pa, m.material.shear_modulus_pa, m.stem_section
-        kax = 1.0 / m.axial_compliance_m_per_n(ik.lengths_m)
-        q0 = self.configuration_at(h)
+        lengths = ik.lengths_m.tolist()
+        kax = (1.0 / m.axial_compliance_m_per_n(ik.lengths_m)).tolist()
+        q0 = self._configuration(h, ik)
+        ls = [length - lc for length in lengths]
+        per_kind = [kax, [n * (e * sec.second_moment_m4) / x for x in ls],  # actuator, stem bending, torsion
+                    [n * (g * sec.polar_moment_m4) / x for x in ls]]
+        jp = self.model.jointPlacements
         for i in range(4):
-            ls = float(ik.lengths_m[i]) - lc
             j0 = self._stem_first[i]
-            self.model.jointPlacements[j0] = _tz(-ls + ls / (2 * n))
+            jp[j0].translation[2] = -ls[i] + ls[i] / (2 * n)
             for k in range(1, n):
-                self.model.jointPlacements[j0 + 3 * k] = _tz(ls / n)
-            self.model.jointPlacements[j0 + 3 * n] = _tz(ls / (2 * n))  # plate cardan (or its virtual joints)
-        for s in self.springs:
-            if s.name.startswith("stem["):
-                k = (g * sec.polar_moment_m4 if s.name.endswith(".z") else e * sec.second_moment_m4)
-                s.law = LinearSpring(n * k / (float(ik.lengths_m[s.leg]) - lc))
-            elif s.name == "actuator":
-                s.law = LinearSpring(float(kax[s.leg]))
+                jp[j0 + 3 * k].translation[2] = ls[i] / n
+            jp[j0 + 3 * n].translation[2] = ls[i] / (2 * n)  # plate cardan (or its virtual joints)
+            bend, tors = LinearSpring(per_kind[1][i]), LinearSpring(per_kind[2][i])
+            for s, torsion in self._stem_springs[i]:
+                s.law = tors if torsion else bend
+            self._actuator_springs[i].law = LinearSpring(kax[i])
+        for s in self._rest_springs:
             s.rest = float(q0[s.idx_q])
+        var, kind, leg = self._variable_springs
+        self.spring_k[var] = np.array(per_kind)[kind, leg]
+        self.spring_rest[:] = q0[self._spring_q]
         self.pose_m, self.q0 = h, q0
         self.version += 1
         return self
@@ -362,6 +386,17 @@ def build_model(machine: Machine, pose_m: np.ndarray, *, springs_per_segment: in
                       springs, anchors, np.array(sigma), np.array(frames0),
                       sections, {k: np.array([model.joints[j].idx_q for j in v]) for k, v in rigid.items()},
                       stem_first, cardan_compliance)
+    var = [(k, 0 if sp.name == "actuator" else 2 if sp.name.endswith(".z") else 1, sp.leg)
+           for k, sp in enumerate(springs) if sp.name == "actuator" or sp.name.startswith("stem[")]
+    mm._variable_springs = tuple(np.array(c, dtype=int) for c in zip(*var))
+    mm._stem_springs = [[(sp, sp.name.endswith(".z")) for sp in springs if sp.leg == i and sp.name.startswith("stem[")]
+                        for i in range(4)]
+    mm._actuator_springs = [next(sp for sp in springs if sp.leg == i and sp.name == "actuator") for i in range(4)]
+    rigid_q = set(np.concatenate(list(mm._rigid_idx.values())).tolist())
+    mm._rest_springs = [sp for sp in springs if sp.idx_q in rigid_q]
+    mm._spring_q = np.array([sp.idx_q for sp in springs], dtype=int)
+    mm.spring_k = np.array([sp.law.k if type(sp.law) is LinearSpring else np.nan for sp in springs])
+    mm.spring_rest = np.zeros(len(springs))
     return mm.retarget(h)
 
 

@@ -38,21 +38,26 @@ vanish) and the characteristic length L_ref = p, the base half-side (m): forces 
 
 from __future__ import annotations
 
+import math
 from dataclasses import dataclass, field
 from typing import Any
 
 import numpy as np
 import pinocchio as pin
+from scipy.linalg.lapack import dgesdd as _gesdd
+from scipy.linalg.lapack import dgesv as _gesv
 from scipy.linalg.lapack import dgetrf as _getrf
 from scipy.linalg.lapack import dgetrs as _getrs
 
 from . import kinematics
 from .errors import ConvergenceError, SingularPoseError
 from .machine import Machine
-from .model import LinearSpring, MachineModel, build_model
+from .model import MachineModel, build_model
 
 SECTIONS = ("base", "actuator", "plate")
 NEWTON_TOL = 1e-10  # stopping tolerance (relative, module doc); the round-off floor is about 3e-12
+_LEGS = np.arange(4)
+_TAN_F = np.array([0, 1, 2, 3, 0, 1, 2, 3, 4])  # skew(f) factors of _tangent's nine products
 
 
 # --- results -----------------------------------------------------------------------------------------
@@ -84,7 +89,7 @@ class Residuals:
 
     plate_force: float  # |F_load + sum leg forces on the plate| / F_ref
     plate_moment: float  # |M_load + sum leg moments about the plate centre| / (F_ref L_ref)
-    machine_force: float  # |sum base reactions + F_load| / F_ref  (base reactions by Pinocchio's RNEA)
+    machine_force: float  # |sum base reactions + F_load| / F_ref (reactions = minus the base-section wrenches)
     machine_moment: float  # same for moments about the world origin / (F_ref L_ref)
     closure_m: float  # largest loop-closure translation error (Pinocchio constraint data), m
     closure_rad: float  # largest loop-closure rotation error, rad
@@ -162,6 +167,64 @@ def _phi_psi(f: np.ndarray, mo: np.ndarray, fp: np.ndarray) -> tuple[np.ndarray,
 
 
 @dataclass
+class _Static:
+    """Per-model data of the solver: index structure (per model) and spring arrays (per retarget)."""
+
+    legv: np.ndarray  # (4, m) v indices of the leg coordinates
+    act_col: np.ndarray  # (4,) column of the actuator in each leg
+    act_spring: np.ndarray  # (4,) index of each leg's actuator in mm.springs
+    is_force: np.ndarray  # (4, m) translation coordinate (stationarity row in N)
+    plate_end: list[int]
+    anchors: np.ndarray  # (3, 4) anchor points in the plate frame
+    frames0: np.ndarray  # (4, 3, 3)
+    cds: list  # constraint datas
+    spring_at: tuple  # (legs, columns) of mm.springs
+    nonlinear: list  # (leg, column, spring index) of springs with a nonlinear law
+    sec_joints: list[int]  # 12 joints carrying the section points, leg-major
+    sec_z: list[tuple[int, int, float]]  # (leg, section, z) for section points off their joint origin
+    lower: np.ndarray  # (m, m) 1.0 strictly below the diagonal
+    k: np.ndarray = None  # (4, m) linear spring stiffness (0 elsewhere)
+    rest_rel: np.ndarray = None  # (4, m) rest values minus q0
+    lin_mask: np.ndarray = None  # (4, m) coordinate carries a linear spring
+    other: list = field(default_factory=list)  # (leg, column, law) of nonlinear springs
+
+
+def _static(mm: MachineModel) -> _Static:
+    """Solver data of a model: structure cached per model, spring arrays refreshed per retarget."""
+    hit = getattr(mm, "_statics_cache", None)
+    if hit is not None and hit[0] == (id(mm), mm.version):
+        return hit[1]
+    if hit is None or hit[0][0] != id(mm):
+        try:
+            legv = np.array(mm.leg_v, dtype=int)
+        except ValueError:
+            raise NotImplementedError("legs with different numbers of virtual joints are not supported yet") from None
+        col = {int(v): (i, c) for i in range(4) for c, v in enumerate(legv[i])}
+        at = np.array([col[s.idx_v] for s in mm.springs], dtype=int).T
+        act = np.array([k for k, s in enumerate(mm.springs) if s.name == "actuator"])
+        sec = [mm.sections[i][name] for i in range(4) for name in SECTIONS]
+        m = legv.shape[1]
+        st = _Static(legv, at[1, act], act, _force_rows(mm), [mm.leg_joint_ids[i]["plate_end"] for i in range(4)],
+                     np.array([a.translation for a in mm.anchor_placements]).T, np.array(mm.leg_frames0),
+                     mm.constraint_datas(), (at[0], at[1]),
+                     [(int(at[0, k]), int(at[1, k]), k) for k in np.flatnonzero(np.isnan(mm.spring_k))],
+                     [j for j, _ in sec], [(n // 3, n % 3, z) for n, (_, z) in enumerate(sec) if z],
+                     np.tril(np.ones((m, m)), -1))
+    else:
+        st = hit[1]
+    lin = ~np.isnan(mm.spring_k)
+    rows, cols = st.spring_at
+    st.k, st.rest_rel, st.lin_mask = np.zeros(st.legv.shape), np.zeros(st.legv.shape), np.zeros(st.legv.shape, bool)
+    st.k[rows[lin], cols[lin]] = mm.spring_k[lin]
+    st.lin_mask[rows[lin], cols[lin]] = True
+    st.rest_rel[rows, cols] = mm.spring_rest
+    st.rest_rel -= mm.q0[st.legv + 1]
+    st.other = [(i, c, mm.springs[k].law) for i, c, k in st.nonlinear]
+    mm._statics_cache = ((id(mm), mm.version), st)
+    return st
+
+
+@dataclass
 class _Problem:
     """Everything a solve needs that does not change during the iterations."""
 
@@ -179,71 +242,21 @@ class _Problem:
     act_col: np.ndarray  # (L,) column of the actuator in each leg
     is_force: np.ndarray  # (L, m) translation coordinate (stationarity row in N)
     sc: _Static | None = None
-
-
-@dataclass
-class _Static:
-    """Per-model data of the solver (rebuilt when the model is retargeted)."""
-
-    legv: np.ndarray
-    k: np.ndarray
-    rest_rel: np.ndarray
-    lin_mask: np.ndarray
-    other: list
-    act_col: np.ndarray
-    is_force: np.ndarray
-    plate_end: list[int]
-    first: list[int]
-    anchors: np.ndarray  # (3, 4) anchor points in the plate frame
-    frames0: np.ndarray  # (4, 3, 3)
-    fext: list  # RNEA external forces (zeros; 4 entries set and reset per call)
-    cds: list  # constraint datas
-    eye6: np.ndarray  # (4, 6, 6) identities
-    spring_cols: tuple = ()  # (leg, column) of each of mm.springs
-
-
-def _static(mm: MachineModel) -> _Static:
-    """Solver data of a model: structure cached per model, spring arrays refreshed per retarget."""
-    hit = getattr(mm, "_statics_cache", None)
-    if hit is not None and hit[0] == (id(mm), mm.version):
-        return hit[1]
-    if hit is None or hit[0][0] != id(mm):
-        try:
-            legv = np.array(mm.leg_v, dtype=int)
-        except ValueError:
-            raise NotImplementedError("legs with different numbers of virtual joints are not supported yet") from None
-        col = {int(v): (i, c) for i in range(4) for c, v in enumerate(legv[i])}
-        first = [next(j for j in range(1, mm.model.njoints) if mm.model.joints[j].idx_v == legv[i, 0]) for i in range(4)]
-        st = _Static(legv, np.zeros(legv.shape), np.zeros(legv.shape), np.zeros(legv.shape, bool), [],
-                     np.array([col[s.idx_v][1] for s in mm.springs if s.name == "actuator"]), _force_rows(mm),
-                     [mm.leg_joint_ids[i]["plate_end"] for i in range(4)], first,
-                     np.array([a.translation for a in mm.anchor_placements]).T, np.array(mm.leg_frames0),
-                     [pin.Force.Zero() for _ in range(mm.model.njoints)], mm.constraint_datas(),
-                     np.tile(np.eye(6), (4, 1, 1)))
-        st.spring_cols = tuple(col[s.idx_v] for s in mm.springs)
-    else:
-        st = hit[1]
-    k, rest, mask = np.zeros(st.legv.shape), np.zeros(st.legv.shape), np.zeros(st.legv.shape, bool)
-    other = []
-    for (i, c), s in zip(st.spring_cols, mm.springs):
-        rest[i, c] = s.rest
-        if type(s.law) is LinearSpring:
-            k[i, c], mask[i, c] = s.law.k, True
-        else:
-            other.append((i, c, s.law))
-    st.k, st.rest_rel, st.lin_mask, st.other = k, rest - mm.q0[st.legv + 1], mask, other
-    mm._statics_cache = ((id(mm), mm.version), st)
-    return st
+    inv_scale: np.ndarray | None = None  # (L, m) 1 / (F_ref or F_ref L_ref) per leg stationarity row
 
 
 def _problem(mm: MachineModel, load: np.ndarray, offsets: np.ndarray, f_pre: float) -> _Problem:
     sc = _static(mm)
     rest_rel = sc.rest_rel.copy()
-    rest_rel[np.arange(4), sc.act_col] += offsets
+    rest_rel[_LEGS, sc.act_col] += offsets
     l_ref = mm.machine.geometry.base_half_side_m
-    f_ref = max(float(np.linalg.norm(load[:3])), float(np.linalg.norm(load[3:])) / l_ref, f_pre)
-    return _Problem(mm, load, sc.k, rest_rel, sc.lin_mask, sc.other, sc.legv + 1, offsets, f_ref if f_ref > 0 else 1.0,
-                    l_ref, sc.legv, sc.act_col, sc.is_force, sc)
+    f, m = load[:3].tolist(), load[3:].tolist()
+    f_ref = max(math.hypot(*f), math.hypot(*m) / l_ref, f_pre)
+    f_ref = f_ref if f_ref > 0 else 1.0
+    pb = _Problem(mm, load, sc.k, rest_rel, sc.lin_mask, sc.other, sc.legv + 1, offsets, f_ref, l_ref, sc.legv,
+                  sc.act_col, sc.is_force, sc)
+    pb.inv_scale = np.where(sc.is_force, 1.0 / f_ref, 1.0 / (f_ref * l_ref))
+    return pb
 
 
 @dataclass
@@ -265,29 +278,30 @@ class _State:
 
 def _evaluate(pb: _Problem, q: np.ndarray, data: pin.Data, d_leg: np.ndarray | None = None) -> _State:
     """Kinematics, closure, spring forces at q; ``d_leg`` = q - q0 on the leg coordinates (kept apart so
-    that spring forces keep full relative precision however stiff the springs: q ~ 1 m, q - rest ~ 1e-6 m)."""
+    that spring forces keep full relative precision however stiff the springs: q ~ 1 m, q - rest ~ 1e-6 m).
+    One Pinocchio pass (``computeJointJacobians``: placements and joint twists); ``data`` keeps the
+    placements at q for :func:`_result`."""
     mm, sc = pb.mm, pb.sc
     if d_leg is None:
         d_leg = q[pb.legq] - mm.q0[pb.legq]
     pin.computeJointJacobians(mm.model, data, q)
-    jac = data.J
+    jac, oMi = data.J, data.oMi
     s = jac[:, pb.legv].transpose(1, 0, 2)  # (L, 6, m) leg twists (v, omega), world, about the origin
     sp = jac[:, :6]
-    op = data.oMi[mm.plate_joint_id]
-    rp, pc = op.rotation, op.translation.copy()
-    pe, c = np.empty((4, 3)), np.empty((4, 6))
+    op = oMi[mm.plate_joint_id]
+    rp, pc = op.rotation.copy(), op.translation.copy()
+    ends = [oMi[j] for j in sc.plate_end]
+    pe = np.array([oe.translation for oe in ends])
     pd = pc + sc.anchors.T @ rp.T  # (4, 3)
     rd = rp @ sc.frames0  # (4, 3, 3) anchor orientations
-    for i, j in enumerate(sc.plate_end):
-        oe = data.oMi[j]
-        pe[i] = oe.translation
-        c[i, 3:] = pin.log3(oe.rotation @ rd[i].T)
+    c = np.empty((4, 6))
     c[:, :3] = pe - pd
-    lam_e, lam_d = sc.eye6.copy(), sc.eye6.copy()  # twist about O -> (velocity of the point, omega)
-    lam_e[:, :3, 3:] = -_skew(pe)  # v + omega x p = v - skew(p) omega
-    lam_d[:, :3, 3:] = -_skew(pd)
-    a = lam_e @ s  # closure Jacobian, leg part (L, 6, m)
-    p = -(lam_d @ sp)  # plate part (L, 6, 6)
+    c[:, 3:] = [pin.log3(oe.rotation @ rd[i].T) for i, oe in enumerate(ends)]
+    a = s.copy()  # closure Jacobian, leg part (L, 6, m): twist about O -> (velocity of the point, omega)
+    a[:, :3] -= _skew(pe) @ s[:, 3:]  # v + omega x p = v - skew(p) omega
+    p = np.empty((4, 6, 6))  # plate part (L, 6, 6)
+    p[:, :3] = _skew(pd) @ sp[3:] - sp[:3]
+    p[:, 3:] = -sp[3:]
     x = d_leg - pb.rest_rel
     g_leg = pb.k * x
     ktan = pb.k
@@ -312,33 +326,42 @@ class _Factor:
     m: int
 
 
-def _kkt_factor(st: _State, h_leg: np.ndarray, h_plate: np.ndarray, check: bool = True) -> _Factor:
+def _kkt_solve(st: _State, h_leg: np.ndarray, h_plate: np.ndarray, r_leg: np.ndarray, r_plate: np.ndarray,
+               rhs_c: np.ndarray, check: bool = True) -> tuple[np.ndarray, np.ndarray, np.ndarray, _Factor]:
+    """Solve [H J^T; J 0][dq; lam] = [r; rhs_c]: (dq_leg, dq_plate, lam) and the factorisation (for
+    :func:`_kkt_apply`). Per leg one LAPACK gesv of the leg's KKT block with 7 right-hand sides (the 6
+    plate-displacement columns and the load), then the 6x6 plate Schur complement."""
     nl, m = h_leg.shape[:2]
     kkt = np.zeros((nl, m + 6, m + 6))
     kkt[:, :m, :m] = h_leg
     kkt[:, :m, m:] = st.a.transpose(0, 2, 1)
     kkt[:, m:, :m] = st.a
-    rhs = np.zeros((m + 6, 6))
-    zz = np.empty((nl, m + 6, 6))
+    rhs = np.zeros((nl, m + 6, 7))
+    rhs[:, m:, :6] = -st.p
+    rhs[:, :m, 6] = r_leg
+    rhs[:, m:, 6] = rhs_c
+    sol = np.empty((nl, m + 6, 7))
     lus = []
-    for i in range(nl):  # direct LAPACK: numpy's batched linalg costs ~5x more on 35x35 blocks
-        lu, piv, info = _getrf(kkt[i])
+    for i in range(nl):  # direct LAPACK: numpy's batched linalg costs more on 35x35 blocks
+        lu, piv, sol[i], info = _gesv(kkt[i], rhs[i])
         if info != 0:
             raise SingularPoseError(f"leg {i + 1}'s elastic KKT block is singular (a leg mechanism has no stiffness)")
-        rhs[m:] = -st.p[i]
-        zz[i] = _getrs(lu, piv, rhs)[0]
         lus.append((lu, piv))
+    zz, z = sol[:, :, :6], sol[:, :, 6]
     pt = st.p.transpose(0, 2, 1)
     schur = h_plate + (pt @ zz[:, m:]).sum(0)
     if check:
-        sv = np.linalg.svd(schur, compute_uv=False)
-        if not np.all(np.isfinite(sv)) or sv[-1] <= 1e-13 * sv[0]:
+        sv = _gesdd(schur, compute_uv=0)[1].tolist()
+        if not all(map(math.isfinite, sv)) or sv[-1] <= 1e-13 * sv[0]:
             raise SingularPoseError("the plate stiffness is singular at this pose "
                                     f"(condition {sv[0] / max(sv[-1], 1e-300):.3g})")
     lu, piv, info = _getrf(schur)
     if info != 0:
         raise SingularPoseError("the plate stiffness is singular at this pose")
-    return _Factor(lus, zz, pt, (lu, piv), m)
+    fa = _Factor(lus, zz, pt, (lu, piv), m)
+    dp = _getrs(lu, piv, r_plate - (pt @ z[:, m:, None]).sum(0)[:, 0])[0]
+    sol = z + zz @ dp
+    return sol[:, :m], dp, sol[:, m:], fa
 
 
 def _kkt_apply(fa: _Factor, r_leg: np.ndarray, r_plate: np.ndarray, rhs_c: np.ndarray
@@ -352,11 +375,6 @@ def _kkt_apply(fa: _Factor, r_leg: np.ndarray, r_plate: np.ndarray, rhs_c: np.nd
     return sol[:, :m], dp, sol[:, m:]
 
 
-def _kkt_solve(st: _State, h_leg: np.ndarray, h_plate: np.ndarray, r_leg: np.ndarray, r_plate: np.ndarray,
-               rhs_c: np.ndarray, check: bool = True) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
-    return _kkt_apply(_kkt_factor(st, h_leg, h_plate, check), r_leg, r_plate, rhs_c)
-
-
 def _stationarity(pb: _Problem, st: _State, lam: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
     r_leg = st.g_leg + (lam[:, None, :] @ st.a)[:, 0]
     r_plate = st.g_plate + (lam[:, None, :] @ st.p).sum(0)[0]
@@ -365,9 +383,9 @@ def _stationarity(pb: _Problem, st: _State, lam: np.ndarray) -> tuple[np.ndarray
 
 def _scaled_stationarity(pb: _Problem, mm: MachineModel, r_leg: np.ndarray, r_plate: np.ndarray) -> float:
     # leg rows: N m for revolutes, N for prismatics; plate rows: (N, N m)
-    scale = np.where(pb.is_force, pb.f_ref, pb.f_ref * pb.l_ref)
-    return float(max(np.max(np.abs(r_leg) / scale),
-                     np.max(np.abs(r_plate[:3])) / pb.f_ref, np.max(np.abs(r_plate[3:])) / (pb.f_ref * pb.l_ref)))
+    rp = np.abs(r_plate)
+    return max(float(np.max(np.abs(r_leg) * pb.inv_scale)), float(rp[:3].max()) / pb.f_ref,
+               float(rp[3:].max()) / (pb.f_ref * pb.l_ref))
 
 
 def _dq(mm: MachineModel, dq_leg: np.ndarray, dp: np.ndarray) -> np.ndarray:
@@ -393,7 +411,7 @@ def _model_for(machine_or_model: Machine | MachineModel, pose: np.ndarray) -> Ma
             hit = (machine_or_model, build_model(machine_or_model, pose))
             _CACHE[key] = hit
         mm = hit[1]
-    if not np.array_equal(mm.pose_m, pose):
+    if mm.pose_m.tolist() != pose.tolist():
         mm.retarget(pose)
     return mm
 
@@ -432,17 +450,15 @@ def solve_equilibrium(machine_or_model: Machine | MachineModel, pose_m: np.ndarr
     actuator rest-length offsets (4,) in m instead of ``preload``; ``step_limit(dv) -> factor in (0, 1]``,
     scales each Newton step (dv over the model's velocity coordinates).
     """
-    if isinstance(machine_or_model, MachineModel):
-        machine = machine_or_model.machine
-    else:
-        machine = machine_or_model
-    pose = kinematics.require_reachable(machine, pose_m)
+    machine = machine_or_model.machine if isinstance(machine_or_model, MachineModel) else machine_or_model
+    pose = np.asarray(pose_m, dtype=float).reshape(3)
+    mm = _model_for(machine_or_model, pose)  # checks reachability when it (re)targets the model
     load = np.asarray(plate_wrench, dtype=float).reshape(-1)
     if load.shape == (3,):
         load = np.concatenate([load, np.zeros(3)])
     if load.shape != (6,) or not np.all(np.isfinite(load)):
         raise ValueError(f"plate_wrench must be 6 finite numbers (F then M), got {plate_wrench!r}")
-    mm = _model_for(machine_or_model, pose)
+    pose = mm.pose_m
     a4, mode = 0.0, preload_mode or "force"
     if preload is not None:
         if hasattr(preload, "a4_n"):
@@ -452,7 +468,7 @@ def solve_equilibrium(machine_or_model: Machine | MachineModel, pose_m: np.ndarr
     offsets = preload_offsets(machine, pose, a4, mode) if a4 else np.zeros(4)
     if preload_offsets_m is not None:
         offsets = np.asarray(preload_offsets_m, dtype=float).reshape(4)
-    kax = np.array([s.law.k for s in mm.springs if s.name == "actuator"])
+    kax = mm.spring_k[_static(mm).act_spring]
     pb = _problem(mm, load, offsets, float(np.max(np.abs(kax * offsets))))
     data = mm.data
     if linear:
@@ -471,18 +487,16 @@ def _solve_linear(pb: _Problem, data: pin.Data) -> Equilibrium:
     mm = pb.mm
     st = _evaluate(pb, mm.q0, data)
     k = st.ktan
-    fa = _kkt_factor(st, _diag(k), np.zeros((6, 6)))
     r_leg, r_plate = -st.g_leg, -st.g_plate
-    dq_leg, dp, lam = _kkt_apply(fa, r_leg, r_plate, -st.c)
+    dq_leg, dp, lam, fa = _kkt_solve(st, _diag(k), np.zeros((6, 6)), r_leg, r_plate, -st.c)
 
     def errors():  # residual of the linear KKT system
         r_l, r_p = _stationarity(pb, st, lam)  # g + J^T lam (g = -r)
         e_c = -st.c - (st.a @ dq_leg[:, :, None])[:, :, 0] - st.p @ dp
         return r_leg - k * dq_leg - (r_l - st.g_leg), r_plate - (r_p - st.g_plate), e_c
 
-    for _ in range(2):  # iterative refinement (keeps the residuals at round-off)
-        d1, d2, d3 = _kkt_apply(fa, *errors())
-        dq_leg, dp, lam = dq_leg + d1, dp + d2, lam + d3
+    d1, d2, d3 = _kkt_apply(fa, *errors())  # one step of iterative refinement: residuals ~3e-16 (1e-14 without;
+    dq_leg, dp, lam = dq_leg + d1, dp + d2, lam + d3  # a second step changes nothing measurable)
     e_leg, e_plate, _ = errors()
     stat = _scaled_stationarity(pb, mm, e_leg, e_plate)
     dv = _dq(mm, dq_leg, dp)
@@ -497,22 +511,26 @@ def _diag(k: np.ndarray) -> np.ndarray:
 
 
 def _tangent(pb: _Problem, st: _State, lam: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
-    """Exact tangent blocks: legs (4, m, m) and plate (6, 6) (module doc)."""
+    """Exact tangent blocks: legs (4, m, m) and plate (6, 6) (module doc). The five dead wrenches (the
+    multipliers at the leg ends; their opposites plus minus the load on the plate) in one batch."""
     lf, lm = lam[:, :3], lam[:, 3:]
-    sf = _skew(lf)
-    # legs: the multiplier as a dead wrench (lf, pe x lf + lm) at the leg end pe
-    phi, psi = _phi_psi(lf, _cross3(st.pe, lf) + lm, sf @ _skew(st.pe))
-    st_ = st.s.transpose(0, 2, 1)
-    h_leg = -np.tril(st_ @ phi @ st.s, -1) + st_ @ psi @ st.s
-    idx = np.arange(h_leg.shape[1])
-    h_leg[:, idx, idx] += st.ktan
-    # plate: minus the load at pc, and -(lf, pd x lf + lm) at pd per leg (Phi linear in W, Psi summed)
     f, m = pb.load[:3], pb.load[3:]
-    f_tot = -f - lf.sum(0)
-    mo_tot = -(_cross3(st.pc, f) + m) - (_cross3(st.pd, lf) + lm).sum(0)
-    fp = -_skew(f) @ _skew(st.pc) - (sf @ _skew(st.pd)).sum(0)
-    phi, psi = _phi_psi(f_tot[None], mo_tot[None], fp[None])
-    h_plate = st.sp.T @ (psi[0] - phi[0]) @ st.sp
+    sk = _skew(np.concatenate([lf, f[None], st.pe, st.pd, st.pc[None]]))  # skew of lf (4), f, pe (4), pd (4), pc
+    sf, sp = sk[:5], sk[5:]
+    fp = sf[_TAN_F] @ sp  # (9, 3, 3): lf x pe (4), lf x pd (4), f x pc
+    xs = (sp @ np.concatenate([lf, lf, f[None]])[:, :, None])[:, :, 0]  # pe x lf (4), pd x lf (4), pc x f
+    w = np.empty((5, 15))  # per wrench: f, moment about O, skew(f) skew(p) flattened
+    w[:4, :3], w[:4, 3:6], w[:4, 6:] = lf, xs[:4] + lm, fp[:4].reshape(4, 9)
+    w[4, :3] = -f - lf.sum(0)  # on the plate: minus the load at pc, and -(lf, pd x lf + lm) at pd per leg
+    w[4, 3:6] = -(xs[8] + m) - (xs[4:8] + lm).sum(0)
+    w[4, 6:] = (-fp[8] - fp[4:8].sum(0)).reshape(9)
+    phi, psi = _phi_psi(w[:, :3], w[:, 3:6], w[:, 6:].reshape(5, 3, 3))
+    st_ = st.s.transpose(0, 2, 1)
+    g = st_[:, None] @ np.stack([phi[:4], psi[:4]], 1) @ st.s[:, None]  # (4, 2, m, m)
+    h_leg = g[:, 1] - g[:, 0] * pb.sc.lower
+    nl, nc = h_leg.shape[:2]
+    h_leg.reshape(nl, nc * nc)[:, ::nc + 1] += st.ktan
+    h_plate = st.sp.T @ (psi[4] - phi[4]) @ st.sp
     return h_leg, h_plate
 
 
@@ -527,13 +545,14 @@ def _solve_nonlinear(pb: _Problem, data: pin.Data, tol: float, max_iter: int, st
         st = _evaluate(pb, q, data, d_leg)
         r_leg, r_plate = _stationarity(pb, st, lam)
         stat = _scaled_stationarity(pb, mm, r_leg, r_plate)
-        clos = max(np.max(np.abs(st.c[:, :3])) / pb.l_ref, np.max(np.abs(st.c[:, 3:])))
+        ac = np.abs(st.c)
+        clos = max(float(ac[:, :3].max()) / pb.l_ref, float(ac[:, 3:].max()))
         if stat <= tol and clos <= tol:
             return _result(pb, st, lam, q, d_leg, stat, it, linear=False, data=data)
         if it == max_iter:
             break
         h_leg, h_plate = _tangent(pb, st, lam)
-        dq_leg, dp, lam_new = _kkt_solve(st, h_leg, h_plate, -st.g_leg, -st.g_plate, -st.c, check=it == 0)
+        dq_leg, dp, lam_new, _ = _kkt_solve(st, h_leg, h_plate, -st.g_leg, -st.g_plate, -st.c, check=it == 0)
         a = 1.0 if step_limit is None else float(step_limit(_dq(mm, dq_leg, dp)))
         dq_leg, dp, lam = a * dq_leg, a * dp, lam + a * (lam_new - lam)
         d_leg = d_leg + dq_leg
@@ -543,76 +562,59 @@ def _solve_nonlinear(pb: _Problem, data: pin.Data, tol: float, max_iter: int, st
 
 
 def _cross3(a: np.ndarray, b: np.ndarray) -> np.ndarray:
-    """Cross product of 3-vectors along the last axis (np.cross costs ~20 us a call)."""
-    return np.stack([a[..., 1] * b[..., 2] - a[..., 2] * b[..., 1], a[..., 2] * b[..., 0] - a[..., 0] * b[..., 2],
-                     a[..., 0] * b[..., 1] - a[..., 1] * b[..., 0]], -1)
+    """Cross product of 3-vectors along the last axis, broadcast (np.cross costs ~20 us a call)."""
+    return (_skew(a) @ b[..., None])[..., 0]
 
 
 def _result(pb: _Problem, st: _State, lam: np.ndarray, q: np.ndarray, d_leg: np.ndarray, stat: float,
             iterations: int, linear: bool, data: pin.Data, dv: np.ndarray | None = None) -> Equilibrium:
-    """Section resultants, plate motion and residuals. Linear: on the reference geometry (st at q0)."""
+    """Section resultants, plate motion and residuals from the state st (at q0 if linear, else at q), whose
+    evaluation left ``data`` with the placements at that configuration."""
     mm, sc = pb.mm, pb.sc
     model = mm.model
-    geo_q = mm.q0 if linear else q
-    pin.forwardKinematics(model, data, geo_q)
     f_load, m_load = pb.load[:3], pb.load[3:]
     lf, lm = lam[:, :3], lam[:, 3:]
+    oMi = data.oMi
     # section points (4 legs, 3 sections, xyz) and deformed leg frames
-    pts = np.empty((4, 3, 3))
-    for i in range(4):
-        for k, name in enumerate(SECTIONS):
-            j, z = mm.sections[i][name]
-            oj = data.oMi[j]
-            pts[i, k] = oj.translation + oj.rotation[:, 2] * z if z else oj.translation
-    pe = st.pe if linear else np.array([data.oMi[j].translation for j in sc.plate_end])
+    pts = np.array([oMi[j].translation for j in sc.sec_joints]).reshape(4, 3, 3)
+    for i, k, z in sc.sec_z:
+        pts[i, k] += oMi[sc.sec_joints[3 * i + k]].rotation[:, 2] * z
     ez = pts[:, 2] - pts[:, 0]
-    ez /= np.linalg.norm(ez, axis=1, keepdims=True)
+    ez /= np.sqrt((ez * ez).sum(1))[:, None]
     ax = mm.machine.cardan_axes
-    ex = ax - np.sum(ax * ez, 1, keepdims=True) * ez
-    ex /= np.linalg.norm(ex, axis=1, keepdims=True)
+    ex = ax - (ax * ez).sum(1)[:, None] * ez
+    ex /= np.sqrt((ex * ex).sum(1))[:, None]
     frames = np.stack([ex, _cross3(ez, ex), ez], -1)  # (4, 3, 3), columns e_x, e_y, e_z
     force = -lf  # the plate's wrench on each leg end, carried to the sections (no loads along the leg)
-    mom = _cross3(pe[:, None, :] - pts, force[:, None, :]) - lm[:, None, :]  # (4, 3, 3)
-    fl = (force[:, None, :] @ frames)[:, 0]  # (4, 3) leg-frame components
-    ml = mom @ frames  # (4, 3 sections, 3)
-    act = np.array([float(pb.k[i, pb.act_col[i]] * (d_leg[i, pb.act_col[i]] - pb.rest_rel[i, pb.act_col[i]]))
-                    if pb.lin_mask[i, pb.act_col[i]] else 0.0 for i in range(4)])
-    legs = tuple(LegLoads({name: SectionWrench(fl[i, 2], fl[i, 0], fl[i, 1], ml[i, k, 0], ml[i, k, 1], ml[i, k, 2])
-                           for k, name in enumerate(SECTIONS)}, frames[i], float(act[i])) for i in range(4))
-    plate = data.oMi[mm.plate_joint_id]
-    pc = st.pc if linear else plate.translation
-    # residuals -----------------------------------------------------------------------------------
-    pd = st.pd if linear else (plate.translation[:, None] + plate.rotation @ sc.anchors).T
-    pf = np.linalg.norm(f_load + lf.sum(0)) / pb.f_ref
-    pm = np.linalg.norm(m_load + (_cross3(pd - pc, lf) + lm).sum(0)) / (pb.f_ref * pb.l_ref)
-    fext = sc.fext
-    for i, j in enumerate(sc.plate_end):
-        oj = data.oMi[j]
-        fext[j] = oj.actInv(pin.Force(force[i], _cross3(oj.translation, force[i]) - lm[i]))  # world, about O
-    zero = np.zeros(model.nv)
-    pin.rnea(model, data, geo_q, zero, zero, fext)
-    for j in sc.plate_end:
-        fext[j] = pin.Force.Zero()
-    react = np.zeros(6)
-    for first in sc.first:
-        react += data.oMi[first].act(data.f[first]).vector
-    mf = np.linalg.norm(react[:3] + f_load) / pb.f_ref
-    mmom = np.linalg.norm(react[3:] + _cross3(pc, f_load) + m_load) / (pb.f_ref * pb.l_ref)
+    mom = _cross3(st.pe[:, None, :] - pts, force[:, None, :]) - lm[:, None, :]  # (4, 3, 3), world
+    fl = (force[:, None, :] @ frames)[:, 0].tolist()  # (4, 3) leg-frame components
+    ml = (mom @ frames).tolist()  # (4, 3 sections, 3)
+    ac = pb.act_col
+    act = np.where(pb.lin_mask[_LEGS, ac], pb.k[_LEGS, ac] * (d_leg[_LEGS, ac] - pb.rest_rel[_LEGS, ac]), 0.0)
+    legs = tuple(LegLoads(sections={name: SectionWrench(N=fl[i][2], V_x=fl[i][0], V_y=fl[i][1],
+                                                           M_x=ml[i][k][0], M_y=ml[i][k][1], T=ml[i][k][2])
+                                             for k, name in enumerate(SECTIONS)}, frame=frames[i], actuator_force_n=a)
+                 for i, a in enumerate(act.tolist()))
+    # residuals: the plate, and the whole machine from the base-section wrenches (what the legs put into
+    # the base, about the world origin) -------------------------------------------------------------
+    pc = st.pc
+    plate = np.concatenate([f_load + lf.sum(0), m_load + (_cross3(st.pd - pc, lf) + lm).sum(0)])
+    base_m = mom[:, 0] + _cross3(pts[:, 0], force)
+    machine = np.concatenate([f_load - force.sum(0), m_load + _cross3(pc, f_load) - base_m.sum(0)])
     cds = sc.cds
+    for cm, cd in zip(mm.constraint_models, cds):
+        cm.calc(model, data, cd)
     if linear:  # linearised closure: Pinocchio's constraint Jacobian at q0 times the displacement
-        pin.computeJointJacobians(model, data, mm.q0)
-        for cm, cd in zip(mm.constraint_models, cds):
-            cm.calc(model, data, cd)
         e = (pin.getConstraintsJacobian(model, data, mm.constraint_models, cds) @ dv).reshape(4, 6)
     else:
-        for cm, cd in zip(mm.constraint_models, cds):
-            cm.calc(model, data, cd)
         e = np.array([cd.extract().constraint_position_error for cd in cds])
-    res = Residuals(float(pf), float(pm), float(mf), float(mmom), float(np.max(np.linalg.norm(e[:, :3], axis=1))),
-                    float(np.max(np.linalg.norm(e[:, 3:], axis=1))), float(stat), pb.f_ref, pb.l_ref)
+    fm = np.sqrt(np.array([plate[:3] @ plate[:3], plate[3:] @ plate[3:], machine[:3] @ machine[:3],
+                           machine[3:] @ machine[3:]])) / (pb.f_ref * np.array([1, pb.l_ref, 1, pb.l_ref]))
+    en = np.sqrt((e * e).reshape(4, 2, 3).sum(2)).max(0)
+    res = Residuals(*fm.tolist(), *en.tolist(), float(stat), pb.f_ref, pb.l_ref)
     if linear:  # the free flyer's v is in its local frame; at q0 the plate is world-aligned
         disp, rot = dv[:3].copy(), dv[3:6].copy()
     else:
-        disp, rot = plate.translation - mm.pose_m, pin.log3(plate.rotation)
+        disp, rot = pc - mm.pose_m, pin.log3(st.rp)
     return Equilibrium(mm.pose_m.copy(), pb.load.copy(), legs, act, disp, rot, q, lam.copy(),
                        iterations, linear, res, pb.offsets.copy())
