@@ -50,7 +50,7 @@ from scipy.linalg.lapack import dgetrf as _getrf
 from scipy.linalg.lapack import dgetrs as _getrs
 
 from . import kinematics
-from .errors import ConvergenceError, SingularPoseError
+from .errors import ConvergenceError, PressfitError, SingularPoseError
 from .machine import Machine
 from .model import MachineModel, build_model
 
@@ -198,7 +198,8 @@ def _static(mm: MachineModel) -> _Static:
         try:
             legv = np.array(mm.leg_v, dtype=int)
         except ValueError:
-            raise NotImplementedError("legs with different numbers of virtual joints are not supported yet") from None
+            raise PressfitError("cardan compliance on only some legs (legs with different numbers of virtual "
+                                "joints) is not supported by the solver yet; give it to every leg") from None
         col = {int(v): (i, c) for i in range(4) for c, v in enumerate(legv[i])}
         at = np.array([col[s.idx_v] for s in mm.springs], dtype=int).T
         act = np.array([k for k, s in enumerate(mm.springs) if s.name == "actuator"])
@@ -428,7 +429,7 @@ def preload_offsets(machine: Machine, pose_m: np.ndarray, a4: float, mode: str =
         return -a4 * vp * machine.axial_compliance_m_per_n(kinematics.inverse_kinematics(machine, pose_m).lengths_m)
     if mode == "length":
         return -a4 * vp
-    raise ValueError(f"preload mode must be 'force' or 'length', got {mode!r}")
+    raise PressfitError(f"preload mode must be 'force' or 'length', got {mode!r}")
 
 
 def solve_equilibrium(machine_or_model: Machine | MachineModel, pose_m: np.ndarray, plate_wrench: np.ndarray, *,
@@ -457,7 +458,7 @@ def solve_equilibrium(machine_or_model: Machine | MachineModel, pose_m: np.ndarr
     if load.shape == (3,):
         load = np.concatenate([load, np.zeros(3)])
     if load.shape != (6,) or not np.all(np.isfinite(load)):
-        raise ValueError(f"plate_wrench must be 6 finite numbers (F then M), got {plate_wrench!r}")
+        raise PressfitError(f"plate_wrench must be 3 or 6 finite numbers (F in N, then M in N m), got {plate_wrench!r}")
     pose = mm.pose_m
     a4, mode = 0.0, preload_mode or "force"
     if preload is not None:

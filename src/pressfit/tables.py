@@ -26,6 +26,7 @@ from pathlib import Path
 import numpy as np
 
 from .cases import Case, load_case
+from .errors import PressfitError
 from .statics import Equilibrium, solve_equilibrium
 
 QUANTITIES = ("F_x", "F_y", "F_z", "M_x", "M_y", "M_bend", "M_z")
@@ -76,7 +77,7 @@ def paper_components(eq: Equilibrium, leg: int, axial_sign: int) -> dict[str, fl
 def compare_case(case: Case) -> list[TableEntry]:
     """Solve a paper case (linear and nonlinear) and line it up with its printed reference."""
     if case.reference is None:
-        raise ValueError(f"case {case.name} has no [reference] table")
+        raise PressfitError(f"{case.path}: case {case.name} has no [reference] table to compare with")
     machine = case.machine()
     pose, wrench = case.poses.array()[0], case.loads.wrenches()[0]
     lin = solve_equilibrium(machine, pose, wrench, linear=True)
