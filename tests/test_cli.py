@@ -72,3 +72,13 @@ def test_list_shows_models_and_every_shipped_case():
     assert res.exit_code == 0, res.output
     for name in ("pressfit_4upu.toml", "paper/A.toml", "paper/B.toml", "paper/C.toml", "press_workspace.toml"):
         assert name in res.output
+
+
+def test_unreadable_inputs_and_outputs_exit_2(tmp_path):
+    (tmp_path / "bin.toml").write_bytes(b"\xff\xfe\x00name")
+    assert run("check", tmp_path / "bin.toml").exit_code == 2
+    assert run("kinematics", 0, 0.6, 0, "--model", tmp_path).exit_code == 2
+    (tmp_path / "afile").write_text("x")
+    res = run("tables", "--out", tmp_path / "afile")
+    assert res.exit_code == 2 and "cannot write" in res.output
+    assert run("workspace", "--y", "2", "--out", tmp_path / "ws").exit_code == 2

@@ -219,6 +219,11 @@ def workspace_cmd(heights: tuple[float, ...], out_dir: Path, overwrite: bool, as
     from . import workspace
 
     machine = load_machine(model_path)
+    rng = workspace.square_height_range(machine)
+    for y in heights:
+        if not (np.isfinite(y) and rng.y_min_m <= y <= rng.y_max_m):
+            raise PressfitError(f"--y {y:g}: the required square is reachable only for y_h in "
+                                f"[{rng.y_min_m:.5f}, {rng.y_max_m:.5f}] m")
     summary, _ = workspace.write_outputs(machine, out_dir, heights or workspace.DEFAULT_HEIGHTS_M,
                                          overwrite, progress)
     if as_json:

@@ -20,8 +20,10 @@ class UnreachablePoseError(PressfitError):
 
     def __init__(self, pose_m: object, violations: list[tuple[int, str, float, str]]) -> None:
         self.pose_m, self.violations = pose_m, violations
-        lines = [f"leg {leg}: {what} = {value:.6g} breaks {limit}" for leg, what, value, limit in violations]
-        super().__init__(f"pose {pose_m} m is not reachable: " + "; ".join(lines))
+        lines = [(f"leg {leg}: " if leg else "") + f"{what} = {value:.6g} breaks {limit}"
+                 for leg, what, value, limit in violations]
+        pose = tuple(float(c) for c in pose_m)  # type: ignore[union-attr]
+        super().__init__(f"pose {pose} m is not reachable: " + "; ".join(lines))
 
 
 class SingularPoseError(PressfitError):
@@ -41,3 +43,11 @@ class ConvergenceError(PressfitError):
 
 class OutputExistsError(PressfitError):
     """An output file exists and overwriting was not requested."""
+
+
+class OutputError(PressfitError):
+    """An output file cannot be written (its directory is a file, or not writable)."""
+
+
+class UnstableEquilibriumError(PressfitError):
+    """The solution found is not a physical, stable state (a leg beyond buckling, a huge displacement)."""

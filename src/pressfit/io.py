@@ -11,7 +11,7 @@ from typing import Any
 
 import numpy as np
 
-from .errors import OutputExistsError
+from .errors import OutputError, OutputExistsError
 
 
 def _atomic(path: Path | str, write: Callable[[Path], None], overwrite: bool) -> Path:
@@ -19,8 +19,11 @@ def _atomic(path: Path | str, write: Callable[[Path], None], overwrite: bool) ->
     path = Path(path)
     if path.exists() and not overwrite:
         raise OutputExistsError(f"{path} exists; pass --overwrite (overwrite=True) to replace it")
-    path.parent.mkdir(parents=True, exist_ok=True)
-    fd, tmp = tempfile.mkstemp(prefix=f".{path.name}.", suffix=path.suffix, dir=path.parent)
+    try:
+        path.parent.mkdir(parents=True, exist_ok=True)
+        fd, tmp = tempfile.mkstemp(prefix=f".{path.name}.", suffix=path.suffix, dir=path.parent)
+    except OSError as exc:
+        raise OutputError(f"cannot write {path}: {exc.strerror}") from None
     os.close(fd)
     try:
         write(Path(tmp))

@@ -81,7 +81,8 @@ def require_reachable(machine: Machine, pose_m: np.ndarray) -> np.ndarray:
     """Return the pose as a float array (3,) or raise :class:`UnreachablePoseError` naming leg and limit."""
     h = np.asarray(pose_m, dtype=float).reshape(3)
     if not np.all(np.isfinite(h)):
-        raise UnreachablePoseError(tuple(h), [(0, "pose", float("nan"), "finite coordinates")])
+        bad = float(next(c for c in h if not np.isfinite(c)))
+        raise UnreachablePoseError(tuple(h), [(0, "pose coordinate", bad, "finite coordinates")])
     if h[1] <= 0:
         raise UnreachablePoseError(tuple(h), [(0, "y_h [m]", float(h[1]), "minimum 0 (plate above base)")])
     bad = violations(machine, h)

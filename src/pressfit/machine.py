@@ -292,6 +292,10 @@ def read_toml(path: Path | str) -> dict[str, Any]:
         raise ModelFileError(path, "<file>", "file does not exist") from None
     except tomllib.TOMLDecodeError as exc:
         raise ModelFileError(path, "<syntax>", f"valid TOML ({exc})") from None
+    except UnicodeDecodeError:
+        raise ModelFileError(path, "<file>", "a UTF-8 text file") from None
+    except OSError as exc:
+        raise ModelFileError(path, "<file>", f"a readable file ({exc.strerror})") from None
 
 
 def load_machine(path: Path | str = DEFAULT_MODEL, overrides: dict[str, Any] | None = None) -> Machine:

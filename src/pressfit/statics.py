@@ -50,7 +50,7 @@ from scipy.linalg.lapack import dgetrf as _getrf
 from scipy.linalg.lapack import dgetrs as _getrs
 
 from . import kinematics
-from .errors import ConvergenceError, PressfitError, SingularPoseError
+from .errors import ConvergenceError, PressfitError, SingularPoseError, UnstableEquilibriumError
 from .machine import Machine
 from .model import MachineModel, build_model
 
@@ -472,9 +472,28 @@ def solve_equilibrium(machine_or_model: Machine | MachineModel, pose_m: np.ndarr
     kax = mm.spring_k[_static(mm).act_spring]
     pb = _problem(mm, load, offsets, float(np.max(np.abs(kax * offsets))))
     data = mm.data
-    if linear:
-        return _solve_linear(pb, data)
-    return _solve_nonlinear(pb, data, tol, max_iter, start, step_limit)
+    eq = _solve_linear(pb, data) if linear else _solve_nonlinear(pb, data, tol, max_iter, start, step_limit)
+    _check_physical(machine, eq)
+    return eq
+
+
+MAX_DISPLACEMENT_M = 0.02  # a plate motion above 20 mm is far outside this small-strain structural model
+
+
+def _check_physical(machine: Machine, eq: Equilibrium) -> None:
+    """Refuse answers no real machine would give: a leg compressed beyond its Euler load (the state is
+    unstable, the equilibrium branch found is meaningless) or a plate displacement that is not small."""
+    from .buckling import leg_critical_load_n
+
+    lengths = kinematics.inverse_kinematics(machine, eq.pose_m).lengths_m
+    for i, n in enumerate(eq.actuator_forces_n):
+        if n < 0 and -n > (p_cr := leg_critical_load_n(machine, float(lengths[i]))):
+            raise UnstableEquilibriumError(f"leg {i + 1}: compression {-n:.4g} N exceeds its Euler buckling load "
+                                           f"{p_cr:.4g} N (pinned-pinned stepped column): no stable equilibrium")
+    u = float(np.linalg.norm(eq.plate_displacement_m))
+    if u > MAX_DISPLACEMENT_M:
+        raise UnstableEquilibriumError(f"plate displacement {u:.4g} m exceeds {MAX_DISPLACEMENT_M} m: the load "
+                                       "is far beyond the structural range of this small-strain model")
 
 
 def _force_rows(mm: MachineModel) -> np.ndarray:
