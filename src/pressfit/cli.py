@@ -192,6 +192,9 @@ def check_cmd(paths: tuple[Path, ...], junit_path: Path | None, json_path: Path 
     checked = [c for c in cases if c.envelope.model_dump(exclude_none=True)]
     if not checked:
         raise PressfitError("no case among " + ", ".join(map(str, paths)) + " has an [envelope] to check")
+    skipped = [c.path for c in cases if c not in checked]
+    if skipped:
+        click.echo(f"skipped (no [envelope]): {', '.join(skipped)}")
     results = [envelope.evaluate_case(c, progress=progress) for c in checked]
     click.echo(envelope.format_table(results))
     if junit_path:

@@ -107,6 +107,8 @@ def to_markdown(entries: list[TableEntry]) -> str:
     lines = []
     for table, title in (("Table 5", "forces (N)"), ("Table 6", "moments (N m)")):
         lines += [f"### {table}: {title}, paper vs pressfit (actuator section, paper's axes and signs)", "",
+                  "rel. error = (pressfit linear - paper) / |paper|, signed in the paper's axes; "
+                  "'~0 both' when both are below 1e-3.", "",
                   "| case | component | CAD leg | kin. leg | paper | pressfit linear | rel. error | pressfit nonlinear |",
                   "|---|---|---|---|---|---|---|---|"]
         for e in entries:
