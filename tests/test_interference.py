@@ -238,7 +238,6 @@ def test_sweep_skips_and_counts_unreachable_poses(machine):
 
 def test_model_rig_matches_closed_form_rig(machine):
     """Shapes on pressfit.model's VJM model (rigid configuration) and on the closed-form rig: 1e-12 m."""
-    pytest.importorskip("pressfit.model")
     rng = np.random.default_rng(11)
     poses = np.column_stack([rng.uniform(-.25, .25, 300), rng.uniform(.49, .75, 300), rng.uniform(-.25, .25, 300)])
     a = I.sweep(I.build_interference(machine, rig="model"), poses)

@@ -11,10 +11,15 @@ README = (ROOT / "README.md").read_text()
 
 
 def test_readme_starts_with_the_two_commands():
-    commands = re.findall(r"<!-- (main|test)-command -->\n +(.+)", README)
+    commands = re.findall(r"<!-- (main|test)-command -->\n```sh\n(.+)\n```", README)
     assert [c[0] for c in commands] == ["main", "test"]
     assert "pressfit report" in commands[0][1] and "pytest" in commands[1][1]
     assert README.index("<!-- test-command -->") < README.index("---")
+
+
+def test_ci_runs_the_readme_test_command():
+    test_command = re.search(r"<!-- test-command -->\n```sh\n(.+)\n```", README).group(1)
+    assert test_command in (ROOT / ".ci/run").read_text()
 
 
 def test_readme_case_file_example_is_valid(tmp_path):
