@@ -157,10 +157,10 @@ def evaluate_case(case: Case, progress: bool = False) -> CaseResult:
             sweep.setdefault(k, []).append(v)
     stacked = {k: np.stack(v) for k, v in sweep.items()}  # (L, P, ...)
 
+    margins = kinematics.limit_margins(machine, poses)
     geometry = {k: v for k, v in {
-        "min_leg_length_margin_m": lambda: kinematics.limit_margins(machine, poses)["leg_length_m"],
-        "min_angle_margin_rad": lambda: np.minimum(*[kinematics.limit_margins(machine, poses)[a]
-                                                     for a in ("alpha_rad", "beta_rad")]),
+        "min_leg_length_margin_m": lambda: margins["leg_length_m"],
+        "min_angle_margin_rad": lambda: np.minimum(margins["alpha_rad"], margins["beta_rad"]),
         "min_interference_distance_m": lambda: _interference(machine, poses, progress),
     }.items() if k in wanted}
 
