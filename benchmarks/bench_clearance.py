@@ -18,8 +18,8 @@ import numpy as np  # noqa: E402
 
 from pressfit import clearance as C  # noqa: E402
 from pressfit import statics  # noqa: E402
-from pressfit.machine import load_machine  # noqa: E402
-from pressfit.model import build_model  # noqa: E402
+from pressfit.description.machine import load_machine  # noqa: E402
+from pressfit.mechanics.model import build_model  # noqa: E402
 
 POSE = np.array([0.2, 0.6, -0.2])
 UP = np.array([0.0, 1.0, 0.0])

@@ -16,7 +16,7 @@ os.environ.setdefault("OPENBLAS_NUM_THREADS", "1")
 import numpy as np  # noqa: E402
 
 from pressfit import condensed  # noqa: E402
-from pressfit.machine import load_machine  # noqa: E402
+from pressfit.description.machine import load_machine  # noqa: E402
 
 
 def _median_s(fn, repeats: int = 7) -> float:

@@ -2,7 +2,7 @@
 
 import pytest
 
-from pressfit.machine import load_machine
+from pressfit.description.machine import load_machine
 
 
 @pytest.fixture(scope="session")

@@ -5,7 +5,7 @@ import math
 
 import pytest
 
-from pressfit.buckling import leg_critical_load_n, leg_critical_loads_n, stepped_column_critical_load_n
+from pressfit.mechanics.buckling import leg_critical_load_n, leg_critical_loads_n, stepped_column_critical_load_n
 
 
 def test_uniform_column_is_euler():

@@ -10,7 +10,7 @@ import pytest
 import tomli_w
 from click.testing import CliRunner
 
-from pressfit.cases import discover, load_case
+from pressfit.description.cases import discover, load_case
 from pressfit.cli import main
 from pressfit.errors import ModelFileError
 

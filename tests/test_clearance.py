@@ -10,11 +10,12 @@ import numpy as np
 import pytest
 from click.testing import CliRunner
 
-from pressfit import clearance as C
-from pressfit import kinematics, statics
-from pressfit.cases import load_case
+from pressfit.mechanics import clearance as C
+from pressfit import kinematics
+from pressfit.mechanics import statics
+from pressfit.description.cases import load_case
 from pressfit.cli import main
-from pressfit.model import build_model
+from pressfit.mechanics.model import build_model
 
 POSE_A = np.array([0.0, 0.72, 0.0])
 OFF = np.array([0.2, 0.6, -0.2])

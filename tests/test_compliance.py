@@ -5,8 +5,10 @@ import math
 import numpy as np
 import pytest
 
-from pressfit import condensed, kinematics
-from pressfit.compliance import plate_compliance
+from pressfit.mechanics import condensed
+
+from pressfit import kinematics
+from pressfit.mechanics.compliance import plate_compliance
 
 
 def test_linear_compliance_equals_condensation(machine):

@@ -13,7 +13,9 @@ import numpy as np
 import pytest
 from scipy.spatial.transform import Rotation
 
-from pressfit import condensed, kinematics
+from pressfit.mechanics import condensed
+
+from pressfit import kinematics
 from pressfit.errors import OutputExistsError, PressfitError
 
 P, R = 0.442, 0.082  # Table 3

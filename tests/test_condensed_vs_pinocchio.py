@@ -6,8 +6,8 @@ relative (forces to max |N|, moments to max |M|, motions to their norm) at sampl
 import numpy as np
 import pytest
 
-from pressfit import condensed
-from pressfit.statics import solve_equilibrium
+from pressfit.mechanics import condensed
+from pressfit.mechanics.statics import solve_equilibrium
 
 POSES = [(0.0, 0.72, 0.0), (0.2, 0.6, -0.15), (-0.25, 0.74, 0.25), (0.1, 0.5, 0.22), (0.25, 0.55, -0.25)]
 LOADS = [(0.0, 700.0, 0.0, 0.0, 0.0, 0.0), (120.0, 650.0, -80.0, 10.0, -5.0, 15.0)]

@@ -17,9 +17,9 @@ import tomli_w
 from click.testing import CliRunner
 
 from pressfit import kinematics
-from pressfit.cases import load_case
+from pressfit.description.cases import load_case
 from pressfit.cli import main
-from pressfit.envelope import LIMITS, evaluate_case
+from pressfit.studies.limit_check import LIMITS, evaluate_case
 
 ROOT = Path(__file__).resolve().parents[1]
 

@@ -10,7 +10,7 @@ import pytest
 import trimesh
 from click.testing import CliRunner
 
-from pressfit import interference as I
+from pressfit.geometry import interference as I
 from pressfit import kinematics
 from pressfit.cli import main
 

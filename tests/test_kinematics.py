@@ -4,6 +4,7 @@ import numpy as np
 import pytest
 
 from pressfit import kinematics
+from pressfit.kinematics import closed_form
 from pressfit.errors import SingularPoseError, UnreachablePoseError
 
 D = 0.442 - 0.082  # p - r from Table 3, m: horizontal distance base cardan -> plate cardan at x = z = 0
@@ -63,7 +64,7 @@ def test_is_reachable_vectorised_agrees_with_violations(machine):
 @pytest.fixture(scope="module")
 def poses():
     rng = np.random.default_rng(1)
-    n = 2 * kinematics._CHUNK + 17  # spans several chunks of indices()
+    n = 2 * closed_form._CHUNK + 17  # spans several chunks of indices()
     return np.column_stack([rng.uniform(-0.3, 0.3, n), rng.uniform(0.45, 0.8, n), rng.uniform(-0.3, 0.3, n)])
 
 

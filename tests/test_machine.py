@@ -4,7 +4,7 @@ import numpy as np
 import pytest
 
 from pressfit.errors import ModelFileError
-from pressfit.machine import DEFAULT_MODEL, load_machine
+from pressfit.description.machine import DEFAULT_MODEL, load_machine
 
 
 def test_default_model(machine):

@@ -12,7 +12,7 @@ import pytest
 
 from pressfit import kinematics
 from pressfit.errors import UnreachablePoseError
-from pressfit.model import CardanCompliance, LinearSpring, build_model
+from pressfit.mechanics.model import CardanCompliance, LinearSpring, build_model
 
 POSES = [(0.0, 0.72, 0.0), (0.2765, 0.72, -0.2765), (0.1, 0.6, -0.15), (-0.25, 0.5, 0.25), (0.25, 0.75, 0.0)]
 

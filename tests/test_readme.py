@@ -4,7 +4,7 @@ commands at the top are the ones .ci/run and users run."""
 import re
 from pathlib import Path
 
-from pressfit.cases import load_case
+from pressfit.description.cases import load_case
 
 ROOT = Path(__file__).resolve().parents[1]
 README = (ROOT / "README.md").read_text()

@@ -13,10 +13,12 @@ import numpy as np
 import pinocchio as pin
 import pytest
 
-from pressfit import kinematics, statics
+from pressfit import kinematics
+
+from pressfit.mechanics import statics
 from pressfit.errors import ConvergenceError, SingularPoseError, UnreachablePoseError
-from pressfit.model import CardanCompliance, LinearSpring, build_model
-from pressfit.statics import solve_equilibrium
+from pressfit.mechanics.model import CardanCompliance, LinearSpring, build_model
+from pressfit.mechanics.statics import solve_equilibrium
 
 POSE = np.array([0.1, 0.6, -0.15])
 WRENCH = np.array([30.0, 700.0, -50.0, 5.0, 10.0, -7.0])

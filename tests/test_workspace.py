@@ -6,7 +6,9 @@ import numpy as np
 import pytest
 from click.testing import CliRunner
 
-from pressfit import kinematics, workspace
+from pressfit import kinematics
+
+from pressfit.kinematics import workspace
 from pressfit.cli import main
 from pressfit.errors import OutputExistsError
 

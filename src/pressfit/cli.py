@@ -11,10 +11,10 @@ from typing import Any
 import click
 import numpy as np
 
-from . import kinematics
-from .errors import PressfitError
-from .io import to_json
-from .machine import DEFAULT_MODEL, load_machine
+from pressfit import kinematics
+from pressfit.errors import PressfitError
+from pressfit.output.files import to_json
+from pressfit.description.machine import DEFAULT_MODEL, load_machine
 
 MODEL_OPTION = click.option("--model", "model_path", type=click.Path(path_type=Path), default=DEFAULT_MODEL,
                             show_default=True, help="Machine description (TOML).")
@@ -68,20 +68,19 @@ def kinematics_cmd(x: float, y: float, z: float, as_json: bool, model_path: Path
 @user_errors
 def list_cmd() -> None:
     """The shipped machine descriptions (models/) and case files (cases/), with what each case holds."""
-    from .cases import discover, load_case
-    from .machine import MODELS_DIR
+    from pressfit.description.cases import discover, load_case
+    from pressfit.shipped import cases_dir, models_dir
 
-    root = MODELS_DIR.parent
-    click.echo("models:")
-    for path in sorted(MODELS_DIR.glob("*.toml")):
+    click.echo(f"models ({models_dir()}):")
+    for path in sorted(models_dir().glob("*.toml")):
         m = load_machine(path)
-        click.echo(f"  {path.relative_to(root)}  {m.name}: {m.description}")
-    click.echo("cases:")
-    for path in discover([root / "cases"]):
+        click.echo(f"  {path.name}  {m.name}: {m.description}")
+    click.echo(f"cases ({cases_dir()}):")
+    for path in discover([cases_dir()]):
         c = load_case(path)
         kinds = [k for k, v in (("reference table", c.reference), ("envelope", c.envelope.model_dump(exclude_none=True)),
                                 ("study", getattr(c, "study", None))) if v]
-        click.echo(f"  {path.relative_to(root)}  {c.name} [{', '.join(kinds) or 'loads'}]: "
+        click.echo(f"  {path.relative_to(cases_dir())}  {c.name} [{', '.join(kinds) or 'loads'}]: "
                    f"{' '.join(c.description.split())[:90]}")
 
 
@@ -99,10 +98,10 @@ def list_cmd() -> None:
 def solve_cmd(values: tuple[str, ...], has_load: bool, a4: float | None, preload_mode: str, linear: bool,
               as_json: bool, model_path: Path) -> None:
     """Static equilibrium: pressfit solve X Y Z --load FX FY FZ [MX MY MZ], or pressfit solve CASE.toml."""
-    from .statics import solve_equilibrium
+    from pressfit.mechanics.statics import solve_equilibrium
 
     if len(values) == 1 and values[0].endswith(".toml"):
-        from .cases import load_case
+        from pressfit.description.cases import load_case
 
         case = load_case(values[0])
         machine = case.machine()
@@ -130,7 +129,7 @@ def solve_cmd(values: tuple[str, ...], has_load: bool, a4: float | None, preload
 
 
 def _print_equilibrium(eq: Any) -> None:
-    from .statics import SECTIONS
+    from pressfit.mechanics.statics import SECTIONS
 
     kind = "linear (small displacements)" if eq.linear else f"nonlinear, {eq.iterations} Newton iterations"
     fmt = lambda v: "(" + ", ".join(f"{c:g}" for c in v) + ")"  # noqa: E731
@@ -156,8 +155,8 @@ def _print_equilibrium(eq: Any) -> None:
 @user_errors
 def tables_cmd(as_json: bool, out_dir: Path | None, overwrite: bool) -> None:
     """Reproduce the paper's Tables 5 and 6 (cases/paper/A, B, C) beside pressfit's solution."""
-    from . import tables
-    from .io import write_csv, write_text
+    from pressfit.studies import paper_tables as tables
+    from pressfit.output.files import write_csv, write_text
 
     entries = tables.paper_tables()
     if as_json:
@@ -181,14 +180,14 @@ def check_cmd(paths: tuple[Path, ...], junit_path: Path | None, json_path: Path 
     """Check the load envelopes of case files (or directories of them): exit 0 pass, 1 fail, 2 bad input."""
     from dataclasses import asdict
 
-    from .cases import discover, load_case
-    from .io import write_json, write_text
+    from pressfit.description.cases import discover, load_case
+    from pressfit.output.files import write_json, write_text
 
     files = discover(list(paths))
     cases = [load_case(f) for f in files]  # validate every file before computing anything
     for c in cases:
         c.machine()
-    from . import envelope
+    from pressfit.studies import limit_check as envelope
     checked = [c for c in cases if c.envelope.model_dump(exclude_none=True)]
     if not checked:
         raise PressfitError("no case among " + ", ".join(map(str, paths)) + " has an [envelope] to check")
@@ -219,7 +218,7 @@ def check_cmd(paths: tuple[Path, ...], junit_path: Path | None, json_path: Path 
 def workspace_cmd(heights: tuple[float, ...], out_dir: Path, overwrite: bool, as_json: bool, progress: bool,
                   model_path: Path) -> None:
     """Reachable heights of the required square (0, 45, 90 deg), maps of n, F and dl/dh, statistics."""
-    from . import workspace
+    from pressfit.kinematics import workspace
 
     machine = load_machine(model_path)
     rng = workspace.square_height_range(machine)
@@ -258,7 +257,8 @@ def stiffness_cmd(x: float, y: float, z: float, as_json: bool, maps: bool, out_d
                   overwrite: bool, model_path: Path) -> None:
     """Plate compliance and stiffness at pose X Y Z (m): condensed linear model, cross-checked against the
     Pinocchio model, plus the tangent compliance of the nonlinear equilibrium under the press load."""
-    from . import compliance, condensed
+    from pressfit.mechanics import compliance
+    from pressfit.mechanics import condensed
 
     machine = load_machine(model_path)
     if maps:
@@ -322,7 +322,7 @@ def interference_cmd(pose: tuple[float, ...], over_workspace: bool, margin_m: fl
 
     Exit 0 when every checked pair keeps the safety margin, 1 when one does not, 2 on bad input.
     """
-    from . import interference
+    from pressfit.geometry import interference
 
     if over_workspace == (len(pose) == 3) or len(pose) not in (0, 3):
         raise PressfitError("give either a pose X Y Z (m) or --workspace")
@@ -368,7 +368,7 @@ def interference_cmd(pose: tuple[float, ...], over_workspace: bool, margin_m: fl
 @user_errors
 def report_cmd(out_dir: Path, overwrite: bool, quick: bool, model_path: Path) -> None:
     """Reproduce Tables 5 and 6 and write the full Markdown report (maps, envelope, stiffness, ...)."""
-    from .report import write_report
+    from pressfit.output.report import write_report
 
     path = write_report(load_machine(model_path), out_dir, overwrite=overwrite, quick=quick)
     click.echo((path.parent / "tables.md").read_text())  # the Tables 5-6 comparison the report just wrote
@@ -408,12 +408,12 @@ def study_preload_cmd(case_file: Path | None, pose: tuple[float, ...] | None, cl
                       direction: tuple[float, ...], out_dir: Path, overwrite: bool, as_json: bool, progress: bool,
                       model_path: Path) -> None:
     """How much preload keeps every cardan closed up to the load, and what stiffness it buys (SI)."""
-    from . import clearance
+    from pressfit.mechanics import clearance
 
     if case_file is not None:
         if pose or clearances or preloads:
             raise PressfitError("give either CASE_FILE or --pose/--clearance/--preload")
-        from .cases import load_case
+        from pressfit.description.cases import load_case
 
         kw = clearance.study_from_case(load_case(case_file))
     else:

@@ -13,7 +13,9 @@ Claims and what is true (see DESIGN.md, "What the paper's text gets wrong"):
 import numpy as np
 import pytest
 
-from pressfit import kinematics, workspace
+from pressfit import kinematics
+
+from pressfit.kinematics import workspace
 
 Y_FIGURES = 0.6  # m, the height of Figures 7-11
 

@@ -14,8 +14,8 @@ import numpy as np
 import pytest
 
 from pressfit import kinematics
-from pressfit.cases import load_case
-from pressfit.tables import PAPER_CASES, compare_case
+from pressfit.description.cases import load_case
+from pressfit.studies.paper_tables import PAPER_CASES, compare_case
 
 
 @pytest.fixture(scope="module")

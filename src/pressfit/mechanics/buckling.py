@@ -15,7 +15,7 @@ from __future__ import annotations
 import numpy as np
 from scipy.optimize import brentq
 
-from .machine import Machine
+from pressfit.description.machine import Machine
 
 
 def stepped_column_critical_load_n(ei_1_nm2: float, length_1_m: float, ei_2_nm2: float,

@@ -49,10 +49,10 @@ from scipy.linalg.lapack import dgesv as _gesv
 from scipy.linalg.lapack import dgetrf as _getrf
 from scipy.linalg.lapack import dgetrs as _getrs
 
-from . import kinematics
-from .errors import ConvergenceError, PressfitError, SingularPoseError, UnstableEquilibriumError
-from .machine import Machine
-from .model import MachineModel, build_model
+from pressfit import kinematics
+from pressfit.errors import ConvergenceError, PressfitError, SingularPoseError, UnstableEquilibriumError
+from pressfit.description.machine import Machine
+from pressfit.mechanics.model import MachineModel, build_model
 
 SECTIONS = ("base", "actuator", "plate")
 NEWTON_TOL = 1e-10  # stopping tolerance (relative, module doc); the round-off floor is about 3e-12
@@ -483,7 +483,7 @@ MAX_DISPLACEMENT_M = 0.02  # a plate motion above 20 mm is far outside this smal
 def _check_physical(machine: Machine, eq: Equilibrium) -> None:
     """Refuse answers no real machine would give: a leg compressed beyond its Euler load (the state is
     unstable, the equilibrium branch found is meaningless) or a plate displacement that is not small."""
-    from .buckling import leg_critical_load_n
+    from pressfit.mechanics.buckling import leg_critical_load_n
 
     lengths = kinematics.inverse_kinematics(machine, eq.pose_m).lengths_m
     for i, n in enumerate(eq.actuator_forces_n):

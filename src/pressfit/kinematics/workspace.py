@@ -20,9 +20,13 @@ from pathlib import Path
 import numpy as np
 from tqdm import tqdm
 
-from . import io, kinematics, plots
-from .errors import OutputExistsError, PressfitError
-from .machine import Machine
+from pressfit.output import files as io
+
+from pressfit import kinematics
+
+from pressfit.output import plots
+from pressfit.errors import OutputExistsError, PressfitError
+from pressfit.description.machine import Machine
 
 BOUNDARY_STEP_M = 5e-4
 INTERIOR_POINTS = 41

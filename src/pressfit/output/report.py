@@ -12,9 +12,15 @@ from pathlib import Path
 import numpy as np
 from tqdm import tqdm
 
-from . import condensed, interference, tables, workspace
-from .io import write_csv, write_json, write_text
-from .machine import Machine
+from pressfit.mechanics import condensed
+
+from pressfit.geometry import interference
+
+from pressfit.studies import paper_tables as tables
+
+from pressfit.kinematics import workspace
+from pressfit.output.files import write_csv, write_json, write_text
+from pressfit.description.machine import Machine
 
 
 def _md_table(header: list[str], rows: list[list[object]]) -> str:
@@ -97,7 +103,7 @@ def write_report(machine: Machine, out_dir: Path | str, overwrite: bool = False,
 
 def _preload_section(machine: Machine, out: Path, overwrite: bool, quick: bool) -> list[str]:
     """Clearance vs preload at pose A and off-centre: the stiffness that preload buys back."""
-    from . import clearance
+    from pressfit.mechanics import clearance
 
     md = ["## 5. Clearance and preload", "",
           "Axial play g at each cardan (smoothed dead zone, contact stiffness from the machine file), "

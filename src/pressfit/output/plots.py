@@ -13,7 +13,7 @@ import matplotlib.pyplot as plt  # noqa: E402
 from matplotlib import ticker  # noqa: E402
 import numpy as np  # noqa: E402
 
-from . import io  # noqa: E402
+from pressfit.output import files as io  # noqa: E402
 
 Fields = dict[str, tuple[np.ndarray, str]]  # CSV column and panel title -> (values, colour-bar label, e.g. the unit)
 

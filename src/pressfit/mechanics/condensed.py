@@ -65,9 +65,9 @@ from pathlib import Path
 import numpy as np
 from tqdm import tqdm
 
-from .errors import PressfitError, SingularPoseError
-from .kinematics import concurrency_point, is_reachable, leg_vectors
-from .machine import Machine
+from pressfit.errors import PressfitError, SingularPoseError
+from pressfit.kinematics import concurrency_point, is_reachable, leg_vectors
+from pressfit.description.machine import Machine
 
 PRESS_LOAD_N = 700.0  # the press reaction on the tool, +y (paper section 4)
 _CHUNK = 16384  # poses per vectorised block: the working set stays in the CPU cache
@@ -408,7 +408,7 @@ def stiffness_maps(machine: Machine, y_m: float, n: int = 51, press_load_n: floa
 
 def write_stiffness_maps(maps: StiffnessMaps, out_dir: Path | str, overwrite: bool = False) -> list[Path]:
     """PNG per map and one CSV (``stiffness_maps_y<mm>.csv``) into out_dir; returns the paths."""
-    from .plots import write_xz_maps
+    from pressfit.output.plots import write_xz_maps
 
     stem = f"stiffness_maps_y{round(maps.y_m * 1000):d}mm"
     return write_xz_maps(out_dir, stem, maps.x_m, maps.z_m, maps.fields(),
@@ -583,8 +583,8 @@ def envelope_rows(env: LoadEnvelope) -> tuple[list[str], list[list[object]]]:
 def write_load_envelope(env: LoadEnvelope, out_dir: Path | str, overwrite: bool = False) -> list[Path]:
     """``load_envelope.csv`` (the table), ``load_envelope.png`` (per-leg bars) and x-z maps of the worst
     values (``load_envelope_maps*``) into out_dir; returns the paths."""
-    from . import io
-    from .plots import write_leg_bars, write_xz_maps
+    from pressfit.output import files as io
+    from pressfit.output.plots import write_leg_bars, write_xz_maps
 
     header, rows = envelope_rows(env)
     out = Path(out_dir)

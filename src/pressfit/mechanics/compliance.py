@@ -8,8 +8,8 @@ from __future__ import annotations
 
 import numpy as np
 
-from .machine import Machine
-from .statics import solve_equilibrium
+from pressfit.description.machine import Machine
+from pressfit.mechanics.statics import solve_equilibrium
 
 
 def _response(eq: object) -> np.ndarray:

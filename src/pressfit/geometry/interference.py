@@ -51,9 +51,9 @@ import coal
 import numpy as np
 import pinocchio as pin
 
-from . import kinematics
-from .errors import PressfitError
-from .machine import ExtraBody, Machine
+from pressfit import kinematics
+from pressfit.errors import PressfitError
+from pressfit.description.machine import ExtraBody, Machine
 
 PART_NAMES = ("cylinder", "stem")
 KIND_ORDER = ("leg", "plate", "base", "extra")
@@ -124,7 +124,7 @@ def make_rig(machine: Machine, rig: str = "auto") -> Any:
         raise InterferenceError(f"rig must be 'auto', 'closed-form' or 'model' (got {rig!r})")
     if rig != "closed-form":
         try:
-            from .model import build_model
+            from pressfit.mechanics.model import build_model
         except ImportError:
             if rig == "model":
                 raise InterferenceError("pressfit.model is not available") from None
@@ -532,7 +532,7 @@ def workspace_grid(machine: Machine, points: int = 41, heights: int = 7,
     (:func:`pressfit.workspace.square_height_range`)."""
     ws = machine.workspace
     if y_range_m is None:
-        from .workspace import square_height_range
+        from pressfit.kinematics.workspace import square_height_range
 
         hr = square_height_range(machine)
         y_range_m = (hr.y_min_m, hr.y_max_m)
@@ -561,7 +561,7 @@ def min_distance_over_poses(machine: Machine, poses_m: np.ndarray, progress: boo
 def write_workspace(result: SweepResult, out_dir: Path | str, overwrite: bool = False) -> list[Path]:
     """``interference_poses.csv`` (per pose), ``interference_pairs.csv`` (per pair) and, for a grid,
     ``interference_map.png`` (minimum distance over x-z at up to four heights)."""
-    from .io import write_csv
+    from pressfit.output.files import write_csv
 
     out = Path(out_dir)
     names = np.array(result.pairs + ("",))
@@ -584,7 +584,7 @@ def plot_workspace(result: SweepResult, path: Path | str, overwrite: bool = Fals
     matplotlib.use("Agg")
     import matplotlib.pyplot as plt
 
-    from .io import save_figure
+    from pressfit.output.files import save_figure
 
     assert result.grid_axes_m is not None
     xs, ys, zs = result.grid_axes_m

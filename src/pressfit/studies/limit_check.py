@@ -18,11 +18,15 @@ from dataclasses import dataclass, field
 import numpy as np
 from tqdm import tqdm
 
-from . import buckling, condensed, kinematics
-from .cases import Case
-from .machine import Machine
-from .errors import PressfitError
-from .statics import Equilibrium, solve_equilibrium
+from pressfit.mechanics import buckling
+
+from pressfit.mechanics import condensed
+
+from pressfit import kinematics
+from pressfit.description.cases import Case
+from pressfit.description.machine import Machine
+from pressfit.errors import PressfitError
+from pressfit.mechanics.statics import Equilibrium, solve_equilibrium
 
 SECTIONS = ("base", "actuator", "plate")
 
@@ -216,7 +220,7 @@ def _with_clearance(case: Case, machine: Machine, pose: np.ndarray, load: np.nda
     """A quantity at the full load with the case's cardan clearances: the preload, then the load in 20
     steps along its direction (lost motion and joints that open both change it). Axial clearance does not
     change the leg couples (they follow the plate rotation about P*), so moments are not re-evaluated."""
-    from . import clearance
+    from pressfit.mechanics import clearance
 
     f = float(np.linalg.norm(load[:3]))
     if f == 0 or np.any(load[3:]):
@@ -241,7 +245,7 @@ def _line(key: str, spec: Limit, limit: float, worst: float, leg: int | None, po
 
 
 def _interference(machine: object, poses: np.ndarray, progress: bool) -> np.ndarray:
-    from . import interference  # Coal is only needed when a case limits interference
+    from pressfit.geometry import interference  # Coal is only needed when a case limits interference
 
     return interference.min_distance_over_poses(machine, poses, progress=progress)
 

@@ -53,9 +53,13 @@ from typing import Any
 import numpy as np
 from tqdm import tqdm
 
-from . import condensed, io, kinematics
-from .errors import ConvergenceError, PressfitError
-from .machine import Machine
+from pressfit.mechanics import condensed
+
+from pressfit.output import files as io
+
+from pressfit import kinematics
+from pressfit.errors import ConvergenceError, PressfitError
+from pressfit.description.machine import Machine
 
 ENDS = ("base", "plate")
 DEFAULT_SMOOTHING_M = 1e-9
@@ -192,7 +196,7 @@ class Clearance:
 
     def cardan_compliance(self) -> dict:
         """The ``cardan_compliance`` argument of :func:`pressfit.model.build_model`."""
-        from .model import CardanCompliance
+        from pressfit.mechanics.model import CardanCompliance
 
         return {(i, e): CardanCompliance(axial=self.law(i, j), rotation=self.rotation_law(i, j))
                 for i in range(4) for j, e in enumerate(ENDS)}
@@ -210,7 +214,7 @@ def preload_offsets(machine: Machine, pose_m: np.ndarray, clearance: Clearance, 
     ``force``: a4 in N; with no load the actuator forces are a4 v_p and the joints closed. ``length``:
     a4 in m (offsets -a4 v_p).
     """
-    from . import statics
+    from pressfit.mechanics import statics
 
     if mode == "length":
         return statics.preload_offsets(machine, pose_m, a4, "length")
@@ -467,8 +471,8 @@ def _sweep_small(machine: Machine, pose: np.ndarray, direction: np.ndarray, load
 
 def _sweep_nonlinear(machine: Machine, pose: np.ndarray, direction: np.ndarray, loads: np.ndarray,
                      clearance: Clearance, offsets: np.ndarray, unload: bool) -> tuple[list, list]:
-    from . import statics
-    from .model import build_model
+    from pressfit.mechanics import statics
+    from pressfit.mechanics.model import build_model
 
     mm = build_model(machine, pose, cardan_compliance=clearance.cardan_compliance())
     idx = np.zeros((4, 2), dtype=int)
@@ -703,7 +707,7 @@ def write_study(study: PreloadStudy, out_dir: Path | str, overwrite: bool = Fals
     """preload_study.csv, preload_study.json and two PNGs (stiffness vs preload, curves) in out_dir."""
     import matplotlib.pyplot as plt
 
-    from . import plots  # noqa: F401  (selects the Agg backend)
+    from pressfit.output import plots  # noqa: F401  (selects the Agg backend)
 
     out = Path(out_dir)
     header, rows = study.rows()

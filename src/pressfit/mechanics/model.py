@@ -44,8 +44,8 @@ from typing import Protocol
 import numpy as np
 import pinocchio as pin
 
-from . import kinematics
-from .machine import Machine
+from pressfit import kinematics
+from pressfit.description.machine import Machine
 
 UP = np.array([0.0, 1.0, 0.0])
 CARDAN_ENDS = ("base", "plate")
@@ -191,7 +191,7 @@ class MachineModel:
 
         Starts from ``q_init`` (default: the rigid closed form, which is already closed); returns q.
         """
-        from .errors import ConvergenceError
+        from pressfit.errors import ConvergenceError
 
         h = kinematics.require_reachable(self.machine, pose_m)
         q = self.configuration_at(h) if q_init is None else np.array(q_init, dtype=float)

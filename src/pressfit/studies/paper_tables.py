@@ -25,13 +25,14 @@ from pathlib import Path
 
 import numpy as np
 
-from .cases import Case, load_case
-from .errors import PressfitError
-from .statics import Equilibrium, solve_equilibrium
+from pressfit.description.cases import Case, load_case
+from pressfit.errors import PressfitError
+from pressfit.shipped import cases_dir
+from pressfit.mechanics.statics import Equilibrium, solve_equilibrium
 
 QUANTITIES = ("F_x", "F_y", "F_z", "M_x", "M_y", "M_bend", "M_z")
 COMPARED = {"F_z", "M_bend", "M_z"}  # frame-independent entries; the others are listed, not compared
-PAPER_CASES = Path(__file__).resolve().parents[2] / "cases" / "paper"
+PAPER_CASES = cases_dir() / "paper"
 NEGLIGIBLE = {"F": 1e-3, "M": 1e-3}  # N, N m: entries below this on both sides count as "~0"
 
 

@@ -11,7 +11,7 @@ from typing import Any
 
 import numpy as np
 
-from .errors import OutputError, OutputExistsError
+from pressfit.errors import OutputError, OutputExistsError
 
 
 def _atomic(path: Path | str, write: Callable[[Path], None], overwrite: bool) -> Path:

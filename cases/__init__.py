@@ -1,0 +1,1 @@
+"""Shipped case files (package data of pressfit; see pressfit.shipped)."""

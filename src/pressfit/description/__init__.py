@@ -1,0 +1,1 @@
+"""The machine as data: strict schemas of machine files (models/) and case files (cases/)."""

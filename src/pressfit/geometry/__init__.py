@@ -1,0 +1,1 @@
+"""Geometry checks: leg interference with Coal."""

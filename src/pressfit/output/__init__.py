@@ -1,0 +1,1 @@
+"""Everything that writes: atomic files, plots, tables and reports."""
