@@ -16,8 +16,9 @@ os.environ.setdefault("OPENBLAS_NUM_THREADS", "1")
 
 import numpy as np  # noqa: E402
 
-from pressfit import clearance as C  # noqa: E402
-from pressfit import statics  # noqa: E402
+from pressfit.mechanics import clearance as C  # noqa: E402
+from pressfit.mechanics import statics  # noqa: E402
+from pressfit.studies import preload_study  # noqa: E402
 from pressfit.description.machine import load_machine  # noqa: E402
 from pressfit.mechanics.model import build_model  # noqa: E402
 
@@ -31,7 +32,7 @@ def main() -> None:
     gaps = np.linspace(0.0, 50e-6, 11)
     steps = 50
     t0 = time.perf_counter()
-    study = C.preload_study(machine, POSE, gaps, preloads, 700.0, steps, progress=False)
+    study = preload_study.preload_study(machine, POSE, gaps, preloads, 700.0, steps, progress=False)
     total = time.perf_counter() - t0
     n_solves = len(gaps) * len(preloads) * (steps + 1)
     print(f"study 13 preloads x 11 clearances x {steps} steps (+ critical preload per clearance): "

@@ -15,7 +15,8 @@ os.environ.setdefault("OPENBLAS_NUM_THREADS", "1")
 
 import numpy as np  # noqa: E402
 
-from pressfit import condensed  # noqa: E402
+from pressfit.mechanics import condensed  # noqa: E402
+from pressfit.studies import workspace_envelope  # noqa: E402
 from pressfit.description.machine import load_machine  # noqa: E402
 
 
@@ -43,8 +44,8 @@ def main(n: int = 1_000_000) -> None:
         "plate_stiffness about the centre (6x6)": (lambda: condensed.plate_stiffness(machine, poses), n),
         "stiffness_maps, 51 x 51": (lambda: condensed.stiffness_maps(machine, 0.6, 51), 2601),
         "load_envelope, 51 x 51 x 11 levels x 9 loads (cone 10 deg)": (
-            lambda: condensed.load_envelope(machine, np.linspace(0.5, 0.74, 11), 51,
-                                            condensed.press_loads(cone_half_angle_rad=np.radians(10)),
+            lambda: workspace_envelope.load_envelope(machine, np.linspace(0.5, 0.74, 11), 51,
+                                            workspace_envelope.press_loads(cone_half_angle_rad=np.radians(10)),
                                             progress=False), 2601 * 11 * 9),
     }
     print(f"{n} poses, median of 7 runs, one core")

@@ -19,7 +19,8 @@ os.environ.setdefault("OPENBLAS_NUM_THREADS", "1")
 import numpy as np  # noqa: E402
 import pinocchio as pin  # noqa: E402
 
-from pressfit import interference, load_machine  # noqa: E402
+from pressfit import load_machine  # noqa: E402
+from pressfit.geometry import interference  # noqa: E402
 
 
 def main() -> None:

@@ -26,7 +26,8 @@ os.environ.setdefault("OPENBLAS_NUM_THREADS", "1")
 import numpy as np  # noqa: E402
 import pinocchio as pin  # noqa: E402
 
-from pressfit import kinematics, load_machine, statics  # noqa: E402
+from pressfit import kinematics, load_machine  # noqa: E402
+from pressfit.mechanics import statics  # noqa: E402
 from pressfit.mechanics.model import build_model  # noqa: E402
 
 PIN_CALLS = ("computeJointJacobians", "forwardKinematics", "rnea", "integrate", "log3", "getConstraintsJacobian")

@@ -15,6 +15,8 @@ from pressfit import kinematics
 from pressfit.mechanics import statics
 from pressfit.description.cases import load_case
 from pressfit.cli import main
+from pressfit.output import maps
+from pressfit.studies import preload_study
 from pressfit.mechanics.model import build_model
 
 POSE_A = np.array([0.0, 0.72, 0.0])
@@ -173,12 +175,12 @@ def test_study_case_and_cli(machine, tmp_path):
     """The one-command answer: the case-file form and the option form write CSV, JSON and two PNGs,
     refuse to overwrite, and report the critical preload of the closed form at pose A (0.5%)."""
     case = load_case("cases/studies/preload_pose_A.toml")
-    kw = C.study_from_case(case)
+    kw = preload_study.study_from_case(case)
     kw["preloads"], kw["clearances_m"], kw["steps"] = [0.0, 400.0], [G], 50
-    study = C.preload_study(**kw, progress=False)
+    study = preload_study.preload_study(**kw, progress=False)
     assert study.critical_preload[0] == pytest.approx(700 / (2 * SIN_A), rel=5e-3)
     assert study.small_load_stiffness_n_per_m[0, 1] > 100 * study.small_load_stiffness_n_per_m[0, 0]
-    paths = C.write_study(study, tmp_path / "a")
+    paths = maps.write_preload_study(study, tmp_path / "a")
     assert sorted(p.name for p in paths) == ["load_deflection.png", "preload_stiffness.png",
                                              "preload_study.csv", "preload_study.json"]
     runner = CliRunner()

@@ -13,7 +13,10 @@ import numpy as np
 import pytest
 from scipy.spatial.transform import Rotation
 
+from pressfit.kinematics.workspace import workspace_square
 from pressfit.mechanics import condensed
+from pressfit.output import maps as map_files
+from pressfit.studies import workspace_envelope
 
 from pressfit import kinematics
 from pressfit.errors import OutputExistsError, PressfitError
@@ -211,18 +214,18 @@ def test_stiffness_maps(machine, tmp_path):
     assert np.all(maps.lateral_to_vertical < 1)
     assert np.all(maps.lateral_n_per_m <= np.minimum(maps.lateral_x_n_per_m, maps.lateral_z_n_per_m) * (1 + 1e-12))
     np.testing.assert_allclose(maps.tilt_rad, maps.tilt_rad.T, rtol=1e-9)  # x <-> z symmetry of the square
-    paths = condensed.write_stiffness_maps(maps, tmp_path)
+    paths = map_files.write_stiffness_maps(maps, tmp_path)
     assert {p.suffix for p in paths} == {".png", ".csv"} and all(p.stat().st_size > 0 for p in paths)
     with pytest.raises(OutputExistsError):
-        condensed.write_stiffness_maps(maps, tmp_path)
+        map_files.write_stiffness_maps(maps, tmp_path)
 
 
 def test_load_envelope_matches_brute_force(machine, tmp_path):
     ys = np.array([0.5, 0.62, 0.74])
-    loads = condensed.press_loads(cone_half_angle_rad=math.radians(10), n_azimuth=4)
-    env = condensed.load_envelope(machine, ys, n_xz=7, loads_n=loads, chunk_poses=100, progress=False)
+    loads = workspace_envelope.press_loads(cone_half_angle_rad=math.radians(10), n_azimuth=4)
+    env = workspace_envelope.load_envelope(machine, ys, n_xz=7, loads_n=loads, chunk_poses=100, progress=False)
     assert env.n_evaluated == 3 * 49 and env.n_unreachable == 0
-    x, z = condensed.workspace_square(machine, 7)
+    x, z = workspace_square(machine, 7)
     h = np.stack(np.meshgrid(x, ys, z, indexing="ij"), -1).reshape(-1, 3)
     res = condensed.solve_linear(machine, h[None], np.c_[loads, np.zeros_like(loads)][:, None])  # (L, P, ...)
     np.testing.assert_allclose(env.entries["tension_n"].value, res.axial_forces_n.max((0, 1)), rtol=1e-12)
@@ -238,12 +241,12 @@ def test_load_envelope_matches_brute_force(machine, tmp_path):
     # 90-degree symmetry of machine, grid and load set: every leg has the same envelope
     np.testing.assert_allclose(env.entries["torsion_nm"].value, env.entries["torsion_nm"].value[0], rtol=1e-9)
     assert env.maps["tilt_rad"].shape == (7, 7)
-    paths = condensed.write_load_envelope(env, tmp_path)
+    paths = map_files.write_load_envelope(env, tmp_path)
     assert len(paths) == 4 and (tmp_path / "load_envelope.csv").read_text().count("\n") == 6 * 4 + 2 + 1
 
 
 def test_envelope_counts_unreachable_poses(machine):
-    env = condensed.load_envelope(machine, [0.3, 0.6], n_xz=5, progress=False)
+    env = workspace_envelope.load_envelope(machine, [0.3, 0.6], n_xz=5, progress=False)
     assert env.n_unreachable > 0 and env.n_evaluated == 25
 
 

@@ -10,6 +10,7 @@ from pressfit import kinematics
 
 from pressfit.kinematics import workspace
 from pressfit.cli import main
+from pressfit.output import maps
 from pressfit.errors import OutputExistsError
 
 
@@ -48,9 +49,9 @@ def test_plane_map(machine):
 def test_write_outputs_and_no_silent_overwrite(machine, tmp_path):
     (tmp_path / "summary.json").write_text("keep")
     with pytest.raises(OutputExistsError):  # checked before anything is computed or written
-        workspace.write_outputs(machine, tmp_path, [0.6])
+        maps.write_kinematic_maps(machine, tmp_path, [0.6])
     assert (tmp_path / "summary.json").read_text() == "keep" and not (tmp_path / "maps_y0.600.csv").exists()
-    summary, paths = workspace.write_outputs(machine, tmp_path, [0.6], overwrite=True)
+    summary, paths = maps.write_kinematic_maps(machine, tmp_path, [0.6], overwrite=True)
     assert sorted(p.name for p in paths) == ["maps_y0.600.csv", "maps_y0.600.png", "summary.json"]
     assert json.loads((tmp_path / "summary.json").read_text()) == json.loads(json.dumps(summary))
 

@@ -12,9 +12,9 @@ import click
 import numpy as np
 
 from pressfit import kinematics
+from pressfit.description.machine import DEFAULT_MODEL, load_machine
 from pressfit.errors import PressfitError
 from pressfit.output.files import to_json
-from pressfit.description.machine import DEFAULT_MODEL, load_machine
 
 MODEL_OPTION = click.option("--model", "model_path", type=click.Path(path_type=Path), default=DEFAULT_MODEL,
                             show_default=True, help="Machine description (TOML).")
@@ -155,8 +155,8 @@ def _print_equilibrium(eq: Any) -> None:
 @user_errors
 def tables_cmd(as_json: bool, out_dir: Path | None, overwrite: bool) -> None:
     """Reproduce the paper's Tables 5 and 6 (cases/paper/A, B, C) beside pressfit's solution."""
-    from pressfit.studies import paper_tables as tables
     from pressfit.output.files import write_csv, write_text
+    from pressfit.studies import paper_tables as tables
 
     entries = tables.paper_tables()
     if as_json:
@@ -187,6 +187,7 @@ def check_cmd(paths: tuple[Path, ...], junit_path: Path | None, json_path: Path 
     cases = [load_case(f) for f in files]  # validate every file before computing anything
     for c in cases:
         c.machine()
+    from pressfit.output import check_report
     from pressfit.studies import limit_check as envelope
     checked = [c for c in cases if c.envelope.model_dump(exclude_none=True)]
     if not checked:
@@ -195,9 +196,9 @@ def check_cmd(paths: tuple[Path, ...], junit_path: Path | None, json_path: Path 
     if skipped:
         click.echo(f"skipped (no [envelope]): {', '.join(skipped)}")
     results = [envelope.evaluate_case(c, progress=progress) for c in checked]
-    click.echo(envelope.format_table(results))
+    click.echo(check_report.format_table(results))
     if junit_path:
-        write_text(junit_path, envelope.junit_xml(results), overwrite)
+        write_text(junit_path, check_report.junit_xml(results), overwrite)
     if json_path:
         write_json(json_path, [asdict(r) | {"passed": r.passed} for r in results], overwrite)
     failed = [r.case for r in results if not r.passed]
@@ -219,6 +220,7 @@ def workspace_cmd(heights: tuple[float, ...], out_dir: Path, overwrite: bool, as
                   model_path: Path) -> None:
     """Reachable heights of the required square (0, 45, 90 deg), maps of n, F and dl/dh, statistics."""
     from pressfit.kinematics import workspace
+    from pressfit.output import maps as map_files
 
     machine = load_machine(model_path)
     rng = workspace.square_height_range(machine)
@@ -226,7 +228,7 @@ def workspace_cmd(heights: tuple[float, ...], out_dir: Path, overwrite: bool, as
         if not (np.isfinite(y) and rng.y_min_m <= y <= rng.y_max_m):
             raise PressfitError(f"--y {y:g}: the required square is reachable only for y_h in "
                                 f"[{rng.y_min_m:.5f}, {rng.y_max_m:.5f}] m")
-    summary, _ = workspace.write_outputs(machine, out_dir, heights or workspace.DEFAULT_HEIGHTS_M,
+    summary, _ = map_files.write_kinematic_maps(machine, out_dir, heights or workspace.DEFAULT_HEIGHTS_M,
                                          overwrite, progress)
     if as_json:
         click.echo(to_json(summary))
@@ -257,13 +259,13 @@ def stiffness_cmd(x: float, y: float, z: float, as_json: bool, maps: bool, out_d
                   overwrite: bool, model_path: Path) -> None:
     """Plate compliance and stiffness at pose X Y Z (m): condensed linear model, cross-checked against the
     Pinocchio model, plus the tangent compliance of the nonlinear equilibrium under the press load."""
-    from pressfit.mechanics import compliance
-    from pressfit.mechanics import condensed
+    from pressfit.mechanics import compliance, condensed
+    from pressfit.output import maps as map_files
 
     machine = load_machine(model_path)
     if maps:
         m = condensed.stiffness_maps(machine, y, n_grid)
-        for p in condensed.write_stiffness_maps(m, out_dir, overwrite):
+        for p in map_files.write_stiffness_maps(m, out_dir, overwrite):
             click.echo(f"wrote {p}")
         return
     h = kinematics.require_reachable(machine, [x, y, z])
@@ -323,6 +325,7 @@ def interference_cmd(pose: tuple[float, ...], over_workspace: bool, margin_m: fl
     Exit 0 when every checked pair keeps the safety margin, 1 when one does not, 2 on bad input.
     """
     from pressfit.geometry import interference
+    from pressfit.output import maps as map_files
 
     if over_workspace == (len(pose) == 3) or len(pose) not in (0, 3):
         raise PressfitError("give either a pose X Y Z (m) or --workspace")
@@ -342,7 +345,7 @@ def interference_cmd(pose: tuple[float, ...], over_workspace: bool, margin_m: fl
     res = interference.workspace_sweep(im, points, heights, y_range, margin_m, progress)
     summary = res.to_dict() | {"kinematics": im.kinematics, "notes": list(im.notes),
                                "y_range_m": [float(res.grid_axes_m[1][0]), float(res.grid_axes_m[1][-1])]}
-    written = interference.write_workspace(res, out_dir, overwrite) if out_dir is not None else []
+    written = map_files.write_interference_sweep(res, out_dir, overwrite) if out_dir is not None else []
     if as_json:
         click.echo(to_json(summary | {"outputs": [str(p) for p in written]}))
     else:
@@ -408,14 +411,15 @@ def study_preload_cmd(case_file: Path | None, pose: tuple[float, ...] | None, cl
                       direction: tuple[float, ...], out_dir: Path, overwrite: bool, as_json: bool, progress: bool,
                       model_path: Path) -> None:
     """How much preload keeps every cardan closed up to the load, and what stiffness it buys (SI)."""
-    from pressfit.mechanics import clearance
+    from pressfit.output import maps as map_files
+    from pressfit.studies import preload_study
 
     if case_file is not None:
         if pose or clearances or preloads:
             raise PressfitError("give either CASE_FILE or --pose/--clearance/--preload")
         from pressfit.description.cases import load_case
 
-        kw = clearance.study_from_case(load_case(case_file))
+        kw = preload_study.study_from_case(load_case(case_file))
     else:
         if not pose or not preloads:
             raise PressfitError("give CASE_FILE, or --pose X Y Z and --preload P1,P2,...")
@@ -423,12 +427,12 @@ def study_preload_cmd(case_file: Path | None, pose: tuple[float, ...] | None, cl
         kw = {"machine": machine, "pose_m": list(pose), "clearances_m": _floats(clearances, "--clearance"),
               "preloads": _floats(preloads, "--preload"), "load_max_n": load_max, "steps": steps,
               "direction": direction, "preload_mode": preload_mode}
-    study = clearance.preload_study(**kw, progress=progress)
-    written = clearance.write_study(study, out_dir, overwrite)
+    study = preload_study.preload_study(**kw, progress=progress)
+    written = map_files.write_preload_study(study, out_dir, overwrite)
     if as_json:
         click.echo(to_json(study.to_dict() | {"outputs": [str(p) for p in written]}))
         return
-    click.echo(clearance.format_answers(study))
+    click.echo(preload_study.format_answers(study))
     for p in written:
         click.echo(f"wrote {p}")
 

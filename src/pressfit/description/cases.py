@@ -14,8 +14,14 @@ from typing import Annotated, Any, Literal
 import numpy as np
 from pydantic import BaseModel, ConfigDict, Field, ValidationError, model_validator
 
+from pressfit.description.machine import (
+    DEFAULT_MODEL,
+    Machine,
+    load_machine,
+    read_toml,
+    validation_error,
+)
 from pressfit.errors import ModelFileError
-from pressfit.description.machine import DEFAULT_MODEL, Machine, load_machine, read_toml, validation_error
 
 Finite = Annotated[float, Field(allow_inf_nan=False)]
 Positive = Annotated[float, Field(gt=0, allow_inf_nan=False)]

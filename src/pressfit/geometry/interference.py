@@ -52,8 +52,8 @@ import numpy as np
 import pinocchio as pin
 
 from pressfit import kinematics
-from pressfit.errors import PressfitError
 from pressfit.description.machine import ExtraBody, Machine
+from pressfit.errors import PressfitError
 
 PART_NAMES = ("cylinder", "stem")
 KIND_ORDER = ("leg", "plate", "base", "extra")
@@ -555,50 +555,3 @@ def workspace_sweep(im: InterferenceModel, points: int = 41, heights: int = 7,
 def min_distance_over_poses(machine: Machine, poses_m: np.ndarray, progress: bool = False) -> np.ndarray:
     """Minimum signed distance over every checked pair at each pose (n,), m; NaN where unreachable."""
     return sweep(build_interference(machine), poses_m, progress=progress).min_distance_m
-
-
-# --- output ---------------------------------------------------------------------------------------
-def write_workspace(result: SweepResult, out_dir: Path | str, overwrite: bool = False) -> list[Path]:
-    """``interference_poses.csv`` (per pose), ``interference_pairs.csv`` (per pair) and, for a grid,
-    ``interference_map.png`` (minimum distance over x-z at up to four heights)."""
-    from pressfit.output.files import write_csv
-
-    out = Path(out_dir)
-    names = np.array(result.pairs + ("",))
-    rows = zip(*result.poses_m.T, result.reachable.astype(int), result.min_distance_m, names[result.worst_pair])
-    paths = [write_csv(out / "interference_poses.csv", ["x_m", "y_m", "z_m", "reachable", "min_distance_m",
-                                                         "worst_pair"], rows, overwrite)]
-    prow = [(p, k, d, *result.poses_m[i]) for p, k, d, i in
-            zip(result.pairs, result.kinds, result.pair_min_m, result.pair_argmin)]
-    paths.append(write_csv(out / "interference_pairs.csv", ["pair", "kind", "min_distance_m", "x_m", "y_m", "z_m"],
-                           prow, overwrite))
-    if result.grid_axes_m is not None:
-        paths.append(plot_workspace(result, out / "interference_map.png", overwrite))
-    return paths
-
-
-def plot_workspace(result: SweepResult, path: Path | str, overwrite: bool = False) -> Path:
-    """Filled contours of the minimum distance (mm) over x-z at up to four heights; the margin dashed."""
-    import matplotlib
-
-    matplotlib.use("Agg")
-    import matplotlib.pyplot as plt
-
-    from pressfit.output.files import save_figure
-
-    assert result.grid_axes_m is not None
-    xs, ys, zs = result.grid_axes_m
-    d = result.min_distance_m.reshape(len(ys), len(zs), len(xs)) * 1e3
-    pick = sorted(set(np.linspace(0, len(ys) - 1, min(4, len(ys))).round().astype(int)))
-    fig, axes = plt.subplots(1, len(pick), figsize=(4.2 * len(pick), 3.8), squeeze=False, constrained_layout=True)
-    levels = np.linspace(np.nanmin(d), np.nanmax(d), 21)
-    for ax, k in zip(axes[0], pick):
-        cs = ax.contourf(xs * 1e3, zs * 1e3, d[k], levels=levels, cmap="viridis")
-        if np.nanmin(d[k]) < result.margin_m * 1e3 < np.nanmax(d[k]):
-            ax.contour(xs * 1e3, zs * 1e3, d[k], levels=[result.margin_m * 1e3], colors="r", linestyles="--")
-        ax.set(title=f"y_h = {ys[k] * 1e3:.1f} mm", xlabel="x_h [mm]", ylabel="z_h [mm]", aspect="equal")
-    fig.colorbar(cs, ax=axes[0].tolist(), label="minimum clearance over pairs [mm]")
-    try:
-        return save_figure(fig, path, overwrite)
-    finally:
-        plt.close(fig)

@@ -10,8 +10,8 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from pressfit.errors import SingularPoseError, UnreachablePoseError
 from pressfit.description.machine import Machine
+from pressfit.errors import SingularPoseError, UnreachablePoseError
 
 Y_AXIS = np.array([0.0, 1.0, 0.0])
 

@@ -15,18 +15,12 @@ from __future__ import annotations
 
 from collections.abc import Iterable
 from dataclasses import asdict, dataclass
-from pathlib import Path
 
 import numpy as np
-from tqdm import tqdm
-
-from pressfit.output import files as io
 
 from pressfit import kinematics
-
-from pressfit.output import plots
-from pressfit.errors import OutputExistsError, PressfitError
 from pressfit.description.machine import Machine
+from pressfit.errors import PressfitError
 
 BOUNDARY_STEP_M = 5e-4
 INTERIOR_POINTS = 41
@@ -250,45 +244,8 @@ def summary(machine: Machine, heights_m: Iterable[float] = DEFAULT_HEIGHTS_M,
     }
 
 
-def _panels(pm: PlaneMap) -> plots.Fields:
-    """The paper's Figures 7-11 as panels: n, F_x, F_y, F_z and leg 1's dl_1/dh (legs 2-4 follow by
-    Table 2's symmetries; every leg is in the CSV)."""
-    fields = {"n (eq. 4)": (pm.dexterity, "-")}
-    fields |= {f"F_{a} (eq. {6 + j})": (pm.force_indices[..., j], "N/N") for j, a in enumerate(_AXES)}
-    fields |= {f"dl_1/d{a}_h (eqs. 2-3)": (pm.leg_rates[..., 0, j], "m/m") for j, a in enumerate(_AXES)}
-    return fields
-
-
-def write_outputs(machine: Machine, out_dir: Path | str, heights_m: Iterable[float] = DEFAULT_HEIGHTS_M,
-                  overwrite: bool = False, progress: bool = False) -> tuple[dict[str, object], list[Path]]:
-    """Write per height ``maps_y<y>.csv`` (every field, every leg) and ``maps_y<y>.png`` (panels, the
-    required square dashed magenta, also at 45 deg on the F panels), then ``summary.json``.
-    Refuses to overwrite unless asked (checked for every file before anything is written)."""
-    out = Path(out_dir)
-    heights = [float(y) for y in heights_m]
-    names = [out / f"maps_y{y:.3f}.{ext}" for y in heights for ext in ("csv", "png")] + [out / "summary.json"]
-    clash = [p for p in names if p.exists()]
-    if clash and not overwrite:
-        raise OutputExistsError(f"{clash[0]} exists ({len(clash)} output files do); pass --overwrite "
-                                "(overwrite=True) to replace them")
-    squares = [np.vstack([c, c[:1]]) for c in (square_corners(machine, 0.0), square_corners(machine, 45.0))]
-    written = []
-    with tqdm(total=len(heights) + 1, desc="workspace", unit="step", disable=not progress) as bar:
-        for y in heights:
-            pm = plane_map(machine, y)
-            written.append(io.write_csv(out / f"maps_y{y:.3f}.csv", *map_rows(pm), overwrite=overwrite))
-            fields = _panels(pm)
-            fig = plots.xz_map_figure(pm.x_m, pm.z_m, fields, f"4-UPU maps at y_h = {y:g} m "
-                                      "(magenta: required square, also at 45 deg)")
-            try:
-                for ax, name in zip(fig.axes, fields, strict=False):
-                    for sq in squares if name.startswith("F_") else squares[:1]:
-                        ax.plot(sq[:, 0], sq[:, 1], "m--", linewidth=1.2)
-                written.append(io.save_figure(fig, out / f"maps_y{y:.3f}.png", overwrite))
-            finally:
-                plots.plt.close(fig)
-            bar.update()
-        result = summary(machine, heights)
-        written.append(io.write_json(out / "summary.json", result, overwrite))
-        bar.update()
-    return result, written
+# --- stiffness maps over the x-z workspace square ------------------------------------------------
+def workspace_square(machine: Machine, n: int) -> tuple[np.ndarray, np.ndarray]:
+    """(x, z) grid coordinates, n points each over the required workspace square, m."""
+    ws = machine.workspace
+    return np.linspace(-ws.x_half_width_m, ws.x_half_width_m, n), np.linspace(-ws.z_half_width_m, ws.z_half_width_m, n)

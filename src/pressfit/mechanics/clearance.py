@@ -47,19 +47,14 @@ the previous solution. The two agree to the geometric nonlinearity (about 1e-3 a
 from __future__ import annotations
 
 from dataclasses import dataclass
-from pathlib import Path
 from typing import Any
 
 import numpy as np
-from tqdm import tqdm
-
-from pressfit.mechanics import condensed
-
-from pressfit.output import files as io
 
 from pressfit import kinematics
-from pressfit.errors import ConvergenceError, PressfitError
 from pressfit.description.machine import Machine
+from pressfit.errors import ConvergenceError, PressfitError
+from pressfit.mechanics import condensed
 
 ENDS = ("base", "plate")
 DEFAULT_SMOOTHING_M = 1e-9
@@ -591,164 +586,6 @@ def critical_preload(machine: Machine, pose_m: Any, direction: Any, press_load_n
     return critical_preloads(machine, pose_m, direction, press_load_n, [cl], preload_mode, steps, tol)[0]
 
 
-# --- the preload study -------------------------------------------------------------------------------------
-@dataclass(frozen=True)
-class PreloadStudy:
-    """Stiffness and lost motion over a (clearance x preload) grid at one pose; arrays (G, P) (SI)."""
-
-    pose_m: np.ndarray
-    direction: np.ndarray
-    preload_mode: str
-    clearances_m: np.ndarray  # (G,) mean play of each clearance variant, m
-    preloads: np.ndarray  # (P,) N (force) or m (length)
-    loads_n: np.ndarray  # (n,)
-    deflection_m: np.ndarray  # (G, P, n) along the direction, loading
-    small_load_stiffness_n_per_m: np.ndarray
-    press_stiffness_n_per_m: np.ndarray
-    press_secant_stiffness_n_per_m: np.ndarray
-    lost_motion_m: np.ndarray
-    first_opening_load_n: np.ndarray  # lowest load at which some joint is open (NaN: none opens)
-    critical_preload: np.ndarray  # (G,)
-    reference_stiffness_n_per_m: float  # the same machine without clearance (g = 0), first step
-    max_residual: float
-    contact_stiffness_n_per_m: float
-    smoothing_m: float
-
-    def rows(self) -> tuple[list[str], list[list[Any]]]:
-        header = ["clearance_m", f"preload_{'n' if self.preload_mode == 'force' else 'm'}",
-                  "small_load_stiffness_n_per_m", "press_stiffness_n_per_m", "press_secant_stiffness_n_per_m",
-                  "lost_motion_m", "deflection_at_max_m", "first_opening_load_n", "critical_preload",
-                  "stiffness_gain_vs_no_preload"]
-        rows = []
-        for g, p in np.ndindex(len(self.clearances_m), len(self.preloads)):
-            rows.append([float(self.clearances_m[g]), float(self.preloads[p]),
-                         float(self.small_load_stiffness_n_per_m[g, p]), float(self.press_stiffness_n_per_m[g, p]),
-                         float(self.press_secant_stiffness_n_per_m[g, p]), float(self.lost_motion_m[g, p]),
-                         float(self.deflection_m[g, p, -1]), _opt(self.first_opening_load_n[g, p]),
-                         float(self.critical_preload[g]), float(self.small_load_stiffness_n_per_m[g, p]
-                                                               / self.small_load_stiffness_n_per_m[g, 0])])
-        return header, rows
-
-    def to_dict(self) -> dict[str, Any]:
-        header, rows = self.rows()
-        return {"pose_m": self.pose_m.tolist(), "direction": self.direction.tolist(),
-                "preload_mode": self.preload_mode, "load_max_n": float(self.loads_n[-1]),
-                "steps": len(self.loads_n) - 1, "contact_stiffness_n_per_m": self.contact_stiffness_n_per_m,
-                "smoothing_m": self.smoothing_m, "reference_stiffness_n_per_m": self.reference_stiffness_n_per_m,
-                "max_residual": self.max_residual, "answers": self.answers(),
-                "table": [dict(zip(header, r)) for r in rows]}
-
-    def answers(self) -> list[dict[str, Any]]:
-        """Per clearance: the critical preload, and the small-load and press-load stiffness it buys."""
-        out = []
-        for g, gap in enumerate(self.clearances_m):
-            ok = np.flatnonzero(self.preloads >= self.critical_preload[g])
-            best = int(ok[0]) if ok.size else None
-            out.append({
-                "clearance_m": float(gap), "critical_preload": float(self.critical_preload[g]),
-                "lost_motion_without_preload_m": float(self.lost_motion_m[g, 0]),
-                "small_load_stiffness_without_preload_n_per_m": float(self.small_load_stiffness_n_per_m[g, 0]),
-                "press_secant_without_preload_n_per_m": float(self.press_secant_stiffness_n_per_m[g, 0]),
-                "first_sufficient_preload": None if best is None else float(self.preloads[best]),
-                "small_load_stiffness_with_it_n_per_m": None if best is None
-                else float(self.small_load_stiffness_n_per_m[g, best]),
-                "press_secant_with_it_n_per_m": None if best is None
-                else float(self.press_secant_stiffness_n_per_m[g, best]),
-            })
-        return out
-
-
-def _opt(v: float) -> float | str:
-    return "" if np.isnan(v) else float(v)
-
-
-def preload_study(machine: Machine, pose_m: Any, clearances_m: Any, preloads: Any, load_max_n: float = 700.0,
-                  steps: int = 50, *, direction: Any = (0.0, 1.0, 0.0), preload_mode: str = "force",
-                  template: Clearance | None = None, progress: bool = True) -> PreloadStudy:
-    """Load-deflection curves (loading, small-displacement solver) for every clearance (a number: m, uniform
-    on the eight cardans with the contact law of ``template`` or the machine; or a :class:`Clearance`; an
-    empty list: ``template`` itself) and preload (N, or m in length mode),
-    0..load_max_n (N) in ``steps`` steps along ``direction``; plus the critical preload per clearance."""
-    pose = kinematics.require_reachable(machine, pose_m)
-    d = _direction(direction)
-    pre = np.atleast_1d(np.asarray(preloads, float))
-    base = template or Clearance.uniform(machine)
-    variants = [c if isinstance(c, Clearance) else base.with_gap(float(c)) for c in clearances_m] or [base]
-    gaps = np.array([float(c.gaps_m.mean()) for c in variants])
-    if pre.size == 0 or not np.all(np.isfinite(pre)):
-        raise ClearanceError("give at least one finite preload")
-    if not (load_max_n > 0 and steps >= 2):
-        raise ClearanceError("load_max_n must be positive and steps >= 2")
-    loads = np.linspace(0.0, float(load_max_n), int(steps) + 1)
-    curves, res = [], 0.0
-    for var in tqdm(variants, desc="preload study", unit="clearance", disable=not progress):
-        cls = [var] * len(pre)
-        offsets = np.array([preload_offsets(machine, pose, var, float(a), preload_mode) for a in pre])
-        up, _ = _sweep_small(machine, pose, d, loads, cls, offsets, unload=False)
-        curves.append([LoadDeflection(pose, d, float(a), preload_mode, "small", cls[0], _branch(loads, up, p), None)
-                       for p, a in enumerate(pre)])
-        res = max(res, max(float(s["residual"].max()) for s in up))
-    crit = critical_preloads(machine, pose, d, load_max_n, variants, preload_mode, steps)
-    ref = load_deflection(machine, pose, d, loads[:3], base.with_gap(0.0), unload=False)
-
-    def grid(f: Any) -> np.ndarray:
-        return np.array([[f(c) for c in row] for row in curves])
-
-    return PreloadStudy(
-        pose, d, preload_mode, gaps, pre, loads, grid(lambda c: c.deflection_m),
-        grid(lambda c: c.small_load_stiffness_n_per_m), grid(lambda c: c.press_stiffness_n_per_m),
-        grid(lambda c: c.press_secant_stiffness_n_per_m), grid(lambda c: c.lost_motion_m),
-        grid(lambda c: np.nanmin(c.opening_loads_n) if np.any(~np.isnan(c.opening_loads_n)) else np.nan),
-        np.array([c.preload for c in crit]), ref.small_load_stiffness_n_per_m, res,
-        base.contact_stiffness_n_per_m, base.smoothing_m)
-
-
-def write_study(study: PreloadStudy, out_dir: Path | str, overwrite: bool = False) -> list[Path]:
-    """preload_study.csv, preload_study.json and two PNGs (stiffness vs preload, curves) in out_dir."""
-    import matplotlib.pyplot as plt
-
-    from pressfit.output import plots  # noqa: F401  (selects the Agg backend)
-
-    out = Path(out_dir)
-    header, rows = study.rows()
-    paths = [io.write_csv(out / "preload_study.csv", header, rows, overwrite),
-             io.write_json(out / "preload_study.json", study.to_dict(), overwrite)]
-    unit = "N" if study.preload_mode == "force" else "m"
-    fig, axes = plt.subplots(1, 2, figsize=(11, 4.2), layout="constrained")
-    try:
-        for g, gap in enumerate(study.clearances_m):
-            lab = f"g = {gap * 1e6:g} um"
-            line, = axes[0].plot(study.preloads, study.small_load_stiffness_n_per_m[g], "o-", ms=3, label=lab)
-            axes[1].plot(study.preloads, study.press_secant_stiffness_n_per_m[g], "o-", ms=3, color=line.get_color(),
-                         label=lab)
-            axes[1].plot(study.preloads, study.press_stiffness_n_per_m[g], "x:", ms=3, color=line.get_color())
-            for ax in axes:
-                ax.axvline(study.critical_preload[g], color=line.get_color(), lw=0.6, ls="--")
-        for ax in axes:
-            ax.axhline(study.reference_stiffness_n_per_m, color="k", lw=0.8, label="no clearance")
-            ax.set(xlabel=f"preload a4 [{unit}] (dashed: critical preload)", ylabel="stiffness [N/m]", yscale="log")
-        axes[0].set_title("small-load stiffness (first step secant)")
-        axes[1].set_title(f"at {study.loads_n[-1]:g} N: secant (o-) and tangent (x:)")
-        axes[0].legend(fontsize=7)
-        fig.suptitle(f"pose {study.pose_m.tolist()} m, load along {np.round(study.direction, 3).tolist()}")
-        paths.append(io.save_figure(fig, out / "preload_stiffness.png", overwrite))
-    finally:
-        plt.close(fig)
-    fig, axes = plt.subplots(1, len(study.clearances_m), figsize=(4.2 * len(study.clearances_m), 3.8),
-                             squeeze=False, layout="constrained")
-    try:
-        for g, ax in enumerate(axes[0]):
-            for p, a in enumerate(study.preloads):
-                ax.plot(study.deflection_m[g, p] * 1e6, study.loads_n, lw=1, label=f"a4 = {a:g} {unit}")
-            ax.set(title=f"g = {study.clearances_m[g] * 1e6:g} um", xlabel="deflection along the load [um]",
-                   ylabel="load [N]")
-        axes[0][0].legend(fontsize=6)
-        paths.append(io.save_figure(fig, out / "load_deflection.png", overwrite))
-    finally:
-        plt.close(fig)
-    return paths
-
-
 def clearance_from_case(case: Any, machine: Machine) -> Clearance:
     """The cardan clearances a case's ``[clearance]`` table describes (default: the machine's uniform one)."""
     spec = case.clearance
@@ -761,34 +598,3 @@ def clearance_from_case(case: Any, machine: Machine) -> Clearance:
         return Clearance.random(machine, *spec.random_m, seed=spec.seed, **kw)
     return Clearance.uniform(machine, **kw)
 
-
-def study_from_case(case: Any) -> dict[str, Any]:
-    """Keyword arguments of :func:`preload_study` (plus ``machine``) from a case with a ``[study]`` table."""
-    if case.study is None:
-        raise ClearanceError(f"{case.path}: no [study] table")
-    if case.loads.press_force_n is None or len(case.poses.array()) != 1:
-        raise ClearanceError(f"{case.path}: a preload study needs one pose in [poses] and [loads] press_force_n")
-    machine = case.machine()
-    return {"machine": machine, "pose_m": case.poses.array()[0], "clearances_m": list(case.study.clearances_m),
-            "preloads": list(case.study.preloads), "load_max_n": case.loads.press_force_n,
-            "steps": case.study.steps, "direction": case.loads.direction, "preload_mode": case.preload.mode,
-            "template": clearance_from_case(case, machine)}
-
-
-def format_answers(study: PreloadStudy) -> str:
-    """The user's question answered per clearance, one line each (SI)."""
-    unit = "N" if study.preload_mode == "force" else "m"
-    lines = [f"pose {study.pose_m.tolist()} m, load 0..{study.loads_n[-1]:g} N along "
-             f"{np.round(study.direction, 4).tolist()}; no-clearance stiffness {study.reference_stiffness_n_per_m:.4g} N/m"]
-    for a in study.answers():
-        s = (f"g = {a['clearance_m'] * 1e6:g} um: critical preload {a['critical_preload']:.4g} {unit}; without "
-             f"preload lost motion {a['lost_motion_without_preload_m'] * 1e6:.3g} um, small-load stiffness "
-             f"{a['small_load_stiffness_without_preload_n_per_m']:.3g} N/m, secant at the load "
-             f"{a['press_secant_without_preload_n_per_m']:.3g} N/m")
-        if a["first_sufficient_preload"] is not None:
-            s += (f"; with a4 = {a['first_sufficient_preload']:g} {unit}: {a['small_load_stiffness_with_it_n_per_m']:.3g}"
-                  f" N/m and {a['press_secant_with_it_n_per_m']:.3g} N/m")
-        else:
-            s += "; no preload in the list is sufficient"
-        lines.append(s)
-    return "\n".join(lines)

@@ -58,16 +58,14 @@ everything beyond this model.
 from __future__ import annotations
 
 import dataclasses
-import math
-from dataclasses import dataclass, field
-from pathlib import Path
+from dataclasses import dataclass
 
 import numpy as np
-from tqdm import tqdm
 
+from pressfit.description.machine import Machine
 from pressfit.errors import PressfitError, SingularPoseError
 from pressfit.kinematics import concurrency_point, is_reachable, leg_vectors
-from pressfit.description.machine import Machine
+from pressfit.kinematics.workspace import workspace_square
 
 PRESS_LOAD_N = 700.0  # the press reaction on the tool, +y (paper section 4)
 _CHUNK = 16384  # poses per vectorised block: the working set stays in the CPU cache
@@ -337,13 +335,6 @@ def with_axial_preload(result: CondensedResult, extra_forces_n: np.ndarray) -> C
         moment_residual_nm=result.moment_residual_nm - np.cross(result.plate_offsets_m, extra).sum(-2))
 
 
-# --- stiffness maps over the x-z workspace square ------------------------------------------------
-def workspace_square(machine: Machine, n: int) -> tuple[np.ndarray, np.ndarray]:
-    """(x, z) grid coordinates, n points each over the required workspace square, m."""
-    ws = machine.workspace
-    return np.linspace(-ws.x_half_width_m, ws.x_half_width_m, n), np.linspace(-ws.z_half_width_m, ws.z_half_width_m, n)
-
-
 @dataclass(frozen=True)
 class StiffnessMaps:
     """Maps over the x-z square at height y; arrays are indexed [i_z, i_x], SI units.
@@ -406,15 +397,6 @@ def stiffness_maps(machine: Machine, y_m: float, n: int = 51, press_load_n: floa
                          masked(np.hypot(res.plate_displacement_m[..., 0], res.plate_displacement_m[..., 2])))
 
 
-def write_stiffness_maps(maps: StiffnessMaps, out_dir: Path | str, overwrite: bool = False) -> list[Path]:
-    """PNG per map and one CSV (``stiffness_maps_y<mm>.csv``) into out_dir; returns the paths."""
-    from pressfit.output.plots import write_xz_maps
-
-    stem = f"stiffness_maps_y{round(maps.y_m * 1000):d}mm"
-    return write_xz_maps(out_dir, stem, maps.x_m, maps.z_m, maps.fields(),
-                         f"condensed linear model, y = {maps.y_m:g} m", overwrite)
-
-
 def stiffness_report(machine: Machine, pose_m: np.ndarray, press_load_n: float = PRESS_LOAD_N) -> dict[str, object]:
     """Stiffness of one pose as JSON-ready lists (SI): the 6x6 compliance at the plate centre, the 3x3
     translational stiffness there with the plate free to tilt (inverse of the compliance's translational
@@ -442,157 +424,3 @@ def stiffness_report(machine: Machine, pose_m: np.ndarray, press_load_n: float =
         "press_axial_forces_n": res.axial_forces_n.tolist(),
         "press_leg_moments_nm": res.leg_moments_nm.tolist(),
     }
-
-
-# --- workspace load envelope ---------------------------------------------------------------------
-def press_loads(force_n: float = PRESS_LOAD_N, cone_half_angle_rad: float = 0.0, n_azimuth: int = 8) -> np.ndarray:
-    """Load directions (L, 3), N: the press force along +y, plus n_azimuth forces of the same magnitude
-    on a cone of the given half-angle about +y (when the angle is > 0)."""
-    loads = [[0.0, force_n, 0.0]]
-    if cone_half_angle_rad > 0:
-        az = np.linspace(0, 2 * np.pi, n_azimuth, endpoint=False)
-        s, c = math.sin(cone_half_angle_rad), math.cos(cone_half_angle_rad)
-        loads += (force_n * np.stack([s * np.cos(az), np.full_like(az, c), s * np.sin(az)], -1)).tolist()
-    return np.array(loads)
-
-
-LEG_QUANTITIES = {  # name -> (unit, description)
-    "tension_n": ("N", "max axial force N (tension; negative if never in tension)"),
-    "compression_n": ("N", "max -N (compression; negative if never in compression)"),
-    "bending_x_nm": ("N m", "max |M_x|"),
-    "bending_y_nm": ("N m", "max |M_y|"),
-    "torsion_nm": ("N m", "max |T|"),
-    "bending_nm": ("N m", "max bending magnitude hypot(M_x, M_y)"),
-}
-PLATE_QUANTITIES = {"tilt_rad": ("rad", "max plate tilt |rotation|"),
-                    "deflection_m": ("m", "max plate-centre displacement |delta|")}
-
-
-@dataclass(frozen=True)
-class EnvelopeEntry:
-    """The worst value of one quantity: per leg (shape (4,)) or for the plate (shape ()), with the pose
-    (m) and the force (N, at the plate centre) where it happens (shapes (4, 3) or (3,))."""
-
-    value: np.ndarray
-    pose_m: np.ndarray
-    load_n: np.ndarray
-
-
-@dataclass(frozen=True)
-class LoadEnvelope:
-    """Workspace load envelope of the condensed linear model (SI). ``entries`` holds every name of
-    LEG_QUANTITIES and PLATE_QUANTITIES; ``maps`` the worst value over y, loads and legs on the x-z grid
-    (indexed [i_z, i_x]; NaN where no pose of the column is reachable)."""
-
-    x_m: np.ndarray
-    z_m: np.ndarray
-    y_m: np.ndarray
-    loads: np.ndarray  # (L, 6) wrenches at the plate centre, N and N m
-    n_evaluated: int  # reachable poses evaluated (each under every load)
-    n_unreachable: int  # grid poses skipped (outside the joint limits)
-    entries: dict[str, EnvelopeEntry] = field(default_factory=dict)
-    maps: dict[str, np.ndarray] = field(default_factory=dict)
-
-
-def _sweep(machine: Machine, h: np.ndarray, loads: np.ndarray) -> dict[str, np.ndarray]:
-    """Every enveloped quantity for poses h (P, 3) under each load (L, 6): (L, P, 4) or (L, P)."""
-    p = h.shape[0]
-    out = {k: np.empty((len(loads), p, 4)) for k in LEG_QUANTITIES}
-    out.update({k: np.empty((len(loads), p)) for k in PLATE_QUANTITIES})
-    for i in range(0, p, _CHUNK):
-        core = _core(machine, h[i:i + _CHUNK])
-        sl = slice(i, i + _CHUNK)
-        for j, w in enumerate(loads):
-            delta, phi, n, _, _, _, mom, _, _ = _solve_core(machine, core, w[:, None])
-            mom = np.abs(mom)
-            for k, v in (("tension_n", n), ("compression_n", -n), ("bending_x_nm", mom[0]),
-                         ("bending_y_nm", mom[1]), ("torsion_nm", mom[2]), ("bending_nm", np.hypot(mom[0], mom[1]))):
-                out[k][j, sl] = v.T
-            out["tilt_rad"][j, sl] = np.sqrt((phi * phi).sum(0))
-            out["deflection_m"][j, sl] = np.sqrt((delta * delta).sum(0))
-    return out
-
-
-def load_envelope(machine: Machine, y_m: np.ndarray, n_xz: int = 51, loads_n: np.ndarray | None = None,
-                  chunk_poses: int = 50_000, progress: bool | None = None) -> LoadEnvelope:
-    """Per-leg worst loads over the required workspace box and a set of plate loads (linear model).
-
-    Args:
-        machine: the machine.
-        y_m: the heights of the grid (m); x and z run over the required square with n_xz points each.
-        loads_n: forces (L, 3) or wrenches (L, 6) at the plate centre; default :func:`press_loads`.
-        chunk_poses: about this many (pose, load) pairs per step (whole y-levels at a time).
-        progress: show a tqdm bar (default: when there is more than one step).
-    Unreachable poses are skipped and counted.
-    """
-    loads = _as_wrench(press_loads() if loads_n is None else np.atleast_2d(loads_n))
-    x, z = workspace_square(machine, n_xz)
-    y = np.atleast_1d(np.asarray(y_m, dtype=float))
-    zz, xx = np.meshgrid(z, x, indexing="ij")
-    levels = max(1, chunk_poses // (zz.size * len(loads)))
-    chunks = [y[i:i + levels] for i in range(0, y.size, levels)]
-    names = list(LEG_QUANTITIES) + list(PLATE_QUANTITIES)
-    best: dict[str, tuple[np.ndarray, np.ndarray, np.ndarray]] = {}
-    maps = {k: np.full(zz.shape, -np.inf) for k in names}
-    n_bad = 0
-    show = len(chunks) > 1 if progress is None else progress
-    for ys in tqdm(chunks, desc="load envelope", unit="y-step", disable=not show):
-        grid = (ys.size,) + zz.shape
-        h = np.stack([np.broadcast_to(xx, grid), np.broadcast_to(ys[:, None, None], grid),
-                      np.broadcast_to(zz, grid)], -1).reshape(-1, 3)
-        ok = is_reachable(machine, h)
-        n_bad += int(np.sum(~ok))
-        if not np.any(ok):
-            continue
-        q = _sweep(machine, h[ok], loads)
-        for k in names:
-            v = q[k].reshape((-1,) + q[k].shape[2:])  # (L * P, 4) or (L * P,)
-            i = np.argmax(v, axis=0)
-            val = v[i, np.arange(4)] if v.ndim > 1 else v[i]
-            pose, load = h[ok][i % ok.sum()], loads[i // ok.sum(), :3]
-            old = best.get(k)
-            if old is not None:
-                better = val > old[0]
-                val, pose, load = (np.where(better, val, old[0]), np.where(better[..., None], pose, old[1]),
-                                   np.where(better[..., None], load, old[2]))
-            best[k] = (val, pose, load)
-            col = np.full(ok.shape, -np.inf)
-            col[ok] = q[k].max(0).max(-1) if q[k].ndim > 2 else q[k].max(0)
-            maps[k] = np.maximum(maps[k], col.reshape(grid).max(0))
-    if not best:
-        raise PressfitError("no pose of the envelope grid is reachable")
-    return LoadEnvelope(x, z, y, loads, int(y.size * zz.size - n_bad), n_bad,
-                        {k: EnvelopeEntry(*best[k]) for k in names},
-                        {k: np.where(np.isfinite(m), m, np.nan) for k, m in maps.items()})
-
-
-def envelope_rows(env: LoadEnvelope) -> tuple[list[str], list[list[object]]]:
-    """The envelope as a table: header and rows (quantity, unit, leg or 'plate', value, pose, load)."""
-    header = ["quantity", "unit", "leg", "value", "x_m", "y_m", "z_m", "load_x_n", "load_y_n", "load_z_n"]
-    rows: list[list[object]] = []
-    for k, e in env.entries.items():
-        unit = {**LEG_QUANTITIES, **PLATE_QUANTITIES}[k][0]
-        if e.value.ndim == 0:
-            rows.append([k, unit, "plate", float(e.value), *e.pose_m.tolist(), *e.load_n.tolist()])
-        else:
-            rows += [[k, unit, i + 1, float(e.value[i]), *e.pose_m[i].tolist(), *e.load_n[i].tolist()]
-                     for i in range(e.value.size)]
-    return header, rows
-
-
-def write_load_envelope(env: LoadEnvelope, out_dir: Path | str, overwrite: bool = False) -> list[Path]:
-    """``load_envelope.csv`` (the table), ``load_envelope.png`` (per-leg bars) and x-z maps of the worst
-    values (``load_envelope_maps*``) into out_dir; returns the paths."""
-    from pressfit.output import files as io
-    from pressfit.output.plots import write_leg_bars, write_xz_maps
-
-    header, rows = envelope_rows(env)
-    out = Path(out_dir)
-    paths = [io.write_csv(out / "load_envelope.csv", header, rows, overwrite)]
-    legs = {k: (env.entries[k].value, f"[{u}]") for k, (u, _) in LEG_QUANTITIES.items()}
-    paths.append(write_leg_bars(out / "load_envelope.png", legs, "workspace load envelope (condensed linear model)",
-                                overwrite))
-    units = {**LEG_QUANTITIES, **PLATE_QUANTITIES}
-    fields = {f"worst_{k}": (m, units[k][0]) for k, m in env.maps.items()}  # over y, loads and legs
-    title = f"y in [{env.y_m.min():g}, {env.y_m.max():g}] m, {len(env.loads)} load(s)"
-    return paths + write_xz_maps(out, "load_envelope_maps", env.x_m, env.z_m, fields, title, overwrite)

@@ -50,8 +50,13 @@ from scipy.linalg.lapack import dgetrf as _getrf
 from scipy.linalg.lapack import dgetrs as _getrs
 
 from pressfit import kinematics
-from pressfit.errors import ConvergenceError, PressfitError, SingularPoseError, UnstableEquilibriumError
 from pressfit.description.machine import Machine
+from pressfit.errors import (
+    ConvergenceError,
+    PressfitError,
+    SingularPoseError,
+    UnstableEquilibriumError,
+)
 from pressfit.mechanics.model import MachineModel, build_model
 
 SECTIONS = ("base", "actuator", "plate")

@@ -12,15 +12,14 @@ from pathlib import Path
 import numpy as np
 from tqdm import tqdm
 
-from pressfit.mechanics import condensed
-
-from pressfit.geometry import interference
-
-from pressfit.studies import paper_tables as tables
-
-from pressfit.kinematics import workspace
-from pressfit.output.files import write_csv, write_json, write_text
 from pressfit.description.machine import Machine
+from pressfit.geometry import interference
+from pressfit.kinematics import workspace
+from pressfit.mechanics import condensed
+from pressfit.output.files import write_csv, write_json, write_text
+from pressfit.output import maps
+from pressfit.studies import paper_tables as tables
+from pressfit.studies import preload_study, workspace_envelope
 
 
 def _md_table(header: list[str], rows: list[list[object]]) -> str:
@@ -50,7 +49,7 @@ def write_report(machine: Machine, out_dir: Path | str, overwrite: bool = False,
     steps.update()
 
     heights = [0.6] if quick else list(workspace.DEFAULT_HEIGHTS_M)
-    summ, _ = workspace.write_outputs(machine, out / "kinematics", heights, overwrite=overwrite)
+    summ, _ = maps.write_kinematic_maps(machine, out / "kinematics", heights, overwrite=overwrite)
     rng = summ["height_range"][0]
     md += ["## 2. Kinematics and workspace (paper section 4.1)", "",
            f"The required {2 * machine.workspace.x_half_width_m * 1000:g} x "
@@ -63,10 +62,10 @@ def write_report(machine: Machine, out_dir: Path | str, overwrite: bool = False,
     steps.update()
 
     ys = np.linspace(0.5, 0.75, 3 if quick else 11)
-    env = condensed.load_envelope(machine, ys, n_xz=11 if quick else 41,
-                                  loads_n=condensed.press_loads(700.0, np.radians(5.0)), progress=False)
-    condensed.write_load_envelope(env, out / "envelope", overwrite)
-    header, rows = condensed.envelope_rows(env)
+    env = workspace_envelope.load_envelope(machine, ys, n_xz=11 if quick else 41,
+                                  loads_n=workspace_envelope.press_loads(700.0, np.radians(5.0)), progress=False)
+    maps.write_load_envelope(env, out / "envelope", overwrite)
+    header, rows = workspace_envelope.envelope_rows(env)
     md += ["## 3. Workspace load envelope (design loads)", "",
            f"700 N press reaction within a 5 degree cone, over the required square at y_h = {ys[0]:g} ... "
            f"{ys[-1]:g} m; exact condensed linear model (DESIGN.md). Use `pressfit check` with a case "
@@ -76,8 +75,8 @@ def write_report(machine: Machine, out_dir: Path | str, overwrite: bool = False,
 
     md += ["## 4. Stiffness", ""]
     for y in (0.6, 0.72):
-        maps = condensed.stiffness_maps(machine, y, n=21 if quick else 51)
-        paths = condensed.write_stiffness_maps(maps, out / "stiffness", overwrite)
+        smaps = condensed.stiffness_maps(machine, y, n=21 if quick else 51)
+        paths = maps.write_stiffness_maps(smaps, out / "stiffness", overwrite)
         md += [f"![{p.name}](stiffness/{p.name})" for p in paths if p.suffix == ".png"]
     md += [""]
     steps.update()
@@ -87,7 +86,7 @@ def write_report(machine: Machine, out_dir: Path | str, overwrite: bool = False,
 
     im = interference.build_interference(machine)
     sweep = interference.workspace_sweep(im, points=11 if quick else 41, heights=3 if quick else 9)
-    interference.write_workspace(sweep, out / "interference", overwrite)
+    maps.write_interference_sweep(sweep, out / "interference", overwrite)
     md += ["## 6. Leg interference (Coal)", "",
            f"Minimum signed distance per pair kind over the required workspace (capsule legs; margin "
            f"{sweep.margin_m * 1000:g} mm: {'PASS' if sweep.passed else 'FAIL'}).", "",
@@ -103,7 +102,6 @@ def write_report(machine: Machine, out_dir: Path | str, overwrite: bool = False,
 
 def _preload_section(machine: Machine, out: Path, overwrite: bool, quick: bool) -> list[str]:
     """Clearance vs preload at pose A and off-centre: the stiffness that preload buys back."""
-    from pressfit.mechanics import clearance
 
     md = ["## 5. Clearance and preload", "",
           "Axial play g at each cardan (smoothed dead zone, contact stiffness from the machine file), "
@@ -112,9 +110,9 @@ def _preload_section(machine: Machine, out: Path, overwrite: bool, quick: bool) 
     preloads = [0.0, 200.0, 400.0, 600.0] if quick else [0.0, 100.0, 200.0, 300.0, 400.0, 500.0, 600.0, 800.0,
                                                          1000.0, 1200.0]
     for name, pose in (("pose_A", (0.0, 0.72, 0.0)), ("off_centre", (0.2, 0.6, -0.2))):
-        study = clearance.preload_study(machine, pose, [0.0, 10e-6, 20e-6, 40e-6], preloads, 700.0,
+        study = preload_study.preload_study(machine, pose, [0.0, 10e-6, 20e-6, 40e-6], preloads, 700.0,
                                         10 if quick else 50, progress=False)
-        paths = clearance.write_study(study, out / "preload" / name, overwrite)
-        md += [f"### {name.replace('_', ' ')} {list(pose)} m", "", "```", clearance.format_answers(study), "```", ""]
+        paths = maps.write_preload_study(study, out / "preload" / name, overwrite)
+        md += [f"### {name.replace('_', ' ')} {list(pose)} m", "", "```", preload_study.format_answers(study), "```", ""]
         md += [f"![{p.name}](preload/{name}/{p.name})" for p in paths if p.suffix == ".png"] + [""]
     return md

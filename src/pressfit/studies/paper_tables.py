@@ -27,8 +27,8 @@ import numpy as np
 
 from pressfit.description.cases import Case, load_case
 from pressfit.errors import PressfitError
-from pressfit.shipped import cases_dir
 from pressfit.mechanics.statics import Equilibrium, solve_equilibrium
+from pressfit.shipped import cases_dir
 
 QUANTITIES = ("F_x", "F_y", "F_z", "M_x", "M_y", "M_bend", "M_z")
 COMPARED = {"F_z", "M_bend", "M_z"}  # frame-independent entries; the others are listed, not compared

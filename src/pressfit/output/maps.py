@@ -1,0 +1,186 @@
+"""Files of the maps and sweeps: stiffness maps, the workspace load envelope, kinematic maps,
+interference sweeps and the preload study (CSV, JSON and PNG, written atomically)."""
+
+from __future__ import annotations
+
+from collections.abc import Iterable
+from pathlib import Path
+
+import numpy as np
+from tqdm import tqdm
+
+from pressfit.description.machine import Machine
+from pressfit.errors import OutputExistsError
+from pressfit.geometry.interference import SweepResult
+from pressfit.kinematics.workspace import (
+    _AXES,
+    DEFAULT_HEIGHTS_M,
+    PlaneMap,
+    map_rows,
+    plane_map,
+    square_corners,
+    summary,
+)
+from pressfit.mechanics.condensed import StiffnessMaps
+from pressfit.output import files as io
+from pressfit.output import plots
+from pressfit.output.files import save_figure, write_csv
+from pressfit.output.plots import plt, write_leg_bars, write_xz_maps
+from pressfit.studies.preload_study import PreloadStudy
+from pressfit.studies.workspace_envelope import (
+    LEG_QUANTITIES,
+    PLATE_QUANTITIES,
+    LoadEnvelope,
+    envelope_rows,
+)
+
+
+def write_load_envelope(env: LoadEnvelope, out_dir: Path | str, overwrite: bool = False) -> list[Path]:
+    """``load_envelope.csv`` (the table), ``load_envelope.png`` (per-leg bars) and x-z maps of the worst
+    values (``load_envelope_maps*``) into out_dir; returns the paths."""
+
+    header, rows = envelope_rows(env)
+    out = Path(out_dir)
+    paths = [io.write_csv(out / "load_envelope.csv", header, rows, overwrite)]
+    legs = {k: (env.entries[k].value, f"[{u}]") for k, (u, _) in LEG_QUANTITIES.items()}
+    paths.append(write_leg_bars(out / "load_envelope.png", legs, "workspace load envelope (condensed linear model)",
+                                overwrite))
+    units = {**LEG_QUANTITIES, **PLATE_QUANTITIES}
+    fields = {f"worst_{k}": (m, units[k][0]) for k, m in env.maps.items()}  # over y, loads and legs
+    title = f"y in [{env.y_m.min():g}, {env.y_m.max():g}] m, {len(env.loads)} load(s)"
+    return paths + write_xz_maps(out, "load_envelope_maps", env.x_m, env.z_m, fields, title, overwrite)
+
+
+def write_stiffness_maps(maps: StiffnessMaps, out_dir: Path | str, overwrite: bool = False) -> list[Path]:
+    """PNG per map and one CSV (``stiffness_maps_y<mm>.csv``) into out_dir; returns the paths."""
+
+    stem = f"stiffness_maps_y{round(maps.y_m * 1000):d}mm"
+    return write_xz_maps(out_dir, stem, maps.x_m, maps.z_m, maps.fields(),
+                         f"condensed linear model, y = {maps.y_m:g} m", overwrite)
+
+
+def _panels(pm: PlaneMap) -> plots.Fields:
+    """The paper's Figures 7-11 as panels: n, F_x, F_y, F_z and leg 1's dl_1/dh (legs 2-4 follow by
+    Table 2's symmetries; every leg is in the CSV)."""
+    fields = {"n (eq. 4)": (pm.dexterity, "-")}
+    fields |= {f"F_{a} (eq. {6 + j})": (pm.force_indices[..., j], "N/N") for j, a in enumerate(_AXES)}
+    fields |= {f"dl_1/d{a}_h (eqs. 2-3)": (pm.leg_rates[..., 0, j], "m/m") for j, a in enumerate(_AXES)}
+    return fields
+
+
+def write_kinematic_maps(machine: Machine, out_dir: Path | str, heights_m: Iterable[float] = DEFAULT_HEIGHTS_M,
+                  overwrite: bool = False, progress: bool = False) -> tuple[dict[str, object], list[Path]]:
+    """Write per height ``maps_y<y>.csv`` (every field, every leg) and ``maps_y<y>.png`` (panels, the
+    required square dashed magenta, also at 45 deg on the F panels), then ``summary.json``.
+    Refuses to overwrite unless asked (checked for every file before anything is written)."""
+    out = Path(out_dir)
+    heights = [float(y) for y in heights_m]
+    names = [out / f"maps_y{y:.3f}.{ext}" for y in heights for ext in ("csv", "png")] + [out / "summary.json"]
+    clash = [p for p in names if p.exists()]
+    if clash and not overwrite:
+        raise OutputExistsError(f"{clash[0]} exists ({len(clash)} output files do); pass --overwrite "
+                                "(overwrite=True) to replace them")
+    squares = [np.vstack([c, c[:1]]) for c in (square_corners(machine, 0.0), square_corners(machine, 45.0))]
+    written = []
+    with tqdm(total=len(heights) + 1, desc="workspace", unit="step", disable=not progress) as bar:
+        for y in heights:
+            pm = plane_map(machine, y)
+            written.append(io.write_csv(out / f"maps_y{y:.3f}.csv", *map_rows(pm), overwrite=overwrite))
+            fields = _panels(pm)
+            fig = plots.xz_map_figure(pm.x_m, pm.z_m, fields, f"4-UPU maps at y_h = {y:g} m "
+                                      "(magenta: required square, also at 45 deg)")
+            try:
+                for ax, name in zip(fig.axes, fields, strict=False):
+                    for sq in squares if name.startswith("F_") else squares[:1]:
+                        ax.plot(sq[:, 0], sq[:, 1], "m--", linewidth=1.2)
+                written.append(io.save_figure(fig, out / f"maps_y{y:.3f}.png", overwrite))
+            finally:
+                plots.plt.close(fig)
+            bar.update()
+        result = summary(machine, heights)
+        written.append(io.write_json(out / "summary.json", result, overwrite))
+        bar.update()
+    return result, written
+
+
+# --- output ---------------------------------------------------------------------------------------
+def write_interference_sweep(result: SweepResult, out_dir: Path | str, overwrite: bool = False) -> list[Path]:
+    """``interference_poses.csv`` (per pose), ``interference_pairs.csv`` (per pair) and, for a grid,
+    ``interference_map.png`` (minimum distance over x-z at up to four heights)."""
+
+    out = Path(out_dir)
+    names = np.array(result.pairs + ("",))
+    rows = zip(*result.poses_m.T, result.reachable.astype(int), result.min_distance_m, names[result.worst_pair])
+    paths = [write_csv(out / "interference_poses.csv", ["x_m", "y_m", "z_m", "reachable", "min_distance_m",
+                                                         "worst_pair"], rows, overwrite)]
+    prow = [(p, k, d, *result.poses_m[i]) for p, k, d, i in
+            zip(result.pairs, result.kinds, result.pair_min_m, result.pair_argmin)]
+    paths.append(write_csv(out / "interference_pairs.csv", ["pair", "kind", "min_distance_m", "x_m", "y_m", "z_m"],
+                           prow, overwrite))
+    if result.grid_axes_m is not None:
+        paths.append(plot_interference_sweep(result, out / "interference_map.png", overwrite))
+    return paths
+
+
+def plot_interference_sweep(result: SweepResult, path: Path | str, overwrite: bool = False) -> Path:
+    """Filled contours of the minimum distance (mm) over x-z at up to four heights; the margin dashed."""
+
+    assert result.grid_axes_m is not None
+    xs, ys, zs = result.grid_axes_m
+    d = result.min_distance_m.reshape(len(ys), len(zs), len(xs)) * 1e3
+    pick = sorted(set(np.linspace(0, len(ys) - 1, min(4, len(ys))).round().astype(int)))
+    fig, axes = plt.subplots(1, len(pick), figsize=(4.2 * len(pick), 3.8), squeeze=False, constrained_layout=True)
+    levels = np.linspace(np.nanmin(d), np.nanmax(d), 21)
+    for ax, k in zip(axes[0], pick):
+        cs = ax.contourf(xs * 1e3, zs * 1e3, d[k], levels=levels, cmap="viridis")
+        if np.nanmin(d[k]) < result.margin_m * 1e3 < np.nanmax(d[k]):
+            ax.contour(xs * 1e3, zs * 1e3, d[k], levels=[result.margin_m * 1e3], colors="r", linestyles="--")
+        ax.set(title=f"y_h = {ys[k] * 1e3:.1f} mm", xlabel="x_h [mm]", ylabel="z_h [mm]", aspect="equal")
+    fig.colorbar(cs, ax=axes[0].tolist(), label="minimum clearance over pairs [mm]")
+    try:
+        return save_figure(fig, path, overwrite)
+    finally:
+        plt.close(fig)
+
+
+def write_preload_study(study: PreloadStudy, out_dir: Path | str, overwrite: bool = False) -> list[Path]:
+    """preload_study.csv, preload_study.json and two PNGs (stiffness vs preload, curves) in out_dir."""
+
+    out = Path(out_dir)
+    header, rows = study.rows()
+    paths = [io.write_csv(out / "preload_study.csv", header, rows, overwrite),
+             io.write_json(out / "preload_study.json", study.to_dict(), overwrite)]
+    unit = "N" if study.preload_mode == "force" else "m"
+    fig, axes = plt.subplots(1, 2, figsize=(11, 4.2), layout="constrained")
+    try:
+        for g, gap in enumerate(study.clearances_m):
+            lab = f"g = {gap * 1e6:g} um"
+            line, = axes[0].plot(study.preloads, study.small_load_stiffness_n_per_m[g], "o-", ms=3, label=lab)
+            axes[1].plot(study.preloads, study.press_secant_stiffness_n_per_m[g], "o-", ms=3, color=line.get_color(),
+                         label=lab)
+            axes[1].plot(study.preloads, study.press_stiffness_n_per_m[g], "x:", ms=3, color=line.get_color())
+            for ax in axes:
+                ax.axvline(study.critical_preload[g], color=line.get_color(), lw=0.6, ls="--")
+        for ax in axes:
+            ax.axhline(study.reference_stiffness_n_per_m, color="k", lw=0.8, label="no clearance")
+            ax.set(xlabel=f"preload a4 [{unit}] (dashed: critical preload)", ylabel="stiffness [N/m]", yscale="log")
+        axes[0].set_title("small-load stiffness (first step secant)")
+        axes[1].set_title(f"at {study.loads_n[-1]:g} N: secant (o-) and tangent (x:)")
+        axes[0].legend(fontsize=7)
+        fig.suptitle(f"pose {study.pose_m.tolist()} m, load along {np.round(study.direction, 3).tolist()}")
+        paths.append(io.save_figure(fig, out / "preload_stiffness.png", overwrite))
+    finally:
+        plt.close(fig)
+    fig, axes = plt.subplots(1, len(study.clearances_m), figsize=(4.2 * len(study.clearances_m), 3.8),
+                             squeeze=False, layout="constrained")
+    try:
+        for g, ax in enumerate(axes[0]):
+            for p, a in enumerate(study.preloads):
+                ax.plot(study.deflection_m[g, p] * 1e6, study.loads_n, lw=1, label=f"a4 = {a:g} {unit}")
+            ax.set(title=f"g = {study.clearances_m[g] * 1e6:g} um", xlabel="deflection along the load [um]",
+                   ylabel="load [N]")
+        axes[0][0].legend(fontsize=6)
+        paths.append(io.save_figure(fig, out / "load_deflection.png", overwrite))
+    finally:
+        plt.close(fig)
+    return paths
