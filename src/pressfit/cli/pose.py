@@ -1,10 +1,8 @@
-"""The ``pressfit`` command: thin; parses, calls the library, prints. Exit 2 on bad input."""
+"""Commands about one pose: kinematics, solve, stiffness, interference."""
 
 from __future__ import annotations
 
-import functools
 import sys
-from collections.abc import Callable
 from pathlib import Path
 from typing import Any
 
@@ -12,35 +10,13 @@ import click
 import numpy as np
 
 from pressfit import kinematics
-from pressfit.description.machine import DEFAULT_MODEL, load_machine
+from pressfit.cli.common import MODEL_OPTION, user_errors
+from pressfit.description.machine import load_machine
 from pressfit.errors import PressfitError
 from pressfit.output.files import to_json
 
-MODEL_OPTION = click.option("--model", "model_path", type=click.Path(path_type=Path), default=DEFAULT_MODEL,
-                            show_default=True, help="Machine description (TOML).")
 
-
-def user_errors(func: Callable[..., Any]) -> Callable[..., Any]:
-    """Turn a :class:`PressfitError` into a one-line message and exit code 2 (never a traceback)."""
-
-    @functools.wraps(func)
-    def wrapper(*args: Any, **kwargs: Any) -> Any:
-        try:
-            return func(*args, **kwargs)
-        except PressfitError as exc:
-            click.echo(f"error: {exc}", err=True)
-            sys.exit(2)
-
-    return wrapper
-
-
-@click.group()
-@click.version_option(package_name="pressfit")
-def main() -> None:
-    """Structural load and compliance analyzer for the 4-UPU press-fit manipulator (SI units)."""
-
-
-@main.command("kinematics", context_settings={"ignore_unknown_options": True})  # negative coordinates
+@click.command("kinematics", context_settings={"ignore_unknown_options": True})  # negative coordinates
 @click.argument("x", type=float)
 @click.argument("y", type=float)
 @click.argument("z", type=float)
@@ -64,27 +40,7 @@ def kinematics_cmd(x: float, y: float, z: float, as_json: bool, model_path: Path
                + ", ".join(f"{v:.4f}" for v in out["force_indices"]))
 
 
-@main.command("list")
-@user_errors
-def list_cmd() -> None:
-    """The shipped machine descriptions (models/) and case files (cases/), with what each case holds."""
-    from pressfit.description.cases import discover, load_case
-    from pressfit.shipped import cases_dir, models_dir
-
-    click.echo(f"models ({models_dir()}):")
-    for path in sorted(models_dir().glob("*.toml")):
-        m = load_machine(path)
-        click.echo(f"  {path.name}  {m.name}: {m.description}")
-    click.echo(f"cases ({cases_dir()}):")
-    for path in discover([cases_dir()]):
-        c = load_case(path)
-        kinds = [k for k, v in (("reference table", c.reference), ("envelope", c.envelope.model_dump(exclude_none=True)),
-                                ("study", getattr(c, "study", None))) if v]
-        click.echo(f"  {path.relative_to(cases_dir())}  {c.name} [{', '.join(kinds) or 'loads'}]: "
-                   f"{' '.join(c.description.split())[:90]}")
-
-
-@main.command("solve", context_settings={"ignore_unknown_options": True})  # negative numbers
+@click.command("solve", context_settings={"ignore_unknown_options": True})  # negative numbers
 @click.argument("values", nargs=-1)
 @click.option("--load", "has_load", is_flag=True,
               help="Followed by FX FY FZ [MX MY MZ]: plate wrench at the plate centre, world axes (N, N m).")
@@ -148,102 +104,7 @@ def _print_equilibrium(eq: Any) -> None:
                f"stationarity {r.stationarity:.1e}\n")
 
 
-@main.command("tables")
-@click.option("--json", "as_json", is_flag=True, help="Print the entries as JSON.")
-@click.option("--out", "out_dir", type=click.Path(path_type=Path), help="Write tables.md and tables.csv here.")
-@click.option("--overwrite", is_flag=True, help="Replace existing output files.")
-@user_errors
-def tables_cmd(as_json: bool, out_dir: Path | None, overwrite: bool) -> None:
-    """Reproduce the paper's Tables 5 and 6 (cases/paper/A, B, C) beside pressfit's solution."""
-    from pressfit.output.files import write_csv, write_text
-    from pressfit.studies import paper_tables as tables
-
-    entries = tables.paper_tables()
-    if as_json:
-        click.echo(to_json([e.as_dict() for e in entries]))
-    else:
-        click.echo(tables.to_markdown(entries))
-    if out_dir is not None:
-        write_text(out_dir / "tables.md", tables.to_markdown(entries), overwrite)
-        write_csv(out_dir / "tables.csv", *tables.to_rows(entries), overwrite=overwrite)
-
-
-@main.command("check")
-@click.argument("paths", nargs=-1, required=True, type=click.Path(path_type=Path))
-@click.option("--junit", "junit_path", type=click.Path(path_type=Path), help="Write JUnit XML here.")
-@click.option("--json", "json_path", type=click.Path(path_type=Path), help="Write JSON results here.")
-@click.option("--overwrite", is_flag=True, help="Replace existing result files.")
-@click.option("--progress/--no-progress", default=True, help="Show progress bars.")
-@user_errors
-def check_cmd(paths: tuple[Path, ...], junit_path: Path | None, json_path: Path | None,
-              overwrite: bool, progress: bool) -> None:
-    """Check the load envelopes of case files (or directories of them): exit 0 pass, 1 fail, 2 bad input."""
-    from dataclasses import asdict
-
-    from pressfit.description.cases import discover, load_case
-    from pressfit.output.files import write_json, write_text
-
-    files = discover(list(paths))
-    cases = [load_case(f) for f in files]  # validate every file before computing anything
-    for c in cases:
-        c.machine()
-    from pressfit.output import check_report
-    from pressfit.studies import limit_check as envelope
-    checked = [c for c in cases if c.envelope.model_dump(exclude_none=True)]
-    if not checked:
-        raise PressfitError("no case among " + ", ".join(map(str, paths)) + " has an [envelope] to check")
-    skipped = [c.path for c in cases if c not in checked]
-    if skipped:
-        click.echo(f"skipped (no [envelope]): {', '.join(skipped)}")
-    results = [envelope.evaluate_case(c, progress=progress) for c in checked]
-    click.echo(check_report.format_table(results))
-    if junit_path:
-        write_text(junit_path, check_report.junit_xml(results), overwrite)
-    if json_path:
-        write_json(json_path, [asdict(r) | {"passed": r.passed} for r in results], overwrite)
-    failed = [r.case for r in results if not r.passed]
-    click.echo(f"{len(results) - len(failed)} passed, {len(failed)} failed")
-    sys.exit(1 if failed else 0)
-
-
-@main.command("workspace")
-@click.option("--y", "heights", type=float, multiple=True, help="Plate height y_h of a map, m (repeatable; "
-              "default 0.6, the paper's Figures 7-11).")
-@click.option("--out", "out_dir", type=click.Path(path_type=Path), default=Path("out/workspace"),
-              show_default=True, help="Directory for the maps (CSV, PNG) and summary.json.")
-@click.option("--overwrite", is_flag=True, help="Replace existing output files.")
-@click.option("--json", "as_json", is_flag=True, help="Print the summary as JSON.")
-@click.option("--progress/--no-progress", default=True, help="Show a progress bar.")
-@MODEL_OPTION
-@user_errors
-def workspace_cmd(heights: tuple[float, ...], out_dir: Path, overwrite: bool, as_json: bool, progress: bool,
-                  model_path: Path) -> None:
-    """Reachable heights of the required square (0, 45, 90 deg), maps of n, F and dl/dh, statistics."""
-    from pressfit.kinematics import workspace
-    from pressfit.output import maps as map_files
-
-    machine = load_machine(model_path)
-    rng = workspace.square_height_range(machine)
-    for y in heights:
-        if not (np.isfinite(y) and rng.y_min_m <= y <= rng.y_max_m):
-            raise PressfitError(f"--y {y:g}: the required square is reachable only for y_h in "
-                                f"[{rng.y_min_m:.5f}, {rng.y_max_m:.5f}] m")
-    summary, _ = map_files.write_kinematic_maps(machine, out_dir, heights or workspace.DEFAULT_HEIGHTS_M,
-                                         overwrite, progress)
-    if as_json:
-        click.echo(to_json(summary))
-        return
-    for r in summary["height_range"]:
-        click.echo(f"square at {r['angle_deg']:g} deg reachable for y_h in [{r['y_min_m']:.5f}, "
-                   f"{r['y_max_m']:.5f}] m (+-{r['tolerance_m']:g} m)")
-    for s in summary["squares"]:
-        click.echo(f"y_h = {s['y_m']:g} m, {s['angle_deg']:g} deg: n in [{s['dexterity_min']:.4f}, "
-                   f"{s['dexterity_max']:.4f}] (variation {s['dexterity_variation']:.1%}), max F_x, F_y, F_z = "
-                   + ", ".join(f"{v:.4f}" for v in s["force_index_max"]))
-    click.echo(f"maps and summary.json written to {out_dir}")
-
-
-@main.command("stiffness", context_settings={"ignore_unknown_options": True})  # negative coordinates
+@click.command("stiffness", context_settings={"ignore_unknown_options": True})  # negative coordinates
 @click.argument("x", type=float)
 @click.argument("y", type=float)
 @click.argument("z", type=float)
@@ -297,7 +158,7 @@ def stiffness_cmd(x: float, y: float, z: float, as_json: bool, maps: bool, out_d
                f"{out['tangent_vertical_stiffness_under_press_load_n_per_m']:.4e} N/m")
 
 
-@main.command("interference", context_settings={"ignore_unknown_options": True})  # negative coordinates
+@click.command("interference", context_settings={"ignore_unknown_options": True})  # negative coordinates
 @click.argument("pose", nargs=-1, type=float)
 @click.option("--workspace", "over_workspace", is_flag=True, help="Sweep the required workspace instead of one pose.")
 @click.option("--margin", "margin_m", type=float, help="Safety margin, m (default: collision.safety_margin_m).")
@@ -360,82 +221,3 @@ def interference_cmd(pose: tuple[float, ...], over_workspace: bool, margin_m: fl
         for p in written:
             click.echo(f"wrote {p}")
     sys.exit(0 if res.passed else 1)
-
-
-@main.command("report")
-@click.option("--out", "out_dir", type=click.Path(path_type=Path), default=Path("report"), show_default=True,
-              help="Output directory.")
-@click.option("--overwrite", is_flag=True, help="Replace existing output files.")
-@click.option("--quick", is_flag=True, help="Coarse grids (a preview in seconds).")
-@MODEL_OPTION
-@user_errors
-def report_cmd(out_dir: Path, overwrite: bool, quick: bool, model_path: Path) -> None:
-    """Reproduce Tables 5 and 6 and write the full Markdown report (maps, envelope, stiffness, ...)."""
-    from pressfit.output.report import write_report
-
-    path = write_report(load_machine(model_path), out_dir, overwrite=overwrite, quick=quick)
-    click.echo((path.parent / "tables.md").read_text())  # the Tables 5-6 comparison the report just wrote
-    click.echo(f"report written to {path}")
-
-
-@main.group("study")
-def study_group() -> None:
-    """Parameter studies: ``pressfit study preload``."""
-
-
-def _floats(text: str | None, what: str) -> list[float]:
-    try:
-        return [float(v) for v in text.split(",") if v.strip()] if text else []
-    except ValueError:
-        raise PressfitError(f"{what} must be comma-separated numbers, got {text!r}") from None
-
-
-@study_group.command("preload", context_settings={"ignore_unknown_options": True})  # negative numbers
-@click.argument("case_file", required=False, type=click.Path(path_type=Path))
-@click.option("--pose", nargs=3, type=float, help="Plate pose X Y Z, m (without CASE_FILE).")
-@click.option("--clearance", "clearances", help="Cardan axial clearances g, m, comma-separated (default: the model's).")
-@click.option("--preload", "preloads", help="Preloads a4 along v_p, comma-separated: N (force mode) or m (length).")
-@click.option("--mode", "preload_mode", type=click.Choice(["force", "length"]), default="force", show_default=True)
-@click.option("--load-max", "load_max", type=float, default=700.0, show_default=True, help="Largest load, N.")
-@click.option("--steps", type=click.IntRange(2, 10000), default=50, show_default=True, help="Load steps.")
-@click.option("--direction", nargs=3, type=float, default=(0.0, 1.0, 0.0), show_default=True, help="Load direction.")
-@click.option("--out", "out_dir", type=click.Path(path_type=Path), default=Path("out/study_preload"), show_default=True,
-              help="Directory for preload_study.csv/.json and the PNG plots.")
-@click.option("--overwrite", is_flag=True, help="Replace existing output files.")
-@click.option("--json", "as_json", is_flag=True, help="Print the study as JSON.")
-@click.option("--progress/--no-progress", default=True, help="Show a progress bar.")
-@MODEL_OPTION
-@user_errors
-def study_preload_cmd(case_file: Path | None, pose: tuple[float, ...] | None, clearances: str | None,
-                      preloads: str | None, preload_mode: str, load_max: float, steps: int,
-                      direction: tuple[float, ...], out_dir: Path, overwrite: bool, as_json: bool, progress: bool,
-                      model_path: Path) -> None:
-    """How much preload keeps every cardan closed up to the load, and what stiffness it buys (SI)."""
-    from pressfit.output import maps as map_files
-    from pressfit.studies import preload_study
-
-    if case_file is not None:
-        if pose or clearances or preloads:
-            raise PressfitError("give either CASE_FILE or --pose/--clearance/--preload")
-        from pressfit.description.cases import load_case
-
-        kw = preload_study.study_from_case(load_case(case_file))
-    else:
-        if not pose or not preloads:
-            raise PressfitError("give CASE_FILE, or --pose X Y Z and --preload P1,P2,...")
-        machine = load_machine(model_path)
-        kw = {"machine": machine, "pose_m": list(pose), "clearances_m": _floats(clearances, "--clearance"),
-              "preloads": _floats(preloads, "--preload"), "load_max_n": load_max, "steps": steps,
-              "direction": direction, "preload_mode": preload_mode}
-    study = preload_study.preload_study(**kw, progress=progress)
-    written = map_files.write_preload_study(study, out_dir, overwrite)
-    if as_json:
-        click.echo(to_json(study.to_dict() | {"outputs": [str(p) for p in written]}))
-        return
-    click.echo(preload_study.format_answers(study))
-    for p in written:
-        click.echo(f"wrote {p}")
-
-
-if __name__ == "__main__":
-    main()

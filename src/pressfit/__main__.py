@@ -1,0 +1,3 @@
+from pressfit.cli import main
+
+main()

@@ -1,0 +1,47 @@
+"""The paper's results: ``pressfit tables`` and the full ``pressfit report``."""
+
+from __future__ import annotations
+
+from pathlib import Path
+
+import click
+
+from pressfit.cli.common import MODEL_OPTION, user_errors
+from pressfit.description.machine import load_machine
+from pressfit.output.files import to_json
+
+
+@click.command("tables")
+@click.option("--json", "as_json", is_flag=True, help="Print the entries as JSON.")
+@click.option("--out", "out_dir", type=click.Path(path_type=Path), help="Write tables.md and tables.csv here.")
+@click.option("--overwrite", is_flag=True, help="Replace existing output files.")
+@user_errors
+def tables_cmd(as_json: bool, out_dir: Path | None, overwrite: bool) -> None:
+    """Reproduce the paper's Tables 5 and 6 (cases/paper/A, B, C) beside pressfit's solution."""
+    from pressfit.output.files import write_csv, write_text
+    from pressfit.studies import paper_tables as tables
+
+    entries = tables.paper_tables()
+    if as_json:
+        click.echo(to_json([e.as_dict() for e in entries]))
+    else:
+        click.echo(tables.to_markdown(entries))
+    if out_dir is not None:
+        write_text(out_dir / "tables.md", tables.to_markdown(entries), overwrite)
+        write_csv(out_dir / "tables.csv", *tables.to_rows(entries), overwrite=overwrite)
+
+
+@click.command("report")
+@click.option("--out", "out_dir", type=click.Path(path_type=Path), default=Path("report"), show_default=True,
+              help="Output directory.")
+@click.option("--overwrite", is_flag=True, help="Replace existing output files.")
+@click.option("--quick", is_flag=True, help="Coarse grids (a preview in seconds).")
+@MODEL_OPTION
+@user_errors
+def report_cmd(out_dir: Path, overwrite: bool, quick: bool, model_path: Path) -> None:
+    """Reproduce Tables 5 and 6 and write the full Markdown report (maps, envelope, stiffness, ...)."""
+    from pressfit.output.report import write_report
+
+    path = write_report(load_machine(model_path), out_dir, overwrite=overwrite, quick=quick)
+    click.echo((path.parent / "tables.md").read_text())  # the Tables 5-6 comparison the report just wrote
+    click.echo(f"report written to {path}")
