@@ -1,0 +1,117 @@
+"""The layout's rules (docs/architecture.md), checked on the source's import graph with ``ast``:
+
+* layers, low to high: errors, spatial, shipped < description < kinematics < mechanics < geometry < dynamics
+  < studies < output < cli; a module never imports a higher layer (a lower one, or its own, is fine);
+* the physics subpackages (kinematics, mechanics, geometry, dynamics) import neither matplotlib nor
+  pressfit.output, and never open files for writing;
+* no module-level mutable state in the library: no module-level dict/list/set that a function mutates
+  (``global`` statements and module-level caches are refused).
+"""
+
+from __future__ import annotations
+
+import ast
+from pathlib import Path
+
+import pytest
+
+SRC = Path(__file__).resolve().parents[1] / "src" / "pressfit"
+LAYERS = ["errors", "spatial", "shipped", "description", "kinematics", "mechanics", "geometry", "dynamics",
+          "studies", "output", "cli"]
+BASE = {"errors": 0, "spatial": 0, "shipped": 0}  # the lowest layer: all three may import each other
+PHYSICS = {"kinematics", "mechanics", "geometry", "dynamics"}
+
+
+def _rank(part: str) -> int:
+    return BASE.get(part, LAYERS.index(part))
+
+
+def _modules() -> list[tuple[str, Path]]:
+    out = []
+    for path in sorted(SRC.rglob("*.py")):
+        rel = path.relative_to(SRC).with_suffix("")
+        if rel.parts[0] in ("__init__", "__main__"):
+            continue
+        out.append((rel.parts[0], path))
+    return out
+
+
+def _imports(path: Path) -> list[str]:
+    names = []
+    for node in ast.walk(ast.parse(path.read_text())):
+        if isinstance(node, ast.Import):
+            names += [a.name for a in node.names]
+        elif isinstance(node, ast.ImportFrom):
+            if node.level:
+                raise AssertionError(f"{path}: relative import (use absolute pressfit.* imports)")
+            names.append(node.module or "")
+            names += [f"{node.module}.{a.name}" for a in node.names]
+    return names
+
+
+MODULES = _modules()
+
+
+def test_every_module_is_in_a_layer():
+    assert MODULES, "no source found: the test would pass vacuously"
+    assert {layer for layer, _ in MODULES} <= set(LAYERS)
+
+
+@pytest.mark.parametrize(("layer", "path"), MODULES, ids=[str(p.relative_to(SRC)) for _, p in MODULES])
+def test_no_import_of_a_higher_layer(layer, path):
+    for name in _imports(path):
+        parts = name.split(".")
+        if parts[0] == "pressfit" and len(parts) > 1 and parts[1] in LAYERS:
+            assert _rank(parts[1]) <= _rank(layer), f"{path.name} ({layer}) imports {name}"
+
+
+@pytest.mark.parametrize(("layer", "path"), [m for m in MODULES if m[0] in PHYSICS],
+                         ids=[str(p.relative_to(SRC)) for layer, p in MODULES if layer in PHYSICS])
+def test_physics_neither_plots_nor_writes(layer, path):
+    for name in _imports(path):
+        assert not name.startswith(("matplotlib", "pressfit.output", "plotly")), f"{path} imports {name}"
+    tree = ast.parse(path.read_text())
+    for node in ast.walk(tree):
+        if isinstance(node, ast.Call) and isinstance(node.func, ast.Attribute):
+            assert node.func.attr not in ("write_text", "write_bytes", "savefig", "mkdir", "to_csv"), \
+                f"{path}:{node.lineno} writes ({node.func.attr})"
+        if isinstance(node, ast.Call) and getattr(node.func, "id", getattr(node.func, "attr", "")) == "open":
+            mode = node.args[1] if len(node.args) > 1 else next((k.value for k in node.keywords if k.arg == "mode"),
+                                                                 None)
+            text = mode.value if isinstance(mode, ast.Constant) else "r"
+            assert not set(text) & set("wax+"), f"{path}:{node.lineno} opens a file for writing"
+
+
+@pytest.mark.parametrize(("layer", "path"), MODULES, ids=[str(p.relative_to(SRC)) for _, p in MODULES])
+def test_no_global_mutable_state(layer, path):
+    tree = ast.parse(path.read_text())
+    for node in ast.walk(tree):
+        assert not isinstance(node, ast.Global), f"{path}:{node.lineno}: global statement"
+    mutable = set()
+    for node in tree.body:  # module level: names bound to a mutable container
+        if isinstance(node, (ast.Assign, ast.AnnAssign)) and isinstance(node.value, (ast.Dict, ast.List, ast.Set,
+                                                                                      ast.DictComp, ast.ListComp)):
+            targets = node.targets if isinstance(node, ast.Assign) else [node.target]
+            mutable |= {t.id for t in targets if isinstance(t, ast.Name)}
+    for node in ast.walk(tree):  # ... and mutated anywhere in the module
+        if isinstance(node, ast.Call) and isinstance(node.func, ast.Attribute) \
+                and isinstance(node.func.value, ast.Name) and node.func.value.id in mutable \
+                and node.func.attr in ("append", "update", "clear", "pop", "setdefault", "extend", "add", "insert"):
+            raise AssertionError(f"{path}:{node.lineno}: module-level {node.func.value.id} is mutated")
+        if isinstance(node, (ast.Assign, ast.AugAssign)):
+            for t in node.targets if isinstance(node, ast.Assign) else [node.target]:
+                if isinstance(t, ast.Subscript) and isinstance(t.value, ast.Name) and t.value.id in mutable:
+                    raise AssertionError(f"{path}:{node.lineno}: module-level {t.value.id} is mutated")
+
+
+def test_the_rules_catch_a_violation(tmp_path):
+    """The checks are not vacuous: a physics module that plots and keeps a cache is refused."""
+    bad = tmp_path / "bad.py"
+    bad.write_text("import matplotlib\nfrom pressfit.output import files\n_CACHE = {}\n"
+                   "def f(k):\n    _CACHE[k] = 1\n    open('x', 'w')\n")
+    with pytest.raises(AssertionError, match="imports matplotlib"):
+        test_physics_neither_plots_nor_writes("mechanics", bad)
+    with pytest.raises(AssertionError, match="module-level _CACHE is mutated"):
+        test_no_global_mutable_state("mechanics", bad)
+    with pytest.raises(AssertionError, match=r"\(kinematics\) imports pressfit.output"):
+        test_no_import_of_a_higher_layer("kinematics", bad)
