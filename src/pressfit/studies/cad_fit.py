@@ -97,7 +97,7 @@ class PrintedTables:
 
 def _half_unit(printed: float) -> float:
     """Half a unit of the last digit of a printed number (its shortest decimal representation)."""
-    return 0.5 * 10.0 ** Decimal(repr(abs(printed))).as_tuple().exponent
+    return 0.5 * 10.0 ** Decimal(repr(abs(float(printed)))).as_tuple().exponent
 
 
 def printed_tables(cases: dict[str, Case], c_leg1_reversed: bool = True, floor: float = FLOOR) -> PrintedTables:
@@ -305,7 +305,7 @@ def _identifiability(jac: np.ndarray, names: tuple[str, ...], free: np.ndarray, 
     return Identifiability(tuple(float(x) for x in s), directions, sensitivity, fitted, corr)
 
 
-def _split_verdict(cases: dict[str, Case], theta: np.ndarray, a_std: float, names: tuple[str, ...]) -> SplitVerdict:
+def _split_verdict(cases: dict[str, Case], theta: np.ndarray, a_std: float) -> SplitVerdict:
     """Case C: the fitted self-stress against the physical rules, and the vertical balance of the printed
     axial forces at the fitted pose (as printed and with CAD leg 1 reversed)."""
     machine, pose, a, _ = configure(cases, theta)[2]
@@ -368,7 +368,7 @@ def fit_cad_model(cases: dict[str, Case] | None = None, tables: PrintedTables | 
                     for i, n in enumerate(CASES) for j, q in enumerate(QUANTITIES) for leg in range(4))
     return CadFit(fitted, entries, chi2, float(np.sum(((before - tables.values) / tables.sigma) ** 2)), dof, scale,
                   chi2_no_couple, _identifiability(jac, names, free, cov),
-                  _split_verdict(cases, theta, float(std[names.index("C_self_stress_n")]), names))
+                  _split_verdict(cases, theta, float(std[names.index("C_self_stress_n")])))
 
 
 def to_dict(fit: CadFit) -> dict[str, object]:
