@@ -395,7 +395,8 @@ def to_markdown(fit: CadFit) -> str:
               f"{f'{p.std:.2g}' if p.determined else ('held' if not p.fitted else 'not determined')} |"
               for p in fit.parameters]
     lines += ["", f"chi-square {fit.chi_square:.4g} with {fit.dof} degrees of freedom (Table 3 model: "
-              f"{fit.chi_square_table3:.4g}; without the couple self-stresses: {fit.chi_square_without_couple_stress:.4g});"
+              f"{fit.chi_square_table3:.4g}; without the couple self-stresses: "
+              f"{fit.chi_square_without_couple_stress:.4g});"
               f" uncertainties scaled by {fit.covariance_scale:.3g} (the reduced chi-square, when above 1).", "",
               "Held parameters, the compensating change of the fitted ones per unit change, and the weighted "
               "residual change that is left (in sigmas; ~0 = the tables cannot see it):", ""]
