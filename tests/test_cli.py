@@ -82,3 +82,12 @@ def test_unreadable_inputs_and_outputs_exit_2(tmp_path):
     res = run("tables", "--out", tmp_path / "afile")
     assert res.exit_code == 2 and "cannot write" in res.output
     assert run("workspace", "--y", "2", "--out", tmp_path / "ws").exit_code == 2
+
+
+def test_tables_cad_fit_json():
+    """`tables --cad-fit --json`: the identified CAD model as JSON (values are tested in test_cad_fit.py)."""
+    res = run("tables", "--cad-fit", "--json")
+    assert res.exit_code == 0, res.output
+    data = json.loads(res.output)
+    assert {"parameters", "entries", "identifiability", "c_split"} <= set(data)
+    assert len(data["entries"]) == 36

@@ -15,12 +15,22 @@ from pressfit.output.files import to_json
 @click.option("--json", "as_json", is_flag=True, help="Print the entries as JSON.")
 @click.option("--out", "out_dir", type=click.Path(path_type=Path), help="Write tables.md and tables.csv here.")
 @click.option("--overwrite", is_flag=True, help="Replace existing output files.")
+@click.option("--cad-fit", "cad", is_flag=True,
+              help="Instead: identify the paper's CAD model from the tables (least squares; a hypothesis).")
 @user_errors
-def tables_cmd(as_json: bool, out_dir: Path | None, overwrite: bool) -> None:
+def tables_cmd(as_json: bool, out_dir: Path | None, overwrite: bool, cad: bool) -> None:
     """Reproduce the paper's Tables 5 and 6 (cases/paper/A, B, C) beside pressfit's solution."""
-    from pressfit.output.files import write_csv, write_text
+    from pressfit.output.files import write_csv, write_json, write_text
+    from pressfit.studies import cad_fit
     from pressfit.studies import paper_tables as tables
 
+    if cad:
+        fit = cad_fit.fit_cad_model()
+        click.echo(to_json(cad_fit.to_dict(fit)) if as_json else cad_fit.to_markdown(fit))
+        if out_dir is not None:
+            write_text(out_dir / "cad_fit.md", cad_fit.to_markdown(fit), overwrite)
+            write_json(out_dir / "cad_fit.json", cad_fit.to_dict(fit), overwrite)
+        return
     entries = tables.paper_tables()
     if as_json:
         click.echo(to_json([e.as_dict() for e in entries]))

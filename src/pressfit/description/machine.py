@@ -31,8 +31,13 @@ class _Strict(BaseModel):
 
 
 class Geometry(_Strict):
+    """Joint layout: p, r (Table 3) and optional heights of the cardan centres above the base plane (base)
+    and above the plate centre (plate), the same for all four legs; m."""
+
     base_half_side_m: Positive
     plate_half_side_m: Positive
+    base_joint_height_m: Finite = 0.0
+    plate_joint_height_m: Finite = 0.0
 
     @model_validator(mode="after")
     def _plate_inside_base(self) -> Geometry:
@@ -208,13 +213,15 @@ class Machine(_Strict):
     # --- derived geometry (arrays, SI) -------------------------------------------------------
     @cached_property
     def base_points_m(self) -> np.ndarray:
-        """(4, 3) base cardan centres B_i in the world frame, m."""
-        return self.geometry.base_half_side_m * np.array([leg.radial_direction for leg in self.legs])
+        """(4, 3) base cardan centres B_i = p n_i + h_b y in the world frame, m (n_i radial, h_b joint height)."""
+        radial = np.array([leg.radial_direction for leg in self.legs])
+        return self.geometry.base_half_side_m * radial + [0.0, self.geometry.base_joint_height_m, 0.0]
 
     @cached_property
     def plate_offsets_m(self) -> np.ndarray:
-        """(4, 3) plate cardan centres relative to the plate centre, d_i, m."""
-        return self.geometry.plate_half_side_m * np.array([leg.radial_direction for leg in self.legs])
+        """(4, 3) plate cardan centres relative to the plate centre, d_i = r n_i + h_p y, m."""
+        radial = np.array([leg.radial_direction for leg in self.legs])
+        return self.geometry.plate_half_side_m * radial + [0.0, self.geometry.plate_joint_height_m, 0.0]
 
     @cached_property
     def cardan_axes(self) -> np.ndarray:

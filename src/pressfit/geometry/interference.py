@@ -137,7 +137,8 @@ def reference_pose_m(machine: Machine) -> np.ndarray:
     """A reachable pose used to attach shapes to joints: x = z = 0, leg length (l_min + l_max) / 2."""
     lim, g = machine.limits, machine.geometry
     lm = 0.5 * (lim.leg_length_min_m + lim.leg_length_max_m)
-    return np.array([0.0, np.sqrt(lm**2 - (g.base_half_side_m - g.plate_half_side_m) ** 2), 0.0])
+    rise = np.sqrt(lm**2 - (g.base_half_side_m - g.plate_half_side_m) ** 2)
+    return np.array([0.0, rise + g.base_joint_height_m - g.plate_joint_height_m, 0.0])
 
 
 # --- shapes ---------------------------------------------------------------------------------------

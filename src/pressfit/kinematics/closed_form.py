@@ -250,9 +250,13 @@ def leg_frames(machine: Machine, pose_m: np.ndarray) -> np.ndarray:
 
 
 def concurrency_point(machine: Machine, pose_m: np.ndarray) -> np.ndarray:
-    """P* = h p / (p - r): the point where all four leg lines meet, m."""
-    p, r = machine.geometry.base_half_side_m, machine.geometry.plate_half_side_m
-    return np.asarray(pose_m, dtype=float) * p / (p - r)
+    """The point where all four leg lines meet, m: P* = (t x_h, h_b + t (y_h + h_p - h_b), t z_h) with
+    t = p / (p - r), h_b and h_p the base and plate joint heights (P* = t h when both are zero)."""
+    g = machine.geometry
+    t = g.base_half_side_m / (g.base_half_side_m - g.plate_half_side_m)
+    h = np.asarray(pose_m, dtype=float)
+    shift = np.array([0.0, g.plate_joint_height_m - g.base_joint_height_m, 0.0])
+    return t * (h + shift) + np.array([0.0, g.base_joint_height_m, 0.0])
 
 
 def pose_report(machine: Machine, pose_m: np.ndarray) -> dict[str, object]:

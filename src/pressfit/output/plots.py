@@ -83,3 +83,24 @@ def write_leg_bars(path: Path | str, fields: Fields, title: str, overwrite: bool
         return io.save_figure(fig, path, overwrite)
     finally:
         plt.close(fig)
+
+
+def write_residual_bars(path: Path | str, labels: list[str], series: dict[str, np.ndarray], title: str,
+                        overwrite: bool = False) -> Path:
+    """Grouped horizontal bars of |residual| / sigma per entry (log scale), one colour per series."""
+    fig, ax = plt.subplots(figsize=(7.0, 0.18 * len(labels) + 1.5))
+    try:
+        y = np.arange(len(labels))
+        h = 0.8 / len(series)
+        for k, (name, values) in enumerate(series.items()):
+            ax.barh(y + k * h, np.maximum(np.abs(values), 1e-3), height=h, label=name)
+        ax.set_xscale("log")
+        ax.set(yticks=y + 0.4 - h / 2, title=title, xlabel="|residual| / sigma (printed rounding)")
+        ax.set_yticklabels(labels, fontsize=6)
+        ax.axvline(1.0, color="k", lw=0.6)
+        ax.invert_yaxis()
+        ax.legend(fontsize=7)
+        fig.tight_layout()
+        return io.save_figure(fig, path, overwrite)
+    finally:
+        plt.close(fig)

@@ -17,7 +17,8 @@ from pressfit.geometry import interference
 from pressfit.kinematics import workspace
 from pressfit.mechanics import condensed
 from pressfit.output.files import write_csv, write_json, write_text
-from pressfit.output import maps
+from pressfit.output import maps, plots
+from pressfit.studies import cad_fit
 from pressfit.studies import paper_tables as tables
 from pressfit.studies import preload_study, workspace_envelope
 
@@ -46,6 +47,7 @@ def write_report(machine: Machine, out_dir: Path | str, overwrite: bool = False,
            "The map from the paper's CAD legs, signs and axes to ours is stated in `pressfit/tables.py`; "
            "why B and C differ from the paper is explained in README.md (\"Tables 5 and 6\").", "",
            tables.to_markdown(entries)]
+    md += cad_fit_section(out, overwrite, quick)
     steps.update()
 
     heights = [0.6] if quick else list(workspace.DEFAULT_HEIGHTS_M)
@@ -98,6 +100,27 @@ def write_report(machine: Machine, out_dir: Path | str, overwrite: bool = False,
     steps.close()
     write_json(out / "summary.json", {"workspace": summ, "interference": sweep.kind_minima()}, overwrite)
     return write_text(out / "report.md", "\n".join(md) + "\n", overwrite)
+
+
+def cad_fit_section(out: Path, overwrite: bool, quick: bool) -> list[str]:
+    """The CAD-model identification (a hypothesis beside Table 3): Markdown lines; writes cad_fit.md/.json/.csv
+    and a residual chart. ``quick`` skips the comparison fit without couple self-stresses."""
+    fit = cad_fit.fit_cad_model(compare_without_couple_stress=not quick)
+    text = cad_fit.to_markdown(fit)
+    write_text(out / "cad_fit.md", text, overwrite)
+    write_json(out / "cad_fit.json", cad_fit.to_dict(fit), overwrite)
+    write_csv(out / "cad_fit.csv", ["case", "quantity", "cad_leg", "printed", "sigma", "table3", "fitted"],
+              [[e.case, e.quantity, e.cad_leg, e.printed, e.sigma, e.table3, e.fitted] for e in fit.entries],
+              overwrite=overwrite)
+    labels = [f"{e.case} {e.quantity} {e.cad_leg}" for e in fit.entries]
+    sigma = np.array([e.sigma for e in fit.entries])
+    png = plots.write_residual_bars(out / "cad_fit_residuals.png", labels,
+                                    {"Table 3 model": np.array([e.table3_residual for e in fit.entries]) / sigma,
+                                     "fitted CAD model": np.array([e.fit_residual for e in fit.entries]) / sigma},
+                                    "Tables 5-6: residuals of the Table 3 and the fitted CAD model", overwrite)
+    return ["### What the paper's CAD model was (a fitted hypothesis; Table 3 stays the default)", "",
+            "Weighted least squares over every printed F_z, M_z and bending magnitude (`pressfit tables --cad-fit`;"
+            " method in `pressfit/studies/cad_fit.py`).", "", text, f"![residuals]({png.name})", ""]
 
 
 def _preload_section(machine: Machine, out: Path, overwrite: bool, quick: bool) -> list[str]:
