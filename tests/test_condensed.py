@@ -15,6 +15,7 @@ from scipy.spatial.transform import Rotation
 
 from pressfit.kinematics.workspace import workspace_square
 from pressfit.mechanics import condensed
+from pressfit.mechanics.preload import with_axial_preload
 from pressfit.output import maps as map_files
 from pressfit.studies import workspace_envelope
 
@@ -254,10 +255,10 @@ def test_axial_preload_superposes(machine):
     h = random_poses(10, 9)
     res = condensed.solve_linear(machine, h, [0, 700, 0])
     vp = kinematics.preload_vector(machine, h)
-    pre = condensed.with_axial_preload(res, 300 * vp)
+    pre = with_axial_preload(res, 300 * vp)
     np.testing.assert_allclose(pre.axial_forces_n - res.axial_forces_n, 300 * vp, rtol=1e-14)
     assert np.max(pre.relative_residual()) < 1e-9
-    bad = condensed.with_axial_preload(res, np.full((10, 4), 100.0))  # not self-equilibrated: shows
+    bad = with_axial_preload(res, np.full((10, 4), 100.0))  # not self-equilibrated: shows
     assert np.min(bad.relative_residual()) > 0.1
 
 

@@ -24,13 +24,13 @@ below 1 N at 700 N, and a lateral shift s <= g of a leg end changes its length b
 left out. The play of the rotation about c_i (``rotation_gaps_rad``) is optional: in series with the
 leg's couple stiffness k_r, it lets the plate rock before torsion takes the moment.
 
-Preload (:func:`preload_offsets`)
----------------------------------
-Actuator rest-length offsets along v_p (:func:`pressfit.kinematics.preload_vector`), applied before the
-load. ``force`` mode: a4 in N, offsets o_i = -(a4 v_i / k_a,i + x_b,i + x_p,i) with x the joint
-coordinates that carry a4 v_i, so that with no load the actuator forces are exactly a4 v_p (tension > 0)
-and every joint with v_i != 0 is closed; the offsets are then held (position-held after setting).
-``length`` mode: a4 in m, offsets -a4 v_p (:func:`pressfit.statics.preload_offsets`).
+Preload (:func:`pressfit.mechanics.preload.rest_length_offsets` with a :class:`Clearance`)
+---------------------------------------------------------------------------------------------
+Actuator rest-length offsets along v_p, applied before the load. ``force`` mode: a4 in N, offsets
+o_i = -(a4 v_i / k_a,i + x_b,i + x_p,i) with x the joint coordinates that carry a4 v_i
+(:meth:`Clearance.play_extension_m`), so that with no load the actuator forces are exactly a4 v_p
+(tension > 0) and every joint with v_i != 0 is closed; the offsets are then held (position-held after
+setting). ``length`` mode: a4 in m, offsets -a4 v_p.
 
 Two solvers
 -----------
@@ -55,6 +55,7 @@ from pressfit import kinematics
 from pressfit.description.machine import Machine
 from pressfit.errors import ConvergenceError, PressfitError
 from pressfit.mechanics import condensed
+from pressfit.mechanics.preload import rest_length_offsets
 
 ENDS = ("base", "plate")
 DEFAULT_SMOOTHING_M = 1e-9
@@ -196,30 +197,15 @@ class Clearance:
         return {(i, e): CardanCompliance(axial=self.law(i, j), rotation=self.rotation_law(i, j))
                 for i in range(4) for j, e in enumerate(ENDS)}
 
+    def play_extension_m(self, axial_forces_n: np.ndarray) -> np.ndarray:
+        """The summed extension (4,), m, of each leg's two axial plays under its axial force (4,), N."""
+        return invert_law(np.repeat(np.asarray(axial_forces_n, float)[:, None], 2, 1), self.gaps_m,
+                          self.contact_stiffness_n_per_m, self.smoothing_m).sum(1)
+
     def to_dict(self) -> dict[str, Any]:
         return {"gaps_m": self.gaps_m.tolist(), "contact_stiffness_n_per_m": self.contact_stiffness_n_per_m,
                 "smoothing_m": self.smoothing_m,
                 "rotation_gaps_rad": None if self.rotation_gaps_rad is None else self.rotation_gaps_rad.tolist()}
-
-
-def preload_offsets(machine: Machine, pose_m: np.ndarray, clearance: Clearance, a4: float,
-                    mode: str = "force") -> np.ndarray:
-    """Actuator rest-length offsets (4,) in m for a preload a4 along v_p (module doc).
-
-    ``force``: a4 in N; with no load the actuator forces are a4 v_p and the joints closed. ``length``:
-    a4 in m (offsets -a4 v_p).
-    """
-    from pressfit.mechanics import statics
-
-    if mode == "length":
-        return statics.preload_offsets(machine, pose_m, a4, "length")
-    if mode != "force":
-        raise ClearanceError(f"preload mode must be 'force' or 'length', got {mode!r}")
-    n = a4 * kinematics.preload_vector(machine, pose_m)
-    c_ax = machine.axial_compliance_m_per_n(kinematics.inverse_kinematics(machine, pose_m).lengths_m)
-    x = invert_law(np.repeat(n[:, None], 2, 1), clearance.gaps_m, clearance.contact_stiffness_n_per_m,
-                   clearance.smoothing_m)
-    return -(n * c_ax + x.sum(1))
 
 
 # --- small-displacement solver, batched --------------------------------------------------------------------
@@ -508,7 +494,7 @@ def load_deflection(machine: Machine, pose_m: Any, direction: Any, loads_n: Any,
     pose = kinematics.require_reachable(machine, pose_m)
     d, loads = _direction(direction), _loads(loads_n)
     cl = clearance or Clearance.uniform(machine)
-    offsets = preload_offsets(machine, pose, cl, float(preload), preload_mode)
+    offsets = rest_length_offsets(machine, pose, float(preload), preload_mode, cl)
     if method == "small":
         up, down = _sweep_small(machine, pose, d, loads, [cl], offsets[None], unload)
     elif method == "nonlinear":
@@ -534,7 +520,7 @@ class CriticalPreload:
 
 def _all_closed(machine: Machine, pose: np.ndarray, d: np.ndarray, loads: np.ndarray, cls: list[Clearance],
                 a4: np.ndarray, mode: str) -> np.ndarray:
-    offsets = np.array([preload_offsets(machine, pose, c, float(a), mode) for c, a in zip(cls, a4)])
+    offsets = np.array([rest_length_offsets(machine, pose, float(a), mode, c) for c, a in zip(cls, a4)])
     up, _ = _sweep_small(machine, pose, d, loads, cls, offsets, unload=False)
     gaps = np.array([c.gaps_m for c in cls])
     return np.array([np.all(np.abs(s["joint_axial_m"]) >= gaps, axis=(1, 2)) for s in up]).all(0)

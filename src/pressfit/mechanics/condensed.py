@@ -66,6 +66,7 @@ from pressfit.description.machine import Machine
 from pressfit.errors import PressfitError, SingularPoseError
 from pressfit.kinematics import concurrency_point, is_reachable, leg_vectors
 from pressfit.kinematics.workspace import workspace_square
+from pressfit.spatial import cross, skew
 
 PRESS_LOAD_N = 700.0  # the press reaction on the tool, +y (paper section 4)
 _CHUNK = 16384  # poses per vectorised block: the working set stays in the CPU cache
@@ -118,10 +119,6 @@ def _sym_full(s: Sym) -> np.ndarray:
     return np.stack([a, b, c, b, d, e, c, e, f], -1).reshape(-1, 3, 3)
 
 
-def _cross(a: np.ndarray, b: np.ndarray) -> np.ndarray:
-    return np.stack([a[1] * b[2] - a[2] * b[1], a[2] * b[0] - a[0] * b[2], a[0] * b[1] - a[1] * b[0]])
-
-
 @dataclass(frozen=True)
 class _Core:
     e: np.ndarray  # (3, 4, m) leg unit vectors, base -> plate
@@ -169,12 +166,6 @@ def _poses(machine: Machine, poses_m: np.ndarray) -> np.ndarray:
     return h
 
 
-def _skew(v: np.ndarray) -> np.ndarray:
-    z = np.zeros_like(v[..., 0])
-    return np.stack([z, -v[..., 2], v[..., 1], v[..., 2], z, -v[..., 0], -v[..., 1], v[..., 0], z],
-                    -1).reshape(v.shape + (3,))
-
-
 def _blocks(tl: np.ndarray, tr: np.ndarray, bl: np.ndarray, br: np.ndarray) -> np.ndarray:
     return np.concatenate([np.concatenate([tl, tr], -1), np.concatenate([bl, br], -1)], -2)
 
@@ -189,7 +180,7 @@ def _six_by_six(machine: Machine, poses_m: np.ndarray, about: str, compliance: b
     if about == "concurrency":
         z = np.zeros_like(t)
         return _blocks(t, z, z, r).reshape(h.shape[:-1] + (6, 6))
-    x = _skew(core.rho.T)  # x_P = S x_h with S = [[I, [rho]], [0, I]]
+    x = skew(core.rho.T)  # x_P = S x_h with S = [[I, [rho]], [0, I]]
     if compliance:  # C_h = S^-1 C_P S^-T
         x_r = x @ r
         out = _blocks(t - x_r @ x, -x_r, r @ x, r)
@@ -279,8 +270,8 @@ def _solve_core(machine: Machine, core: _Core, w: np.ndarray) -> tuple[np.ndarra
     """Solve with w of shape (6, m) or (6, 1); returns SoA arrays (see :func:`solve_linear`)."""
     f, m = w[:3], w[3:]
     d_p = _sym_mv(core.ct, f)
-    phi = _sym_mv(core.cr, m + _cross(core.rho, f))
-    delta = d_p - _cross(core.rho, phi)
+    phi = _sym_mv(core.cr, m + cross(core.rho, f, axis=0))
+    delta = d_p - cross(core.rho, phi, axis=0)
     e, c = core.e, core.c
     n = core.k_a * (e[0] * d_p[0] + e[1] * d_p[1] + e[2] * d_p[2])
     cpl = core.k_r * (c[0] * phi[0] + c[1] * phi[1] + c[2] * phi[2])
@@ -290,7 +281,7 @@ def _solve_core(machine: Machine, core: _Core, w: np.ndarray) -> tuple[np.ndarra
     leg_f = n * e
     d = machine.plate_offsets_m.T[:, :, None]
     res_f = f - leg_f.sum(1)
-    res_m = m - (_cross(d, leg_f) + cpl * c).sum(1)
+    res_m = m - (cross(d, leg_f, axis=0) + cpl * c).sum(1)
     return delta, phi, n, cpl, c, e, moments, res_f, res_m
 
 
@@ -320,19 +311,6 @@ def solve_linear(machine: Machine, poses_m: np.ndarray, plate_wrench: np.ndarray
     o = [x.reshape(shape + x.shape[1:]) for x in out]
     return CondensedResult(np.broadcast_to(h, shape + (3,)), np.broadcast_to(w, shape + (6,)), *o,
                            machine.plate_offsets_m)
-
-
-def with_axial_preload(result: CondensedResult, extra_forces_n: np.ndarray) -> CondensedResult:
-    """Superpose leg forces that are self-equilibrated on the plate (a multiple of v_p, e.g. a
-    force-mode actuator preload): N += extra, (..., 4) N. Exact in the linear model: displacements and
-    couples are unchanged; the residuals are updated, so an extra set that is not self-equilibrated shows.
-    """
-    extra_forces_n = np.asarray(extra_forces_n, dtype=float)
-    extra = extra_forces_n[..., None] * result.leg_unit_vectors
-    return dataclasses.replace(
-        result, axial_forces_n=result.axial_forces_n + extra_forces_n,
-        force_residual_n=result.force_residual_n - extra.sum(-2),
-        moment_residual_nm=result.moment_residual_nm - np.cross(result.plate_offsets_m, extra).sum(-2))
 
 
 @dataclass(frozen=True)
