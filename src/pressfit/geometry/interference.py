@@ -54,6 +54,7 @@ import pinocchio as pin
 from pressfit import kinematics
 from pressfit.description.machine import ExtraBody, Machine
 from pressfit.errors import PressfitError
+from pressfit.kinematics import reference_pose_m
 from pressfit.kinematics.workspace import square_height_range, workspace_box, workspace_square
 from pressfit.spatial import cross
 
@@ -133,13 +134,6 @@ def make_rig(machine: Machine, rig: str = "auto") -> Any:
         else:
             return build_model(machine, reference_pose_m(machine))
     return ClosedFormRig(machine)
-
-
-def reference_pose_m(machine: Machine) -> np.ndarray:
-    """A reachable pose used to attach shapes to joints: x = z = 0, leg length (l_min + l_max) / 2."""
-    lim, g = machine.limits, machine.geometry
-    lm = 0.5 * (lim.leg_length_min_m + lim.leg_length_max_m)
-    return np.array([0.0, np.sqrt(lm**2 - (g.base_half_side_m - g.plate_half_side_m) ** 2), 0.0])
 
 
 # --- shapes ---------------------------------------------------------------------------------------

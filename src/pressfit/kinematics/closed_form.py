@@ -28,6 +28,14 @@ class LegKinematics:
     beta_rad: np.ndarray  # equation 1: sin(beta_i) = (u_i . s_i) / l_i
 
 
+def reference_pose_m(machine: Machine) -> np.ndarray:
+    """A reachable pose (3,), m, where models are built and shapes attached: x = z = 0, leg length
+    (l_min + l_max) / 2."""
+    lim, g = machine.limits, machine.geometry
+    lm = 0.5 * (lim.leg_length_min_m + lim.leg_length_max_m)
+    return np.array([0.0, np.sqrt(lm**2 - (g.base_half_side_m - g.plate_half_side_m) ** 2), 0.0])
+
+
 def leg_vectors(machine: Machine, pose_m: np.ndarray) -> np.ndarray:
     """u_i = h + d_i - B_i, shape (..., 4, 3), m."""
     h = np.asarray(pose_m, dtype=float)

@@ -452,12 +452,11 @@ def _sweep_small(machine: Machine, pose: np.ndarray, direction: np.ndarray, load
 
 def _sweep_nonlinear(machine: Machine, pose: np.ndarray, direction: np.ndarray, loads: np.ndarray,
                      clearance: Clearance, offsets: np.ndarray, unload: bool) -> tuple[list, list]:
-    from pressfit.mechanics import statics
-    from pressfit.mechanics.model import build_model
+    from pressfit.mechanics.statics import EquilibriumSolver
 
-    mm = build_model(machine, pose, cardan_compliance=clearance.cardan_compliance())
+    solver = EquilibriumSolver(machine, cardan_compliance=clearance.cardan_compliance(), pose_m=pose)
     idx = np.zeros((4, 2), dtype=int)
-    for s in mm.springs:
+    for s in solver.model.springs:
         if s.name.endswith("_cardan.axial"):
             idx[s.leg, ENDS.index(s.name.split("_")[0])] = s.idx_q
     radius = max(0.5 * float(clearance.gaps_m.max()), 100 * clearance.smoothing_m)
@@ -470,8 +469,8 @@ def _sweep_nonlinear(machine: Machine, pose: np.ndarray, direction: np.ndarray, 
 
     def solve(f: float) -> dict[str, np.ndarray]:
         nonlocal prev
-        eq = statics.solve_equilibrium(mm, pose, np.concatenate([f * direction, np.zeros(3)]),
-                                       preload_offsets_m=offsets, start=prev, step_limit=limit, max_iter=200)
+        eq = solver.solve(pose, np.concatenate([f * direction, np.zeros(3)]), preload_offsets_m=offsets, start=prev,
+                          step_limit=limit, max_iter=200)
         prev = eq
         return {"displacement_m": eq.plate_displacement_m[None], "rotation_rad": eq.plate_rotation_rad[None],
                 "axial_forces_n": eq.actuator_forces_n[None], "joint_axial_m": eq.q[idx][None],

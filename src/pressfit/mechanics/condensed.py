@@ -199,7 +199,7 @@ def plate_stiffness(machine: Machine, poses_m: np.ndarray, about: str = "centre"
     return _six_by_six(machine, poses_m, about, compliance=False)
 
 
-def plate_compliance(machine: Machine, poses_m: np.ndarray, about: str = "centre") -> np.ndarray:
+def condensed_plate_compliance(machine: Machine, poses_m: np.ndarray, about: str = "centre") -> np.ndarray:
     """The inverse of :func:`plate_stiffness`, (..., 6, 6): m/N, rad/N, rad/(N m); closed form."""
     return _six_by_six(machine, poses_m, about, compliance=True)
 
@@ -361,7 +361,7 @@ def stiffness_maps(machine: Machine, y_m: float, n: int = 51, press_load_n: floa
     zz, xx = np.meshgrid(z, x, indexing="ij")
     h = np.stack([xx, np.full_like(xx, y_m), zz], -1)
     ok = is_reachable(machine, h)
-    comp = plate_compliance(machine, h)
+    comp = condensed_plate_compliance(machine, h)
     res = solve_linear(machine, h, np.array([0.0, press_load_n, 0.0]))
     hor = comp[..., [0, 2]][..., [0, 2], :]
     tr, det = hor[..., 0, 0] + hor[..., 1, 1], hor[..., 0, 0] * hor[..., 1, 1] - hor[..., 0, 1] ** 2
@@ -381,7 +381,7 @@ def stiffness_report(machine: Machine, pose_m: np.ndarray, press_load_n: float =
     block) and about P* (rotation-free, K_t), the scalar stiffnesses of :class:`StiffnessMaps`, and the
     response to the press load (+y at the plate centre)."""
     h = np.asarray(pose_m, dtype=float).reshape(3)
-    comp = plate_compliance(machine, h)
+    comp = condensed_plate_compliance(machine, h)
     maps_like = np.linalg.eigvalsh(comp[[0, 2]][:, [0, 2]])
     res = solve_linear(machine, h, [0.0, press_load_n, 0.0])
     return {

@@ -23,7 +23,7 @@ from pressfit.description.cases import Case
 from pressfit.description.machine import Machine
 from pressfit.errors import PressfitError
 from pressfit.mechanics import buckling, condensed, preload
-from pressfit.mechanics.statics import Equilibrium, solve_equilibrium
+from pressfit.mechanics.statics import Equilibrium, EquilibriumSolver
 
 SECTIONS = ("base", "actuator", "plate")
 
@@ -165,6 +165,7 @@ def evaluate_case(case: Case, progress: bool = False) -> CaseResult:
     }.items() if k in wanted}
 
     lines = []
+    solver = EquilibriumSolver(machine, pose_m=poses[0])  # one model for every refined pose
     for key, limit in wanted.items():
         spec = LIMITS[key]
         if not spec.load_dependent:
@@ -187,8 +188,7 @@ def evaluate_case(case: Case, progress: bool = False) -> CaseResult:
             order = np.argsort(-b, axis=None)
             candidates = [tuple(np.unravel_index(i, b.shape)) for i in order[:max(1, case.solver.refine_worst)]]
         for j, p in candidates:
-            eq = solve_equilibrium(machine, poses[p], loads[j], linear=case.solver.linear,
-                                   preload=a4 or None)
+            eq = solver.solve(poses[p], loads[j], linear=case.solver.linear, preload=a4 or None)
             w, _, leg = _worst(equilibrium_quantities(eq, critical[p:p + 1])[key], spec.sense)
             if worse(w, best, spec.sense):
                 how = "linear" if case.solver.linear else "nonlinear"
