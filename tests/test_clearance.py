@@ -104,7 +104,8 @@ def test_preload_alone_is_along_vp_without_bending(machine):
     a4 = 500.0
     vp = kinematics.preload_vector(machine, OFF)
     mm = build_model(machine, OFF, cardan_compliance=cl.cardan_compliance())
-    eq = statics.solve_equilibrium(mm, OFF, np.zeros(6), preload_offsets_m=rest_length_offsets(machine, OFF, a4, "force", cl))
+    offsets = rest_length_offsets(machine, OFF, a4, "force", cl)
+    eq = statics.solve_equilibrium(mm, OFF, np.zeros(6), preload_offsets_m=offsets)
     assert np.allclose(eq.actuator_forces_n, a4 * vp, rtol=1e-6, atol=1e-6 * a4)
     for leg in eq.legs:
         for s in leg.sections.values():

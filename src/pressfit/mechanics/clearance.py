@@ -39,8 +39,8 @@ kept, exact for this structure: each leg is its axial spring in series with its 
 couple spring in series with the optional rotational plays), and about the concurrency point P* the
 plate's translation and rotation decouple (:mod:`pressfit.condensed`). Each load step is a damped Newton
 on the convex energy, batched over many (clearance, preload) pairs. ``method="nonlinear"``: the Pinocchio
-VJM model with the axial plays as virtual prismatic joints (:func:`pressfit.model.build_model`),
-geometrically nonlinear Newton (:func:`pressfit.statics.solve_equilibrium`), each load step started from
+VJM model with the axial plays as virtual prismatic joints (:func:`pressfit.mechanics.model.build_model`),
+geometrically nonlinear Newton (:class:`pressfit.mechanics.statics.EquilibriumSolver`), each load step started from
 the previous solution. The two agree to the geometric nonlinearity (about 1e-3 at 700 N, tested).
 """
 
@@ -50,8 +50,10 @@ from dataclasses import dataclass
 from typing import Any
 
 import numpy as np
+from numpy.typing import ArrayLike
 
 from pressfit import kinematics
+from pressfit.description.cases import Case
 from pressfit.description.machine import Machine
 from pressfit.errors import ConvergenceError, PressfitError
 from pressfit.mechanics import condensed
@@ -85,19 +87,19 @@ def _big_s(u: np.ndarray, w: float) -> np.ndarray:
 @dataclass(frozen=True)
 class DeadZone:
     """Smoothed dead zone of +-gap (m) with contact stiffness (N/m or N m/rad) and smoothing width (m or
-    rad); a :class:`pressfit.model.SpringLaw`, vectorised over numpy arrays. gap = 0 gives k x exactly."""
+    rad); a :class:`pressfit.mechanics.model.SpringLaw`, vectorised over numpy arrays. gap = 0 gives k x exactly."""
 
     gap: float
     stiffness: float
     width: float = DEFAULT_SMOOTHING_M
 
-    def energy(self, x: Any) -> Any:
+    def energy(self, x: ArrayLike) -> np.ndarray:
         return self.stiffness * (_big_s(x - self.gap, self.width) + _big_s(-x - self.gap, self.width))
 
-    def force(self, x: Any) -> Any:
+    def force(self, x: ArrayLike) -> np.ndarray:
         return self.stiffness * (_s(x - self.gap, self.width) - _s(-x - self.gap, self.width))
 
-    def tangent(self, x: Any) -> Any:
+    def tangent(self, x: ArrayLike) -> np.ndarray:
         return self.stiffness * (_ds(x - self.gap, self.width) + _ds(-x - self.gap, self.width))
 
 
@@ -191,7 +193,7 @@ class Clearance:
                         self.rotation_smoothing_rad)
 
     def cardan_compliance(self) -> dict:
-        """The ``cardan_compliance`` argument of :func:`pressfit.model.build_model`."""
+        """The ``cardan_compliance`` argument of :func:`pressfit.mechanics.model.build_model`."""
         from pressfit.mechanics.model import CardanCompliance
 
         return {(i, e): CardanCompliance(axial=self.law(i, j), rotation=self.rotation_law(i, j))
@@ -413,7 +415,7 @@ class LoadDeflection:
                 "max_residual": float(np.max(self.loading.residual))}
 
 
-def _direction(direction: Any) -> np.ndarray:
+def _direction(direction: ArrayLike) -> np.ndarray:
     d = np.asarray(direction, dtype=float).reshape(3)
     nd = np.linalg.norm(d)
     if not np.isfinite(nd) or nd == 0:
@@ -421,7 +423,7 @@ def _direction(direction: Any) -> np.ndarray:
     return d / nd
 
 
-def _loads(loads: Any) -> np.ndarray:
+def _loads(loads: ArrayLike) -> np.ndarray:
     f = np.asarray(loads, dtype=float).reshape(-1)
     if f.size < 3 or not np.all(np.isfinite(f)) or f[0] != 0 or np.any(np.diff(f) <= 0):
         raise ClearanceError("loads must start at 0 N and increase strictly, with at least 3 values")
@@ -481,8 +483,9 @@ def _sweep_nonlinear(machine: Machine, pose: np.ndarray, direction: np.ndarray, 
     return up, down
 
 
-def load_deflection(machine: Machine, pose_m: Any, direction: Any, loads_n: Any, clearance: Clearance | None = None,
-                    preload: float = 0.0, preload_mode: str = "force", *, method: str = "small",
+def load_deflection(machine: Machine, pose_m: ArrayLike, direction: ArrayLike, loads_n: ArrayLike,
+                    clearance: Clearance | None = None, preload: float = 0.0, preload_mode: str = "force", *,
+                    method: str = "small",
                     unload: bool = True) -> LoadDeflection:
     """Load-deflection curve of the plate at a reachable pose (m) under loads_n (N, from 0, increasing)
     along ``direction`` (world, at the plate centre), after the preload a4 (N, or m in length mode).
@@ -525,7 +528,7 @@ def _all_closed(machine: Machine, pose: np.ndarray, d: np.ndarray, loads: np.nda
     return np.array([np.all(np.abs(s["joint_axial_m"]) >= gaps, axis=(1, 2)) for s in up]).all(0)
 
 
-def critical_preloads(machine: Machine, pose_m: Any, direction: Any, press_load_n: float,
+def critical_preloads(machine: Machine, pose_m: ArrayLike, direction: ArrayLike, press_load_n: float,
                       clearances: list[Clearance], preload_mode: str = "force", steps: int = 50,
                       tol: float | None = None) -> list[CriticalPreload]:
     """:func:`critical_preload` for several clearances at once (batched bisections)."""
@@ -557,7 +560,7 @@ def critical_preloads(machine: Machine, pose_m: Any, direction: Any, press_load_
             for h, lw in zip(hi, lo)]
 
 
-def critical_preload(machine: Machine, pose_m: Any, direction: Any, press_load_n: float,
+def critical_preload(machine: Machine, pose_m: ArrayLike, direction: ArrayLike, press_load_n: float,
                      clearance: Clearance | None = None, preload_mode: str = "force", steps: int = 50,
                      tol: float | None = None) -> CriticalPreload:
     """The smallest preload a4 (N in force mode, m in length mode) that keeps every cardan closed
@@ -571,7 +574,7 @@ def critical_preload(machine: Machine, pose_m: Any, direction: Any, press_load_n
     return critical_preloads(machine, pose_m, direction, press_load_n, [cl], preload_mode, steps, tol)[0]
 
 
-def clearance_from_case(case: Any, machine: Machine) -> Clearance:
+def clearance_from_case(case: Case, machine: Machine) -> Clearance:
     """The cardan clearances a case's ``[clearance]`` table describes (default: the machine's uniform one)."""
     spec = case.clearance
     kw: dict[str, Any] = {"smoothing_m": spec.smoothing_m if spec else DEFAULT_SMOOTHING_M}

@@ -50,8 +50,8 @@ so every solve is two closed-form 3x3 inverses. With rho = h - P*, a wrench (F, 
 
 A load whose line passes through P* (a vertical force at h only when x_h = z_h = 0) is carried by the
 axial forces alone; any moment about P* only by the couples. Clearance is ignored here (the default
-model's clearance matters only to :mod:`pressfit.clearance`); elastic cardans break the rank-2
-structure and are refused. The Pinocchio solver (:mod:`pressfit.statics`) is the reference for
+model's clearance matters only to :mod:`pressfit.mechanics.clearance`); elastic cardans break the rank-2
+structure and are refused. The Pinocchio solver (:mod:`pressfit.mechanics.statics`) is the reference for
 everything beyond this model.
 """
 
@@ -159,7 +159,7 @@ def _core(machine: Machine, h: np.ndarray) -> _Core:
 def _poses(machine: Machine, poses_m: np.ndarray) -> np.ndarray:
     if machine.joints.cardan_rotational_stiffness_nm_per_rad is not None:
         raise CondensedModelError("the condensed model needs free cardans; this machine gives them a "
-                                  "rotational stiffness: use pressfit.statics")
+                                  "rotational stiffness: use pressfit.mechanics.statics")
     h = np.asarray(poses_m, dtype=float)
     if h.shape[-1:] != (3,) or not np.all(np.isfinite(h)):
         raise PressfitError(f"poses must be finite with shape (..., 3), got shape {h.shape}")
@@ -294,7 +294,7 @@ def solve_linear(machine: Machine, poses_m: np.ndarray, plate_wrench: np.ndarray
         plate_wrench: (F, M) at the plate centre in world axes, (..., 6) or (6,), N and N m; a force
             (..., 3) means zero moment. Broadcast against the poses.
 
-    Geometrically linear (the DESIGN.md default, nonlinear, solve is :mod:`pressfit.statics`). Poses
+    Geometrically linear (the DESIGN.md default, nonlinear, solve is :mod:`pressfit.mechanics.statics`). Poses
     are processed in cache-sized blocks; no Python loop runs over single poses.
     """
     h, w = _poses(machine, poses_m), _as_wrench(plate_wrench)

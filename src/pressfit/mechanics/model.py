@@ -32,7 +32,7 @@ frame R0_i, at the cardan centre) and the rotation about c_i = a_i x b_i (betwee
 revolutes), each with a spring law (:class:`LinearSpring`, or any object with ``energy``, ``force``,
 ``tangent`` of the joint coordinate). ``axial`` adds one translation along the leg (+z of the leg
 segment frame, positive = the leg lengthens) between the cardan and its leg segment: the axial play that
-:mod:`pressfit.clearance` models. ``machine.joints.cardan_rotational_stiffness_nm_per_rad`` (if set)
+:mod:`pressfit.mechanics.clearance` models. ``machine.joints.cardan_rotational_stiffness_nm_per_rad`` (if set)
 puts a linear spring on the cardans' free revolutes.
 """
 
@@ -379,7 +379,8 @@ class _ChainBuilder:
     def leg_velocities(self, i: int) -> np.ndarray:
         """Leg i's velocity indices in chain order (its first virtual translation to its plate end)."""
         c = self.compliance("base", i)
-        first = self.model.joints[self.ids[i]["base_cardan"]].idx_v - (3 if c is not None and c.translation is not None else 0)
+        virtual = 3 if c is not None and c.translation is not None else 0
+        first = self.model.joints[self.ids[i]["base_cardan"]].idx_v - virtual
         return np.arange(first, self.model.joints[self.ids[i]["plate_end"]].idx_v + 1)
 
 

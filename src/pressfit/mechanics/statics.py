@@ -1,4 +1,4 @@
-r"""Compliant static equilibrium of the 4-UPU machine (VJM model of :mod:`pressfit.model`).
+r"""Compliant static equilibrium of the 4-UPU machine (VJM model of :mod:`pressfit.mechanics.model`).
 
 Equilibrium = stationarity of  E(q) - W_load(q)  subject to the four 6D loop closures c_i(q) = 0:
 
@@ -518,8 +518,8 @@ def _offsets(machine: Machine, pose: np.ndarray, preload: float | ActuatorPreloa
 
 def solve_equilibrium(system: Machine | MachineModel | EquilibriumSolver, pose_m: np.ndarray, plate_wrench: np.ndarray,
                       *, preload: float | ActuatorPreload | None = None, preload_mode: str | None = None,
-                      linear: bool = False, tol: float = NEWTON_TOL, max_iter: int = 25, start: Equilibrium | None = None,
-                      preload_offsets_m: np.ndarray | None = None, step_limit: StepLimit | None = None) -> Equilibrium:
+                      linear: bool = False, tol: float = NEWTON_TOL, max_iter: int = 25,
+                      start: Equilibrium | None = None, preload_offsets_m: np.ndarray | None = None, step_limit: StepLimit | None = None) -> Equilibrium:
     """One equilibrium (:meth:`EquilibriumSolver.solve`, same keywords) of a machine, a built model or a
     solver. Convenience: for a machine it builds the model and a solver each call (~0.1 s; a built model:
     ~5 ms for the solver's index structure and model copy; ``benchmarks/bench_statics.py`` measures both);
