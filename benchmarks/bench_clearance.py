@@ -21,6 +21,7 @@ from pressfit.mechanics import statics  # noqa: E402
 from pressfit.studies import preload_study  # noqa: E402
 from pressfit.description.machine import load_machine  # noqa: E402
 from pressfit.mechanics.model import build_model  # noqa: E402
+from pressfit.mechanics.preload import rest_length_offsets  # noqa: E402
 
 POSE = np.array([0.2, 0.6, -0.2])
 UP = np.array([0.0, 1.0, 0.0])
@@ -40,7 +41,7 @@ def main() -> None:
 
     # per-step medians of the batched small-displacement step (13 preloads at once) and of one solve
     cl = C.Clearance.uniform(machine, 20e-6)
-    offsets = np.array([C.preload_offsets(machine, POSE, cl, float(a)) for a in preloads])
+    offsets = np.array([rest_length_offsets(machine, POSE, float(a), "force", cl) for a in preloads])
     for batch, offs in (("13 preloads", offsets), ("1 preload", offsets[6:7])):
         model = C._SmallModel.build(machine, POSE, [cl] * len(offs), offs)
         state, times = None, []

@@ -40,7 +40,8 @@ def main(n: int = 1_000_000) -> None:
         "solve_linear, vertical press load (stiffness + solve + residuals)":
             (lambda: condensed.solve_linear(machine, poses, press), n),
         "solve_linear, one wrench per pose": (lambda: condensed.solve_linear(machine, poses, wrenches), n),
-        "plate_compliance about the centre (6x6)": (lambda: condensed.plate_compliance(machine, poses), n),
+        "condensed_plate_compliance about the centre (6x6)": (
+            lambda: condensed.condensed_plate_compliance(machine, poses), n),
         "plate_stiffness about the centre (6x6)": (lambda: condensed.plate_stiffness(machine, poses), n),
         "stiffness_maps, 51 x 51": (lambda: condensed.stiffness_maps(machine, 0.6, 51), 2601),
         "load_envelope, 51 x 51 x 11 levels x 9 loads (cone 10 deg)": (

@@ -1,12 +1,13 @@
-"""Per-pose time of the Pinocchio equilibrium solve (``statics.solve_equilibrium``), one core.
+"""Per-pose time of the Pinocchio equilibrium solve (``statics.EquilibriumSolver.solve``), one core.
 
 Run: ``python benchmarks/bench_statics.py [--poses 1000] [--springs 4]``. Random reachable poses in the
 required workspace (x, z in +-0.25 m, y in [0.5, 0.75] m), a 700 N press load plus a small off-axis
-wrench; one model is built once and retargeted per pose (as a sweep would), and the same loads are also
-solved at one fixed pose (no retarget: the solver alone). Prints the median time per pose and the
+wrench; one solver is built once and reused over the poses (as a sweep would; each solve takes the
+pose-dependent values afresh), and the same loads are also solved at one fixed pose. Also times the
+convenience ``solve_equilibrium(machine, ...)``, which builds a solver per call. Prints the median time per pose and the
 throughput for the linear and the nonlinear solve, then an instrumented run that splits the time into
 Pinocchio calls, LAPACK / numpy.linalg calls and the rest (Python and small numpy operations, including
-the retarget and the result objects). Not a test. Goals (issue 3): linear <= 25 us, nonlinear <= 250 us.
+the per-pose values and the result objects). Not a test. Goals (issue 3): linear <= 25 us, nonlinear <= 250 us.
 
 Before/after: the script only uses the public API (the breakdown wraps whichever LAPACK entry points
 ``pressfit.statics`` imports), so ``PYTHONPATH=<older checkout>/src python benchmarks/bench_statics.py``
@@ -46,12 +47,12 @@ def poses_and_loads(machine, n: int, rng: np.random.Generator) -> tuple[np.ndarr
 LAPACK = ("_getrf", "_getrs", "_gesv", "_gesdd")
 
 
-def run(mm, poses, loads, linear: bool, fixed: bool = False) -> tuple[list[float], list[int]]:
+def run(solver, poses, loads, linear: bool, fixed: bool = False) -> tuple[list[float], list[int]]:
     times, iters = [], []
     for h, w in zip(poses, loads):
         h = poses[0] if fixed else h
         t0 = time.perf_counter()
-        eq = statics.solve_equilibrium(mm, h, w, linear=linear)
+        eq = solver.solve(h, w, linear=linear)
         times.append(time.perf_counter() - t0)
         iters.append(eq.iterations)
         assert eq.is_valid(1e-9), eq.residuals
@@ -74,7 +75,7 @@ class Clock:
         return g
 
 
-def breakdown(mm, poses, loads, linear: bool) -> dict[str, float]:
+def breakdown(solver, poses, loads, linear: bool) -> dict[str, float]:
     pin_clock, la_clock = Clock(), Clock()
     saved = {name: getattr(pin, name) for name in PIN_CALLS}
     saved_la = {name: getattr(statics, name) for name in LAPACK if hasattr(statics, name)}
@@ -86,7 +87,7 @@ def breakdown(mm, poses, loads, linear: bool) -> dict[str, float]:
             setattr(statics, name, la_clock.wrap(f))
         np.linalg.svd = la_clock.wrap(saved_svd)
         t0 = time.perf_counter()
-        run(mm, poses, loads, linear)
+        run(solver, poses, loads, linear)
         total = time.perf_counter() - t0
     finally:
         for name, f in saved.items():
@@ -107,14 +108,15 @@ def main() -> None:
     machine = load_machine()
     rng = np.random.default_rng(0)
     poses, loads = poses_and_loads(machine, args.poses, rng)
-    mm = build_model(machine, poses[0], springs_per_segment=args.springs)
+    solver = statics.EquilibriumSolver(machine, springs_per_segment=args.springs, pose_m=poses[0])
+    mm = solver.model
     print(f"model: nq = {mm.model.nq}, nv = {mm.model.nv}, {mm.springs_per_segment} springs per segment, "
           f"{len(poses)} poses")
-    run(mm, poses[:20], loads[:20], True)  # warm-up
+    run(solver, poses[:20], loads[:20], True)  # warm-up
     for fixed in (False, True):
-        print("one fixed pose, no retarget:" if fixed else "a new pose per solve (retarget included):")
+        print("one fixed pose:" if fixed else "a new pose per solve:")
         for linear in (True, False):
-            times, iters = run(mm, poses, loads, linear, fixed)
+            times, iters = run(solver, poses, loads, linear, fixed)
             med = statistics.median(times)
             name = "linear   " if linear else "nonlinear"
             print(f"  {name}: median {med * 1e6:8.1f} us/pose, throughput {1 / med:8.0f} poses/s "
@@ -122,10 +124,24 @@ def main() -> None:
                   f"Newton iterations median {statistics.median(iters):g}, max {max(iters)})")
     print("instrumented breakdown, new pose per solve (mean per pose; the wrappers add ~1 us per call):")
     for linear in (True, False):
-        b = breakdown(mm, poses[:300], loads[:300], linear)
+        b = breakdown(solver, poses[:300], loads[:300], linear)
         print(f"  {'linear   ' if linear else 'nonlinear'}: total {b['total'] * 1e6:7.1f} us = Pinocchio "
               f"{b['pinocchio'] * 1e6:6.1f} + LAPACK {b['linalg'] * 1e6:6.1f} + Python/numpy "
               f"{b['python+numpy'] * 1e6:6.1f} us")
+    print("convenience function (a solver built per call):")
+    convenience_cost(machine, poses[:50], loads[:50])
+
+
+def convenience_cost(machine, poses, loads) -> None:
+    """solve_equilibrium(machine, ...) and (model, ...) build a solver per call: the extra cost."""
+    mm = build_model(machine, poses[0])
+    for what, system in (("machine", machine), ("built model", mm)):
+        times = []
+        for h, w in zip(poses, loads):
+            t0 = time.perf_counter()
+            statics.solve_equilibrium(system, h, w, linear=True)
+            times.append(time.perf_counter() - t0)
+        print(f"  solve_equilibrium({what}, ..., linear=True): median {statistics.median(times) * 1e3:.2f} ms per call")
 
 
 if __name__ == "__main__":

@@ -18,6 +18,7 @@ from pressfit.cli import main
 from pressfit.output import maps
 from pressfit.studies import preload_study
 from pressfit.mechanics.model import build_model
+from pressfit.mechanics.preload import PreloadError, rest_length_offsets
 
 POSE_A = np.array([0.0, 0.72, 0.0])
 OFF = np.array([0.2, 0.6, -0.2])
@@ -103,7 +104,8 @@ def test_preload_alone_is_along_vp_without_bending(machine):
     a4 = 500.0
     vp = kinematics.preload_vector(machine, OFF)
     mm = build_model(machine, OFF, cardan_compliance=cl.cardan_compliance())
-    eq = statics.solve_equilibrium(mm, OFF, np.zeros(6), preload_offsets_m=C.preload_offsets(machine, OFF, cl, a4))
+    offsets = rest_length_offsets(machine, OFF, a4, "force", cl)
+    eq = statics.solve_equilibrium(mm, OFF, np.zeros(6), preload_offsets_m=offsets)
     assert np.allclose(eq.actuator_forces_n, a4 * vp, rtol=1e-6, atol=1e-6 * a4)
     for leg in eq.legs:
         for s in leg.sections.values():
@@ -165,7 +167,7 @@ def test_clearance_variants_and_errors(machine):
         C.Clearance.uniform(machine, -1e-6)
     with pytest.raises(C.ClearanceError):
         C.load_deflection(machine, POSE_A, UP, [0.0, 5.0, 1.0])
-    with pytest.raises(C.ClearanceError):
+    with pytest.raises(PreloadError):
         C.load_deflection(machine, POSE_A, UP, [0.0, 1.0, 2.0], preload_mode="torque")
     cp = C.critical_preload(machine, POSE_A, UP, 700.0, preload_mode="length")
     assert cp.preload > 0  # a4 in m in length mode

@@ -15,6 +15,7 @@ from scipy.spatial.transform import Rotation
 
 from pressfit.kinematics.workspace import workspace_square
 from pressfit.mechanics import condensed
+from pressfit.mechanics.preload import with_axial_preload
 from pressfit.output import maps as map_files
 from pressfit.studies import workspace_envelope
 
@@ -53,7 +54,7 @@ def test_pose_a_press_load_closed_form(machine, y):
     np.testing.assert_allclose(res.couples_nm, 0, atol=1e-9)
     np.testing.assert_allclose(res.plate_rotation_rad, 0, atol=1e-15)
     k_vert = 4 * k_axial(length) * sin_a**2
-    assert 1 / condensed.plate_compliance(machine, [0, y, 0])[1, 1] == pytest.approx(k_vert, rel=1e-12)
+    assert 1 / condensed.condensed_plate_compliance(machine, [0, y, 0])[1, 1] == pytest.approx(k_vert, rel=1e-12)
     assert res.plate_displacement_m[1] == pytest.approx(700 / k_vert, rel=1e-12)
 
 
@@ -100,12 +101,12 @@ def test_solve_matches_compliance_and_stiffness(machine):
     h = random_poses(30, 4)
     w = np.random.default_rng(5).normal(size=(30, 6)) * [700, 700, 700, 60, 60, 60]
     res = condensed.solve_linear(machine, h, w)
-    c = condensed.plate_compliance(machine, h)
+    c = condensed.condensed_plate_compliance(machine, h)
     x = np.einsum("pij,pj->pi", c, w)
     np.testing.assert_allclose(x[:, :3], res.plate_displacement_m, rtol=1e-9, atol=1e-15)
     np.testing.assert_allclose(x[:, 3:], res.plate_rotation_rad, rtol=1e-9, atol=1e-15)
     for about in ("centre", "concurrency"):
-        kc = condensed.plate_stiffness(machine, h, about) @ condensed.plate_compliance(machine, h, about)
+        kc = condensed.plate_stiffness(machine, h, about) @ condensed.condensed_plate_compliance(machine, h, about)
         np.testing.assert_allclose(kc, np.broadcast_to(np.eye(6), kc.shape), atol=1e-9)
     kp = condensed.plate_stiffness(machine, h, "concurrency")
     np.testing.assert_array_equal(kp[:, :3, 3:], 0)
@@ -254,10 +255,10 @@ def test_axial_preload_superposes(machine):
     h = random_poses(10, 9)
     res = condensed.solve_linear(machine, h, [0, 700, 0])
     vp = kinematics.preload_vector(machine, h)
-    pre = condensed.with_axial_preload(res, 300 * vp)
+    pre = with_axial_preload(res, 300 * vp)
     np.testing.assert_allclose(pre.axial_forces_n - res.axial_forces_n, 300 * vp, rtol=1e-14)
     assert np.max(pre.relative_residual()) < 1e-9
-    bad = condensed.with_axial_preload(res, np.full((10, 4), 100.0))  # not self-equilibrated: shows
+    bad = with_axial_preload(res, np.full((10, 4), 100.0))  # not self-equilibrated: shows
     assert np.min(bad.relative_residual()) > 0.1
 
 

@@ -143,7 +143,7 @@ def test_base_reactions_balance_the_load(machine, linear):
     """Sum over legs of the base-section wrench (what each leg pushes into the base) = the load, about the
     world origin, to 1e-9 relative (the reactions and load are O(700 N), moments O(700 N x 0.442 m))."""
     eq = solve_equilibrium(machine, POSE, WRENCH, linear=linear)
-    mm = statics._model_for(machine, POSE)
+    mm = build_model(machine, POSE)
     data = mm.model.createData()
     pin.forwardKinematics(mm.model, data, mm.q0 if linear else eq.q)
     f_sum, m_sum = np.zeros(3), np.zeros(3)
@@ -249,7 +249,7 @@ def test_analytic_tangent_matches_finite_differences_of_the_gradient(machine):
     stationarity residual along pin.integrate, at a non-equilibrium point with arbitrary multipliers.
     Tolerance 1e-6 relative to the largest entry (differences with step 1e-7 are good to ~1e-8)."""
     mm = build_model(machine, POSE, springs_per_segment=2)
-    pb = statics._problem(mm, WRENCH, np.zeros(4), 0.0)
+    pb, _ = statics.EquilibriumSolver(mm)._problem(mm.pose_values(POSE), WRENCH, np.zeros(4))
     rng = np.random.default_rng(4)
     q = pin.integrate(mm.model, mm.q0, 1e-3 * rng.normal(size=mm.model.nv))
     lam = rng.normal(size=(4, 6)) * np.array([300, 300, 300, 20, 20, 20])
@@ -260,7 +260,7 @@ def test_analytic_tangent_matches_finite_differences_of_the_gradient(machine):
     def residual(qq, dv):  # spring offsets from the exact step (q ~ 1 m would cost k * 1e-16 m of noise)
         st = statics._evaluate(pb, qq, data, d0 + dv[pb.legv])
         r_leg, r_plate = statics._stationarity(pb, st, lam)
-        return statics._dq(mm, r_leg, r_plate)
+        return statics._dq(pb.mm, r_leg, r_plate)
 
     st = statics._evaluate(pb, q, data)
     h_leg, h_plate = statics._tangent(pb, st, lam)
@@ -285,7 +285,7 @@ def test_constraint_jacobian_equals_pinocchios_frame_anchor_jacobian(machine):
     Pinocchio's FrameAnchor Jacobian (c2 relative to c1, in c1's frame) rotated to world axes, 1e-9."""
     mm = build_model(machine, POSE, springs_per_segment=2)
     eq = solve_equilibrium(mm, POSE, WRENCH)
-    pb = statics._problem(mm, WRENCH, np.zeros(4), 0.0)
+    pb, _ = statics.EquilibriumSolver(mm)._problem(mm.pose_values(POSE), WRENCH, np.zeros(4))
     data = mm.model.createData()
     st = statics._evaluate(pb, eq.q, data)
     cds = mm.constraint_datas()

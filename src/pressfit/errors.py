@@ -15,15 +15,30 @@ class ModelFileError(PressfitError):
         super().__init__(f"{self.path}: key '{key}': {expected}")
 
 
+def format_violation(leg: int, quantity: str, value: float, limit: str) -> str:
+    """The one text of a broken limit: "leg 2: alpha [rad] = 1.57081 breaks maximum 1.5708" (no "leg"
+    part for leg 0, a pose-wide limit). ``limit`` is "<minimum|maximum> <number>[ ...]"; the value gets
+    6 significant digits, or as many more as it takes for the printed value to break the printed limit
+    (a value just above a maximum never reads as equal to it)."""
+    kind, _, rest = limit.partition(" ")
+    try:
+        bound = float(rest.split()[0])
+    except (ValueError, IndexError):
+        bound = None
+    for digits in range(6, 18):
+        text = f"{value:.{digits}g}"
+        if bound is None or (float(text) > bound if kind == "maximum" else float(text) < bound):
+            break
+    return (f"leg {leg}: " if leg else "") + f"{quantity} = {text} breaks {limit}"
+
+
 class UnreachablePoseError(PressfitError):
     """A plate pose breaks a joint limit; ``violations`` lists (leg, quantity, value, limit)."""
 
-    def __init__(self, pose_m: object, violations: list[tuple[int, str, float, str]]) -> None:
+    def __init__(self, pose_m: tuple[float, ...], violations: list[tuple[int, str, float, str]]) -> None:
         self.pose_m, self.violations = pose_m, violations
-        lines = [(f"leg {leg}: " if leg else "") + f"{what} = {value:.6g} breaks {limit}"
-                 for leg, what, value, limit in violations]
-        pose = tuple(float(c) for c in pose_m)  # type: ignore[union-attr]
-        super().__init__(f"pose {pose} m is not reachable: " + "; ".join(lines))
+        pose = tuple(float(c) for c in pose_m)
+        super().__init__(f"pose {pose} m is not reachable: " + "; ".join(format_violation(*v) for v in violations))
 
 
 class SingularPoseError(PressfitError):

@@ -131,8 +131,8 @@ def stiffness_cmd(x: float, y: float, z: float, as_json: bool, maps: bool, out_d
         return
     h = kinematics.require_reachable(machine, [x, y, z])
     out = condensed.stiffness_report(machine, h)
-    c_pin = compliance.plate_compliance(machine, h)
-    c_tan = compliance.plate_compliance(machine, h, load=np.array([0.0, out["press_load_n"], 0, 0, 0, 0]))
+    c_pin = compliance.vjm_plate_compliance(machine, h)
+    c_tan = compliance.vjm_plate_compliance(machine, h, load=np.array([0.0, out["press_load_n"], 0, 0, 0, 0]))
     scale = np.abs(c_pin).max()
     out["pinocchio_linear_compliance_6x6"] = c_pin.tolist()
     out["condensed_vs_pinocchio_max_difference_relative"] = float(

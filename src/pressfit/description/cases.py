@@ -22,6 +22,7 @@ from pressfit.description.machine import (
     validation_error,
 )
 from pressfit.errors import ModelFileError
+from pressfit.spatial import cone_directions
 
 Finite = Annotated[float, Field(allow_inf_nan=False)]
 Positive = Annotated[float, Field(gt=0, allow_inf_nan=False)]
@@ -110,16 +111,7 @@ class Loads(_Strict):
         m = np.asarray(self.moment_nm, dtype=float)
         if self.force_n is not None:
             return np.concatenate([np.asarray(self.force_n, float), m])[None]
-        d = np.asarray(self.direction, float)
-        d /= np.linalg.norm(d)
-        dirs = [d]
-        if self.cone_half_angle_rad > 0:
-            t = np.cross(d, [1.0, 0, 0] if abs(d[0]) < 0.9 else [0, 0, 1.0])
-            t /= np.linalg.norm(t)
-            s = np.cross(d, t)
-            for phi in np.linspace(0, 2 * np.pi, self.cone_directions, endpoint=False):
-                c = self.cone_half_angle_rad
-                dirs.append(np.cos(c) * d + np.sin(c) * (np.cos(phi) * t + np.sin(phi) * s))
+        dirs = cone_directions(np.asarray(self.direction, float), self.cone_half_angle_rad, self.cone_directions)
         return np.array([np.concatenate([self.press_force_n * u, m]) for u in dirs])
 
 

@@ -54,6 +54,9 @@ import pinocchio as pin
 from pressfit import kinematics
 from pressfit.description.machine import ExtraBody, Machine
 from pressfit.errors import PressfitError
+from pressfit.kinematics import reference_pose_m
+from pressfit.kinematics.workspace import square_height_range, workspace_box, workspace_square
+from pressfit.spatial import cross
 
 PART_NAMES = ("cylinder", "stem")
 KIND_ORDER = ("leg", "plate", "base", "extra")
@@ -87,9 +90,9 @@ class ClosedFormRig:
         self.model = pin.Model()
         self.leg_joint_ids: list[dict[str, int]] = []
         a, w = machine.cardan_axes, machine.inward_directions
-        self._a, self._aw, self._w = a, np.cross(a, w), w
+        self._a, self._aw, self._w = a, cross(a, w), w
         for i in range(4):
-            frame = np.column_stack([a[i], np.cross(w[i], a[i]), w[i]])
+            frame = np.column_stack([a[i], cross(w[i], a[i]), w[i]])
             j1 = self.model.addJoint(0, pin.JointModelRX(), pin.SE3(frame, machine.base_points_m[i]),
                                      f"leg{i + 1}_cardan_a")
             j2 = self.model.addJoint(j1, pin.JointModelRY(), pin.SE3.Identity(), f"leg{i + 1}_cardan_b")
@@ -131,14 +134,6 @@ def make_rig(machine: Machine, rig: str = "auto") -> Any:
         else:
             return build_model(machine, reference_pose_m(machine))
     return ClosedFormRig(machine)
-
-
-def reference_pose_m(machine: Machine) -> np.ndarray:
-    """A reachable pose used to attach shapes to joints: x = z = 0, leg length (l_min + l_max) / 2."""
-    lim, g = machine.limits, machine.geometry
-    lm = 0.5 * (lim.leg_length_min_m + lim.leg_length_max_m)
-    rise = np.sqrt(lm**2 - (g.base_half_side_m - g.plate_half_side_m) ** 2)
-    return np.array([0.0, rise + g.base_joint_height_m - g.plate_joint_height_m, 0.0])
 
 
 # --- shapes ---------------------------------------------------------------------------------------
@@ -526,31 +521,19 @@ def sweep(im: InterferenceModel, poses_m: np.ndarray, margin_m: float | None = N
     return SweepResult(poses, ok, dmin, worst, im.pairs, im.kinds, im.excluded, pmin, parg, margin, grid_axes_m)
 
 
-def workspace_grid(machine: Machine, points: int = 41, heights: int = 7,
-                   y_range_m: tuple[float, float] | None = None) -> tuple[np.ndarray, tuple[np.ndarray, ...]]:
-    """Poses (heights * points^2, 3) over the required workspace ordered (y, z, x), and the axes (x, y, z).
-    y spans ``y_range_m`` (m), by default the heights where the whole required square is reachable
-    (:func:`pressfit.workspace.square_height_range`)."""
-    ws = machine.workspace
-    if y_range_m is None:
-        from pressfit.kinematics.workspace import square_height_range
-
-        hr = square_height_range(machine)
-        y_range_m = (hr.y_min_m, hr.y_max_m)
-    y0, y1 = y_range_m
-    xs = np.linspace(-ws.x_half_width_m, ws.x_half_width_m, points)
-    zs = np.linspace(-ws.z_half_width_m, ws.z_half_width_m, points)
-    ys = np.linspace(y0, y1, heights)
-    yy, zz, xx = np.meshgrid(ys, zs, xs, indexing="ij")
-    return np.stack([xx, yy, zz], -1).reshape(-1, 3), (xs, ys, zs)
-
-
 def workspace_sweep(im: InterferenceModel, points: int = 41, heights: int = 7,
                     y_range_m: tuple[float, float] | None = None, margin_m: float | None = None,
                     progress: bool = False) -> SweepResult:
-    """:func:`sweep` over :func:`workspace_grid`."""
-    poses, axes = workspace_grid(im.machine, points, heights, y_range_m)
-    return sweep(im, poses, margin_m, progress, axes)
+    """:func:`sweep` over the required workspace (:func:`pressfit.kinematics.workspace.workspace_box`,
+    poses ordered (y, z, x)): ``points`` per side, ``heights`` levels spanning ``y_range_m`` (m), by default
+    the heights where the whole required square is reachable (``square_height_range``)."""
+    if y_range_m is None:
+        hr = square_height_range(im.machine)
+        y_range_m = (hr.y_min_m, hr.y_max_m)
+    ys = np.linspace(*y_range_m, heights)
+    xs, zs = workspace_square(im.machine, points)
+    poses = workspace_box(im.machine, ys, points).reshape(-1, 3)
+    return sweep(im, poses, margin_m, progress, (xs, ys, zs))
 
 
 def min_distance_over_poses(machine: Machine, poses_m: np.ndarray, progress: bool = False) -> np.ndarray:

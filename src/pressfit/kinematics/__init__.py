@@ -17,12 +17,14 @@ from pressfit.kinematics.closed_form import (
     pose_report,
     preload_vector,
     pseudo_inverse,
+    reference_pose_m,
     require_reachable,
     static_matrix,
+    unreachable_reason,
     violations,
 )
 
 __all__ = ["Indices", "LegKinematics", "actuator_forces_min_norm", "concurrency_point", "dexterity",
            "force_indices", "indices", "inverse_kinematics", "is_reachable", "jacobian", "leg_frames",
            "leg_vectors", "limit_margins", "pose_report", "preload_vector", "pseudo_inverse",
-           "require_reachable", "static_matrix", "violations"]
+           "reference_pose_m", "require_reachable", "static_matrix", "unreachable_reason", "violations"]

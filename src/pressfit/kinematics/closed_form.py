@@ -11,7 +11,8 @@ from dataclasses import dataclass
 import numpy as np
 
 from pressfit.description.machine import Machine
-from pressfit.errors import SingularPoseError, UnreachablePoseError
+from pressfit.errors import SingularPoseError, UnreachablePoseError, format_violation
+from pressfit.spatial import cross
 
 Y_AXIS = np.array([0.0, 1.0, 0.0])
 
@@ -25,6 +26,15 @@ class LegKinematics:
     unit_vectors: np.ndarray  # e_i = u_i / l_i
     alpha_rad: np.ndarray  # equation 1: tan(alpha_i) = (u_i . y) / (u_i . w_i), w_i inward
     beta_rad: np.ndarray  # equation 1: sin(beta_i) = (u_i . s_i) / l_i
+
+
+def reference_pose_m(machine: Machine) -> np.ndarray:
+    """A reachable pose (3,), m, where models are built and shapes attached: x = z = 0, leg length
+    (l_min + l_max) / 2."""
+    lim, g = machine.limits, machine.geometry
+    lm = 0.5 * (lim.leg_length_min_m + lim.leg_length_max_m)
+    rise = np.sqrt(lm**2 - (g.base_half_side_m - g.plate_half_side_m) ** 2)
+    return np.array([0.0, rise + g.base_joint_height_m - g.plate_joint_height_m, 0.0])
 
 
 def leg_vectors(machine: Machine, pose_m: np.ndarray) -> np.ndarray:
@@ -42,21 +52,43 @@ def inverse_kinematics(machine: Machine, pose_m: np.ndarray) -> LegKinematics:
     return LegKinematics(u, length, u / length[..., None], alpha, np.arcsin(np.clip(sin_beta, -1, 1)))
 
 
-def violations(machine: Machine, pose_m: np.ndarray) -> list[tuple[int, str, float, str]]:
-    """Joint-limit violations of one pose as (leg 1..4, quantity, value, broken limit)."""
-    ik = inverse_kinematics(machine, np.asarray(pose_m, dtype=float).reshape(3))
+def _bound_text(value: float, bound: float) -> str:
+    """The bound with 6 significant digits, or as many more as it takes to differ from the value."""
+    for digits in range(6, 18):
+        if f"{value:.{digits}g}" != f"{bound:.{digits}g}":
+            break
+    return f"{bound:.{digits}g}"
+
+
+def violations(machine: Machine, pose_m: np.ndarray, ik: LegKinematics | None = None
+               ) -> list[tuple[int, str, float, str]]:
+    """Joint-limit violations of one pose (m) as (leg 1..4, quantity, value, broken limit), the one check
+    of Table 3's limits (``ik``: the pose's inverse kinematics, if already computed). The texts are
+    printed by :func:`pressfit.errors.format_violation`."""
+    ik = ik or inverse_kinematics(machine, np.asarray(pose_m, dtype=float).reshape(3))
     lim = machine.limits
-    out: list[tuple[int, str, float, str]] = []
     checks = (("leg length l [m]", ik.lengths_m, lim.leg_length_min_m, lim.leg_length_max_m),
               ("alpha [rad]", ik.alpha_rad, lim.alpha_min_rad, lim.alpha_max_rad),
               ("beta [rad]", ik.beta_rad, lim.beta_min_rad, lim.beta_max_rad))
+    if all(np.all((values >= lo) & (values <= hi)) for _, values, lo, hi in checks):
+        return []
+    out: list[tuple[int, str, float, str]] = []
     for name, values, lo, hi in checks:
-        for i, v in enumerate(values):
+        for i, v in enumerate(values.tolist()):
             if v < lo:
-                out.append((i + 1, name, float(v), f"minimum {lo:.6g}"))
+                out.append((i + 1, name, v, f"minimum {_bound_text(v, lo)}"))
             elif v > hi:
-                out.append((i + 1, name, float(v), f"maximum {hi:.6g}"))
+                out.append((i + 1, name, v, f"maximum {_bound_text(v, hi)}"))
     return out
+
+
+def unreachable_reason(machine: Machine, pose_m: np.ndarray) -> str:
+    """Why a pose (m) is unreachable, one line (every broken limit), or "" if it is reachable."""
+    try:
+        require_reachable(machine, pose_m)
+    except UnreachablePoseError as exc:
+        return "; ".join(format_violation(*v) for v in exc.violations)
+    return ""
 
 
 def limit_margins(machine: Machine, pose_m: np.ndarray) -> dict[str, np.ndarray]:
@@ -77,15 +109,16 @@ def is_reachable(machine: Machine, pose_m: np.ndarray) -> np.ndarray:
     return ok & (np.asarray(pose_m)[..., 1] > 0)
 
 
-def require_reachable(machine: Machine, pose_m: np.ndarray) -> np.ndarray:
-    """Return the pose as a float array (3,) or raise :class:`UnreachablePoseError` naming leg and limit."""
+def require_reachable(machine: Machine, pose_m: np.ndarray, ik: LegKinematics | None = None) -> np.ndarray:
+    """Return the pose as a float array (3,) or raise :class:`UnreachablePoseError` naming leg and limit
+    (``ik``: the pose's inverse kinematics, if already computed)."""
     h = np.asarray(pose_m, dtype=float).reshape(3)
     if not np.all(np.isfinite(h)):
         bad = float(next(c for c in h if not np.isfinite(c)))
         raise UnreachablePoseError(tuple(h), [(0, "pose coordinate", bad, "finite coordinates")])
     if h[1] <= 0:
         raise UnreachablePoseError(tuple(h), [(0, "y_h [m]", float(h[1]), "minimum 0 (plate above base)")])
-    bad = violations(machine, h)
+    bad = violations(machine, h, ik)
     if bad:
         raise UnreachablePoseError(tuple(float(c) for c in h), bad)
     return h
@@ -246,7 +279,7 @@ def leg_frames(machine: Machine, pose_m: np.ndarray) -> np.ndarray:
     a = np.broadcast_to(machine.cardan_axes, ez.shape)
     ex = a - np.sum(a * ez, -1, keepdims=True) * ez
     ex /= np.linalg.norm(ex, axis=-1, keepdims=True)
-    return np.stack([ex, np.cross(ez, ex), ez], -1)
+    return np.stack([ex, cross(ez, ex), ez], -1)
 
 
 def concurrency_point(machine: Machine, pose_m: np.ndarray) -> np.ndarray:

@@ -116,9 +116,7 @@ def _first_violation(machine: Machine, xz: np.ndarray, y_m: float) -> str:
     if bad.size == 0:
         return "none"
     h = poses[bad[0]]
-    text = "; ".join(f"leg {leg}: {what} = {value:.6g} breaks {limit}"
-                     for leg, what, value, limit in kinematics.violations(machine, h))
-    return f"at (x, y, z) = ({h[0]:.4f}, {h[1]:.6f}, {h[2]:.4f}) m: {text or 'y_h <= 0'}"
+    return f"at (x, y, z) = ({h[0]:.4f}, {h[1]:.6f}, {h[2]:.4f}) m: {kinematics.unreachable_reason(machine, h)}"
 
 
 @dataclass(frozen=True)
@@ -249,3 +247,11 @@ def workspace_square(machine: Machine, n: int) -> tuple[np.ndarray, np.ndarray]:
     """(x, z) grid coordinates, n points each over the required workspace square, m."""
     ws = machine.workspace
     return np.linspace(-ws.x_half_width_m, ws.x_half_width_m, n), np.linspace(-ws.z_half_width_m, ws.z_half_width_m, n)
+
+
+def workspace_box(machine: Machine, y_m: np.ndarray, n_xz: int) -> np.ndarray:
+    """Poses (len(y_m), n_xz, n_xz, 3), m, indexed [i_y, i_z, i_x]: the :func:`workspace_square` grid at
+    each height y_m (m). The one workspace grid of the sweeps (load envelope, interference)."""
+    x, z = workspace_square(machine, n_xz)
+    yy, zz, xx = np.meshgrid(np.atleast_1d(np.asarray(y_m, dtype=float)), z, x, indexing="ij")
+    return np.stack([xx, yy, zz], -1)

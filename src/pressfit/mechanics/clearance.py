@@ -24,13 +24,13 @@ below 1 N at 700 N, and a lateral shift s <= g of a leg end changes its length b
 left out. The play of the rotation about c_i (``rotation_gaps_rad``) is optional: in series with the
 leg's couple stiffness k_r, it lets the plate rock before torsion takes the moment.
 
-Preload (:func:`preload_offsets`)
----------------------------------
-Actuator rest-length offsets along v_p (:func:`pressfit.kinematics.preload_vector`), applied before the
-load. ``force`` mode: a4 in N, offsets o_i = -(a4 v_i / k_a,i + x_b,i + x_p,i) with x the joint
-coordinates that carry a4 v_i, so that with no load the actuator forces are exactly a4 v_p (tension > 0)
-and every joint with v_i != 0 is closed; the offsets are then held (position-held after setting).
-``length`` mode: a4 in m, offsets -a4 v_p (:func:`pressfit.statics.preload_offsets`).
+Preload (:func:`pressfit.mechanics.preload.rest_length_offsets` with a :class:`Clearance`)
+---------------------------------------------------------------------------------------------
+Actuator rest-length offsets along v_p, applied before the load. ``force`` mode: a4 in N, offsets
+o_i = -(a4 v_i / k_a,i + x_b,i + x_p,i) with x the joint coordinates that carry a4 v_i
+(:meth:`Clearance.play_extension_m`), so that with no load the actuator forces are exactly a4 v_p
+(tension > 0) and every joint with v_i != 0 is closed; the offsets are then held (position-held after
+setting). ``length`` mode: a4 in m, offsets -a4 v_p.
 
 Two solvers
 -----------
@@ -39,8 +39,8 @@ kept, exact for this structure: each leg is its axial spring in series with its 
 couple spring in series with the optional rotational plays), and about the concurrency point P* the
 plate's translation and rotation decouple (:mod:`pressfit.condensed`). Each load step is a damped Newton
 on the convex energy, batched over many (clearance, preload) pairs. ``method="nonlinear"``: the Pinocchio
-VJM model with the axial plays as virtual prismatic joints (:func:`pressfit.model.build_model`),
-geometrically nonlinear Newton (:func:`pressfit.statics.solve_equilibrium`), each load step started from
+VJM model with the axial plays as virtual prismatic joints (:func:`pressfit.mechanics.model.build_model`),
+geometrically nonlinear Newton (:class:`pressfit.mechanics.statics.EquilibriumSolver`), each load step started from
 the previous solution. The two agree to the geometric nonlinearity (about 1e-3 at 700 N, tested).
 """
 
@@ -50,11 +50,14 @@ from dataclasses import dataclass
 from typing import Any
 
 import numpy as np
+from numpy.typing import ArrayLike
 
 from pressfit import kinematics
+from pressfit.description.cases import Case
 from pressfit.description.machine import Machine
 from pressfit.errors import ConvergenceError, PressfitError
 from pressfit.mechanics import condensed
+from pressfit.mechanics.preload import rest_length_offsets
 
 ENDS = ("base", "plate")
 DEFAULT_SMOOTHING_M = 1e-9
@@ -84,19 +87,19 @@ def _big_s(u: np.ndarray, w: float) -> np.ndarray:
 @dataclass(frozen=True)
 class DeadZone:
     """Smoothed dead zone of +-gap (m) with contact stiffness (N/m or N m/rad) and smoothing width (m or
-    rad); a :class:`pressfit.model.SpringLaw`, vectorised over numpy arrays. gap = 0 gives k x exactly."""
+    rad); a :class:`pressfit.mechanics.model.SpringLaw`, vectorised over numpy arrays. gap = 0 gives k x exactly."""
 
     gap: float
     stiffness: float
     width: float = DEFAULT_SMOOTHING_M
 
-    def energy(self, x: Any) -> Any:
+    def energy(self, x: ArrayLike) -> np.ndarray:
         return self.stiffness * (_big_s(x - self.gap, self.width) + _big_s(-x - self.gap, self.width))
 
-    def force(self, x: Any) -> Any:
+    def force(self, x: ArrayLike) -> np.ndarray:
         return self.stiffness * (_s(x - self.gap, self.width) - _s(-x - self.gap, self.width))
 
-    def tangent(self, x: Any) -> Any:
+    def tangent(self, x: ArrayLike) -> np.ndarray:
         return self.stiffness * (_ds(x - self.gap, self.width) + _ds(-x - self.gap, self.width))
 
 
@@ -190,36 +193,21 @@ class Clearance:
                         self.rotation_smoothing_rad)
 
     def cardan_compliance(self) -> dict:
-        """The ``cardan_compliance`` argument of :func:`pressfit.model.build_model`."""
+        """The ``cardan_compliance`` argument of :func:`pressfit.mechanics.model.build_model`."""
         from pressfit.mechanics.model import CardanCompliance
 
         return {(i, e): CardanCompliance(axial=self.law(i, j), rotation=self.rotation_law(i, j))
                 for i in range(4) for j, e in enumerate(ENDS)}
 
+    def play_extension_m(self, axial_forces_n: np.ndarray) -> np.ndarray:
+        """The summed extension (4,), m, of each leg's two axial plays under its axial force (4,), N."""
+        return invert_law(np.repeat(np.asarray(axial_forces_n, float)[:, None], 2, 1), self.gaps_m,
+                          self.contact_stiffness_n_per_m, self.smoothing_m).sum(1)
+
     def to_dict(self) -> dict[str, Any]:
         return {"gaps_m": self.gaps_m.tolist(), "contact_stiffness_n_per_m": self.contact_stiffness_n_per_m,
                 "smoothing_m": self.smoothing_m,
                 "rotation_gaps_rad": None if self.rotation_gaps_rad is None else self.rotation_gaps_rad.tolist()}
-
-
-def preload_offsets(machine: Machine, pose_m: np.ndarray, clearance: Clearance, a4: float,
-                    mode: str = "force") -> np.ndarray:
-    """Actuator rest-length offsets (4,) in m for a preload a4 along v_p (module doc).
-
-    ``force``: a4 in N; with no load the actuator forces are a4 v_p and the joints closed. ``length``:
-    a4 in m (offsets -a4 v_p).
-    """
-    from pressfit.mechanics import statics
-
-    if mode == "length":
-        return statics.preload_offsets(machine, pose_m, a4, "length")
-    if mode != "force":
-        raise ClearanceError(f"preload mode must be 'force' or 'length', got {mode!r}")
-    n = a4 * kinematics.preload_vector(machine, pose_m)
-    c_ax = machine.axial_compliance_m_per_n(kinematics.inverse_kinematics(machine, pose_m).lengths_m)
-    x = invert_law(np.repeat(n[:, None], 2, 1), clearance.gaps_m, clearance.contact_stiffness_n_per_m,
-                   clearance.smoothing_m)
-    return -(n * c_ax + x.sum(1))
 
 
 # --- small-displacement solver, batched --------------------------------------------------------------------
@@ -427,7 +415,7 @@ class LoadDeflection:
                 "max_residual": float(np.max(self.loading.residual))}
 
 
-def _direction(direction: Any) -> np.ndarray:
+def _direction(direction: ArrayLike) -> np.ndarray:
     d = np.asarray(direction, dtype=float).reshape(3)
     nd = np.linalg.norm(d)
     if not np.isfinite(nd) or nd == 0:
@@ -435,7 +423,7 @@ def _direction(direction: Any) -> np.ndarray:
     return d / nd
 
 
-def _loads(loads: Any) -> np.ndarray:
+def _loads(loads: ArrayLike) -> np.ndarray:
     f = np.asarray(loads, dtype=float).reshape(-1)
     if f.size < 3 or not np.all(np.isfinite(f)) or f[0] != 0 or np.any(np.diff(f) <= 0):
         raise ClearanceError("loads must start at 0 N and increase strictly, with at least 3 values")
@@ -466,12 +454,11 @@ def _sweep_small(machine: Machine, pose: np.ndarray, direction: np.ndarray, load
 
 def _sweep_nonlinear(machine: Machine, pose: np.ndarray, direction: np.ndarray, loads: np.ndarray,
                      clearance: Clearance, offsets: np.ndarray, unload: bool) -> tuple[list, list]:
-    from pressfit.mechanics import statics
-    from pressfit.mechanics.model import build_model
+    from pressfit.mechanics.statics import EquilibriumSolver
 
-    mm = build_model(machine, pose, cardan_compliance=clearance.cardan_compliance())
+    solver = EquilibriumSolver(machine, cardan_compliance=clearance.cardan_compliance(), pose_m=pose)
     idx = np.zeros((4, 2), dtype=int)
-    for s in mm.springs:
+    for s in solver.model.springs:
         if s.name.endswith("_cardan.axial"):
             idx[s.leg, ENDS.index(s.name.split("_")[0])] = s.idx_q
     radius = max(0.5 * float(clearance.gaps_m.max()), 100 * clearance.smoothing_m)
@@ -484,8 +471,8 @@ def _sweep_nonlinear(machine: Machine, pose: np.ndarray, direction: np.ndarray, 
 
     def solve(f: float) -> dict[str, np.ndarray]:
         nonlocal prev
-        eq = statics.solve_equilibrium(mm, pose, np.concatenate([f * direction, np.zeros(3)]),
-                                       preload_offsets_m=offsets, start=prev, step_limit=limit, max_iter=200)
+        eq = solver.solve(pose, np.concatenate([f * direction, np.zeros(3)]), preload_offsets_m=offsets, start=prev,
+                          step_limit=limit, max_iter=200)
         prev = eq
         return {"displacement_m": eq.plate_displacement_m[None], "rotation_rad": eq.plate_rotation_rad[None],
                 "axial_forces_n": eq.actuator_forces_n[None], "joint_axial_m": eq.q[idx][None],
@@ -496,8 +483,9 @@ def _sweep_nonlinear(machine: Machine, pose: np.ndarray, direction: np.ndarray, 
     return up, down
 
 
-def load_deflection(machine: Machine, pose_m: Any, direction: Any, loads_n: Any, clearance: Clearance | None = None,
-                    preload: float = 0.0, preload_mode: str = "force", *, method: str = "small",
+def load_deflection(machine: Machine, pose_m: ArrayLike, direction: ArrayLike, loads_n: ArrayLike,
+                    clearance: Clearance | None = None, preload: float = 0.0, preload_mode: str = "force", *,
+                    method: str = "small",
                     unload: bool = True) -> LoadDeflection:
     """Load-deflection curve of the plate at a reachable pose (m) under loads_n (N, from 0, increasing)
     along ``direction`` (world, at the plate centre), after the preload a4 (N, or m in length mode).
@@ -508,7 +496,7 @@ def load_deflection(machine: Machine, pose_m: Any, direction: Any, loads_n: Any,
     pose = kinematics.require_reachable(machine, pose_m)
     d, loads = _direction(direction), _loads(loads_n)
     cl = clearance or Clearance.uniform(machine)
-    offsets = preload_offsets(machine, pose, cl, float(preload), preload_mode)
+    offsets = rest_length_offsets(machine, pose, float(preload), preload_mode, cl)
     if method == "small":
         up, down = _sweep_small(machine, pose, d, loads, [cl], offsets[None], unload)
     elif method == "nonlinear":
@@ -534,13 +522,13 @@ class CriticalPreload:
 
 def _all_closed(machine: Machine, pose: np.ndarray, d: np.ndarray, loads: np.ndarray, cls: list[Clearance],
                 a4: np.ndarray, mode: str) -> np.ndarray:
-    offsets = np.array([preload_offsets(machine, pose, c, float(a), mode) for c, a in zip(cls, a4)])
+    offsets = np.array([rest_length_offsets(machine, pose, float(a), mode, c) for c, a in zip(cls, a4)])
     up, _ = _sweep_small(machine, pose, d, loads, cls, offsets, unload=False)
     gaps = np.array([c.gaps_m for c in cls])
     return np.array([np.all(np.abs(s["joint_axial_m"]) >= gaps, axis=(1, 2)) for s in up]).all(0)
 
 
-def critical_preloads(machine: Machine, pose_m: Any, direction: Any, press_load_n: float,
+def critical_preloads(machine: Machine, pose_m: ArrayLike, direction: ArrayLike, press_load_n: float,
                       clearances: list[Clearance], preload_mode: str = "force", steps: int = 50,
                       tol: float | None = None) -> list[CriticalPreload]:
     """:func:`critical_preload` for several clearances at once (batched bisections)."""
@@ -572,7 +560,7 @@ def critical_preloads(machine: Machine, pose_m: Any, direction: Any, press_load_
             for h, lw in zip(hi, lo)]
 
 
-def critical_preload(machine: Machine, pose_m: Any, direction: Any, press_load_n: float,
+def critical_preload(machine: Machine, pose_m: ArrayLike, direction: ArrayLike, press_load_n: float,
                      clearance: Clearance | None = None, preload_mode: str = "force", steps: int = 50,
                      tol: float | None = None) -> CriticalPreload:
     """The smallest preload a4 (N in force mode, m in length mode) that keeps every cardan closed
@@ -586,7 +574,7 @@ def critical_preload(machine: Machine, pose_m: Any, direction: Any, press_load_n
     return critical_preloads(machine, pose_m, direction, press_load_n, [cl], preload_mode, steps, tol)[0]
 
 
-def clearance_from_case(case: Any, machine: Machine) -> Clearance:
+def clearance_from_case(case: Case, machine: Machine) -> Clearance:
     """The cardan clearances a case's ``[clearance]`` table describes (default: the machine's uniform one)."""
     spec = case.clearance
     kw: dict[str, Any] = {"smoothing_m": spec.smoothing_m if spec else DEFAULT_SMOOTHING_M}

@@ -9,16 +9,17 @@ from __future__ import annotations
 import numpy as np
 
 from pressfit.description.machine import Machine
-from pressfit.mechanics.statics import solve_equilibrium
+from pressfit.mechanics.statics import Equilibrium, EquilibriumSolver
 
 
-def _response(eq: object) -> np.ndarray:
-    return np.concatenate([eq.plate_displacement_m, eq.plate_rotation_rad])  # type: ignore[attr-defined]
+def _response(eq: Equilibrium) -> np.ndarray:
+    return np.concatenate([eq.plate_displacement_m, eq.plate_rotation_rad])
 
 
-def plate_compliance(machine: Machine, pose_m: np.ndarray, load: np.ndarray | None = None,
-                     preload: float | None = None, step: tuple[float, float] = (1.0, 0.1)) -> np.ndarray:
-    """6x6 plate compliance at a pose, from the closed-loop Pinocchio VJM model.
+def vjm_plate_compliance(machine: Machine, pose_m: np.ndarray, load: np.ndarray | None = None,
+                         preload: float | None = None, step: tuple[float, float] = (1.0, 0.1)) -> np.ndarray:
+    """6x6 plate compliance at a pose, from the closed-loop Pinocchio VJM model (the closed form of the
+    condensed model is :func:`pressfit.mechanics.condensed.condensed_plate_compliance`).
 
     Without ``load``: the small-displacement compliance, column j = the linear response to the unit
     wrench e_j (exact: the linear solve is linear). With ``load`` (6,) (and ``preload`` a4, N): the
@@ -27,17 +28,18 @@ def plate_compliance(machine: Machine, pose_m: np.ndarray, load: np.ndarray | No
     relative, so the difference error is ~1e-12 * |load| / step (negligible), and the curvature error
     O(step^2) is below 1e-6 relative for the default steps.
     """
+    solver = EquilibriumSolver(machine, pose_m=pose_m)
     cols = []
     for j in range(6):
         if load is None:
             e = np.zeros(6)
             e[j] = 1.0
-            cols.append(_response(solve_equilibrium(machine, pose_m, e, linear=True)))
+            cols.append(_response(solver.solve(pose_m, e, linear=True)))
         else:
             d = np.zeros(6)
             d[j] = step[0] if j < 3 else step[1]
             base = np.asarray(load, dtype=float)
-            plus = _response(solve_equilibrium(machine, pose_m, base + d, preload=preload))
-            minus = _response(solve_equilibrium(machine, pose_m, base - d, preload=preload))
+            plus = _response(solver.solve(pose_m, base + d, preload=preload))
+            minus = _response(solver.solve(pose_m, base - d, preload=preload))
             cols.append((plus - minus) / (2 * d[j]))
     return np.stack(cols, axis=1)

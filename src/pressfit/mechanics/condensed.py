@@ -50,8 +50,8 @@ so every solve is two closed-form 3x3 inverses. With rho = h - P*, a wrench (F, 
 
 A load whose line passes through P* (a vertical force at h only when x_h = z_h = 0) is carried by the
 axial forces alone; any moment about P* only by the couples. Clearance is ignored here (the default
-model's clearance matters only to :mod:`pressfit.clearance`); elastic cardans break the rank-2
-structure and are refused. The Pinocchio solver (:mod:`pressfit.statics`) is the reference for
+model's clearance matters only to :mod:`pressfit.mechanics.clearance`); elastic cardans break the rank-2
+structure and are refused. The Pinocchio solver (:mod:`pressfit.mechanics.statics`) is the reference for
 everything beyond this model.
 """
 
@@ -66,6 +66,7 @@ from pressfit.description.machine import Machine
 from pressfit.errors import PressfitError, SingularPoseError
 from pressfit.kinematics import concurrency_point, is_reachable, leg_vectors
 from pressfit.kinematics.workspace import workspace_square
+from pressfit.spatial import cross, skew
 
 PRESS_LOAD_N = 700.0  # the press reaction on the tool, +y (paper section 4)
 _CHUNK = 16384  # poses per vectorised block: the working set stays in the CPU cache
@@ -118,10 +119,6 @@ def _sym_full(s: Sym) -> np.ndarray:
     return np.stack([a, b, c, b, d, e, c, e, f], -1).reshape(-1, 3, 3)
 
 
-def _cross(a: np.ndarray, b: np.ndarray) -> np.ndarray:
-    return np.stack([a[1] * b[2] - a[2] * b[1], a[2] * b[0] - a[0] * b[2], a[0] * b[1] - a[1] * b[0]])
-
-
 @dataclass(frozen=True)
 class _Core:
     e: np.ndarray  # (3, 4, m) leg unit vectors, base -> plate
@@ -162,17 +159,11 @@ def _core(machine: Machine, h: np.ndarray) -> _Core:
 def _poses(machine: Machine, poses_m: np.ndarray) -> np.ndarray:
     if machine.joints.cardan_rotational_stiffness_nm_per_rad is not None:
         raise CondensedModelError("the condensed model needs free cardans; this machine gives them a "
-                                  "rotational stiffness: use pressfit.statics")
+                                  "rotational stiffness: use pressfit.mechanics.statics")
     h = np.asarray(poses_m, dtype=float)
     if h.shape[-1:] != (3,) or not np.all(np.isfinite(h)):
         raise PressfitError(f"poses must be finite with shape (..., 3), got shape {h.shape}")
     return h
-
-
-def _skew(v: np.ndarray) -> np.ndarray:
-    z = np.zeros_like(v[..., 0])
-    return np.stack([z, -v[..., 2], v[..., 1], v[..., 2], z, -v[..., 0], -v[..., 1], v[..., 0], z],
-                    -1).reshape(v.shape + (3,))
 
 
 def _blocks(tl: np.ndarray, tr: np.ndarray, bl: np.ndarray, br: np.ndarray) -> np.ndarray:
@@ -189,7 +180,7 @@ def _six_by_six(machine: Machine, poses_m: np.ndarray, about: str, compliance: b
     if about == "concurrency":
         z = np.zeros_like(t)
         return _blocks(t, z, z, r).reshape(h.shape[:-1] + (6, 6))
-    x = _skew(core.rho.T)  # x_P = S x_h with S = [[I, [rho]], [0, I]]
+    x = skew(core.rho.T)  # x_P = S x_h with S = [[I, [rho]], [0, I]]
     if compliance:  # C_h = S^-1 C_P S^-T
         x_r = x @ r
         out = _blocks(t - x_r @ x, -x_r, r @ x, r)
@@ -208,7 +199,7 @@ def plate_stiffness(machine: Machine, poses_m: np.ndarray, about: str = "centre"
     return _six_by_six(machine, poses_m, about, compliance=False)
 
 
-def plate_compliance(machine: Machine, poses_m: np.ndarray, about: str = "centre") -> np.ndarray:
+def condensed_plate_compliance(machine: Machine, poses_m: np.ndarray, about: str = "centre") -> np.ndarray:
     """The inverse of :func:`plate_stiffness`, (..., 6, 6): m/N, rad/N, rad/(N m); closed form."""
     return _six_by_six(machine, poses_m, about, compliance=True)
 
@@ -279,8 +270,8 @@ def _solve_core(machine: Machine, core: _Core, w: np.ndarray) -> tuple[np.ndarra
     """Solve with w of shape (6, m) or (6, 1); returns SoA arrays (see :func:`solve_linear`)."""
     f, m = w[:3], w[3:]
     d_p = _sym_mv(core.ct, f)
-    phi = _sym_mv(core.cr, m + _cross(core.rho, f))
-    delta = d_p - _cross(core.rho, phi)
+    phi = _sym_mv(core.cr, m + cross(core.rho, f, axis=0))
+    delta = d_p - cross(core.rho, phi, axis=0)
     e, c = core.e, core.c
     n = core.k_a * (e[0] * d_p[0] + e[1] * d_p[1] + e[2] * d_p[2])
     cpl = core.k_r * (c[0] * phi[0] + c[1] * phi[1] + c[2] * phi[2])
@@ -290,7 +281,7 @@ def _solve_core(machine: Machine, core: _Core, w: np.ndarray) -> tuple[np.ndarra
     leg_f = n * e
     d = machine.plate_offsets_m.T[:, :, None]
     res_f = f - leg_f.sum(1)
-    res_m = m - (_cross(d, leg_f) + cpl * c).sum(1)
+    res_m = m - (cross(d, leg_f, axis=0) + cpl * c).sum(1)
     return delta, phi, n, cpl, c, e, moments, res_f, res_m
 
 
@@ -303,7 +294,7 @@ def solve_linear(machine: Machine, poses_m: np.ndarray, plate_wrench: np.ndarray
         plate_wrench: (F, M) at the plate centre in world axes, (..., 6) or (6,), N and N m; a force
             (..., 3) means zero moment. Broadcast against the poses.
 
-    Geometrically linear (the DESIGN.md default, nonlinear, solve is :mod:`pressfit.statics`). Poses
+    Geometrically linear (the DESIGN.md default, nonlinear, solve is :mod:`pressfit.mechanics.statics`). Poses
     are processed in cache-sized blocks; no Python loop runs over single poses.
     """
     h, w = _poses(machine, poses_m), _as_wrench(plate_wrench)
@@ -320,19 +311,6 @@ def solve_linear(machine: Machine, poses_m: np.ndarray, plate_wrench: np.ndarray
     o = [x.reshape(shape + x.shape[1:]) for x in out]
     return CondensedResult(np.broadcast_to(h, shape + (3,)), np.broadcast_to(w, shape + (6,)), *o,
                            machine.plate_offsets_m)
-
-
-def with_axial_preload(result: CondensedResult, extra_forces_n: np.ndarray) -> CondensedResult:
-    """Superpose leg forces that are self-equilibrated on the plate (a multiple of v_p, e.g. a
-    force-mode actuator preload): N += extra, (..., 4) N. Exact in the linear model: displacements and
-    couples are unchanged; the residuals are updated, so an extra set that is not self-equilibrated shows.
-    """
-    extra_forces_n = np.asarray(extra_forces_n, dtype=float)
-    extra = extra_forces_n[..., None] * result.leg_unit_vectors
-    return dataclasses.replace(
-        result, axial_forces_n=result.axial_forces_n + extra_forces_n,
-        force_residual_n=result.force_residual_n - extra.sum(-2),
-        moment_residual_nm=result.moment_residual_nm - np.cross(result.plate_offsets_m, extra).sum(-2))
 
 
 @dataclass(frozen=True)
@@ -383,7 +361,7 @@ def stiffness_maps(machine: Machine, y_m: float, n: int = 51, press_load_n: floa
     zz, xx = np.meshgrid(z, x, indexing="ij")
     h = np.stack([xx, np.full_like(xx, y_m), zz], -1)
     ok = is_reachable(machine, h)
-    comp = plate_compliance(machine, h)
+    comp = condensed_plate_compliance(machine, h)
     res = solve_linear(machine, h, np.array([0.0, press_load_n, 0.0]))
     hor = comp[..., [0, 2]][..., [0, 2], :]
     tr, det = hor[..., 0, 0] + hor[..., 1, 1], hor[..., 0, 0] * hor[..., 1, 1] - hor[..., 0, 1] ** 2
@@ -403,7 +381,7 @@ def stiffness_report(machine: Machine, pose_m: np.ndarray, press_load_n: float =
     block) and about P* (rotation-free, K_t), the scalar stiffnesses of :class:`StiffnessMaps`, and the
     response to the press load (+y at the plate centre)."""
     h = np.asarray(pose_m, dtype=float).reshape(3)
-    comp = plate_compliance(machine, h)
+    comp = condensed_plate_compliance(machine, h)
     maps_like = np.linalg.eigvalsh(comp[[0, 2]][:, [0, 2]])
     res = solve_linear(machine, h, [0.0, press_load_n, 0.0])
     return {

@@ -32,7 +32,7 @@ frame R0_i, at the cardan centre) and the rotation about c_i = a_i x b_i (betwee
 revolutes), each with a spring law (:class:`LinearSpring`, or any object with ``energy``, ``force``,
 ``tangent`` of the joint coordinate). ``axial`` adds one translation along the leg (+z of the leg
 segment frame, positive = the leg lengthens) between the cardan and its leg segment: the axial play that
-:mod:`pressfit.clearance` models. ``machine.joints.cardan_rotational_stiffness_nm_per_rad`` (if set)
+:mod:`pressfit.mechanics.clearance` models. ``machine.joints.cardan_rotational_stiffness_nm_per_rad`` (if set)
 puts a linear spring on the cardans' free revolutes.
 """
 
@@ -46,6 +46,8 @@ import pinocchio as pin
 
 from pressfit import kinematics
 from pressfit.description.machine import Machine
+from pressfit.errors import ConvergenceError
+from pressfit.spatial import cross
 
 UP = np.array([0.0, 1.0, 0.0])
 CARDAN_ENDS = ("base", "plate")
@@ -103,9 +105,28 @@ class Spring:
     rest: float = 0.0
 
 
+CardanComplianceSpec = CardanCompliance | dict[tuple[int, str], CardanCompliance | None] | None
+
+
+@dataclass(frozen=True)
+class ModelPose:
+    """The pose-dependent values of a :class:`MachineModel` at one reachable pose: a fresh value per pose
+    (the model itself never changes after it is built).
+
+    The stem springs sit at (k + 1/2) L_s / n from the cylinder end, so the stem joint placements depend
+    on the stem length L_s = l_i - L_c (:meth:`MachineModel.place_stem` writes them into a Pinocchio
+    model); the stem spring and actuator stiffnesses depend on it too."""
+
+    pose_m: np.ndarray  # (3,) plate-centre pose h, m
+    q0: np.ndarray  # (nq,) rigid closed-form configuration (springs 0, equation 1)
+    stem_lengths_m: np.ndarray  # (4,) L_s per leg, m
+    spring_k: np.ndarray  # per spring: linear stiffness (N/m or N m/rad), NaN for a nonlinear law
+    spring_rest: np.ndarray  # per spring: rest value of its coordinate (m or rad)
+
+
 @dataclass
 class MachineModel:
-    """The Pinocchio model of a machine at a reference pose, with its springs and loop closures.
+    """The Pinocchio model of a machine, with its springs and loop closures, built at a reference pose.
 
     Body frames in the rigid configuration (all spring coordinates 0), per ``leg_joint_ids[i]``:
 
@@ -121,12 +142,17 @@ class MachineModel:
     gives, for 'base' (base cardan centre), 'actuator' (cylinder end, L_c from the base cardan) and
     'plate' (plate cardan centre), the joint carrying the section point and its z offset (m); the same
     points are Pinocchio frames named ``leg<i>.section.<name>`` (legs numbered from 1).
+
+    ``pose_m``, ``q0``, ``spring_k``, ``spring_rest`` and the springs' laws are the values at the pose the
+    model was built at (:class:`ModelPose`); nothing changes them afterwards. Other poses: take
+    :meth:`pose_values` and :meth:`place_stem` on a copy of ``model`` (what the equilibrium solver does).
+    ``data`` serves :meth:`closure_error` and :meth:`assemble` (one thread at a time).
     """
 
     machine: Machine
     model: pin.Model
     data: pin.Data
-    constraint_models: list
+    constraint_models: list[pin.ConstraintModel]
     springs_per_segment: int
     pose_m: np.ndarray
     q0: np.ndarray
@@ -138,17 +164,12 @@ class MachineModel:
     sigma: np.ndarray  # (4,) sign of the b-revolute against beta
     leg_frames0: np.ndarray  # (4, 3, 3) R0_i
     sections: list[dict[str, tuple[int, float]]]  # per leg: section -> (joint id, z offset in its frame, m)
-    _rigid_idx: dict[str, np.ndarray] = field(repr=False, default_factory=dict)
-    _stem_first: list[int] = field(repr=False, default_factory=list)
-    cardan_compliance: object = None
-    spring_k: np.ndarray = field(default_factory=lambda: np.zeros(0))  # per spring: linear k, NaN if nonlinear
-    spring_rest: np.ndarray = field(default_factory=lambda: np.zeros(0))  # per spring: rest value
-    _spring_q: np.ndarray = field(repr=False, default_factory=lambda: np.zeros(0, int))  # idx_q per spring
-    _variable_springs: tuple = field(repr=False, default=())  # (spring index, kind 0 act / 1 bend / 2 tors, leg)
-    _stem_springs: list = field(repr=False, default_factory=list)  # per leg: [(Spring, is torsion)]
-    _actuator_springs: list = field(repr=False, default_factory=list)  # per leg
-    _rest_springs: list = field(repr=False, default_factory=list)  # springs on coordinates with q0 != 0
-    version: int = 0  # bumped by retarget(); solvers cache per-model data under (id, version)
+    cardan_compliance: CardanComplianceSpec
+    spring_k: np.ndarray  # per spring: linear k (N/m or N m/rad) at pose_m, NaN if nonlinear
+    spring_rest: np.ndarray  # per spring: rest value at pose_m (m or rad)
+    _rigid_idx: dict[str, np.ndarray] = field(repr=False)  # q indices of the rigid joints, by kind
+    _stem_first: list[int] = field(repr=False)  # per leg: first stem joint
+    _variable_springs: tuple[np.ndarray, ...] = field(repr=False)  # (spring index, kind 0 act/1 bend/2 tors, leg)
 
     # --- configurations ----------------------------------------------------------------------------
     def configuration_at(self, pose_m: np.ndarray) -> np.ndarray:
@@ -168,7 +189,7 @@ class MachineModel:
         q[r["plate_a"]] = -ik.alpha_rad
         return q
 
-    def constraint_datas(self) -> list:
+    def constraint_datas(self) -> list[pin.ConstraintData]:
         return [cm.createData() for cm in self.constraint_models]
 
     def closure_error(self, q: np.ndarray, data: pin.Data | None = None) -> tuple[float, float]:
@@ -191,8 +212,6 @@ class MachineModel:
 
         Starts from ``q_init`` (default: the rigid closed form, which is already closed); returns q.
         """
-        from pressfit.errors import ConvergenceError
-
         h = kinematics.require_reachable(self.machine, pose_m)
         q = self.configuration_at(h) if q_init is None else np.array(q_init, dtype=float)
         q[0:3] = h
@@ -200,7 +219,7 @@ class MachineModel:
         free = np.concatenate([[3, 4, 5]] + [r[k] - 1 for k in ("base_a", "base_b", "prismatic", "plate_b",
                                                                     "plate_a")])
         data, cds = self.data, self.constraint_datas()
-        for it in range(max_iter):
+        for _ in range(max_iter):
             pin.computeJointJacobians(self.model, data, q)
             err = []
             for cm, cd in zip(self.constraint_models, cds):
@@ -216,49 +235,37 @@ class MachineModel:
             q = pin.integrate(self.model, q, dv)
         raise ConvergenceError("loop-closure assembly", float(np.max(np.abs(e))), tol, max_iter)
 
-    # --- pose-dependent data ---------------------------------------------------------------------
-    def retarget(self, pose_m: np.ndarray) -> MachineModel:
-        """Move the model's reference pose in place (stem spring positions and stiffnesses, actuator
-        stiffness, rest values, q0); returns self. Rigid kinematics is unchanged by this.
-
-        Spring laws are re-read from ``springs`` only at build; afterwards retarget replaces the stem and
-        actuator laws (shared :class:`LinearSpring` objects per leg) and keeps ``spring_k`` (N/m or N m/rad,
-        NaN for a nonlinear law) and ``spring_rest`` (m or rad), aligned with ``springs``, up to date."""
+    # --- pose-dependent values -------------------------------------------------------------------
+    def pose_values(self, pose_m: np.ndarray) -> ModelPose:
+        """The model's pose-dependent values at a reachable pose (m), computed afresh: stem lengths,
+        actuator stiffness (actuator in series with the leg's axial compliance, N/m), stem bending
+        n E I_s / L_s and torsion n G J_s / L_s (N m/rad), rest values and q0. Raises
+        :class:`UnreachablePoseError` outside the joint limits."""
         m = self.machine
         h = np.asarray(pose_m, dtype=float).reshape(3)
         ik = kinematics.inverse_kinematics(m, h)
-        lim = m.limits
-        if not (h[1] > 0 and np.all((ik.lengths_m >= lim.leg_length_min_m) & (ik.lengths_m <= lim.leg_length_max_m)
-                                    & (ik.alpha_rad >= lim.alpha_min_rad) & (ik.alpha_rad <= lim.alpha_max_rad)
-                                    & (ik.beta_rad >= lim.beta_min_rad) & (ik.beta_rad <= lim.beta_max_rad))):
-            h = kinematics.require_reachable(m, h)  # raises the named error (fast path above: same limits)
-        n, lc = self.springs_per_segment, m.cylinder.length_m
-        e, g, sec = m.material.youngs_modulus_pa, m.material.shear_modulus_pa, m.stem_section
-        lengths = ik.lengths_m.tolist()
-        kax = (1.0 / m.axial_compliance_m_per_n(ik.lengths_m)).tolist()
+        h = kinematics.require_reachable(m, h, ik)
+        n, sec = self.springs_per_segment, m.stem_section
+        ls = ik.lengths_m - m.cylinder.length_m
+        per_kind = np.stack([1.0 / m.axial_compliance_m_per_n(ik.lengths_m),  # actuator, stem bending, torsion
+                             n * (m.material.youngs_modulus_pa * sec.second_moment_m4) / ls,
+                             n * (m.material.shear_modulus_pa * sec.polar_moment_m4) / ls])
         q0 = self._configuration(h, ik)
-        ls = [length - lc for length in lengths]
-        per_kind = [kax, [n * (e * sec.second_moment_m4) / x for x in ls],  # actuator, stem bending, torsion
-                    [n * (g * sec.polar_moment_m4) / x for x in ls]]
-        jp = self.model.jointPlacements
-        for i in range(4):
-            j0 = self._stem_first[i]
-            jp[j0].translation[2] = -ls[i] + ls[i] / (2 * n)
-            for k in range(1, n):
-                jp[j0 + 3 * k].translation[2] = ls[i] / n
-            jp[j0 + 3 * n].translation[2] = ls[i] / (2 * n)  # plate cardan (or its virtual joints)
-            bend, tors = LinearSpring(per_kind[1][i]), LinearSpring(per_kind[2][i])
-            for s, torsion in self._stem_springs[i]:
-                s.law = tors if torsion else bend
-            self._actuator_springs[i].law = LinearSpring(kax[i])
-        for s in self._rest_springs:
-            s.rest = float(q0[s.idx_q])
+        k = self.spring_k.copy()
         var, kind, leg = self._variable_springs
-        self.spring_k[var] = np.array(per_kind)[kind, leg]
-        self.spring_rest[:] = q0[self._spring_q]
-        self.pose_m, self.q0 = h, q0
-        self.version += 1
-        return self
+        k[var] = per_kind[kind, leg]
+        return ModelPose(h, q0, ls, k, q0[[s.idx_q for s in self.springs]])
+
+    def place_stem(self, model: pin.Model, stem_lengths_m: np.ndarray) -> None:
+        """Write the stem joint placements for stem lengths (4,) (m) into ``model``: this model's
+        Pinocchio model or a copy of it (every pose-dependent placement is written)."""
+        n = self.springs_per_segment
+        jp = model.jointPlacements
+        for j0, ls in zip(self._stem_first, stem_lengths_m.tolist()):
+            jp[j0].translation[2] = -ls + ls / (2 * n)
+            for k in range(1, n):
+                jp[j0 + 3 * k].translation[2] = ls / n
+            jp[j0 + 3 * n].translation[2] = ls / (2 * n)  # plate cardan (or its virtual axial joint)
 
 
 def _tz(z: float) -> pin.SE3:
@@ -268,11 +275,117 @@ def _tz(z: float) -> pin.SE3:
 def _leg_frame0(machine: Machine, i: int) -> np.ndarray:
     w = machine.inward_directions[i]
     y = -UP
-    return np.column_stack([np.cross(y, w), y, w])
+    return np.column_stack([cross(y, w), y, w])
+
+
+_JOINT_MODELS = {"RX": pin.JointModelRX, "RY": pin.JointModelRY, "RZ": pin.JointModelRZ,
+                 "PX": pin.JointModelPX, "PY": pin.JointModelPY, "PZ": pin.JointModelPZ}
+_RIGID = ("base_a", "base_b", "prismatic", "plate_b", "plate_a")
+
+
+class _ChainBuilder:
+    """Adds the four leg chains to a Pinocchio model with the plate's free flyer (module doc): one joint
+    at a time after ``parent``, placed by ``pending``; records springs, rigid joints and sections."""
+
+    def __init__(self, machine: Machine, n: int, cardan_compliance: CardanComplianceSpec) -> None:
+        self.machine, self.n, self.cc = machine, n, cardan_compliance
+        self.model = pin.Model()
+        self.model.name = machine.name
+        self.model.gravity = pin.Motion.Zero()  # massless bodies: loads enter as wrenches only
+        self.plate = self.model.addJoint(0, pin.JointModelFreeFlyer(), pin.SE3.Identity(), "plate")
+        self.springs: list[Spring] = []
+        self.rigid: dict[str, list[int]] = {k: [] for k in _RIGID}
+        self.ids: list[dict[str, int]] = []
+        self.stem_first: list[int] = []
+        self.sections: list[dict[str, tuple[int, float]]] = []
+        self.leg, self.parent, self.pending = 0, 0, pin.SE3.Identity()
+        k_card = machine.joints.cardan_rotational_stiffness_nm_per_rad
+        self.card = LinearSpring(k_card) if k_card else None
+
+    def compliance(self, end: str, leg: int | None = None) -> CardanCompliance | None:
+        leg = self.leg if leg is None else leg
+        return self.cc.get((leg, end)) if isinstance(self.cc, dict) else self.cc
+
+    def add(self, kind: str, name: str, law: SpringLaw | None = None) -> int:
+        j = self.model.addJoint(self.parent, _JOINT_MODELS[kind](), self.pending, f"leg{self.leg + 1}.{name}")
+        self.parent, self.pending = j, pin.SE3.Identity()
+        if law is not None:
+            jm = self.model.joints[j]
+            self.springs.append(Spring(name, self.leg, jm.idx_q, jm.idx_v, law))
+        return j
+
+    def virtual(self, end: str, which: str) -> None:
+        """The cardan's virtual joints of one kind ('translation', 'rotation', 'axial'), if compliant."""
+        law = getattr(self.compliance(end) or CardanCompliance(), which)
+        if law is None:
+            return
+        if which == "translation":
+            for ax in "XYZ":
+                self.add("P" + ax, f"{end}_cardan.t{ax.lower()}", law)
+        else:
+            self.add("RZ" if which == "rotation" else "PZ", f"{end}_cardan.{'rc' if which == 'rotation' else 'axial'}",
+                     law)
+
+    def add_leg(self, i: int) -> None:
+        m = self.machine
+        self.leg, self.parent = i, 0
+        self.pending = pin.SE3(_leg_frame0(m, i), m.base_points_m[i].copy())
+        jid: dict[str, int] = {}
+        self.virtual("base", "translation")
+        jid["base_cardan"] = self.add("RX", "base_cardan.a", self.card)
+        self.virtual("base", "rotation")
+        jid["cylinder"] = self.add("RY", "base_cardan.b", self.card)
+        self.virtual("base", "axial")
+        sec = {"base": (jid["cylinder"], 0.0), "actuator": self.cylinder()}
+        jid["actuator"] = jid["stem"] = self.add("PZ", "actuator", LinearSpring(1.0))  # k set per pose
+        self.stem()
+        self.virtual("plate", "axial")  # placed per pose like the plate cardan (first joint after the stem)
+        jid["plate_cardan"] = self.add("RY", "plate_cardan.b", self.card)
+        self.virtual("plate", "rotation")
+        sec["plate"] = (self.add("RX", "plate_cardan.a", self.card), 0.0)
+        for name, (pj, z) in sec.items():
+            self.model.addFrame(pin.Frame(f"leg{i + 1}.section.{name}", pj, _tz(z), pin.FrameType.OP_FRAME))
+        self.virtual("plate", "translation")
+        jid["plate_end"] = self.parent
+        for kind, key in zip(_RIGID, ("base_cardan", "cylinder", "actuator", "plate_cardan")):
+            self.rigid[kind].append(jid[key])
+        self.rigid["plate_a"].append(sec["plate"][0])
+        self.ids.append(jid)
+        self.sections.append(sec)
+
+    def cylinder(self) -> tuple[int, float]:
+        """The cylinder's n springs (bending n E I / L_c, torsion n G J / L_c); returns the actuator section
+        (joint, z offset); leaves ``pending`` at the prismatic frame (the virtual base point: q = l_i)."""
+        m, n = self.machine, self.n
+        lc, cyl = m.cylinder.length_m, m.cylinder_section
+        bend, tors = n * m.material.youngs_modulus_pa * cyl.second_moment_m4 / lc, n * m.material.shear_modulus_pa * \
+            cyl.polar_moment_m4 / lc
+        for k in range(n):
+            self.pending = _tz(lc / (2 * n) if k == 0 else lc / n)
+            for ax, kk in zip("XYZ", (bend, bend, tors)):
+                self.add("R" + ax, f"cylinder[{k}].{ax.lower()}", LinearSpring(kk))
+        self.pending = _tz(-(lc - lc / (2 * n)))
+        return self.parent, lc / (2 * n)
+
+    def stem(self) -> None:
+        """The stem's n springs (stiffness and placement set per pose: :meth:`MachineModel.place_stem`)."""
+        for k in range(self.n):
+            j = self.add("RX", f"stem[{k}].x", LinearSpring(1.0))
+            if k == 0:
+                self.stem_first.append(j)
+            self.add("RY", f"stem[{k}].y", LinearSpring(1.0))
+            self.add("RZ", f"stem[{k}].z", LinearSpring(1.0))
+
+    def leg_velocities(self, i: int) -> np.ndarray:
+        """Leg i's velocity indices in chain order (its first virtual translation to its plate end)."""
+        c = self.compliance("base", i)
+        virtual = 3 if c is not None and c.translation is not None else 0
+        first = self.model.joints[self.ids[i]["base_cardan"]].idx_v - virtual
+        return np.arange(first, self.model.joints[self.ids[i]["plate_end"]].idx_v + 1)
 
 
 def build_model(machine: Machine, pose_m: np.ndarray, *, springs_per_segment: int | None = None,
-                cardan_compliance: CardanCompliance | dict | None = None) -> MachineModel:
+                cardan_compliance: CardanComplianceSpec = None) -> MachineModel:
     """Build the VJM Pinocchio model of ``machine`` at the reachable pose ``pose_m`` (m).
 
     ``springs_per_segment`` defaults to ``machine.model.springs_per_segment``. ``cardan_compliance`` is
@@ -280,125 +393,30 @@ def build_model(machine: Machine, pose_m: np.ndarray, *, springs_per_segment: in
     ``(leg 0..3, 'base' | 'plate')``. Raises :class:`UnreachablePoseError` for a pose outside the limits.
     """
     h = kinematics.require_reachable(machine, pose_m)
-    n = int(springs_per_segment or machine.model.springs_per_segment)
-    lc = machine.cylinder.length_m
-    e, g = machine.material.youngs_modulus_pa, machine.material.shear_modulus_pa
-    cyl = machine.cylinder_section
-    k_cyl = (n * e * cyl.second_moment_m4 / lc, n * e * cyl.second_moment_m4 / lc, n * g * cyl.polar_moment_m4 / lc)
-    k_card = machine.joints.cardan_rotational_stiffness_nm_per_rad
-
-    def compliance(i: int, end: str) -> CardanCompliance | None:
-        if isinstance(cardan_compliance, dict):
-            return cardan_compliance.get((i, end))
-        return cardan_compliance
-
-    model = pin.Model()
-    model.name = machine.name
-    model.gravity = pin.Motion.Zero()  # massless bodies: loads enter as wrenches only
-    plate = model.addJoint(0, pin.JointModelFreeFlyer(), pin.SE3.Identity(), "plate")
-    springs: list[Spring] = []
-    ids: list[dict[str, int]] = []
-    rigid: dict[str, list[int]] = {k: [] for k in ("base_a", "base_b", "prismatic", "plate_b", "plate_a")}
-    stem_first: list[int] = []
-    sections: list[dict[str, tuple[int, float]]] = []
-    anchors, frames0, sigma = [], [], []
-
+    b = _ChainBuilder(machine, int(springs_per_segment or machine.model.springs_per_segment), cardan_compliance)
     for i in range(4):
-        r0 = _leg_frame0(machine, i)
-        frames0.append(r0)
-        sigma.append(float(np.sign(r0[:, 0] @ machine.beta_axes[i])))
-        parent = 0
-        pending = pin.SE3(r0, machine.base_points_m[i].copy())  # placement of the next joint
-        jid: dict[str, int] = {}
-
-        def add(kind: str, name: str, law: SpringLaw | None = None, rest: float = 0.0) -> int:
-            nonlocal parent, pending
-            jm = {"RX": pin.JointModelRX, "RY": pin.JointModelRY, "RZ": pin.JointModelRZ,
-                  "PX": pin.JointModelPX, "PY": pin.JointModelPY, "PZ": pin.JointModelPZ}[kind]()
-            j = model.addJoint(parent, jm, pending, f"leg{i + 1}.{name}")
-            parent, pending = j, pin.SE3.Identity()
-            if law is not None:
-                springs.append(Spring(name, i, model.joints[j].idx_q, model.joints[j].idx_v, law, rest))
-            return j
-
-        def virtual_translations(end: str) -> None:
-            c = compliance(i, end)
-            if c is not None and c.translation is not None:
-                for ax in "XYZ":
-                    add("P" + ax, f"{end}_cardan.t{ax.lower()}", c.translation)
-
-        def virtual_rotation(end: str) -> None:
-            c = compliance(i, end)
-            if c is not None and c.rotation is not None:
-                add("RZ", f"{end}_cardan.rc", c.rotation)
-
-        def virtual_axial(end: str) -> None:
-            c = compliance(i, end)
-            if c is not None and c.axial is not None:
-                add("PZ", f"{end}_cardan.axial", c.axial)
-
-        card = LinearSpring(k_card) if k_card else None
-        virtual_translations("base")
-        jid["base_cardan"] = add("RX", "base_cardan.a", card)
-        rigid["base_a"].append(jid["base_cardan"])
-        virtual_rotation("base")
-        jid["cylinder"] = add("RY", "base_cardan.b", card)
-        rigid["base_b"].append(jid["cylinder"])
-        virtual_axial("base")
-        for k in range(n):
-            pending = _tz(lc / (2 * n) if k == 0 else lc / n)
-            for ax, kk in zip("XYZ", k_cyl):
-                add("R" + ax, f"cylinder[{k}].{ax.lower()}", LinearSpring(kk))
-        sec = {"base": (jid["cylinder"], 0.0), "actuator": (parent, lc / (2 * n))}
-        pending = _tz(-(lc - lc / (2 * n)))  # prismatic frame at the (virtual) base point: q = leg length
-        jid["actuator"] = jid["stem"] = add("PZ", "actuator", LinearSpring(1.0))
-        rigid["prismatic"].append(jid["actuator"])
-        for k in range(n):
-            pending = _tz(0.0)  # set by retarget (depends on the stem length)
-            j = add("RX", f"stem[{k}].x", LinearSpring(1.0))
-            if k == 0:
-                stem_first.append(j)
-            add("RY", f"stem[{k}].y", LinearSpring(1.0))
-            add("RZ", f"stem[{k}].z", LinearSpring(1.0))
-        virtual_axial("plate")  # placed by retarget like the plate cardan (first joint after the stem)
-        jid["plate_cardan"] = add("RY", "plate_cardan.b", card)
-        rigid["plate_b"].append(jid["plate_cardan"])
-        virtual_rotation("plate")
-        j = add("RX", "plate_cardan.a", card)
-        rigid["plate_a"].append(j)
-        sec["plate"] = (j, 0.0)
-        sections.append(sec)
-        for name, (pj, z) in sec.items():
-            model.addFrame(pin.Frame(f"leg{i + 1}.section.{name}", pj, _tz(z), pin.FrameType.OP_FRAME))
-        virtual_translations("plate")
-        jid["plate_end"] = parent
-        ids.append(jid)
-        anchors.append(pin.SE3(r0, machine.plate_offsets_m[i].copy()))
-
-    constraints = [pin.ConstraintModel(pin.FrameAnchorConstraintModel(model, ids[i]["plate_end"], pin.SE3.Identity(),
-                                                                      plate, anchors[i])) for i in range(4)]
-    leg_v = []
-    for i in range(4):
-        first = model.joints[ids[i]["base_cardan"]].idx_v - (3 if _has_t(compliance(i, "base")) else 0)
-        last = model.joints[ids[i]["plate_end"]].idx_v
-        leg_v.append(np.arange(first, last + 1))
-    mm = MachineModel(machine, model, model.createData(), constraints, n, h, np.zeros(model.nq), plate, ids, leg_v,
-                      springs, anchors, np.array(sigma), np.array(frames0),
-                      sections, {k: np.array([model.joints[j].idx_q for j in v]) for k, v in rigid.items()},
-                      stem_first, cardan_compliance)
+        b.add_leg(i)
+    model, springs = b.model, b.springs
+    frames0 = np.array([_leg_frame0(machine, i) for i in range(4)])
+    anchors = [pin.SE3(frames0[i], machine.plate_offsets_m[i].copy()) for i in range(4)]
+    constraints = [pin.ConstraintModel(pin.FrameAnchorConstraintModel(model, b.ids[i]["plate_end"], pin.SE3.Identity(),
+                                                                      b.plate, anchors[i])) for i in range(4)]
     var = [(k, 0 if sp.name == "actuator" else 2 if sp.name.endswith(".z") else 1, sp.leg)
            for k, sp in enumerate(springs) if sp.name == "actuator" or sp.name.startswith("stem[")]
-    mm._variable_springs = tuple(np.array(c, dtype=int) for c in zip(*var))
-    mm._stem_springs = [[(sp, sp.name.endswith(".z")) for sp in springs if sp.leg == i and sp.name.startswith("stem[")]
-                        for i in range(4)]
-    mm._actuator_springs = [next(sp for sp in springs if sp.leg == i and sp.name == "actuator") for i in range(4)]
-    rigid_q = set(np.concatenate(list(mm._rigid_idx.values())).tolist())
-    mm._rest_springs = [sp for sp in springs if sp.idx_q in rigid_q]
-    mm._spring_q = np.array([sp.idx_q for sp in springs], dtype=int)
-    mm.spring_k = np.array([sp.law.k if type(sp.law) is LinearSpring else np.nan for sp in springs])
-    mm.spring_rest = np.zeros(len(springs))
-    return mm.retarget(h)
-
-
-def _has_t(c: CardanCompliance | None) -> bool:
-    return c is not None and c.translation is not None
+    mm = MachineModel(
+        machine, model, model.createData(), constraints, b.n, h, np.zeros(model.nq), b.plate, b.ids,
+        [b.leg_velocities(i) for i in range(4)], springs, anchors,
+        np.array([float(np.sign(frames0[i][:, 0] @ machine.beta_axes[i])) for i in range(4)]), frames0,
+        b.sections, cardan_compliance,
+        np.array([sp.law.k if type(sp.law) is LinearSpring else np.nan for sp in springs]), np.zeros(len(springs)),
+        {k: np.array([model.joints[j].idx_q for j in v]) for k, v in b.rigid.items()}, b.stem_first,
+        tuple(np.array(c, dtype=int) for c in zip(*var)))
+    at = mm.pose_values(h)
+    mm.place_stem(model, at.stem_lengths_m)
+    variable = set(mm._variable_springs[0].tolist())
+    for k, sp in enumerate(springs):  # the laws and rest values at the build pose
+        if k in variable:
+            sp.law = LinearSpring(float(at.spring_k[k]))
+        sp.rest = float(at.spring_rest[k])
+    mm.q0, mm.spring_k, mm.spring_rest = at.q0, at.spring_k, at.spring_rest
+    return mm

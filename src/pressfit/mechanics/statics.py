@@ -1,4 +1,4 @@
-r"""Compliant static equilibrium of the 4-UPU machine (VJM model of :mod:`pressfit.model`).
+r"""Compliant static equilibrium of the 4-UPU machine (VJM model of :mod:`pressfit.mechanics.model`).
 
 Equilibrium = stationarity of  E(q) - W_load(q)  subject to the four 6D loop closures c_i(q) = 0:
 
@@ -39,6 +39,8 @@ vanish) and the characteristic length L_ref = p, the base half-side (m): forces 
 from __future__ import annotations
 
 import math
+import threading
+from collections.abc import Callable
 from dataclasses import dataclass, field
 from typing import Any
 
@@ -57,7 +59,9 @@ from pressfit.errors import (
     SingularPoseError,
     UnstableEquilibriumError,
 )
-from pressfit.mechanics.model import MachineModel, build_model
+from pressfit.mechanics.model import CardanComplianceSpec, MachineModel, ModelPose, SpringLaw, build_model
+from pressfit.mechanics.preload import ActuatorPreload, rest_length_offsets
+from pressfit.spatial import cross, skew
 
 SECTIONS = ("base", "actuator", "plate")
 NEWTON_TOL = 1e-10  # stopping tolerance (relative, module doc); the round-off floor is about 3e-12
@@ -146,16 +150,8 @@ class Equilibrium:
         }
 
 
-# --- small spatial-algebra helpers (batched; few numpy calls, since each call costs ~1 us) -------------
-_LEVI = np.zeros((3, 3, 3))
-_LEVI[0, 1, 2] = _LEVI[1, 2, 0] = _LEVI[2, 0, 1] = 1.0
-_LEVI[0, 2, 1] = _LEVI[2, 1, 0] = _LEVI[1, 0, 2] = -1.0
-_SKEW = _LEVI.transpose(1, 0, 2).reshape(3, 9)  # p @ _SKEW -> skew(p) flattened: skew(p)_ik = eps_ijk p_j
-
-
-def _skew(p: np.ndarray) -> np.ndarray:
-    """(..., 3) -> (..., 3, 3) with skew(p) x = p x x."""
-    return (p @ _SKEW).reshape(p.shape[:-1] + (3, 3))
+# --- spatial algebra: pressfit.spatial (batched; few numpy calls, since each call costs ~1 us) -------------
+_skew, _cross3 = skew, cross
 
 
 def _phi_psi(f: np.ndarray, mo: np.ndarray, fp: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
@@ -173,7 +169,7 @@ def _phi_psi(f: np.ndarray, mo: np.ndarray, fp: np.ndarray) -> tuple[np.ndarray,
 
 @dataclass
 class _Static:
-    """Per-model data of the solver: index structure (per model) and spring arrays (per retarget)."""
+    """Pose-independent index structure of the solver for one model, with one thread's constraint datas."""
 
     legv: np.ndarray  # (4, m) v indices of the leg coordinates
     act_col: np.ndarray  # (4,) column of the actuator in each leg
@@ -182,64 +178,62 @@ class _Static:
     plate_end: list[int]
     anchors: np.ndarray  # (3, 4) anchor points in the plate frame
     frames0: np.ndarray  # (4, 3, 3)
-    cds: list  # constraint datas
-    spring_at: tuple  # (legs, columns) of mm.springs
-    nonlinear: list  # (leg, column, spring index) of springs with a nonlinear law
+    cds: list[pin.ConstraintData]  # constraint datas (one set per thread)
+    spring_at: tuple[np.ndarray, np.ndarray]  # (legs, columns) of mm.springs
     sec_joints: list[int]  # 12 joints carrying the section points, leg-major
     sec_z: list[tuple[int, int, float]]  # (leg, section, z) for section points off their joint origin
     lower: np.ndarray  # (m, m) 1.0 strictly below the diagonal
-    k: np.ndarray = None  # (4, m) linear spring stiffness (0 elsewhere)
-    rest_rel: np.ndarray = None  # (4, m) rest values minus q0
-    lin_mask: np.ndarray = None  # (4, m) coordinate carries a linear spring
-    other: list = field(default_factory=list)  # (leg, column, law) of nonlinear springs
+    lin: np.ndarray  # per spring: linear law
+    lin_mask: np.ndarray  # (4, m) coordinate carries a linear spring
+    other: list[tuple[int, int, SpringLaw]]  # (leg, column, law) of the springs with a nonlinear law
 
 
 def _static(mm: MachineModel) -> _Static:
-    """Solver data of a model: structure cached per model, spring arrays refreshed per retarget."""
-    hit = getattr(mm, "_statics_cache", None)
-    if hit is not None and hit[0] == (id(mm), mm.version):
-        return hit[1]
-    if hit is None or hit[0][0] != id(mm):
-        try:
-            legv = np.array(mm.leg_v, dtype=int)
-        except ValueError:
-            raise PressfitError("cardan compliance on only some legs (legs with different numbers of virtual "
-                                "joints) is not supported by the solver yet; give it to every leg") from None
-        col = {int(v): (i, c) for i in range(4) for c, v in enumerate(legv[i])}
-        at = np.array([col[s.idx_v] for s in mm.springs], dtype=int).T
-        act = np.array([k for k, s in enumerate(mm.springs) if s.name == "actuator"])
-        sec = [mm.sections[i][name] for i in range(4) for name in SECTIONS]
-        m = legv.shape[1]
-        st = _Static(legv, at[1, act], act, _force_rows(mm), [mm.leg_joint_ids[i]["plate_end"] for i in range(4)],
-                     np.array([a.translation for a in mm.anchor_placements]).T, np.array(mm.leg_frames0),
-                     mm.constraint_datas(), (at[0], at[1]),
-                     [(int(at[0, k]), int(at[1, k]), k) for k in np.flatnonzero(np.isnan(mm.spring_k))],
-                     [j for j, _ in sec], [(n // 3, n % 3, z) for n, (_, z) in enumerate(sec) if z],
-                     np.tril(np.ones((m, m)), -1))
-    else:
-        st = hit[1]
+    """The solver's index structure of a model (pose-independent)."""
+    try:
+        legv = np.array(mm.leg_v, dtype=int)
+    except ValueError:
+        raise PressfitError("cardan compliance on only some legs (legs with different numbers of virtual "
+                            "joints) is not supported by the solver yet; give it to every leg") from None
+    col = {int(v): (i, c) for i in range(4) for c, v in enumerate(legv[i])}
+    at = np.array([col[s.idx_v] for s in mm.springs], dtype=int).T
+    act = np.array([k for k, s in enumerate(mm.springs) if s.name == "actuator"])
+    sec = [mm.sections[i][name] for i in range(4) for name in SECTIONS]
+    m = legv.shape[1]
     lin = ~np.isnan(mm.spring_k)
-    rows, cols = st.spring_at
-    st.k, st.rest_rel, st.lin_mask = np.zeros(st.legv.shape), np.zeros(st.legv.shape), np.zeros(st.legv.shape, bool)
-    st.k[rows[lin], cols[lin]] = mm.spring_k[lin]
-    st.lin_mask[rows[lin], cols[lin]] = True
-    st.rest_rel[rows, cols] = mm.spring_rest
-    st.rest_rel -= mm.q0[st.legv + 1]
-    st.other = [(i, c, mm.springs[k].law) for i, c, k in st.nonlinear]
-    mm._statics_cache = ((id(mm), mm.version), st)
-    return st
+    lin_mask = np.zeros(legv.shape, bool)
+    lin_mask[at[0, lin], at[1, lin]] = True
+    return _Static(legv, at[1, act], act, _force_rows(mm), [mm.leg_joint_ids[i]["plate_end"] for i in range(4)],
+                   np.array([a.translation for a in mm.anchor_placements]).T, np.array(mm.leg_frames0),
+                   mm.constraint_datas(), (at[0], at[1]), [j for j, _ in sec],
+                   [(n // 3, n % 3, z) for n, (_, z) in enumerate(sec) if z], np.tril(np.ones((m, m)), -1), lin,
+                   lin_mask, [(int(at[0, k]), int(at[1, k]), mm.springs[k].law) for k in np.flatnonzero(~lin)])
+
+
+@dataclass(frozen=True)
+class _PoseModel:
+    """What the Newton loop and the results read of the model at one pose: a fresh value per solve, with
+    the calling thread's Pinocchio model (its stem placed for this pose)."""
+
+    machine: Machine
+    model: pin.Model
+    constraint_models: list[pin.ConstraintModel]
+    plate_joint_id: int
+    pose_m: np.ndarray  # (3,), m
+    q0: np.ndarray  # (nq,) rigid configuration at pose_m
+    legv: np.ndarray  # (4, m) v indices of the leg coordinates
 
 
 @dataclass
 class _Problem:
     """Everything a solve needs that does not change during the iterations."""
 
-    mm: MachineModel
+    mm: _PoseModel
     load: np.ndarray
     k: np.ndarray  # (L, m) diagonal spring stiffness of the linear springs per leg coordinate
     rest_rel: np.ndarray  # (L, m) rest values minus q0 (preload offsets on the actuators), m or rad
     lin_mask: np.ndarray  # (L, m) bool: coordinate carries a linear spring
-    other: list  # nonlinear springs: (leg, col, law)
+    other: list[tuple[int, int, SpringLaw]]  # nonlinear springs: (leg, col, law)
     legq: np.ndarray  # (L, m) q indices of leg coordinates
     offsets: np.ndarray  # (4,) actuator rest-length offsets, m
     f_ref: float
@@ -247,22 +241,25 @@ class _Problem:
     legv: np.ndarray  # (L, m) v indices of leg coordinates
     act_col: np.ndarray  # (L,) column of the actuator in each leg
     is_force: np.ndarray  # (L, m) translation coordinate (stationarity row in N)
-    sc: _Static | None = None
-    inv_scale: np.ndarray | None = None  # (L, m) 1 / (F_ref or F_ref L_ref) per leg stationarity row
+    sc: _Static
+    inv_scale: np.ndarray  # (L, m) 1 / (F_ref or F_ref L_ref) per leg stationarity row
 
 
-def _problem(mm: MachineModel, load: np.ndarray, offsets: np.ndarray, f_pre: float) -> _Problem:
-    sc = _static(mm)
-    rest_rel = sc.rest_rel.copy()
+def _problem(mm: _PoseModel, sc: _Static, pv: ModelPose, load: np.ndarray, offsets: np.ndarray) -> _Problem:
+    """The spring arrays of one pose (fresh; nothing shared with other poses) and the residual scales."""
+    rows, cols = sc.spring_at
+    k, rest_rel = np.zeros(sc.legv.shape), np.zeros(sc.legv.shape)
+    k[rows[sc.lin], cols[sc.lin]] = pv.spring_k[sc.lin]
+    rest_rel[rows, cols] = pv.spring_rest
+    rest_rel -= pv.q0[sc.legv + 1]
     rest_rel[_LEGS, sc.act_col] += offsets
+    f_pre = float(np.max(np.abs(pv.spring_k[sc.act_spring] * offsets)))
     l_ref = mm.machine.geometry.base_half_side_m
     f, m = load[:3].tolist(), load[3:].tolist()
     f_ref = max(math.hypot(*f), math.hypot(*m) / l_ref, f_pre)
     f_ref = f_ref if f_ref > 0 else 1.0
-    pb = _Problem(mm, load, sc.k, rest_rel, sc.lin_mask, sc.other, sc.legv + 1, offsets, f_ref, l_ref, sc.legv,
-                  sc.act_col, sc.is_force, sc)
-    pb.inv_scale = np.where(sc.is_force, 1.0 / f_ref, 1.0 / (f_ref * l_ref))
-    return pb
+    return _Problem(mm, load, k, rest_rel, sc.lin_mask, sc.other, sc.legv + 1, offsets, f_ref, l_ref, sc.legv,
+                    sc.act_col, sc.is_force, sc, np.where(sc.is_force, 1.0 / f_ref, 1.0 / (f_ref * l_ref)))
 
 
 @dataclass
@@ -387,99 +384,155 @@ def _stationarity(pb: _Problem, st: _State, lam: np.ndarray) -> tuple[np.ndarray
     return r_leg, r_plate
 
 
-def _scaled_stationarity(pb: _Problem, mm: MachineModel, r_leg: np.ndarray, r_plate: np.ndarray) -> float:
+def _scaled_stationarity(pb: _Problem, mm: _PoseModel, r_leg: np.ndarray, r_plate: np.ndarray) -> float:
     # leg rows: N m for revolutes, N for prismatics; plate rows: (N, N m)
     rp = np.abs(r_plate)
     return max(float(np.max(np.abs(r_leg) * pb.inv_scale)), float(rp[:3].max()) / pb.f_ref,
                float(rp[3:].max()) / (pb.f_ref * pb.l_ref))
 
 
-def _dq(mm: MachineModel, dq_leg: np.ndarray, dp: np.ndarray) -> np.ndarray:
+def _dq(mm: _PoseModel, dq_leg: np.ndarray, dp: np.ndarray) -> np.ndarray:
     dv = np.empty(mm.model.nv)
     dv[:6] = dp
-    dv[_static(mm).legv] = dq_leg
+    dv[mm.legv] = dq_leg
     return dv
 
 
 # --- public API ----------------------------------------------------------------------------------------
-_CACHE: dict[tuple, tuple[Machine, MachineModel]] = {}
+StepLimit = Callable[[np.ndarray], float]  # dv (model velocity coordinates) -> step factor in (0, 1]
 
 
-def _model_for(machine_or_model: Machine | MachineModel, pose: np.ndarray) -> MachineModel:
-    if isinstance(machine_or_model, MachineModel):
-        mm = machine_or_model
-    else:
-        key = (id(machine_or_model), machine_or_model.model.springs_per_segment)
-        hit = _CACHE.get(key)
-        if hit is None or hit[0] is not machine_or_model:
-            if len(_CACHE) > 16:
-                _CACHE.clear()
-            hit = (machine_or_model, build_model(machine_or_model, pose))
-            _CACHE[key] = hit
-        mm = hit[1]
-    if mm.pose_m.tolist() != pose.tolist():
-        mm.retarget(pose)
-    return mm
+@dataclass
+class _Worker:
+    """One thread's own Pinocchio model (stem placed per solve), data and constraint datas."""
+
+    model: pin.Model
+    data: pin.Data
+    sc: _Static
 
 
-def preload_offsets(machine: Machine, pose_m: np.ndarray, a4: float, mode: str = "force") -> np.ndarray:
-    """Actuator rest-length offsets (4,) in m for a preload along v_p (paper eqs. 9-10, Table 4).
+class EquilibriumSolver:
+    """The static equilibrium solver of one machine model, built once and reused over poses and loads.
 
-    ``force``: a4 in N; offsets -a4 v_p,i c_axial,i, so that with no load the actuator forces are exactly
-    a4 v_p (tension positive). ``length``: a4 in m; offsets -a4 v_p,i (position-held drives shortened by
-    a4 v_p,i, so a4 > 0 pulls the legs with v_p,i > 0 like the force mode).
+    It owns its :class:`MachineModel` (never modified) and, per thread, a copy of the Pinocchio model
+    with its data. Every :meth:`solve` takes the pose-dependent values afresh
+    (:meth:`MachineModel.pose_values`) and writes the pose's stem placements into the calling thread's
+    copy before anything reads it, so no state carries over from one pose or call to the next.
+
+    Threads: one solver may be shared; each thread uses its own model copy and data (created on its
+    first solve). Processes: picklable; the pickle holds the model's description (machine, springs per
+    segment, cardan compliance, build pose) and the model is rebuilt on unpickling.
     """
-    vp = kinematics.preload_vector(machine, pose_m)
-    if mode == "force":
-        return -a4 * vp * machine.axial_compliance_m_per_n(kinematics.inverse_kinematics(machine, pose_m).lengths_m)
-    if mode == "length":
-        return -a4 * vp
-    raise PressfitError(f"preload mode must be 'force' or 'length', got {mode!r}")
+
+    def __init__(self, machine_or_model: Machine | MachineModel, *, springs_per_segment: int | None = None,
+                 cardan_compliance: CardanComplianceSpec = None, pose_m: np.ndarray | None = None) -> None:
+        """A solver for a built :class:`MachineModel`, or for a machine: its model is built at ``pose_m``
+        (m; default: x = z = 0, mid-range leg length) with ``springs_per_segment`` and
+        ``cardan_compliance`` (see :func:`pressfit.mechanics.model.build_model`)."""
+        if isinstance(machine_or_model, MachineModel):
+            if springs_per_segment is not None or cardan_compliance is not None:
+                raise PressfitError("springs_per_segment and cardan_compliance are fixed by a built model")
+            self.model = machine_or_model
+        else:
+            pose = kinematics.reference_pose_m(machine_or_model) if pose_m is None else pose_m
+            self.model = build_model(machine_or_model, pose, springs_per_segment=springs_per_segment,
+                                     cardan_compliance=cardan_compliance)
+        self._structure = _static(self.model)  # checks the model's legs once
+        self._local = threading.local()
+
+    @property
+    def machine(self) -> Machine:
+        return self.model.machine
+
+    def __getstate__(self) -> dict[str, Machine | int | CardanComplianceSpec | np.ndarray]:
+        mm = self.model
+        return {"machine": mm.machine, "springs_per_segment": mm.springs_per_segment,
+                "cardan_compliance": mm.cardan_compliance, "pose_m": mm.pose_m}
+
+    def __setstate__(self, state: dict) -> None:
+        self.__init__(build_model(state["machine"], state["pose_m"], springs_per_segment=state["springs_per_segment"],
+                                  cardan_compliance=state["cardan_compliance"]))
+
+    def _worker(self) -> _Worker:
+        w = getattr(self._local, "worker", None)
+        if w is None:
+            model = self.model.model.copy()
+            w = self._local.worker = _Worker(model, model.createData(), _static(self.model))
+        return w
+
+    def solve(self, pose_m: np.ndarray, plate_wrench: np.ndarray, *, preload: float | ActuatorPreload | None = None,
+              preload_mode: str | None = None, linear: bool = False, tol: float = NEWTON_TOL, max_iter: int = 25,
+              start: Equilibrium | None = None, preload_offsets_m: np.ndarray | None = None,
+              step_limit: StepLimit | None = None) -> Equilibrium:
+        """Static equilibrium at a reachable pose (m) under a dead plate wrench (6,) (N, N m; world axes, at
+        the plate centre; a force (3,) alone is accepted), after an optional actuator preload along v_p.
+
+        ``preload``: a4 (N in force mode, m in length mode; :mod:`pressfit.mechanics.preload`) or an
+        :class:`ActuatorPreload`; ``preload_mode`` overrides its mode. Preload first, then load.
+        Geometrically nonlinear Newton by default (``tol``: relative stationarity and closure, module doc);
+        ``linear=True``: small-displacement solve at the assembled pose. Raises UnreachablePoseError,
+        SingularPoseError, ConvergenceError, UnstableEquilibriumError.
+
+        Continuation hooks (nonlinear solve; used by :mod:`pressfit.mechanics.clearance`): ``start``, a
+        previous solution at the same pose, to start Newton from (its q and multipliers);
+        ``preload_offsets_m``, explicit actuator rest-length offsets (4,) in m instead of ``preload``;
+        ``step_limit(dv)``, a factor in (0, 1] scaling each Newton step (dv over the velocity coordinates).
+        """
+        load = _wrench(plate_wrench)
+        pv = self.model.pose_values(pose_m)  # checks reachability
+        offsets = _offsets(self.machine, pv.pose_m, preload, preload_mode, preload_offsets_m)
+        pb, data = self._problem(pv, load, offsets)
+        eq = _solve_linear(pb, data) if linear else _solve_nonlinear(pb, data, tol, max_iter, start, step_limit)
+        _check_physical(self.machine, eq)
+        return eq
+
+    def _problem(self, pv: ModelPose, load: np.ndarray, offsets: np.ndarray) -> tuple[_Problem, pin.Data]:
+        """The problem at one pose on this thread's model copy, its stem placed for the pose first."""
+        w = self._worker()
+        self.model.place_stem(w.model, pv.stem_lengths_m)
+        mm = _PoseModel(self.machine, w.model, self.model.constraint_models, self.model.plate_joint_id, pv.pose_m,
+                        pv.q0, w.sc.legv)
+        return _problem(mm, w.sc, pv, load, offsets), w.data
 
 
-def solve_equilibrium(machine_or_model: Machine | MachineModel, pose_m: np.ndarray, plate_wrench: np.ndarray, *,
-                      preload: float | Any | None = None, preload_mode: str | None = None, linear: bool = False,
-                      tol: float = NEWTON_TOL, max_iter: int = 25, start: Equilibrium | None = None,
-                      preload_offsets_m: np.ndarray | None = None, step_limit: Any = None) -> Equilibrium:
-    """Static equilibrium at a reachable pose (m) under a dead plate wrench (6,) (N, N m; world axes, at
-    the plate centre), after an optional actuator preload along v_p.
-
-    ``preload``: a4 (a float; N in force mode, m in length mode, see :func:`preload_offsets`) or an
-    object with ``a4_n`` and ``mode`` (a case file's ``[preload]``). Preload first, then load.
-    Geometrically nonlinear Newton by default (``tol``: relative stationarity and closure, module doc);
-    ``linear=True``: small-displacement solve at the assembled pose. A :class:`MachineModel` argument is
-    retargeted in place to ``pose_m`` if needed. Raises UnreachablePoseError, SingularPoseError,
-    ConvergenceError.
-
-    Continuation hooks (nonlinear solve; used by :mod:`pressfit.clearance`): ``start``, a previous solution of
-    the same model and pose, to start Newton from (its q and multipliers); ``preload_offsets_m``, explicit
-    actuator rest-length offsets (4,) in m instead of ``preload``; ``step_limit(dv) -> factor in (0, 1]``,
-    scales each Newton step (dv over the model's velocity coordinates).
-    """
-    machine = machine_or_model.machine if isinstance(machine_or_model, MachineModel) else machine_or_model
-    pose = np.asarray(pose_m, dtype=float).reshape(3)
-    mm = _model_for(machine_or_model, pose)  # checks reachability when it (re)targets the model
+def _wrench(plate_wrench: np.ndarray) -> np.ndarray:
     load = np.asarray(plate_wrench, dtype=float).reshape(-1)
     if load.shape == (3,):
         load = np.concatenate([load, np.zeros(3)])
     if load.shape != (6,) or not np.all(np.isfinite(load)):
         raise PressfitError(f"plate_wrench must be 3 or 6 finite numbers (F in N, then M in N m), got {plate_wrench!r}")
-    pose = mm.pose_m
-    a4, mode = 0.0, preload_mode or "force"
-    if preload is not None:
-        if hasattr(preload, "a4_n"):
-            a4, mode = float(preload.a4_n), preload_mode or preload.mode
-        else:
-            a4 = float(preload)
-    offsets = preload_offsets(machine, pose, a4, mode) if a4 else np.zeros(4)
+    return load
+
+
+def _offsets(machine: Machine, pose: np.ndarray, preload: float | ActuatorPreload | None, preload_mode: str | None,
+             preload_offsets_m: np.ndarray | None) -> np.ndarray:
+    """Actuator rest-length offsets (4,), m: explicit, or from the preload (:mod:`pressfit.mechanics.preload`)."""
     if preload_offsets_m is not None:
-        offsets = np.asarray(preload_offsets_m, dtype=float).reshape(4)
-    kax = mm.spring_k[_static(mm).act_spring]
-    pb = _problem(mm, load, offsets, float(np.max(np.abs(kax * offsets))))
-    data = mm.data
-    eq = _solve_linear(pb, data) if linear else _solve_nonlinear(pb, data, tol, max_iter, start, step_limit)
-    _check_physical(machine, eq)
-    return eq
+        return np.asarray(preload_offsets_m, dtype=float).reshape(4)
+    if isinstance(preload, ActuatorPreload):
+        a4, mode = preload.a4, preload_mode or preload.mode
+    else:
+        a4, mode = (0.0 if preload is None else float(preload)), preload_mode or "force"
+    return rest_length_offsets(machine, pose, a4, mode) if a4 else np.zeros(4)
+
+
+def solve_equilibrium(system: Machine | MachineModel | EquilibriumSolver, pose_m: np.ndarray, plate_wrench: np.ndarray,
+                      *, preload: float | ActuatorPreload | None = None, preload_mode: str | None = None,
+                      linear: bool = False, tol: float = NEWTON_TOL, max_iter: int = 25,
+                      start: Equilibrium | None = None, preload_offsets_m: np.ndarray | None = None, step_limit: StepLimit | None = None) -> Equilibrium:
+    """One equilibrium (:meth:`EquilibriumSolver.solve`, same keywords) of a machine, a built model or a
+    solver. Convenience: for a machine it builds the model and a solver each call (~0.1 s; a built model:
+    ~5 ms for the solver's index structure and model copy; ``benchmarks/bench_statics.py`` measures both);
+    a loop over poses or loads builds one :class:`EquilibriumSolver` and reuses it.
+    """
+    if isinstance(system, EquilibriumSolver):
+        solver = system
+    elif isinstance(system, MachineModel):
+        solver = EquilibriumSolver(system)
+    else:
+        solver = EquilibriumSolver(system, pose_m=pose_m)
+    return solver.solve(pose_m, plate_wrench, preload=preload, preload_mode=preload_mode, linear=linear, tol=tol,
+                        max_iter=max_iter, start=start, preload_offsets_m=preload_offsets_m, step_limit=step_limit)
 
 
 MAX_DISPLACEMENT_M = 0.02  # a plate motion above 20 mm is far outside this small-strain structural model
@@ -560,7 +613,7 @@ def _tangent(pb: _Problem, st: _State, lam: np.ndarray) -> tuple[np.ndarray, np.
 
 
 def _solve_nonlinear(pb: _Problem, data: pin.Data, tol: float, max_iter: int, start: Equilibrium | None = None,
-                     step_limit: Any = None) -> Equilibrium:
+                     step_limit: StepLimit | None = None) -> Equilibrium:
     mm = pb.mm
     q = mm.q0.copy() if start is None else start.q.copy()
     d_leg = np.zeros(pb.legq.shape) if start is None else start.q[pb.legq] - mm.q0[pb.legq]

@@ -22,8 +22,8 @@ from pressfit import kinematics
 from pressfit.description.cases import Case
 from pressfit.description.machine import Machine
 from pressfit.errors import PressfitError
-from pressfit.mechanics import buckling, condensed
-from pressfit.mechanics.statics import Equilibrium, solve_equilibrium
+from pressfit.mechanics import buckling, condensed, preload
+from pressfit.mechanics.statics import Equilibrium, EquilibriumSolver
 
 SECTIONS = ("base", "actuator", "plate")
 
@@ -132,9 +132,8 @@ def evaluate_case(case: Case, progress: bool = False) -> CaseResult:
     machine = case.machine()
     poses_all, loads = case.poses.array(), case.loads.wrenches()
     ok = kinematics.is_reachable(machine, poses_all)
-    unreachable = [{"pose_m": h.tolist(), "reason": "; ".join(
-        f"leg {leg}: {what} = {v:.6g} breaks {lim}" for leg, what, v, lim in kinematics.violations(machine, h))
-        or "plate not above the base"} for h in poses_all[~ok]]
+    unreachable = [{"pose_m": h.tolist(), "reason": kinematics.unreachable_reason(machine, h)}
+                   for h in poses_all[~ok]]
     poses = poses_all[ok]
     wanted = {k: v for k, v in case.envelope.model_dump().items() if v is not None}
     result = CaseResult(case.name, case.path, len(poses_all), len(loads), unreachable)
@@ -145,15 +144,15 @@ def evaluate_case(case: Case, progress: bool = False) -> CaseResult:
         raise PressfitError(f"{case.path}: [preload] mode = \"length\" is not supported by the envelope check "
                             "(its linear sweep superposes force-mode preload only); give a4_n with mode = \"force\"")
     a4 = case.preload.a4_n
-    vp = kinematics.preload_vector(machine, poses) if a4 else None
+    self_stress = preload.self_stress_forces_n(machine, poses, a4) if a4 else None
 
     # linear sweep over every pose and load
     sweep: dict[str, list[np.ndarray]] = {}
     for w in tqdm(loads, desc=f"{case.name}: linear sweep", disable=not progress, unit="load"):
         res = condensed.solve_linear(machine, poses, w)
-        if vp is not None:  # a force-mode preload is a self-stress along v_p with no couples and no
-            # plate motion: it superposes exactly in the linear model (length mode: see README)
-            res = condensed.with_axial_preload(res, a4 * vp)
+        if self_stress is not None:  # a force-mode preload is a self-stress along v_p with no couples and
+            # no plate motion: it superposes exactly in the linear model (length mode: see README)
+            res = preload.with_axial_preload(res, self_stress)
         for k, v in condensed_quantities(res, critical).items():
             sweep.setdefault(k, []).append(v)
     stacked = {k: np.stack(v) for k, v in sweep.items()}  # (L, P, ...)
@@ -166,6 +165,7 @@ def evaluate_case(case: Case, progress: bool = False) -> CaseResult:
     }.items() if k in wanted}
 
     lines = []
+    solver = EquilibriumSolver(machine, pose_m=poses[0])  # one model for every refined pose
     for key, limit in wanted.items():
         spec = LIMITS[key]
         if not spec.load_dependent:
@@ -188,8 +188,7 @@ def evaluate_case(case: Case, progress: bool = False) -> CaseResult:
             order = np.argsort(-b, axis=None)
             candidates = [tuple(np.unravel_index(i, b.shape)) for i in order[:max(1, case.solver.refine_worst)]]
         for j, p in candidates:
-            eq = solve_equilibrium(machine, poses[p], loads[j], linear=case.solver.linear,
-                                   preload=a4 or None)
+            eq = solver.solve(poses[p], loads[j], linear=case.solver.linear, preload=a4 or None)
             w, _, leg = _worst(equilibrium_quantities(eq, critical[p:p + 1])[key], spec.sense)
             if worse(w, best, spec.sense):
                 how = "linear" if case.solver.linear else "nonlinear"

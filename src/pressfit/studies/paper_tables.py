@@ -27,7 +27,7 @@ import numpy as np
 
 from pressfit.description.cases import Case, load_case
 from pressfit.errors import PressfitError
-from pressfit.mechanics.statics import Equilibrium, solve_equilibrium
+from pressfit.mechanics.statics import Equilibrium, EquilibriumSolver
 from pressfit.shipped import cases_dir
 
 QUANTITIES = ("F_x", "F_y", "F_z", "M_x", "M_y", "M_bend", "M_z")
@@ -81,8 +81,9 @@ def compare_case(case: Case) -> list[TableEntry]:
         raise PressfitError(f"{case.path}: case {case.name} has no [reference] table to compare with")
     machine = case.machine()
     pose, wrench = case.poses.array()[0], case.loads.wrenches()[0]
-    lin = solve_equilibrium(machine, pose, wrench, linear=True)
-    nonlin = solve_equilibrium(machine, pose, wrench, linear=False)
+    solver = EquilibriumSolver(machine, pose_m=pose)
+    lin = solver.solve(pose, wrench, linear=True)
+    nonlin = solver.solve(pose, wrench, linear=False)
     ref = case.reference
     out = []
     for q in QUANTITIES:

@@ -23,8 +23,8 @@ from pressfit.mechanics.clearance import (
     _sweep_small,
     critical_preloads,
     load_deflection,
-    preload_offsets,
 )
+from pressfit.mechanics.preload import rest_length_offsets
 
 
 # --- the preload study -------------------------------------------------------------------------------------
@@ -119,7 +119,7 @@ def preload_study(machine: Machine, pose_m: Any, clearances_m: Any, preloads: An
     curves, res = [], 0.0
     for var in tqdm(variants, desc="preload study", unit="clearance", disable=not progress):
         cls = [var] * len(pre)
-        offsets = np.array([preload_offsets(machine, pose, var, float(a), preload_mode) for a in pre])
+        offsets = np.array([rest_length_offsets(machine, pose, float(a), preload_mode, var) for a in pre])
         up, _ = _sweep_small(machine, pose, d, loads, cls, offsets, unload=False)
         curves.append([LoadDeflection(pose, d, float(a), preload_mode, "small", cls[0], _branch(loads, up, p), None)
                        for p, a in enumerate(pre)])

@@ -6,7 +6,6 @@ files is :mod:`pressfit.studies.limit_check`.
 
 from __future__ import annotations
 
-import math
 from dataclasses import dataclass, field
 
 import numpy as np
@@ -15,20 +14,16 @@ from tqdm import tqdm
 from pressfit.description.machine import Machine
 from pressfit.errors import PressfitError
 from pressfit.kinematics import is_reachable
-from pressfit.kinematics.workspace import workspace_square
+from pressfit.kinematics.workspace import workspace_box, workspace_square
 from pressfit.mechanics.condensed import _CHUNK, PRESS_LOAD_N, _as_wrench, _core, _solve_core
+from pressfit.spatial import cone_directions
 
 
 # --- workspace load envelope ---------------------------------------------------------------------
 def press_loads(force_n: float = PRESS_LOAD_N, cone_half_angle_rad: float = 0.0, n_azimuth: int = 8) -> np.ndarray:
     """Load directions (L, 3), N: the press force along +y, plus n_azimuth forces of the same magnitude
     on a cone of the given half-angle about +y (when the angle is > 0)."""
-    loads = [[0.0, force_n, 0.0]]
-    if cone_half_angle_rad > 0:
-        az = np.linspace(0, 2 * np.pi, n_azimuth, endpoint=False)
-        s, c = math.sin(cone_half_angle_rad), math.cos(cone_half_angle_rad)
-        loads += (force_n * np.stack([s * np.cos(az), np.full_like(az, c), s * np.sin(az)], -1)).tolist()
-    return np.array(loads)
+    return force_n * cone_directions(np.array([0.0, 1.0, 0.0]), cone_half_angle_rad, n_azimuth)
 
 
 LEG_QUANTITIES = {  # name -> (unit, description)
@@ -105,18 +100,16 @@ def load_envelope(machine: Machine, y_m: np.ndarray, n_xz: int = 51, loads_n: np
     loads = _as_wrench(press_loads() if loads_n is None else np.atleast_2d(loads_n))
     x, z = workspace_square(machine, n_xz)
     y = np.atleast_1d(np.asarray(y_m, dtype=float))
-    zz, xx = np.meshgrid(z, x, indexing="ij")
-    levels = max(1, chunk_poses // (zz.size * len(loads)))
+    grid = (z.size, x.size)  # one height of the box, [i_z, i_x]
+    levels = max(1, chunk_poses // (z.size * x.size * len(loads)))
     chunks = [y[i:i + levels] for i in range(0, y.size, levels)]
     names = list(LEG_QUANTITIES) + list(PLATE_QUANTITIES)
     best: dict[str, tuple[np.ndarray, np.ndarray, np.ndarray]] = {}
-    maps = {k: np.full(zz.shape, -np.inf) for k in names}
+    maps = {k: np.full(grid, -np.inf) for k in names}
     n_bad = 0
     show = len(chunks) > 1 if progress is None else progress
     for ys in tqdm(chunks, desc="load envelope", unit="y-step", disable=not show):
-        grid = (ys.size,) + zz.shape
-        h = np.stack([np.broadcast_to(xx, grid), np.broadcast_to(ys[:, None, None], grid),
-                      np.broadcast_to(zz, grid)], -1).reshape(-1, 3)
+        h = workspace_box(machine, ys, n_xz).reshape(-1, 3)
         ok = is_reachable(machine, h)
         n_bad += int(np.sum(~ok))
         if not np.any(ok):
@@ -135,10 +128,10 @@ def load_envelope(machine: Machine, y_m: np.ndarray, n_xz: int = 51, loads_n: np
             best[k] = (val, pose, load)
             col = np.full(ok.shape, -np.inf)
             col[ok] = q[k].max(0).max(-1) if q[k].ndim > 2 else q[k].max(0)
-            maps[k] = np.maximum(maps[k], col.reshape(grid).max(0))
+            maps[k] = np.maximum(maps[k], col.reshape((-1,) + grid).max(0))
     if not best:
         raise PressfitError("no pose of the envelope grid is reachable")
-    return LoadEnvelope(x, z, y, loads, int(y.size * zz.size - n_bad), n_bad,
+    return LoadEnvelope(x, z, y, loads, int(y.size * z.size * x.size - n_bad), n_bad,
                         {k: EnvelopeEntry(*best[k]) for k in names},
                         {k: np.where(np.isfinite(m), m, np.nan) for k, m in maps.items()})
 
