@@ -123,7 +123,7 @@ class Mass(_Strict):
     (the stem's length varies with the pose). The tool is lumped at the plate centre with the plate (a
     uniform box of side 2 r and ``collision.plate_thickness_m``); the actuator housing is spread uniformly
     along the cylinder, its moving parts (nut, piston, rod end) sit on the stem at the cylinder's end;
-    each cardan spider is a point mass at its centre.
+    each cardan is a small sphere at its centre (split between its spider and the next body).
     """
 
     density_kg_per_m3: Positive = 7850.0

@@ -9,7 +9,9 @@ body of the VJM chain carries the piece of tube it spans between the virtual spr
   density * A_c per metre plus the actuator housing spread uniformly (``actuator_housing_mass_kg`` / L_c);
 * the stem, s in [L_c, l_i], split at the stem springs: rod mass density * A_s per metre; the body after the
   prismatic joint (the actuator) also carries the actuator's moving parts as a point mass at s = L_c;
-* each cardan spider, a point mass at its cardan centre; the plate (a uniform box 2 r x t x 2 r, t =
+* each cardan, a solid sphere of the stem's radius at its centre, half of its mass on the spider (between the
+  two revolutes) and half on the body after the cardan (every body then has rotational inertia about its
+  joint axes, which keeps the mass matrix of the rigid-leg model positive definite); the plate (a uniform box 2 r x t x 2 r, t =
   ``collision.plate_thickness_m``) plus the tool as a point mass at the plate centre, on the plate joint.
 
 A piece of length L and mass m is a thick-walled tube about its own centre: axial inertia m (r_o^2 + r_i^2) / 2,
@@ -75,11 +77,13 @@ def inertial_model(mm: MachineModel, mass_scale: float = 1.0) -> pin.Model:
             for j, s0, s1 in zip(joints, bounds[:-1], bounds[1:], strict=True):
                 m = mu * (s1 - s0)
                 _add(model, data.oMi[j], j, m, base + axis * (s0 + s1) / 2, _tube(m, s1 - s0, r_out, r_in, axis))
-        points = ((ids["actuator"], lc, mass.actuator_moving_mass_kg),
-                  (ids["base_cardan"], 0.0, mass.cardan_spider_mass_kg),
-                  (ids["plate_cardan"], length, mass.cardan_spider_mass_kg))
-        for j, s, m in points:
-            _add(model, data.oMi[j], j, mass_scale * m, base + axis * s, np.zeros((3, 3)))
+        m_half = mass_scale * mass.cardan_spider_mass_kg / 2
+        sphere = 0.4 * m_half * (machine.stem.diameter_m / 2) ** 2 * np.eye(3)
+        points = ((ids["actuator"], lc, mass_scale * mass.actuator_moving_mass_kg, np.zeros((3, 3))),
+                  (ids["base_cardan"], 0.0, m_half, sphere), (ids["cylinder"], 0.0, m_half, sphere),
+                  (ids["plate_cardan"], length, m_half, sphere), (ids["plate_end"], length, m_half, sphere))
+        for j, s, m, inertia in points:
+            _add(model, data.oMi[j], j, m, base + axis * s, inertia)
     plate = mm.plate_joint_id
     side, t = 2 * machine.geometry.plate_half_side_m, machine.collision.plate_thickness_m
     m_plate = mass_scale * mass.plate_mass_kg
