@@ -11,8 +11,9 @@ body of the VJM chain carries the piece of tube it spans between the virtual spr
   prismatic joint (the actuator) also carries the actuator's moving parts as a point mass at s = L_c;
 * each cardan, a solid sphere of the stem's radius at its centre, half of its mass on the spider (between the
   two revolutes) and half on the body after the cardan (every body then has rotational inertia about its
-  joint axes, which keeps the mass matrix of the rigid-leg model positive definite); the plate (a uniform box 2 r x t x 2 r, t =
-  ``collision.plate_thickness_m``) plus the tool as a point mass at the plate centre, on the plate joint.
+  joint axes, which keeps the mass matrix of the rigid-leg model positive definite);
+* the plate (a uniform box 2 r x t x 2 r, t = ``collision.plate_thickness_m``) plus the tool as a point mass
+  at the plate centre, on the plate joint.
 
 A piece of length L and mass m is a thick-walled tube about its own centre: axial inertia m (r_o^2 + r_i^2) / 2,
 transverse m ((r_o^2 + r_i^2) / 4 + L^2 / 12) (kg m^2). Inertias are body-fixed, so they are computed once
