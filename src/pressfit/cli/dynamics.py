@@ -33,10 +33,9 @@ def modes_cmd(x: float, y: float, z: float, count: int, out_dir: Path | None, ov
         return
     click.echo(f"pose h = ({x:g}, {y:g}, {z:g}) m, moving mass {modes.total_mass_kg:.4g} kg; "
                f"closure residual of the shapes {modes.closure_residual:.1e}")
-    click.echo("mode  f [Hz]      plate translation direction   rotation/translation [rad/m]")
-    for k, entry in enumerate(zip(modes.frequencies_hz, modes.to_dict()["plate_translation_shapes"],
-                                  modes.to_dict()["plate_rotation_to_translation_rad_per_m"], strict=True)):
-        f, u, ratio = entry
-        click.echo(f"{k + 1:>4}  {f:<10.4g}  ({u[0]:+.3f}, {u[1]:+.3f}, {u[2]:+.3f})        {ratio:.4g}")
+    click.echo("mode  f [Hz]      plate translation [m]           plate rotation [rad]  (mass-normalised, kg^-1/2)")
+    for k, (f, u) in enumerate(zip(modes.frequencies_hz, modes.plate_shapes, strict=True)):
+        click.echo(f"{k + 1:>4}  {f:<10.4g}  " + " ".join(f"{c:+.3e}" for c in u[:3]) + "  "
+                   + " ".join(f"{c:+.3e}" for c in u[3:]))
     for p in paths:
         click.echo(f"wrote {p}")

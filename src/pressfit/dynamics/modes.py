@@ -49,18 +49,12 @@ class Modes:
     equilibrium_residual: float  # worst relative residual of the static equilibrium (statics module)
 
     def to_dict(self) -> dict[str, Any]:
-        """JSON-ready summary: frequencies and plate mode shapes (unit-norm plate translation part)."""
+        """JSON-ready summary: frequencies and the plate part of each mass-normalised shape (per unit modal
+        coordinate, kg^-1/2: translation in m, rotation in rad, world axes)."""
         return {"pose_m": self.pose_m, "plate_wrench": self.plate_wrench, "total_mass_kg": self.total_mass_kg,
                 "frequencies_hz": self.frequencies_hz,
-                "plate_translation_shapes": [_unit(s[:3]) for s in self.plate_shapes],
-                "plate_rotation_to_translation_rad_per_m": [float(np.linalg.norm(s[3:]) / np.linalg.norm(s[:3]))
-                                                            for s in self.plate_shapes],
+                "plate_shapes": [{"translation_m": s[:3], "rotation_rad": s[3:]} for s in self.plate_shapes],
                 "closure_residual": self.closure_residual, "equilibrium_residual": self.equilibrium_residual}
-
-
-def _unit(v: np.ndarray) -> np.ndarray:
-    n = float(np.linalg.norm(v))
-    return v / n if n > 0 else v
 
 
 def closure_jacobian(mm: MachineModel, model: pin.Model, data: pin.Data, q: np.ndarray) -> np.ndarray:
