@@ -17,6 +17,16 @@ def test_default_model(machine):
     np.testing.assert_allclose(machine.plate_offsets_m, machine.base_points_m * 0.082 / 0.442, rtol=1e-15)
 
 
+def test_leg_tube_masses(machine):
+    """Tube masses from the sections by hand: steel 7850 kg/m^3, cylinder tube 60 x 5 mm over 0.45 m,
+    stem rod 30 mm over l - 0.45 m (the shipped defaults); exact up to round-off."""
+    rho = 7850.0
+    assert machine.mass.density_kg_per_m3 == rho
+    assert machine.cylinder_tube_mass_kg == pytest.approx(rho * np.pi / 4 * (0.06**2 - 0.05**2) * 0.45, rel=1e-13)
+    np.testing.assert_allclose(machine.stem_mass_kg(np.array([0.5, 0.8])),
+                               rho * np.pi / 4 * 0.03**2 * np.array([0.05, 0.35]), rtol=1e-13)
+
+
 def test_overrides_are_validated(machine):
     m = machine.with_overrides({"actuator": {"axial_stiffness_n_per_m": 1e8}})
     assert m.actuator.axial_stiffness_n_per_m == 1e8
@@ -45,6 +55,9 @@ BAD_FILES = {  # id: (replace, by, expected key, words in the expectation)
                        "leg_length_min_m must be smaller than leg_length_max_m"),
     "three legs": ("[[legs]]\nradial_direction = [-1.0", "[[other]]\nradial_direction = [-1.0", "legs",
                    "at least 4 items"),
+    "negative density": ("density_kg_per_m3 = 7850.0", "density_kg_per_m3 = -7850.0", "mass.density_kg_per_m3",
+                         "greater than 0"),
+    "unknown mass key": ("[mass]", "[mass]\nleg_mass_kg = 3.0", "mass.leg_mass_kg", "unknown key"),
     "bad TOML syntax": ("[geometry]", "[geometry", "<syntax>", "valid TOML"),
 }
 

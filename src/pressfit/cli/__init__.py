@@ -5,7 +5,7 @@ from __future__ import annotations
 
 import click
 
-from pressfit.cli import check, listing, paper, pose, study, workspace
+from pressfit.cli import check, dynamics, listing, paper, pose, study, workspace
 
 
 @click.group()
@@ -16,5 +16,5 @@ def main() -> None:
 
 for command in (pose.kinematics_cmd, listing.list_cmd, pose.solve_cmd, paper.tables_cmd, check.check_cmd,
                 workspace.workspace_cmd, pose.stiffness_cmd, pose.interference_cmd, paper.report_cmd,
-                study.study_group):
+                study.study_group, dynamics.modes_cmd):
     main.add_command(command)

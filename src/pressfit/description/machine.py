@@ -121,6 +121,24 @@ class Joints(_Strict):
     cardan_rotational_stiffness_nm_per_rad: Positive | None = None
 
 
+class Mass(_Strict):
+    """Inertial data (kg, kg/m^3) for modes and dynamics; the defaults are estimates (see the machine file).
+
+    The leg tubes' masses follow from ``density_kg_per_m3`` and the cylinder and stem sections and lengths
+    (the stem's length varies with the pose). The tool is lumped at the plate centre with the plate (a
+    uniform box of side 2 r and ``collision.plate_thickness_m``); the actuator housing is spread uniformly
+    along the cylinder, its moving parts (nut, piston, rod end) sit on the stem at the cylinder's end;
+    each cardan is a small sphere at its centre (split between its spider and the next body).
+    """
+
+    density_kg_per_m3: Positive = 7850.0
+    plate_mass_kg: Positive = 4.2
+    tool_mass_kg: NonNegative = 2.0
+    actuator_housing_mass_kg: NonNegative = 2.5
+    actuator_moving_mass_kg: NonNegative = 0.8
+    cardan_spider_mass_kg: NonNegative = 0.3
+
+
 class ModelOptions(_Strict):
     springs_per_segment: Annotated[int, Field(ge=1, le=64)] = 4
 
@@ -200,6 +218,7 @@ class Machine(_Strict):
     stem: Stem
     actuator: Actuator
     joints: Joints = Joints()
+    mass: Mass = Mass()
     model: ModelOptions = ModelOptions()
     collision: Collision
     source: str = ""
@@ -257,6 +276,16 @@ class Machine(_Strict):
         lc = self.cylinder.length_m
         return (1.0 / self.actuator.axial_stiffness_n_per_m + lc / (e * self.cylinder_section.area_m2)
                 + (np.asarray(leg_length_m) - lc) / (e * self.stem_section.area_m2))
+
+    @cached_property
+    def cylinder_tube_mass_kg(self) -> float:
+        """Mass of one cylinder tube (without the actuator housing), kg."""
+        return self.mass.density_kg_per_m3 * self.cylinder_section.area_m2 * self.cylinder.length_m
+
+    def stem_mass_kg(self, leg_length_m: np.ndarray | float) -> np.ndarray:
+        """Mass of the stem of a leg of length l (from the cylinder end to the plate cardan), kg."""
+        stem_length_m = np.asarray(leg_length_m) - self.cylinder.length_m
+        return self.mass.density_kg_per_m3 * self.stem_section.area_m2 * stem_length_m
 
     def with_overrides(self, overrides: dict[str, Any], source: str = "<overrides>") -> Machine:
         """A copy with nested keys replaced (e.g. ``{"actuator": {"axial_stiffness_n_per_m": 1e8}}``)."""

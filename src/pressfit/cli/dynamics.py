@@ -1,0 +1,41 @@
+"""Commands about the machine in motion: ``pressfit modes``."""
+
+from __future__ import annotations
+
+from pathlib import Path
+
+import click
+
+from pressfit.cli.common import MODEL_OPTION, user_errors
+from pressfit.description.machine import load_machine
+from pressfit.output.files import to_json
+
+
+@click.command("modes", context_settings={"ignore_unknown_options": True})  # negative coordinates
+@click.argument("x", type=float)
+@click.argument("y", type=float)
+@click.argument("z", type=float)
+@click.option("--count", type=click.IntRange(1, 60), default=6, show_default=True, help="Number of modes.")
+@click.option("--out", "out_dir", type=click.Path(path_type=Path), default=None,
+              help="Directory for modes.json, modes.csv and modes.png (nothing written without it).")
+@click.option("--overwrite", is_flag=True, help="Replace existing output files.")
+@click.option("--json", "as_json", is_flag=True, help="Print the summary as JSON.")
+@MODEL_OPTION
+@user_errors
+def modes_cmd(x: float, y: float, z: float, count: int, out_dir: Path | None, overwrite: bool, as_json: bool,
+              model_path: Path) -> None:
+    """Natural frequencies and mode shapes at the plate pose X Y Z (m), under the plate's and tool's weight."""
+    from pressfit.output.modal import run_modes
+
+    modes, paths = run_modes(load_machine(model_path), [x, y, z], count, out_dir, overwrite)
+    if as_json:
+        click.echo(to_json(modes.to_dict()))
+        return
+    click.echo(f"pose h = ({x:g}, {y:g}, {z:g}) m, moving mass {modes.total_mass_kg:.4g} kg; "
+               f"closure residual of the shapes {modes.closure_residual:.1e}")
+    click.echo("mode  f [Hz]      plate translation [m]           plate rotation [rad]  (mass-normalised, kg^-1/2)")
+    for k, (f, u) in enumerate(zip(modes.frequencies_hz, modes.plate_shapes, strict=True)):
+        click.echo(f"{k + 1:>4}  {f:<10.4g}  " + " ".join(f"{c:+.3e}" for c in u[:3]) + "  "
+                   + " ".join(f"{c:+.3e}" for c in u[3:]))
+    for p in paths:
+        click.echo(f"wrote {p}")

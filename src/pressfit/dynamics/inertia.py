@@ -1,0 +1,99 @@
+r"""Masses on the machine's Pinocchio model (the ``[mass]`` table of the machine file), for modes and dynamics.
+
+:func:`pressfit.mechanics.model.build_model` builds a massless model (the statics needs none);
+:func:`inertial_model` returns a copy of its ``pin.Model`` with body inertias and gravity (-9.81 m/s^2 along
+world y) set. Along leg i (unit axis e_i from the base cardan B_i to the plate cardan, length l_i) each
+body of the VJM chain carries the piece of tube it spans between the virtual springs:
+
+* the cylinder, s in [0, L_c] from B_i, split at the cylinder springs (s = (k + 1/2) L_c / n): tube mass
+  density * A_c per metre plus the actuator housing spread uniformly (``actuator_housing_mass_kg`` / L_c);
+* the stem, s in [L_c, l_i], split at the stem springs: rod mass density * A_s per metre; the body after the
+  prismatic joint (the actuator) also carries the actuator's moving parts as a point mass at s = L_c;
+* each cardan, a solid sphere of the stem's radius at its centre, half of its mass on the spider (between the
+  two revolutes) and half on the body after the cardan (every body then has rotational inertia about its
+  joint axes, which keeps the mass matrix of the rigid-leg model positive definite);
+* the plate (a uniform box 2 r x t x 2 r, t = ``collision.plate_thickness_m``) plus the tool as a point mass
+  at the plate centre, on the plate joint.
+
+A piece of length L and mass m is a thick-walled tube about its own centre: axial inertia m (r_o^2 + r_i^2) / 2,
+transverse m ((r_o^2 + r_i^2) / 4 + L^2 / 12) (kg m^2). Inertias are body-fixed, so they are computed once
+at the model's reference configuration ``mm.q0``.
+"""
+
+from __future__ import annotations
+
+import numpy as np
+import pinocchio as pin
+
+from pressfit.mechanics.model import MachineModel
+
+GRAVITY_M_PER_S2 = 9.81  # standard gravity, along -y (world y is vertical, up)
+
+
+def _tube(mass_kg: float, length_m: float, r_out_m: float, r_in_m: float, axis: np.ndarray) -> np.ndarray:
+    """Rotational inertia (3, 3) about the centre of a tube piece, world axes (kg m^2)."""
+    rr = r_out_m**2 + r_in_m**2
+    ee = np.outer(axis, axis)
+    return mass_kg * ((rr / 4 + length_m**2 / 12) * (np.eye(3) - ee) + rr / 2 * ee)
+
+
+def _add(model: pin.Model, oMi: pin.SE3, joint: int, mass_kg: float, com_world: np.ndarray,
+         inertia_world: np.ndarray) -> None:
+    """Add a body piece given in world coordinates to joint ``joint``'s inertia (its frame is ``oMi``)."""
+    if mass_kg <= 0.0:
+        return
+    rot = oMi.rotation
+    piece = pin.Inertia(mass_kg, rot.T @ (com_world - oMi.translation), rot.T @ inertia_world @ rot)
+    model.inertias[joint] = model.inertias[joint] + piece
+
+
+def _chain(mm: MachineModel, leg: int, first: int, segment: str) -> list[int]:
+    """Joint ids carrying a leg segment: ``first`` then the last revolute of each of its spring groups."""
+    names = [f"leg{leg + 1}.{segment}[{k}].z" for k in range(mm.springs_per_segment)]
+    return [first] + [mm.model.getJointId(name) for name in names]
+
+
+def inertial_model(mm: MachineModel, mass_scale: float = 1.0) -> pin.Model:
+    """A copy of ``mm.model`` with the machine's masses (all multiplied by ``mass_scale``) and gravity on."""
+    machine, mass = mm.machine, mm.machine.mass
+    model = pin.Model(mm.model)
+    model.gravity = pin.Motion(np.array([0.0, -GRAVITY_M_PER_S2, 0.0, 0.0, 0.0, 0.0]))
+    data = model.createData()
+    pin.forwardKinematics(model, data, mm.q0)
+    n, lc = mm.springs_per_segment, machine.cylinder.length_m
+    r_cyl = (machine.cylinder.outer_diameter_m / 2, machine.cylinder.outer_diameter_m / 2
+             - machine.cylinder.wall_thickness_m)
+    mu_cyl = mass_scale * (machine.cylinder_tube_mass_kg + mass.actuator_housing_mass_kg) / lc
+    mu_stem = mass_scale * mass.density_kg_per_m3 * machine.stem_section.area_m2
+    for i, ids in enumerate(mm.leg_joint_ids):
+        base = machine.base_points_m[i]
+        axis = mm.pose_m + machine.plate_offsets_m[i] - base
+        length = float(np.linalg.norm(axis))
+        axis = axis / length
+        ls = length - lc
+        cuts = ((_chain(mm, i, ids["cylinder"], "cylinder"), 0.0, lc, mu_cyl, r_cyl),
+                (_chain(mm, i, ids["actuator"], "stem"), lc, ls, mu_stem, (machine.stem.diameter_m / 2, 0.0)))
+        for joints, start, span, mu, (r_out, r_in) in cuts:
+            bounds = start + span * np.concatenate([[0.0], (np.arange(n) + 0.5) / n, [1.0]])
+            for j, s0, s1 in zip(joints, bounds[:-1], bounds[1:], strict=True):
+                m = mu * (s1 - s0)
+                _add(model, data.oMi[j], j, m, base + axis * (s0 + s1) / 2, _tube(m, s1 - s0, r_out, r_in, axis))
+        m_half = mass_scale * mass.cardan_spider_mass_kg / 2
+        sphere = 0.4 * m_half * (machine.stem.diameter_m / 2) ** 2 * np.eye(3)
+        points = ((ids["actuator"], lc, mass_scale * mass.actuator_moving_mass_kg, np.zeros((3, 3))),
+                  (ids["base_cardan"], 0.0, m_half, sphere), (ids["cylinder"], 0.0, m_half, sphere),
+                  (ids["plate_cardan"], length, m_half, sphere), (ids["plate_end"], length, m_half, sphere))
+        for j, s, m, inertia in points:
+            _add(model, data.oMi[j], j, m, base + axis * s, inertia)
+    plate = mm.plate_joint_id
+    side, t = 2 * machine.geometry.plate_half_side_m, machine.collision.plate_thickness_m
+    m_plate = mass_scale * mass.plate_mass_kg
+    box = m_plate / 12 * np.diag([side**2 + t**2, 2 * side**2, side**2 + t**2])
+    _add(model, data.oMi[plate], plate, m_plate, mm.pose_m, box)
+    _add(model, data.oMi[plate], plate, mass_scale * mass.tool_mass_kg, mm.pose_m, np.zeros((3, 3)))
+    return model
+
+
+def total_mass_kg(model: pin.Model) -> float:
+    """Sum of the body masses of a model, kg."""
+    return float(sum(inertia.mass for inertia in model.inertias))

@@ -1,0 +1,145 @@
+r"""Closed-loop rigid-leg multibody dynamics of the 4-UPU with Pinocchio's constraint dynamics.
+
+The model (:func:`rigid_leg_model`) is the VJM model of :mod:`pressfit.mechanics.model` with its elastic
+virtual joints frozen: plate free flyer, per leg base cardan (2 revolutes), the actuated prismatic joint
+(coordinate = leg length l_i, m), plate cardan (2 revolutes), closed on the plate by four 6D loop closures
+(``pin.RigidConstraintModel`` CONTACT_6D, the same anchor frames as the elastic model). Body inertias are
+those of :func:`pressfit.dynamics.inertia.inertial_model` lumped onto the rigid bodies (the stem's mass is
+that at the model's pose and moves with the plate cardan, like a rod sliding out of its cylinder); gravity
+-9.81 m/s^2 along y. The elastic structure is left out because its modes (from 20 Hz for the plate's
+rocking up to kHz for the legs' axial modes, ``pressfit modes``) would need time steps of microseconds.
+
+Why the rigid model is right for motion and forces below the first structural mode: there the structure
+responds quasi-statically, so its deflection under a tool force F is C F, C the plate compliance of
+:mod:`pressfit.mechanics.condensed` at the current pose, which a contact model can put in series with the
+rigid motion (the tool sees the rigid position plus C F).
+
+Accelerations: ``pin.constraintDynamics`` (proximal KKT; the four closures are redundant, rank 23 of 24,
+and the proximal iterations handle it) with Baumgarte stabilisation a_c = -Kp e - Kd e_dot of the closure
+error e, Kp = omega_b^2, Kd = 2 omega_b. Time stepping: semi-implicit (symplectic) Euler, v += a dt,
+q = q (+) v dt. The closure drift (largest translation error of the four closures, m) is reported per step.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+
+import numpy as np
+import pinocchio as pin
+
+from pressfit import kinematics
+from pressfit.description.machine import Machine
+from pressfit.dynamics.inertia import inertial_model
+from pressfit.errors import PressfitError
+from pressfit.mechanics.model import build_model
+
+RIGID_JOINTS = (("RX", "base_cardan.a"), ("RY", "base_cardan.b"), ("PZ", "actuator"), ("RY", "plate_cardan.b"),
+                ("RX", "plate_cardan.a"))
+_JOINT_TYPES = {"RX": pin.JointModelRX, "RY": pin.JointModelRY, "PZ": pin.JointModelPZ}
+
+
+@dataclass
+class RigidLegModel:
+    """The rigid-leg closed-loop model and its solver workspace (Pinocchio data, constraint datas)."""
+
+    machine: Machine
+    model: pin.Model
+    data: pin.Data
+    constraint_models: pin.StdVec_RigidConstraintModel
+    constraint_datas: pin.StdVec_RigidConstraintData
+    prox: pin.ProximalSettings
+    actuator_v: np.ndarray  # (4,) velocity indices of the prismatic (actuator) joints
+    actuator_q: np.ndarray  # (4,) their configuration indices: q[actuator_q] = leg lengths l_i (m)
+    sigma: np.ndarray  # (4,) sign of the b-revolutes against beta (as in the elastic model)
+    reference_q: np.ndarray  # rigid configuration at the model's pose
+    baumgarte_rad_per_s: float
+
+    def configuration_at(self, pose_m: np.ndarray) -> np.ndarray:
+        """Closed rigid configuration (nq,) at a reachable pose (m), from equation 1 (closed form)."""
+        h = kinematics.require_reachable(self.machine, pose_m)
+        ik = kinematics.inverse_kinematics(self.machine, h)
+        sigma = self.sigma
+        q = np.zeros(self.model.nq)
+        q[0:3], q[6] = h, 1.0
+        values = np.array([ik.alpha_rad, sigma * ik.beta_rad, ik.lengths_m, -sigma * ik.beta_rad, -ik.alpha_rad])
+        for i in range(4):
+            q[self.actuator_q[i] - 2:self.actuator_q[i] + 3] = values[:, i]
+        return q
+
+    def accelerations(self, q: np.ndarray, v: np.ndarray, tau: np.ndarray) -> np.ndarray:
+        """Joint accelerations (nv,) under joint forces ``tau`` (N on the actuators, > 0 extends the leg)."""
+        return pin.constraintDynamics(self.model, self.data, q, v, tau, self.constraint_models,
+                                      self.constraint_datas, self.prox)
+
+    def closure_error_m(self) -> float:
+        """Largest loop-closure translation error (m) at the last :meth:`accelerations` call."""
+        return max(float(np.linalg.norm(cd.contact_placement_error.linear)) for cd in self.constraint_datas)
+
+    def energy_j(self, q: np.ndarray, v: np.ndarray) -> tuple[float, float]:
+        """Kinetic and gravitational potential energy (J) at (q, v)."""
+        return (float(pin.computeKineticEnergy(self.model, self.data, q, v)),
+                float(pin.computePotentialEnergy(self.model, self.data, q)))
+
+    def closure_jacobian(self, q: np.ndarray) -> np.ndarray:
+        """The (24, nv) Jacobian of the four loop closures at q."""
+        pin.computeJointJacobians(self.model, self.data, q)
+        return np.vstack([pin.getConstraintJacobian(self.model, self.data, cm, cd)
+                          for cm, cd in zip(self.constraint_models, self.constraint_datas, strict=True)])
+
+    def admissible_velocity(self, q: np.ndarray, plate_velocity_m_per_s: np.ndarray) -> np.ndarray:
+        """Joint velocities (nv,) with the plate translating at the given velocity (m/s, world axes; the plate
+        unrotated) that satisfy the linearised closures J v = 0 (least squares over the leg joints)."""
+        v = np.zeros(self.model.nv)
+        v[0:3] = np.asarray(plate_velocity_m_per_s, dtype=float)
+        jac = self.closure_jacobian(q)
+        v[6:] = -np.linalg.lstsq(jac[:, 6:], jac[:, :6] @ v[:6], rcond=None)[0]
+        return v
+
+    def step(self, q: np.ndarray, v: np.ndarray, tau: np.ndarray, dt_s: float) -> tuple[np.ndarray, np.ndarray]:
+        """One semi-implicit Euler step of ``dt_s`` (s)."""
+        v = v + dt_s * self.accelerations(q, v, tau)
+        return pin.integrate(self.model, q, v * dt_s), v
+
+
+def rigid_leg_model(machine: Machine, pose_m: np.ndarray, baumgarte_rad_per_s: float = 200.0) -> RigidLegModel:
+    """The rigid-leg model with the machine's masses at a reachable pose (m); Baumgarte rate omega_b (rad/s)."""
+    if not (np.isfinite(baumgarte_rad_per_s) and baumgarte_rad_per_s > 0):
+        raise PressfitError(f"baumgarte_rad_per_s must be positive, got {baumgarte_rad_per_s!r}")
+    mm = build_model(machine, pose_m)
+    full = inertial_model(mm)
+    full_data = full.createData()
+    pin.forwardKinematics(full, full_data, mm.q0)
+    model = pin.Model()
+    model.gravity = full.gravity
+    plate = model.addJoint(0, pin.JointModelFreeFlyer(), pin.SE3.Identity(), "plate")
+    owner = {mm.plate_joint_id: plate}
+    for i, ids in enumerate(mm.leg_joint_ids):
+        parent, placement = 0, pin.SE3(mm.leg_frames0[i], machine.base_points_m[i].copy())
+        for kind, name in RIGID_JOINTS:
+            parent = model.addJoint(parent, _JOINT_TYPES[kind](), placement, f"leg{i + 1}.{name}")
+            placement = pin.SE3.Identity()
+        for j in range(ids["base_cardan"], ids["plate_end"] + 1):  # full-model bodies -> rigid body carrying them
+            if model.existJointName(full.names[j]):
+                current = model.getJointId(full.names[j])
+            owner[j] = current
+    rigid = RigidLegModel(machine, model, model.createData(), pin.StdVec_RigidConstraintModel(),
+                          pin.StdVec_RigidConstraintData(), pin.ProximalSettings(1e-12, 1e-10, 10),
+                          np.array([model.joints[model.getJointId(f"leg{i + 1}.actuator")].idx_v for i in range(4)]),
+                          np.array([model.joints[model.getJointId(f"leg{i + 1}.actuator")].idx_q for i in range(4)]),
+                          mm.sigma.copy(), np.zeros(model.nq), baumgarte_rad_per_s)
+    rigid.reference_q = rigid.configuration_at(mm.pose_m)
+    data = model.createData()
+    pin.forwardKinematics(model, data, rigid.reference_q)
+    for j, body in owner.items():
+        model.inertias[body] = model.inertias[body] + data.oMi[body].actInv(full_data.oMi[j].act(full.inertias[j]))
+    gains = pin.BaumgarteCorrectorParameters(baumgarte_rad_per_s**2, 2 * baumgarte_rad_per_s)
+    for i in range(4):
+        end = model.getJointId(f"leg{i + 1}.plate_cardan.a")
+        cm = pin.RigidConstraintModel(pin.ContactType.CONTACT_6D, model, end, pin.SE3.Identity(), plate,
+                                      mm.anchor_placements[i], pin.ReferenceFrame.LOCAL)
+        cm.setBaumgarteCorrectorParameters(gains)
+        rigid.constraint_models.append(cm)
+        rigid.constraint_datas.append(cm.createData())
+    rigid.data = model.createData()
+    pin.initConstraintDynamics(model, rigid.data, rigid.constraint_models, rigid.constraint_datas)
+    return rigid
