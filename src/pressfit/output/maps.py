@@ -10,7 +10,7 @@ import numpy as np
 from tqdm import tqdm
 
 from pressfit.description.machine import Machine
-from pressfit.errors import OutputExistsError
+from pressfit.errors import OutputError, OutputExistsError
 from pressfit.geometry.interference import SweepResult
 from pressfit.kinematics.workspace import (
     _AXES,
@@ -76,10 +76,15 @@ def write_kinematic_maps(machine: Machine, out_dir: Path | str, heights_m: Itera
     out = Path(out_dir)
     heights = [float(y) for y in heights_m]
     names = [out / f"maps_y{y:.3f}.{ext}" for y in heights for ext in ("csv", "png")] + [out / "summary.json"]
+    stems = [f"maps_y{y:.3f}" for y in heights]
+    if len(set(stems)) != len(stems):
+        y0, y1 = next((a, b) for i, a in enumerate(heights) for b in heights[i + 1:] if f"{a:.3f}" == f"{b:.3f}")
+        raise OutputError(f"heights {y0:g} m and {y1:g} m would write the same files maps_y{y0:.3f}.*: "
+                          "give heights that differ by at least 1 mm")
     clash = [p for p in names if p.exists()]
     if clash and not overwrite:
         raise OutputExistsError(f"{clash[0]} exists ({len(clash)} output files do); pass --overwrite "
-                                "(overwrite=True) to replace them")
+                                "to replace them")
     squares = [np.vstack([c, c[:1]]) for c in (square_corners(machine, 0.0), square_corners(machine, 45.0))]
     written = []
     with tqdm(total=len(heights) + 1, desc="workspace", unit="step", disable=not progress) as bar:
