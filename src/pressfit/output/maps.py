@@ -160,16 +160,18 @@ def write_preload_study(study: PreloadStudy, out_dir: Path | str, overwrite: boo
     try:
         for g, gap in enumerate(study.clearances_m):
             lab = f"g = {gap * 1e6:g} um"
-            line, = axes[0].plot(study.preloads, study.small_load_stiffness_n_per_m[g], "o-", ms=3, label=lab)
+            line, = axes[0].plot(study.preloads, study.small_load_secant_stiffness_n_per_m[g], "o-", ms=3, label=lab)
             axes[1].plot(study.preloads, study.press_secant_stiffness_n_per_m[g], "o-", ms=3, color=line.get_color(),
                          label=lab)
             axes[1].plot(study.preloads, study.press_stiffness_n_per_m[g], "x:", ms=3, color=line.get_color())
             for ax in axes:
                 ax.axvline(study.critical_preload[g], color=line.get_color(), lw=0.6, ls="--")
         for ax in axes:
-            ax.axhline(study.reference_stiffness_n_per_m, color="k", lw=0.8, label="no clearance")
+            ax.axhline(study.no_clearance_contact_stiffness_n_per_m, color="k", lw=0.8,
+                       label="no clearance, contact springs")
+            ax.axhline(study.rigid_cardan_stiffness_n_per_m, color="k", lw=0.8, ls=":", label="rigid cardans")
             ax.set(xlabel=f"preload a4 [{unit}] (dashed: critical preload)", ylabel="stiffness [N/m]", yscale="log")
-        axes[0].set_title("small-load stiffness (first step secant)")
+        axes[0].set_title(f"small-load secant stiffness at {study.small_load_n:g} N")
         axes[1].set_title(f"at {study.loads_n[-1]:g} N: secant (o-) and tangent (x:)")
         axes[0].legend(fontsize=7)
         fig.suptitle(f"pose {study.pose_m.tolist()} m, load along {np.round(study.direction, 3).tolist()}")
