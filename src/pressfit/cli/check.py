@@ -38,5 +38,7 @@ def check_cmd(paths: tuple[Path, ...], junit_path: Path | None, json_path: Path 
                                                                       for r in run.results],
                                "errors": [asdict(e) for e in run.errors], "skipped": run.skipped}, overwrite)
     if run.errors:
-        click.echo(f"error: {len(run.errors)} case file(s) could not be checked (listed above)", err=True)
+        first = " ".join(run.errors[0].message.split())
+        more = f" ({len(run.errors) - 1} more listed above)" if len(run.errors) > 1 else ""
+        click.echo(f"error: {first}{more}", err=True)
     sys.exit(run.exit_code)

@@ -53,10 +53,17 @@ def violations(machine: Machine, pose_m: np.ndarray) -> list[tuple[int, str, flo
     for name, values, lo, hi in checks:
         for i, v in enumerate(values):
             if v < lo:
-                out.append((i + 1, name, float(v), f"minimum {lo:.6g}"))
+                out.append((i + 1, name, float(v), _bound("minimum", lo, v)))
             elif v > hi:
-                out.append((i + 1, name, float(v), f"maximum {hi:.6g}"))
+                out.append((i + 1, name, float(v), _bound("maximum", hi, v)))
     return out
+
+
+def _bound(kind: str, limit: float, value: float) -> str:
+    """'maximum 1.5708', or with 12 digits and the excess when the value prints like the limit at 6 digits."""
+    if f"{value:.6g}" != f"{limit:.6g}":
+        return f"{kind} {limit:.6g}"
+    return f"{kind} {limit:.12g}, {'exceeded' if kind == 'maximum' else 'undercut'} by {abs(value - limit):.2g}"
 
 
 def limit_margins(machine: Machine, pose_m: np.ndarray) -> dict[str, np.ndarray]:
