@@ -112,9 +112,21 @@ class Actuator(_Strict):
 
 
 class Joints(_Strict):
-    cardan_radial_clearance_m: NonNegative = 0.0
+    """Cardan compliance. ``cardan_axial_clearance_m``: the play g of each cardan **along its leg axis**
+    (+-g, a dead zone in series with the leg, :mod:`pressfit.mechanics.clearance`); lateral play carries no
+    load in a UPU leg and is not modelled."""
+
+    cardan_axial_clearance_m: NonNegative = 0.0
     cardan_contact_stiffness_n_per_m: Positive = 1.0e9  # per cardan, along the leg (pressfit.clearance)
     cardan_rotational_stiffness_nm_per_rad: Positive | None = None
+
+    @model_validator(mode="before")
+    @classmethod
+    def _renamed(cls, data: Any) -> Any:
+        if isinstance(data, dict) and "cardan_radial_clearance_m" in data:
+            raise ValueError("cardan_radial_clearance_m is renamed cardan_axial_clearance_m: the play is applied "
+                             "along the leg axis (+-g per cardan), not radially")
+        return data
 
 
 class ModelOptions(_Strict):

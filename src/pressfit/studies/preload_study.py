@@ -28,6 +28,7 @@ from pressfit.mechanics.clearance import (
 )
 
 
+CLEARANCE_GEOMETRY = "axial: +-g along the leg axis at each cardan"
 SMALL_LOAD_FRACTION = 0.1  # the small load of the small-load secant stiffness, as a fraction of the largest load
 
 
@@ -81,6 +82,7 @@ class PreloadStudy:
         header, rows = self.rows()
         return {"pose_m": self.pose_m.tolist(), "direction": self.direction.tolist(),
                 "preload_mode": self.preload_mode, "load_max_n": float(self.loads_n[-1]),
+                "clearance_geometry": CLEARANCE_GEOMETRY,
                 "steps": len(self.loads_n) - 1, "contact_stiffness_n_per_m": self.contact_stiffness_n_per_m,
                 "smoothing_m": self.smoothing_m, "small_load_n": self.small_load_n,
                 "no_clearance_contact_stiffness_n_per_m": self.no_clearance_contact_stiffness_n_per_m,
@@ -181,7 +183,8 @@ def format_answers(study: PreloadStudy) -> str:
     lines = [f"pose ({pose}) m, load 0..{study.loads_n[-1]:g} N along ({direction}); stiffness without clearance: "
              f"{study.no_clearance_contact_stiffness_n_per_m:.4g} N/m with the cardan contact springs "
              f"({study.contact_stiffness_n_per_m:.3g} N/m each) in series, {study.rigid_cardan_stiffness_n_per_m:.4g}"
-             f" N/m with rigid cardans (as 'pressfit stiffness'); small-load secant at {study.small_load_n:g} N"]
+             f" N/m with rigid cardans (as 'pressfit stiffness'); small-load secant at {study.small_load_n:g} N; "
+             f"clearance geometry {CLEARANCE_GEOMETRY}"]
     for a in study.answers():
         s = (f"g = {a['clearance_m'] * 1e6:g} um: critical preload {a['critical_preload']:.4g} {unit}; without "
              f"preload lost motion {a['lost_motion_without_preload_m'] * 1e6:.3g} um, small-load secant "
