@@ -10,7 +10,15 @@ import click
 import numpy as np
 
 from pressfit import kinematics
-from pressfit.cli.common import COORDINATE, FORCE, MODEL_OPTION, FiniteFloat, increasing_pair, parse_numbers, user_errors
+from pressfit.cli.common import (
+    COORDINATE,
+    FORCE,
+    MODEL_OPTION,
+    FiniteFloat,
+    increasing_pair,
+    parse_numbers,
+    user_errors,
+)
 from pressfit.description.machine import load_machine
 from pressfit.errors import PressfitError
 from pressfit.output.files import check_directory, to_json, write_directory
@@ -165,12 +173,14 @@ def stiffness_cmd(x: float, y: float, z: float, as_json: bool, maps: bool, out_d
 @click.command("interference", context_settings={"ignore_unknown_options": True})  # negative coordinates
 @click.argument("pose", nargs=-1, type=COORDINATE)
 @click.option("--workspace", "over_workspace", is_flag=True, help="Sweep the required workspace instead of one pose.")
-@click.option("--margin", "margin_m", type=FiniteFloat(0.0, 1.0), help="Safety margin, m (default: collision.safety_margin_m).")
+@click.option("--margin", "margin_m", type=FiniteFloat(0.0, 1.0),
+              help="Safety margin, m, in [0, 1] (default: collision.safety_margin_m).")
 @click.option("--points", type=click.IntRange(2, 1001), default=41, show_default=True,
               help="Grid points per x and z axis (--workspace).")
 @click.option("--heights", type=click.IntRange(1, 1001), default=7, show_default=True,
               help="Grid heights (--workspace).")
-@click.option("--y-range", "y_range", type=COORDINATE, nargs=2, callback=increasing_pair, help="y_h range, m (default: heights where the whole "
+@click.option("--y-range", "y_range", type=COORDINATE, nargs=2, callback=increasing_pair,
+              help="y_h range LOW HIGH, m (default: heights where the whole "
               "required square is reachable).")
 @click.option("--include", multiple=True, help="Also check pair 'a|b' (repeatable).")
 @click.option("--exclude", multiple=True, help="Do not check pair 'a|b' (repeatable).")

@@ -21,10 +21,13 @@ def study_group() -> None:
 @study_group.command("preload", context_settings={"ignore_unknown_options": True})  # negative numbers
 @click.argument("case_file", required=False, type=click.Path(path_type=Path))
 @click.option("--pose", nargs=3, type=COORDINATE, help="Plate pose X Y Z, m (without CASE_FILE).")
-@click.option("--clearance", "clearances", type=FloatList(0.0, 1e-2), help="Cardan axial clearances g, m, comma-separated (default: the model's).")
-@click.option("--preload", "preloads", type=FloatList(-MAX_FORCE_N, MAX_FORCE_N), help="Preloads a4 along v_p, comma-separated: N (force mode) or m (length).")
+@click.option("--clearance", "clearances", type=FloatList(0.0, 1e-2),
+              help="Cardan axial clearances g, m, comma-separated (default: the model's).")
+@click.option("--preload", "preloads", type=FloatList(-MAX_FORCE_N, MAX_FORCE_N),
+              help="Preloads a4 along v_p, comma-separated: N (force mode) or m (length).")
 @click.option("--mode", "preload_mode", type=click.Choice(["force", "length"]), default="force", show_default=True)
-@click.option("--load-max", "load_max", type=FiniteFloat(0.0, MAX_FORCE_N, open_low=True), default=700.0, show_default=True, help="Largest load, N.")
+@click.option("--load-max", "load_max", type=FiniteFloat(0.0, MAX_FORCE_N, open_low=True), default=700.0,
+              show_default=True, help="Largest load, N.")
 @click.option("--steps", type=click.IntRange(2, 10000), default=50, show_default=True, help="Load steps.")
 @click.option("--direction", nargs=3, type=FORCE, default=(0.0, 1.0, 0.0), show_default=True, help="Load direction.")
 @click.option("--out", "out_dir", type=click.Path(path_type=Path), default=Path("out/study_preload"), show_default=True,

@@ -251,7 +251,8 @@ def evaluate_case(case: Case, progress: bool = False) -> CaseResult:
                     unstable.setdefault((int(j), int(p)), str(exc))
                     continue
                 if worse(w, best, spec.sense):
-                    best = (w, int(j), int(p), leg, f"with the case's cardan clearances (axial play along each leg, small-displacement "
+                    best = (w, int(j), int(p), leg, "with the case's cardan clearances (axial play along each leg, "
+                            f"small-displacement "
                             f"clearance solver, 20 load steps) at the {len(candidates)} worst poses")
         if best is None:  # shear with every refined solve unstable: the stability line below reports it
             continue
