@@ -3,12 +3,12 @@
 from __future__ import annotations
 
 import sys
+from dataclasses import asdict
 from pathlib import Path
 
 import click
 
 from pressfit.cli.common import user_errors
-from pressfit.errors import PressfitError
 
 
 @click.command("check")
@@ -20,30 +20,25 @@ from pressfit.errors import PressfitError
 @user_errors
 def check_cmd(paths: tuple[Path, ...], junit_path: Path | None, json_path: Path | None,
               overwrite: bool, progress: bool) -> None:
-    """Check the load envelopes of case files (or directories of them): exit 0 pass, 1 fail, 2 bad input."""
-    from dataclasses import asdict
-
-    from pressfit.description.cases import discover, load_case
-    from pressfit.output.files import write_json, write_text
-
-    files = discover(list(paths))
-    cases = [load_case(f) for f in files]  # validate every file before computing anything
-    for c in cases:
-        c.machine()
+    """Check the load envelopes of case files (or directories of them): exit 0 pass, 1 a limit is exceeded,
+    2 bad input (a malformed file is reported and the others are still checked)."""
     from pressfit.output import check_report
-    from pressfit.studies import limit_check as envelope
-    checked = [c for c in cases if c.envelope.model_dump(exclude_none=True)]
-    if not checked:
-        raise PressfitError("no case among " + ", ".join(map(str, paths)) + " has an [envelope] to check")
-    skipped = [c.path for c in cases if c not in checked]
-    if skipped:
-        click.echo(f"skipped (no [envelope]): {', '.join(skipped)}")
-    results = [envelope.evaluate_case(c, progress=progress) for c in checked]
-    click.echo(check_report.format_table(results))
+    from pressfit.output.files import check_target, write_json, write_text
+    from pressfit.studies.limit_check import check_files
+
+    for target in (junit_path, json_path):  # before any computation
+        if target is not None:
+            check_target(target, overwrite)
+    run = check_files(list(paths), progress=progress)
+    click.echo(check_report.format_run(run))
     if junit_path:
-        write_text(junit_path, check_report.junit_xml(results), overwrite)
+        write_text(junit_path, check_report.junit_xml(run), overwrite)
     if json_path:
-        write_json(json_path, [asdict(r) | {"passed": r.passed} for r in results], overwrite)
-    failed = [r.case for r in results if not r.passed]
-    click.echo(f"{len(results) - len(failed)} passed, {len(failed)} failed")
-    sys.exit(1 if failed else 0)
+        write_json(json_path, {"exit_code": run.exit_code, "cases": [asdict(r) | {"passed": r.passed}
+                                                                      for r in run.results],
+                               "errors": [asdict(e) for e in run.errors], "skipped": run.skipped}, overwrite)
+    if run.errors:
+        first = " ".join(run.errors[0].message.split())
+        more = f" ({len(run.errors) - 1} more listed above)" if len(run.errors) > 1 else ""
+        click.echo(f"error: {first}{more}", err=True)
+    sys.exit(run.exit_code)

@@ -20,16 +20,18 @@ from pressfit.output.files import to_json
 @user_errors
 def tables_cmd(as_json: bool, out_dir: Path | None, overwrite: bool, cad: bool) -> None:
     """Reproduce the paper's Tables 5 and 6 (cases/paper/A, B, C) beside pressfit's solution."""
-    from pressfit.output.files import write_csv, write_json, write_text
+    from pressfit.output.files import check_directory, write_csv, write_directory, write_json, write_text
     from pressfit.studies import cad_fit
     from pressfit.studies import paper_tables as tables
 
+    if out_dir is not None:
+        check_directory(out_dir, overwrite)
     if cad:
         fit = cad_fit.fit_cad_model()
         click.echo(to_json(cad_fit.to_dict(fit)) if as_json else cad_fit.to_markdown(fit))
         if out_dir is not None:
-            write_text(out_dir / "cad_fit.md", cad_fit.to_markdown(fit), overwrite)
-            write_json(out_dir / "cad_fit.json", cad_fit.to_dict(fit), overwrite)
+            write_directory(out_dir, overwrite, lambda tmp: [write_text(tmp / "cad_fit.md", cad_fit.to_markdown(fit)),
+                                                             write_json(tmp / "cad_fit.json", cad_fit.to_dict(fit))])
         return
     entries = tables.paper_tables()
     if as_json:
@@ -37,8 +39,8 @@ def tables_cmd(as_json: bool, out_dir: Path | None, overwrite: bool, cad: bool) 
     else:
         click.echo(tables.to_markdown(entries))
     if out_dir is not None:
-        write_text(out_dir / "tables.md", tables.to_markdown(entries), overwrite)
-        write_csv(out_dir / "tables.csv", *tables.to_rows(entries), overwrite=overwrite)
+        write_directory(out_dir, overwrite, lambda tmp: [write_text(tmp / "tables.md", tables.to_markdown(entries)),
+                                                         write_csv(tmp / "tables.csv", *tables.to_rows(entries))])
 
 
 @click.command("report")
@@ -50,8 +52,11 @@ def tables_cmd(as_json: bool, out_dir: Path | None, overwrite: bool, cad: bool) 
 @user_errors
 def report_cmd(out_dir: Path, overwrite: bool, quick: bool, model_path: Path) -> None:
     """Reproduce Tables 5 and 6 and write the full Markdown report (maps, envelope, stiffness, ...)."""
+    from pressfit.output.files import check_directory, write_directory
     from pressfit.output.report import write_report
 
-    path = write_report(load_machine(model_path), out_dir, overwrite=overwrite, quick=quick)
+    check_directory(out_dir, overwrite)
+    machine = load_machine(model_path)
+    path, = write_directory(out_dir, overwrite, lambda tmp: [write_report(machine, tmp, quick=quick)])
     click.echo((path.parent / "tables.md").read_text())  # the Tables 5-6 comparison the report just wrote
     click.echo(f"report written to {path}")

@@ -10,16 +10,24 @@ import click
 import numpy as np
 
 from pressfit import kinematics
-from pressfit.cli.common import MODEL_OPTION, user_errors
+from pressfit.cli.common import (
+    COORDINATE,
+    FORCE,
+    MODEL_OPTION,
+    FiniteFloat,
+    increasing_pair,
+    parse_numbers,
+    user_errors,
+)
 from pressfit.description.machine import load_machine
 from pressfit.errors import PressfitError
-from pressfit.output.files import to_json
+from pressfit.output.files import check_directory, to_json, write_directory
 
 
 @click.command("kinematics", context_settings={"ignore_unknown_options": True})  # negative coordinates
-@click.argument("x", type=float)
-@click.argument("y", type=float)
-@click.argument("z", type=float)
+@click.argument("x", type=COORDINATE)
+@click.argument("y", type=COORDINATE)
+@click.argument("z", type=COORDINATE)
 @click.option("--json", "as_json", is_flag=True, help="Print JSON (keys documented in README).")
 @MODEL_OPTION
 @user_errors
@@ -44,14 +52,14 @@ def kinematics_cmd(x: float, y: float, z: float, as_json: bool, model_path: Path
 @click.argument("values", nargs=-1)
 @click.option("--load", "has_load", is_flag=True,
               help="Followed by FX FY FZ [MX MY MZ]: plate wrench at the plate centre, world axes (N, N m).")
-@click.option("--preload", "a4", type=float, default=None, help="Actuator preload a4 along v_p (N; m in length mode).")
-@click.option("--preload-mode", type=click.Choice(["force", "length"]), default="force", show_default=True,
-              help="force: offsets giving actuator forces a4 v_p at no load; length: offsets -a4 v_p (m).")
+@click.option("--preload", "a4", type=FORCE, default=None, help="Actuator preload a4 along v_p (N; m in length mode).")
+@click.option("--preload-mode", type=click.Choice(["force", "length"]), default=None,
+              help="force (default): offsets giving actuator forces a4 v_p at no load; length: offsets -a4 v_p (m).")
 @click.option("--linear", is_flag=True, help="Small-displacement (linear) solve instead of the nonlinear default.")
 @click.option("--json", "as_json", is_flag=True, help="Print JSON (keys documented in README).")
 @MODEL_OPTION
 @user_errors
-def solve_cmd(values: tuple[str, ...], has_load: bool, a4: float | None, preload_mode: str, linear: bool,
+def solve_cmd(values: tuple[str, ...], has_load: bool, a4: float | None, preload_mode: str | None, linear: bool,
               as_json: bool, model_path: Path) -> None:
     """Static equilibrium: pressfit solve X Y Z --load FX FY FZ [MX MY MZ], or pressfit solve CASE.toml."""
     from pressfit.mechanics.statics import solve_equilibrium
@@ -60,22 +68,25 @@ def solve_cmd(values: tuple[str, ...], has_load: bool, a4: float | None, preload
         from pressfit.description.cases import load_case
 
         case = load_case(values[0])
+        if a4 is not None or preload_mode is not None:
+            raise PressfitError(f"--preload/--preload-mode cannot be combined with a case file: edit the [preload] "
+                                f"table of {values[0]}")
+        if case.clearance is not None:
+            raise PressfitError(f"{values[0]} has a [clearance] table, which solve does not model (rigid cardans): "
+                                "use 'pressfit study preload' or 'pressfit check' for cardan clearance")
         machine = case.machine()
         a4, preload_mode = (case.preload.a4 or None), case.preload.mode
         linear = linear or case.solver.linear
         jobs = [(h, w) for h in case.poses.array() for w in case.loads.wrenches()]
     else:
-        try:
-            numbers = [float(v) for v in values]
-        except ValueError:
-            raise click.UsageError("expected X Y Z --load FX FY FZ [MX MY MZ] (numbers) or CASE.toml") from None
+        numbers = parse_numbers(values, "expected X Y Z --load FX FY FZ [MX MY MZ] (finite numbers) or CASE.toml")
         if not has_load or len(numbers) not in (6, 9):
             raise click.UsageError("expected X Y Z --load FX FY FZ [MX MY MZ]")
         wrench = np.zeros(6)
         wrench[:len(numbers) - 3] = numbers[3:]
         machine = load_machine(model_path)
         jobs = [(np.array(numbers[:3]), wrench)]
-    results = [solve_equilibrium(machine, h, w, preload=a4, preload_mode=preload_mode, linear=linear)
+    results = [solve_equilibrium(machine, h, w, preload=a4, preload_mode=preload_mode or "force", linear=linear)
                for h, w in jobs]
     if as_json:
         click.echo(to_json(results[0].to_dict() if len(results) == 1 else [r.to_dict() for r in results]))
@@ -105,9 +116,9 @@ def _print_equilibrium(eq: Any) -> None:
 
 
 @click.command("stiffness", context_settings={"ignore_unknown_options": True})  # negative coordinates
-@click.argument("x", type=float)
-@click.argument("y", type=float)
-@click.argument("z", type=float)
+@click.argument("x", type=COORDINATE)
+@click.argument("y", type=COORDINATE)
+@click.argument("z", type=COORDINATE)
 @click.option("--json", "as_json", is_flag=True, help="Print JSON (SI units, keys name their units).")
 @click.option("--maps", is_flag=True, help="Instead: maps over the x-z required square at height Y (X, Z unused).")
 @click.option("--out", "out_dir", type=click.Path(path_type=Path), default=Path("out/stiffness"), show_default=True,
@@ -125,8 +136,9 @@ def stiffness_cmd(x: float, y: float, z: float, as_json: bool, maps: bool, out_d
 
     machine = load_machine(model_path)
     if maps:
+        check_directory(out_dir, overwrite)
         m = condensed.stiffness_maps(machine, y, n_grid)
-        for p in map_files.write_stiffness_maps(m, out_dir, overwrite):
+        for p in write_directory(out_dir, overwrite, lambda tmp: map_files.write_stiffness_maps(m, tmp)):
             click.echo(f"wrote {p}")
         return
     h = kinematics.require_reachable(machine, [x, y, z])
@@ -159,14 +171,16 @@ def stiffness_cmd(x: float, y: float, z: float, as_json: bool, maps: bool, out_d
 
 
 @click.command("interference", context_settings={"ignore_unknown_options": True})  # negative coordinates
-@click.argument("pose", nargs=-1, type=float)
+@click.argument("pose", nargs=-1, type=COORDINATE)
 @click.option("--workspace", "over_workspace", is_flag=True, help="Sweep the required workspace instead of one pose.")
-@click.option("--margin", "margin_m", type=float, help="Safety margin, m (default: collision.safety_margin_m).")
+@click.option("--margin", "margin_m", type=FiniteFloat(0.0, 1.0),
+              help="Safety margin, m, in [0, 1] (default: collision.safety_margin_m).")
 @click.option("--points", type=click.IntRange(2, 1001), default=41, show_default=True,
               help="Grid points per x and z axis (--workspace).")
 @click.option("--heights", type=click.IntRange(1, 1001), default=7, show_default=True,
               help="Grid heights (--workspace).")
-@click.option("--y-range", "y_range", type=float, nargs=2, help="y_h range, m (default: heights where the whole "
+@click.option("--y-range", "y_range", type=COORDINATE, nargs=2, callback=increasing_pair,
+              help="y_h range LOW HIGH, m (default: heights where the whole "
               "required square is reachable).")
 @click.option("--include", multiple=True, help="Also check pair 'a|b' (repeatable).")
 @click.option("--exclude", multiple=True, help="Do not check pair 'a|b' (repeatable).")
@@ -190,6 +204,8 @@ def interference_cmd(pose: tuple[float, ...], over_workspace: bool, margin_m: fl
 
     if over_workspace == (len(pose) == 3) or len(pose) not in (0, 3):
         raise PressfitError("give either a pose X Y Z (m) or --workspace")
+    if out_dir is not None:
+        check_directory(out_dir, overwrite)
     machine = load_machine(model_path)
     im = interference.build_interference(machine, rig, include, exclude)
     if not over_workspace:
@@ -206,7 +222,8 @@ def interference_cmd(pose: tuple[float, ...], over_workspace: bool, margin_m: fl
     res = interference.workspace_sweep(im, points, heights, y_range, margin_m, progress)
     summary = res.to_dict() | {"kinematics": im.kinematics, "notes": list(im.notes),
                                "y_range_m": [float(res.grid_axes_m[1][0]), float(res.grid_axes_m[1][-1])]}
-    written = map_files.write_interference_sweep(res, out_dir, overwrite) if out_dir is not None else []
+    written = [] if out_dir is None else write_directory(
+        out_dir, overwrite, lambda tmp: map_files.write_interference_sweep(res, tmp))
     if as_json:
         click.echo(to_json(summary | {"outputs": [str(p) for p in written]}))
     else:

@@ -6,10 +6,11 @@ from pathlib import Path
 
 import click
 
-from pressfit.cli.common import MODEL_OPTION, floats_option, user_errors
+from pressfit.cli.common import COORDINATE, FORCE, MODEL_OPTION, FiniteFloat, FloatList, user_errors
+from pressfit.description.cases import MAX_FORCE_N
 from pressfit.description.machine import load_machine
 from pressfit.errors import PressfitError
-from pressfit.output.files import to_json
+from pressfit.output.files import check_directory, to_json, write_directory
 
 
 @click.group("study")
@@ -19,13 +20,16 @@ def study_group() -> None:
 
 @study_group.command("preload", context_settings={"ignore_unknown_options": True})  # negative numbers
 @click.argument("case_file", required=False, type=click.Path(path_type=Path))
-@click.option("--pose", nargs=3, type=float, help="Plate pose X Y Z, m (without CASE_FILE).")
-@click.option("--clearance", "clearances", help="Cardan axial clearances g, m, comma-separated (default: the model's).")
-@click.option("--preload", "preloads", help="Preloads a4 along v_p, comma-separated: N (force mode) or m (length).")
+@click.option("--pose", nargs=3, type=COORDINATE, help="Plate pose X Y Z, m (without CASE_FILE).")
+@click.option("--clearance", "clearances", type=FloatList(0.0, 1e-2),
+              help="Cardan axial clearances g, m, comma-separated (default: the model's).")
+@click.option("--preload", "preloads", type=FloatList(-MAX_FORCE_N, MAX_FORCE_N),
+              help="Preloads a4 along v_p, comma-separated: N (force mode) or m (length).")
 @click.option("--mode", "preload_mode", type=click.Choice(["force", "length"]), default="force", show_default=True)
-@click.option("--load-max", "load_max", type=float, default=700.0, show_default=True, help="Largest load, N.")
+@click.option("--load-max", "load_max", type=FiniteFloat(0.0, MAX_FORCE_N, open_low=True), default=700.0,
+              show_default=True, help="Largest load, N.")
 @click.option("--steps", type=click.IntRange(2, 10000), default=50, show_default=True, help="Load steps.")
-@click.option("--direction", nargs=3, type=float, default=(0.0, 1.0, 0.0), show_default=True, help="Load direction.")
+@click.option("--direction", nargs=3, type=FORCE, default=(0.0, 1.0, 0.0), show_default=True, help="Load direction.")
 @click.option("--out", "out_dir", type=click.Path(path_type=Path), default=Path("out/study_preload"), show_default=True,
               help="Directory for preload_study.csv/.json and the PNG plots.")
 @click.option("--overwrite", is_flag=True, help="Replace existing output files.")
@@ -33,14 +37,15 @@ def study_group() -> None:
 @click.option("--progress/--no-progress", default=True, help="Show a progress bar.")
 @MODEL_OPTION
 @user_errors
-def study_preload_cmd(case_file: Path | None, pose: tuple[float, ...] | None, clearances: str | None,
-                      preloads: str | None, preload_mode: str, load_max: float, steps: int,
+def study_preload_cmd(case_file: Path | None, pose: tuple[float, ...] | None, clearances: list[float] | None,
+                      preloads: list[float] | None, preload_mode: str, load_max: float, steps: int,
                       direction: tuple[float, ...], out_dir: Path, overwrite: bool, as_json: bool, progress: bool,
                       model_path: Path) -> None:
     """How much preload keeps every cardan closed up to the load, and what stiffness it buys (SI)."""
     from pressfit.output import maps as map_files
     from pressfit.studies import preload_study
 
+    check_directory(out_dir, overwrite)
     if case_file is not None:
         if pose or clearances or preloads:
             raise PressfitError("give either CASE_FILE or --pose/--clearance/--preload")
@@ -51,11 +56,11 @@ def study_preload_cmd(case_file: Path | None, pose: tuple[float, ...] | None, cl
         if not pose or not preloads:
             raise PressfitError("give CASE_FILE, or --pose X Y Z and --preload P1,P2,...")
         machine = load_machine(model_path)
-        kw = {"machine": machine, "pose_m": list(pose), "clearances_m": floats_option(clearances, "--clearance"),
-              "preloads": floats_option(preloads, "--preload"), "load_max_n": load_max, "steps": steps,
+        kw = {"machine": machine, "pose_m": list(pose), "clearances_m": clearances or [],
+              "preloads": preloads, "load_max_n": load_max, "steps": steps,
               "direction": direction, "preload_mode": preload_mode}
     study = preload_study.preload_study(**kw, progress=progress)
-    written = map_files.write_preload_study(study, out_dir, overwrite)
+    written = write_directory(out_dir, overwrite, lambda tmp: map_files.write_preload_study(study, tmp))
     if as_json:
         click.echo(to_json(study.to_dict() | {"outputs": [str(p) for p in written]}))
         return

@@ -7,14 +7,14 @@ from pathlib import Path
 import click
 import numpy as np
 
-from pressfit.cli.common import MODEL_OPTION, user_errors
+from pressfit.cli.common import COORDINATE, MODEL_OPTION, user_errors
 from pressfit.description.machine import load_machine
 from pressfit.errors import PressfitError
-from pressfit.output.files import to_json
+from pressfit.output.files import check_directory, to_json, write_directory
 
 
 @click.command("workspace")
-@click.option("--y", "heights", type=float, multiple=True, help="Plate height y_h of a map, m (repeatable; "
+@click.option("--y", "heights", type=COORDINATE, multiple=True, help="Plate height y_h of a map, m (repeatable; "
               "default 0.6, the paper's Figures 7-11).")
 @click.option("--out", "out_dir", type=click.Path(path_type=Path), default=Path("out/workspace"),
               show_default=True, help="Directory for the maps (CSV, PNG) and summary.json.")
@@ -29,14 +29,22 @@ def workspace_cmd(heights: tuple[float, ...], out_dir: Path, overwrite: bool, as
     from pressfit.kinematics import workspace
     from pressfit.output import maps as map_files
 
+    check_directory(out_dir, overwrite)
     machine = load_machine(model_path)
     rng = workspace.square_height_range(machine)
     for y in heights:
-        if not (np.isfinite(y) and rng.y_min_m <= y <= rng.y_max_m):
+        if not (rng.y_min_m <= y <= rng.y_max_m):
             raise PressfitError(f"--y {y:g}: the required square is reachable only for y_h in "
                                 f"[{rng.y_min_m:.5f}, {rng.y_max_m:.5f}] m")
-    summary, _ = map_files.write_kinematic_maps(machine, out_dir, heights or workspace.DEFAULT_HEIGHTS_M,
-                                         overwrite, progress)
+    box: dict[str, dict] = {}
+
+    def write(tmp: Path) -> list[Path]:
+        box["summary"], paths = map_files.write_kinematic_maps(machine, tmp, heights or workspace.DEFAULT_HEIGHTS_M,
+                                                               progress=progress)
+        return paths
+
+    write_directory(out_dir, overwrite, write)
+    summary = box["summary"]
     if as_json:
         click.echo(to_json(summary))
         return

@@ -7,6 +7,7 @@ file, the key and what was expected.
 from __future__ import annotations
 
 import math
+import stat
 import tomllib
 from functools import cached_property
 from pathlib import Path
@@ -116,9 +117,21 @@ class Actuator(_Strict):
 
 
 class Joints(_Strict):
-    cardan_radial_clearance_m: NonNegative = 0.0
+    """Cardan compliance. ``cardan_axial_clearance_m``: the play g of each cardan **along its leg axis**
+    (+-g, a dead zone in series with the leg, :mod:`pressfit.mechanics.clearance`); lateral play carries no
+    load in a UPU leg and is not modelled."""
+
+    cardan_axial_clearance_m: NonNegative = 0.0
     cardan_contact_stiffness_n_per_m: Positive = 1.0e9  # per cardan, along the leg (pressfit.clearance)
     cardan_rotational_stiffness_nm_per_rad: Positive | None = None
+
+    @model_validator(mode="before")
+    @classmethod
+    def _renamed(cls, data: Any) -> Any:
+        if isinstance(data, dict) and "cardan_radial_clearance_m" in data:
+            raise ValueError("cardan_radial_clearance_m is renamed cardan_axial_clearance_m: the play is applied "
+                             "along the leg axis (+-g per cardan), not radially")
+        return data
 
 
 class Mass(_Strict):
@@ -318,20 +331,30 @@ def validation_error(path: object, exc: ValidationError) -> ModelFileError:
     return ModelFileError(path, key, expected)
 
 
+MAX_INPUT_BYTES = 10_000_000  # a machine or case file is a few kB; anything larger is not one
+
+
 def read_toml(path: Path | str) -> dict[str, Any]:
-    """Parse a TOML file; a missing file or bad syntax becomes a :class:`ModelFileError`."""
+    """Parse a TOML file; a missing, special (FIFO, device), oversized or malformed file becomes a
+    :class:`ModelFileError` (checked with ``stat`` before opening, so nothing blocks or reads forever)."""
     path = Path(path)
     try:
+        st = path.stat()
+        if not stat.S_ISREG(st.st_mode):
+            raise ModelFileError(path, "<file>", "a regular file (not a directory, FIFO or device)")
+        if st.st_size > MAX_INPUT_BYTES:
+            raise ModelFileError(path, "<file>", f"a TOML file of at most {MAX_INPUT_BYTES} bytes "
+                                 f"(it has {st.st_size})")
         with path.open("rb") as f:
-            return tomllib.load(f)
+            return tomllib.loads(f.read(MAX_INPUT_BYTES + 1).decode("utf-8"))
     except FileNotFoundError:
         raise ModelFileError(path, "<file>", "file does not exist") from None
     except tomllib.TOMLDecodeError as exc:
         raise ModelFileError(path, "<syntax>", f"valid TOML ({exc})") from None
     except UnicodeDecodeError:
         raise ModelFileError(path, "<file>", "a UTF-8 text file") from None
-    except OSError as exc:
-        raise ModelFileError(path, "<file>", f"a readable file ({exc.strerror})") from None
+    except (OSError, RecursionError) as exc:
+        raise ModelFileError(path, "<file>", f"a readable file ({getattr(exc, 'strerror', None) or exc})") from None
 
 
 def load_machine(path: Path | str = DEFAULT_MODEL, overrides: dict[str, Any] | None = None) -> Machine:

@@ -158,8 +158,8 @@ class Clearance:
 
     @classmethod
     def uniform(cls, machine: Machine, gap_m: float | None = None, **kw: Any) -> Clearance:
-        """Every cardan with the same play (default: the machine's ``joints.cardan_radial_clearance_m``)."""
-        g = machine.joints.cardan_radial_clearance_m if gap_m is None else gap_m
+        """Every cardan with the same play (default: the machine's ``joints.cardan_axial_clearance_m``)."""
+        g = machine.joints.cardan_axial_clearance_m if gap_m is None else gap_m
         kw.setdefault("contact_stiffness_n_per_m", machine.joints.cardan_contact_stiffness_n_per_m)
         return cls(np.full((4, 2), float(g)), **kw)
 

@@ -4,6 +4,7 @@ from __future__ import annotations
 
 import json
 import os
+import shutil
 import tempfile
 from collections.abc import Callable, Iterable, Sequence
 from pathlib import Path
@@ -14,20 +15,89 @@ import numpy as np
 from pressfit.errors import OutputError, OutputExistsError
 
 
-def _atomic(path: Path | str, write: Callable[[Path], None], overwrite: bool) -> Path:
-    """Write through ``write(tmp)`` into a temporary file beside ``path``, then rename it in place."""
+def _umask() -> int:
+    mask = os.umask(0o022)
+    os.umask(mask)
+    return mask
+
+
+def check_target(path: Path | str, overwrite: bool) -> Path:
+    """Check before any computation that a single output file can be written (raises otherwise).
+
+    Refused: an existing file without ``overwrite``, a directory or special file (FIFO, device) at the path,
+    a parent that is a file or not writable. A symlink is followed (its target is replaced, not the link).
+    """
     path = Path(path)
-    if path.exists() and not overwrite:
-        raise OutputExistsError(f"{path} exists; pass --overwrite (overwrite=True) to replace it")
+    real = Path(os.path.realpath(path))
+    if real.exists() and not real.is_file():
+        raise OutputError(f"cannot write {path}: it is a directory or special file, not a regular file")
+    if real.exists() and not overwrite:
+        raise OutputExistsError(f"{path} exists; pass --overwrite to replace it")
+    _check_parent(path, real.parent)
+    return real
+
+
+def _check_parent(path: Path, parent: Path) -> None:
+    """The nearest existing ancestor of ``parent`` must be a writable directory."""
+    anc = parent
+    while not anc.exists() and anc != anc.parent:
+        anc = anc.parent
+    if not anc.is_dir():
+        raise OutputError(f"cannot write {path}: {anc} is not a directory")
+    if not os.access(anc, os.W_OK | os.X_OK):
+        raise OutputError(f"cannot write {path}: {anc} is not writable")
+
+
+def check_directory(out_dir: Path | str, overwrite: bool) -> Path:
+    """Check before any computation that a multi-file output directory can be written: it must be new or
+    empty unless ``overwrite`` (then files of the same names are replaced), and its parent writable."""
+    out = Path(out_dir)
+    if out.exists() and not out.is_dir():
+        raise OutputError(f"cannot write {out}: it exists and is not a directory")
+    if out.is_dir() and not overwrite and any(out.iterdir()):
+        raise OutputExistsError(f"{out} exists and is not empty; pass --overwrite to replace its files")
+    _check_parent(out, out if out.is_dir() else out.parent)
+    return out
+
+
+def write_directory(out_dir: Path | str, overwrite: bool, write: Callable[[Path], Iterable[Path]]) -> list[Path]:
+    """Run ``write(tmp)`` into a temporary directory beside ``out_dir``, then move every file it wrote into
+    ``out_dir`` (so an error or a signal leaves no partial output); returns the final paths."""
+    out = check_directory(out_dir, overwrite)
+    out.parent.mkdir(parents=True, exist_ok=True)
+    tmp = Path(tempfile.mkdtemp(prefix=f".{out.name}.", dir=out.parent))
     try:
-        path.parent.mkdir(parents=True, exist_ok=True)
-        fd, tmp = tempfile.mkstemp(prefix=f".{path.name}.", suffix=path.suffix, dir=path.parent)
+        written = [Path(p) for p in write(tmp)]
+        final = []
+        for p in sorted(q for q in tmp.rglob("*") if q.is_file()):
+            target = out / p.relative_to(tmp)
+            target.parent.mkdir(parents=True, exist_ok=True)
+            os.replace(p, target)
+            final.append(target)
+        return [out / p.relative_to(tmp) for p in written] if written else final
+    except OSError as exc:
+        raise OutputError(f"cannot write {out}: {exc.strerror}") from None
+    finally:
+        shutil.rmtree(tmp, ignore_errors=True)
+
+
+def _atomic(path: Path | str, write: Callable[[Path], None], overwrite: bool) -> Path:
+    """Write through ``write(tmp)`` into a temporary file beside ``path``, then rename it in place.
+
+    A symlink is written through (its target replaced); the file gets the mode of the file it replaces,
+    or 0666 less the umask. The temporary file is removed on any error or interruption."""
+    path = Path(path)
+    real = check_target(path, overwrite)
+    try:
+        real.parent.mkdir(parents=True, exist_ok=True)
+        fd, tmp = tempfile.mkstemp(prefix=f".{real.name}.", suffix=real.suffix, dir=real.parent)
     except OSError as exc:
         raise OutputError(f"cannot write {path}: {exc.strerror}") from None
     os.close(fd)
     try:
+        os.chmod(tmp, real.stat().st_mode & 0o7777 if real.exists() else 0o666 & ~_umask())
         write(Path(tmp))
-        os.replace(tmp, path)
+        os.replace(tmp, real)
     finally:
         if os.path.exists(tmp):
             os.unlink(tmp)

@@ -10,7 +10,7 @@ import numpy as np
 from tqdm import tqdm
 
 from pressfit.description.machine import Machine
-from pressfit.errors import OutputExistsError
+from pressfit.errors import OutputError, OutputExistsError
 from pressfit.geometry.interference import SweepResult
 from pressfit.kinematics.workspace import (
     _AXES,
@@ -76,10 +76,15 @@ def write_kinematic_maps(machine: Machine, out_dir: Path | str, heights_m: Itera
     out = Path(out_dir)
     heights = [float(y) for y in heights_m]
     names = [out / f"maps_y{y:.3f}.{ext}" for y in heights for ext in ("csv", "png")] + [out / "summary.json"]
+    stems = [f"maps_y{y:.3f}" for y in heights]
+    if len(set(stems)) != len(stems):
+        y0, y1 = next((a, b) for i, a in enumerate(heights) for b in heights[i + 1:] if f"{a:.3f}" == f"{b:.3f}")
+        raise OutputError(f"heights {y0:g} m and {y1:g} m would write the same files maps_y{y0:.3f}.*: "
+                          "give heights that differ by at least 1 mm")
     clash = [p for p in names if p.exists()]
     if clash and not overwrite:
         raise OutputExistsError(f"{clash[0]} exists ({len(clash)} output files do); pass --overwrite "
-                                "(overwrite=True) to replace them")
+                                "to replace them")
     squares = [np.vstack([c, c[:1]]) for c in (square_corners(machine, 0.0), square_corners(machine, 45.0))]
     written = []
     with tqdm(total=len(heights) + 1, desc="workspace", unit="step", disable=not progress) as bar:
@@ -155,16 +160,18 @@ def write_preload_study(study: PreloadStudy, out_dir: Path | str, overwrite: boo
     try:
         for g, gap in enumerate(study.clearances_m):
             lab = f"g = {gap * 1e6:g} um"
-            line, = axes[0].plot(study.preloads, study.small_load_stiffness_n_per_m[g], "o-", ms=3, label=lab)
+            line, = axes[0].plot(study.preloads, study.small_load_secant_stiffness_n_per_m[g], "o-", ms=3, label=lab)
             axes[1].plot(study.preloads, study.press_secant_stiffness_n_per_m[g], "o-", ms=3, color=line.get_color(),
                          label=lab)
             axes[1].plot(study.preloads, study.press_stiffness_n_per_m[g], "x:", ms=3, color=line.get_color())
             for ax in axes:
                 ax.axvline(study.critical_preload[g], color=line.get_color(), lw=0.6, ls="--")
         for ax in axes:
-            ax.axhline(study.reference_stiffness_n_per_m, color="k", lw=0.8, label="no clearance")
+            ax.axhline(study.no_clearance_contact_stiffness_n_per_m, color="k", lw=0.8,
+                       label="no clearance, contact springs")
+            ax.axhline(study.rigid_cardan_stiffness_n_per_m, color="k", lw=0.8, ls=":", label="rigid cardans")
             ax.set(xlabel=f"preload a4 [{unit}] (dashed: critical preload)", ylabel="stiffness [N/m]", yscale="log")
-        axes[0].set_title("small-load stiffness (first step secant)")
+        axes[0].set_title(f"small-load secant stiffness at {study.small_load_n:g} N")
         axes[1].set_title(f"at {study.loads_n[-1]:g} N: secant (o-) and tangent (x:)")
         axes[0].legend(fontsize=7)
         fig.suptitle(f"pose {study.pose_m.tolist()} m, load along {np.round(study.direction, 3).tolist()}")

@@ -14,14 +14,15 @@ from __future__ import annotations
 
 from collections.abc import Callable
 from dataclasses import dataclass, field
+from pathlib import Path
 
 import numpy as np
 from tqdm import tqdm
 
 from pressfit import kinematics
-from pressfit.description.cases import Case
+from pressfit.description.cases import Case, discover, load_case
 from pressfit.description.machine import Machine
-from pressfit.errors import PressfitError
+from pressfit.errors import PressfitError, UnstableEquilibriumError
 from pressfit.mechanics import buckling, condensed, preload
 from pressfit.mechanics.statics import Equilibrium, EquilibriumSolver
 
@@ -68,6 +69,7 @@ class LimitResult:
     load: list[float]
     method: str
     passed: bool
+    sense: str = "max"  # "max": worst <= limit passes; "min": worst >= limit passes
 
 
 @dataclass(frozen=True)
@@ -78,12 +80,57 @@ class CaseResult:
     path: str
     n_poses: int
     n_loads: int
-    unreachable: list[dict[str, object]] = field(default_factory=list)
+    unreachable: list[dict[str, object]] = field(default_factory=list)  # every one: pose_m, reason, excess
     limits: list[LimitResult] = field(default_factory=list)
 
     @property
     def passed(self) -> bool:
         return not self.unreachable and all(r.passed for r in self.limits)
+
+
+@dataclass(frozen=True)
+class FileError:
+    """A case file that could not be checked (malformed, or its evaluation refused): an error, not a verdict."""
+
+    path: str
+    message: str
+
+
+@dataclass(frozen=True)
+class CheckRun:
+    """``pressfit check``: the verdict of every checkable case, the files that could not be checked, and the
+    cases without an ``[envelope]``. Exit code: 2 if any file is in error, else 1 if any case fails, else 0."""
+
+    results: list[CaseResult]
+    errors: list[FileError]
+    skipped: list[str]
+
+    @property
+    def exit_code(self) -> int:
+        return 2 if self.errors else 1 if any(not r.passed for r in self.results) else 0
+
+
+def check_files(paths: list[Path | str], progress: bool = False) -> CheckRun:
+    """Check every case file named or found under the directories in ``paths``: a malformed file (or one
+    whose evaluation is refused) is recorded as an error and the others are still checked."""
+    cases, errors = [], []
+    for f in discover(paths):
+        try:
+            case = load_case(f)
+            case.machine()
+            cases.append(case)
+        except PressfitError as exc:
+            errors.append(FileError(str(f), str(exc)))
+    checked = [c for c in cases if c.envelope.model_dump(exclude_none=True)]
+    if not checked and not errors:
+        raise PressfitError("no case among " + ", ".join(map(str, paths)) + " has an [envelope] to check")
+    results = []
+    for case in checked:
+        try:
+            results.append(evaluate_case(case, progress=progress))
+        except PressfitError as exc:
+            errors.append(FileError(case.path, str(exc)))
+    return CheckRun(results, errors, [c.path for c in cases if c not in checked])
 
 
 def _axial_quantities(n: np.ndarray, critical: np.ndarray) -> dict[str, np.ndarray]:
@@ -132,8 +179,7 @@ def evaluate_case(case: Case, progress: bool = False) -> CaseResult:
     machine = case.machine()
     poses_all, loads = case.poses.array(), case.loads.wrenches()
     ok = kinematics.is_reachable(machine, poses_all)
-    unreachable = [{"pose_m": h.tolist(), "reason": kinematics.unreachable_reason(machine, h)}
-                   for h in poses_all[~ok]]
+    unreachable = _unreachable(machine, poses_all[~ok])
     poses = poses_all[ok]
     wanted = {k: v for k, v in case.envelope.model_dump().items() if v is not None}
     result = CaseResult(case.name, case.path, len(poses_all), len(loads), unreachable)
@@ -164,7 +210,8 @@ def evaluate_case(case: Case, progress: bool = False) -> CaseResult:
         "min_interference_distance_m": lambda: _interference(machine, poses, progress),
     }.items() if k in wanted}
 
-    lines = []
+    lines: list[LimitResult] = []
+    unstable: dict[tuple[int, int], str] = {}  # (load, pose) -> why no stable equilibrium was found
     solver = EquilibriumSolver(machine, pose_m=poses[0])  # one model for every refined pose
     for key, limit in wanted.items():
         spec = LIMITS[key]
@@ -180,7 +227,7 @@ def evaluate_case(case: Case, progress: bool = False) -> CaseResult:
                 lin.reshape(len(loads), len(poses), -1).min(-1)
             order = np.argsort(-flat if spec.sense == "max" else flat, axis=None)
             candidates = [tuple(np.unravel_index(i, flat.shape)) for i in order[:case.solver.refine_worst]]
-            j, p = candidates[0] if candidates else (0, 0)
+            j, p = np.unravel_index(order[0], flat.shape)  # the worst of the whole sweep, refined or not
             w, _, leg = _worst(lin[j], spec.sense)
             best = (w, int(j), int(p), leg, f"linear condensed over {len(poses)} poses x {len(loads)} loads")
         else:  # shear: only the refined nonlinear solutions carry it; refine the worst bending poses
@@ -188,19 +235,62 @@ def evaluate_case(case: Case, progress: bool = False) -> CaseResult:
             order = np.argsort(-b, axis=None)
             candidates = [tuple(np.unravel_index(i, b.shape)) for i in order[:max(1, case.solver.refine_worst)]]
         for j, p in candidates:
-            eq = solver.solve(poses[p], loads[j], linear=case.solver.linear, preload=a4 or None)
+            try:
+                eq = solver.solve(poses[p], loads[j], linear=case.solver.linear, preload=a4 or None)
+            except UnstableEquilibriumError as exc:
+                unstable.setdefault((int(j), int(p)), str(exc))
+                continue
             w, _, leg = _worst(equilibrium_quantities(eq, critical[p:p + 1])[key], spec.sense)
             if worse(w, best, spec.sense):
                 how = "linear" if case.solver.linear else "nonlinear"
                 best = (w, int(j), int(p), leg, f"{how} Pinocchio solve at the {len(candidates)} worst poses")
             if case.clearance is not None and key in CLEARANCE_SENSITIVE:
-                w, leg = _with_clearance(case, machine, poses[p], loads[j], a4, critical[p:p + 1], key, spec.sense)
+                try:
+                    w, leg = _with_clearance(case, machine, poses[p], loads[j], a4, critical[p:p + 1], key,
+                                             spec.sense)
+                except UnstableEquilibriumError as exc:
+                    unstable.setdefault((int(j), int(p)), str(exc))
+                    continue
                 if worse(w, best, spec.sense):
-                    best = (w, int(j), int(p), leg, f"with the case's cardan clearances (small-displacement "
+                    best = (w, int(j), int(p), leg, "with the case's cardan clearances (axial play along each leg, "
+                            f"small-displacement "
                             f"clearance solver, 20 load steps) at the {len(candidates)} worst poses")
-        assert best is not None
+        if best is None:  # shear with every refined solve unstable: the stability line below reports it
+            continue
         lines.append(_line(key, spec, limit, best[0], best[3], poses[best[2]], loads[best[1]], best[4]))
+    if unstable:
+        lines = _instability_line(lines, unstable, poses, loads, wanted.get("min_buckling_safety_factor"))
     return CaseResult(case.name, case.path, len(poses_all), len(loads), unreachable, lines)
+
+
+STABILITY = Limit("stable equilibrium under the full load (1 = stable, 0 = none found)", "-", "min")
+
+
+def _instability_line(lines: list[LimitResult], unstable: dict[tuple[int, int], str], poses: np.ndarray,
+                      loads: np.ndarray, buckling_limit: float | None) -> list[LimitResult]:
+    """A refined solve found no stable equilibrium (a leg beyond buckling, a runaway displacement): a failed
+    limit, not bad input. It fails ``min_buckling_safety_factor`` (reported as factor 0 at that pose and
+    load) or, without a buckling limit, a ``stable_equilibrium`` line."""
+    (j, p), why = next(iter(unstable.items()))
+    method = f"no stable equilibrium under this load in the nonlinear solve ({why})"
+    if len(unstable) > 1:
+        method += f"; {len(unstable) - 1} more (pose, load) pairs likewise"
+    if buckling_limit is None:
+        return [*lines, _line("stable_equilibrium", STABILITY, 1.0, 0.0, None, poses[p], loads[j], method)]
+    spec = LIMITS["min_buckling_safety_factor"]
+    line = _line("min_buckling_safety_factor", spec, buckling_limit, 0.0, None, poses[p], loads[j], method)
+    return [line if x.key == line.key else x for x in lines]
+
+
+def _unreachable(machine: Machine, poses: np.ndarray) -> list[dict[str, object]]:
+    """Every unreachable pose with the limits it breaks and by how much (m for leg lengths, rad for angles)."""
+    if not len(poses):
+        return []
+    m = kinematics.limit_margins(machine, poses)
+    length = np.maximum(-m["leg_length_m"].min(-1), 0.0)
+    angle = np.maximum(-np.minimum(m["alpha_rad"], m["beta_rad"]).min(-1), 0.0)
+    return [{"pose_m": h.tolist(), "reason": kinematics.unreachable_reason(machine, h),
+             "leg_length_excess_m": float(dl), "angle_excess_rad": float(da)} for h, dl, da in zip(poses, length, angle)]
 
 
 CLEARANCE_SENSITIVE = {"max_tension_n", "max_compression_n", "max_actuator_force_n", "max_plate_deflection_m",
@@ -237,7 +327,7 @@ def _line(key: str, spec: Limit, limit: float, worst: float, leg: int | None, po
     passed = worst <= limit if spec.sense == "max" else worst >= limit
     return LimitResult(key, spec.label, spec.unit, float(limit), float(worst), leg,
                        [float(c) for c in pose], [] if load is None else [float(c) for c in load],
-                       method, bool(passed))
+                       method, bool(passed), spec.sense)
 
 
 def _interference(machine: object, poses: np.ndarray, progress: bool) -> np.ndarray:

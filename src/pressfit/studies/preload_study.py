@@ -13,6 +13,7 @@ from tqdm import tqdm
 
 from pressfit import kinematics
 from pressfit.description.machine import Machine
+from pressfit.mechanics import condensed
 from pressfit.mechanics.clearance import (
     clearance_from_case,
     Clearance,
@@ -27,6 +28,10 @@ from pressfit.mechanics.clearance import (
 from pressfit.mechanics.preload import rest_length_offsets
 
 
+CLEARANCE_GEOMETRY = "axial: +-g along the leg axis at each cardan"
+SMALL_LOAD_FRACTION = 0.1  # the small load of the small-load secant stiffness, as a fraction of the largest load
+
+
 # --- the preload study -------------------------------------------------------------------------------------
 @dataclass(frozen=True)
 class PreloadStudy:
@@ -39,55 +44,66 @@ class PreloadStudy:
     preloads: np.ndarray  # (P,) N (force) or m (length)
     loads_n: np.ndarray  # (n,)
     deflection_m: np.ndarray  # (G, P, n) along the direction, loading
-    small_load_stiffness_n_per_m: np.ndarray
+    small_load_n: float  # the stated small load, N (SMALL_LOAD_FRACTION of the largest load)
+    small_load_secant_stiffness_n_per_m: np.ndarray  # small_load_n over the deflection it causes (own solve)
     press_stiffness_n_per_m: np.ndarray
     press_secant_stiffness_n_per_m: np.ndarray
     lost_motion_m: np.ndarray
     first_opening_load_n: np.ndarray  # lowest load at which some joint is open (NaN: none opens)
     critical_preload: np.ndarray  # (G,)
-    reference_stiffness_n_per_m: float  # the same machine without clearance (g = 0), first step
+    no_clearance_contact_stiffness_n_per_m: float  # g = 0 with the contact springs k_c in series with each leg
+    rigid_cardan_stiffness_n_per_m: float  # g = 0 and rigid cardans: the stiffness that ``pressfit stiffness`` gives
     max_residual: float
     contact_stiffness_n_per_m: float
     smoothing_m: float
 
+    @property
+    def baseline(self) -> int:
+        """Index of the "without preload" column (a4 = 0, always computed)."""
+        return int(np.flatnonzero(self.preloads == 0.0)[0])
+
     def rows(self) -> tuple[list[str], list[list[Any]]]:
         header = ["clearance_m", f"preload_{'n' if self.preload_mode == 'force' else 'm'}",
-                  "small_load_stiffness_n_per_m", "press_stiffness_n_per_m", "press_secant_stiffness_n_per_m",
+                  "small_load_secant_stiffness_n_per_m", "press_stiffness_n_per_m", "press_secant_stiffness_n_per_m",
                   "lost_motion_m", "deflection_at_max_m", "first_opening_load_n", "critical_preload",
                   "stiffness_gain_vs_no_preload"]
-        rows = []
+        rows, b = [], self.baseline
         for g, p in np.ndindex(len(self.clearances_m), len(self.preloads)):
             rows.append([float(self.clearances_m[g]), float(self.preloads[p]),
-                         float(self.small_load_stiffness_n_per_m[g, p]), float(self.press_stiffness_n_per_m[g, p]),
+                         float(self.small_load_secant_stiffness_n_per_m[g, p]),
+                         float(self.press_stiffness_n_per_m[g, p]),
                          float(self.press_secant_stiffness_n_per_m[g, p]), float(self.lost_motion_m[g, p]),
                          float(self.deflection_m[g, p, -1]), _opt(self.first_opening_load_n[g, p]),
-                         float(self.critical_preload[g]), float(self.small_load_stiffness_n_per_m[g, p]
-                                                               / self.small_load_stiffness_n_per_m[g, 0])])
+                         float(self.critical_preload[g]), float(self.small_load_secant_stiffness_n_per_m[g, p]
+                                                               / self.small_load_secant_stiffness_n_per_m[g, b])])
         return header, rows
 
     def to_dict(self) -> dict[str, Any]:
         header, rows = self.rows()
         return {"pose_m": self.pose_m.tolist(), "direction": self.direction.tolist(),
                 "preload_mode": self.preload_mode, "load_max_n": float(self.loads_n[-1]),
+                "clearance_geometry": CLEARANCE_GEOMETRY,
                 "steps": len(self.loads_n) - 1, "contact_stiffness_n_per_m": self.contact_stiffness_n_per_m,
-                "smoothing_m": self.smoothing_m, "reference_stiffness_n_per_m": self.reference_stiffness_n_per_m,
+                "smoothing_m": self.smoothing_m, "small_load_n": self.small_load_n,
+                "no_clearance_contact_stiffness_n_per_m": self.no_clearance_contact_stiffness_n_per_m,
+                "rigid_cardan_stiffness_n_per_m": self.rigid_cardan_stiffness_n_per_m,
                 "max_residual": self.max_residual, "answers": self.answers(),
                 "table": [dict(zip(header, r)) for r in rows]}
 
     def answers(self) -> list[dict[str, Any]]:
         """Per clearance: the critical preload, and the small-load and press-load stiffness it buys."""
-        out = []
+        out, b = [], self.baseline
         for g, gap in enumerate(self.clearances_m):
             ok = np.flatnonzero(self.preloads >= self.critical_preload[g])
             best = int(ok[0]) if ok.size else None
             out.append({
                 "clearance_m": float(gap), "critical_preload": float(self.critical_preload[g]),
-                "lost_motion_without_preload_m": float(self.lost_motion_m[g, 0]),
-                "small_load_stiffness_without_preload_n_per_m": float(self.small_load_stiffness_n_per_m[g, 0]),
-                "press_secant_without_preload_n_per_m": float(self.press_secant_stiffness_n_per_m[g, 0]),
+                "lost_motion_without_preload_m": float(self.lost_motion_m[g, b]),
+                "small_load_secant_without_preload_n_per_m": float(self.small_load_secant_stiffness_n_per_m[g, b]),
+                "press_secant_without_preload_n_per_m": float(self.press_secant_stiffness_n_per_m[g, b]),
                 "first_sufficient_preload": None if best is None else float(self.preloads[best]),
-                "small_load_stiffness_with_it_n_per_m": None if best is None
-                else float(self.small_load_stiffness_n_per_m[g, best]),
+                "small_load_secant_with_it_n_per_m": None if best is None
+                else float(self.small_load_secant_stiffness_n_per_m[g, best]),
                 "press_secant_with_it_n_per_m": None if best is None
                 else float(self.press_secant_stiffness_n_per_m[g, best]),
             })
@@ -104,10 +120,14 @@ def preload_study(machine: Machine, pose_m: Any, clearances_m: Any, preloads: An
     """Load-deflection curves (loading, small-displacement solver) for every clearance (a number: m, uniform
     on the eight cardans with the contact law of ``template`` or the machine; or a :class:`Clearance`; an
     empty list: ``template`` itself) and preload (N, or m in length mode),
-    0..load_max_n (N) in ``steps`` steps along ``direction``; plus the critical preload per clearance."""
+    0..load_max_n (N) in ``steps`` steps along ``direction``; plus the critical preload per clearance.
+
+    The preload a4 = 0 (the baseline "without preload") is always part of the grid; preloads are sorted.
+    The small-load stiffness is the secant at the stated load ``SMALL_LOAD_FRACTION * load_max_n`` from its
+    own solve (independent of ``steps``); it includes the lost motion a joint's play allows."""
     pose = kinematics.require_reachable(machine, pose_m)
     d = _direction(direction)
-    pre = np.atleast_1d(np.asarray(preloads, float))
+    pre = np.unique(np.append(np.atleast_1d(np.asarray(preloads, float)), 0.0))
     base = template or Clearance.uniform(machine)
     variants = [c if isinstance(c, Clearance) else base.with_gap(float(c)) for c in clearances_m] or [base]
     gaps = np.array([float(c.gaps_m.mean()) for c in variants])
@@ -116,26 +136,30 @@ def preload_study(machine: Machine, pose_m: Any, clearances_m: Any, preloads: An
     if not (load_max_n > 0 and steps >= 2):
         raise ClearanceError("load_max_n must be positive and steps >= 2")
     loads = np.linspace(0.0, float(load_max_n), int(steps) + 1)
-    curves, res = [], 0.0
+    small = np.array([0.0, SMALL_LOAD_FRACTION * float(load_max_n)])
+    curves, secants, res = [], [], 0.0
     for var in tqdm(variants, desc="preload study", unit="clearance", disable=not progress):
         cls = [var] * len(pre)
         offsets = np.array([rest_length_offsets(machine, pose, float(a), preload_mode, var) for a in pre])
         up, _ = _sweep_small(machine, pose, d, loads, cls, offsets, unload=False)
         curves.append([LoadDeflection(pose, d, float(a), preload_mode, "small", cls[0], _branch(loads, up, p), None)
                        for p, a in enumerate(pre)])
-        res = max(res, max(float(s["residual"].max()) for s in up))
+        at, _ = _sweep_small(machine, pose, d, small, cls, offsets, unload=False)
+        secants.append(small[1] / ((at[1]["displacement_m"] - at[0]["displacement_m"]) @ d))
+        res = max(res, max(float(s["residual"].max()) for s in up + at))
     crit = critical_preloads(machine, pose, d, load_max_n, variants, preload_mode, steps)
-    ref = load_deflection(machine, pose, d, loads[:3], base.with_gap(0.0), unload=False)
+    contact = load_deflection(machine, pose, d, np.array([0.0, 0.5, 1.0]) * small[1], base.with_gap(0.0), unload=False)
+    rigid = 1.0 / float(d @ condensed.plate_compliance(machine, pose[None])[0, :3, :3] @ d)
 
     def grid(f: Any) -> np.ndarray:
         return np.array([[f(c) for c in row] for row in curves])
 
     return PreloadStudy(
-        pose, d, preload_mode, gaps, pre, loads, grid(lambda c: c.deflection_m),
-        grid(lambda c: c.small_load_stiffness_n_per_m), grid(lambda c: c.press_stiffness_n_per_m),
+        pose, d, preload_mode, gaps, pre, loads, grid(lambda c: c.deflection_m), float(small[1]), np.array(secants),
+        grid(lambda c: c.press_stiffness_n_per_m),
         grid(lambda c: c.press_secant_stiffness_n_per_m), grid(lambda c: c.lost_motion_m),
         grid(lambda c: np.nanmin(c.opening_loads_n) if np.any(~np.isnan(c.opening_loads_n)) else np.nan),
-        np.array([c.preload for c in crit]), ref.small_load_stiffness_n_per_m, res,
+        np.array([c.preload for c in crit]), contact.press_secant_stiffness_n_per_m, rigid, res,
         base.contact_stiffness_n_per_m, base.smoothing_m)
 
 
@@ -155,15 +179,19 @@ def study_from_case(case: Any) -> dict[str, Any]:
 def format_answers(study: PreloadStudy) -> str:
     """The user's question answered per clearance, one line each (SI)."""
     unit = "N" if study.preload_mode == "force" else "m"
-    lines = [f"pose {study.pose_m.tolist()} m, load 0..{study.loads_n[-1]:g} N along "
-             f"{np.round(study.direction, 4).tolist()}; no-clearance stiffness {study.reference_stiffness_n_per_m:.4g} N/m"]
+    pose, direction = (", ".join(f"{c:.4g}" for c in v) for v in (study.pose_m, study.direction))
+    lines = [f"pose ({pose}) m, load 0..{study.loads_n[-1]:g} N along ({direction}); stiffness without clearance: "
+             f"{study.no_clearance_contact_stiffness_n_per_m:.4g} N/m with the cardan contact springs "
+             f"({study.contact_stiffness_n_per_m:.3g} N/m each) in series, {study.rigid_cardan_stiffness_n_per_m:.4g}"
+             f" N/m with rigid cardans (as 'pressfit stiffness'); small-load secant at {study.small_load_n:g} N; "
+             f"clearance geometry {CLEARANCE_GEOMETRY}"]
     for a in study.answers():
         s = (f"g = {a['clearance_m'] * 1e6:g} um: critical preload {a['critical_preload']:.4g} {unit}; without "
-             f"preload lost motion {a['lost_motion_without_preload_m'] * 1e6:.3g} um, small-load stiffness "
-             f"{a['small_load_stiffness_without_preload_n_per_m']:.3g} N/m, secant at the load "
+             f"preload lost motion {a['lost_motion_without_preload_m'] * 1e6:.3g} um, small-load secant "
+             f"{a['small_load_secant_without_preload_n_per_m']:.3g} N/m, secant at the load "
              f"{a['press_secant_without_preload_n_per_m']:.3g} N/m")
         if a["first_sufficient_preload"] is not None:
-            s += (f"; with a4 = {a['first_sufficient_preload']:g} {unit}: {a['small_load_stiffness_with_it_n_per_m']:.3g}"
+            s += (f"; with a4 = {a['first_sufficient_preload']:g} {unit}: {a['small_load_secant_with_it_n_per_m']:.3g}"
                   f" N/m and {a['press_secant_with_it_n_per_m']:.3g} N/m")
         else:
             s += "; no preload in the list is sufficient"
