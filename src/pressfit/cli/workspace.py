@@ -5,7 +5,6 @@ from __future__ import annotations
 from pathlib import Path
 
 import click
-import numpy as np
 
 from pressfit.cli.common import COORDINATE, MODEL_OPTION, user_errors
 from pressfit.description.machine import load_machine

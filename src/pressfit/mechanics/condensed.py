@@ -57,7 +57,6 @@ everything beyond this model.
 
 from __future__ import annotations
 
-import dataclasses
 from dataclasses import dataclass
 
 import numpy as np

@@ -149,7 +149,7 @@ def preload_study(machine: Machine, pose_m: Any, clearances_m: Any, preloads: An
         res = max(res, max(float(s["residual"].max()) for s in up + at))
     crit = critical_preloads(machine, pose, d, load_max_n, variants, preload_mode, steps)
     contact = load_deflection(machine, pose, d, np.array([0.0, 0.5, 1.0]) * small[1], base.with_gap(0.0), unload=False)
-    rigid = 1.0 / float(d @ condensed.plate_compliance(machine, pose[None])[0, :3, :3] @ d)
+    rigid = 1.0 / float(d @ condensed.condensed_plate_compliance(machine, pose[None])[0, :3, :3] @ d)
 
     def grid(f: Any) -> np.ndarray:
         return np.array([[f(c) for c in row] for row in curves])
