@@ -42,9 +42,15 @@ class Geometry(_Strict):
 
 
 class LegLayout(_Strict):
+    """One leg's direction and cardan axes; ``base_point_error_m`` and ``plate_point_error_m`` (m, world
+    axes, default 0) move its base cardan centre B_i and its plate cardan centre d_i off the nominal
+    square (manufacturing errors; the leg lines then no longer meet at one point)."""
+
     radial_direction: Vector3
     cardan_axis: Vector3
     beta_axis: Vector3
+    base_point_error_m: Vector3 = [0.0, 0.0, 0.0]
+    plate_point_error_m: Vector3 = [0.0, 0.0, 0.0]
 
     @field_validator("radial_direction", "cardan_axis", "beta_axis")
     @classmethod
@@ -208,13 +214,22 @@ class Machine(_Strict):
     # --- derived geometry (arrays, SI) -------------------------------------------------------
     @cached_property
     def base_points_m(self) -> np.ndarray:
-        """(4, 3) base cardan centres B_i in the world frame, m."""
-        return self.geometry.base_half_side_m * np.array([leg.radial_direction for leg in self.legs])
+        """(4, 3) base cardan centres B_i in the world frame (nominal p r_i plus the leg's error), m."""
+        return (self.geometry.base_half_side_m * np.array([leg.radial_direction for leg in self.legs])
+                + np.array([leg.base_point_error_m for leg in self.legs]))
 
     @cached_property
     def plate_offsets_m(self) -> np.ndarray:
-        """(4, 3) plate cardan centres relative to the plate centre, d_i, m."""
-        return self.geometry.plate_half_side_m * np.array([leg.radial_direction for leg in self.legs])
+        """(4, 3) plate cardan centres relative to the plate centre, d_i (nominal r r_i plus the error), m."""
+        return (self.geometry.plate_half_side_m * np.array([leg.radial_direction for leg in self.legs])
+                + np.array([leg.plate_point_error_m for leg in self.legs]))
+
+    @cached_property
+    def legs_concurrent(self) -> bool:
+        """True when every leg line meets the others at P* = h p / (p - r) for every pose h, i.e.
+        d_i = (r / p) B_i for each leg (to 1e-12 m): false once a joint position error breaks it."""
+        p, r = self.geometry.base_half_side_m, self.geometry.plate_half_side_m
+        return bool(np.all(np.abs(p * self.plate_offsets_m - r * self.base_points_m) <= 1e-12 * p))
 
     @cached_property
     def cardan_axes(self) -> np.ndarray:
