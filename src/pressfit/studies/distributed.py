@@ -41,7 +41,7 @@ def _client(workers: int | None, scheduler: str | None):  # -> distributed.Clien
     n = workers or default_workers()
     if n < 1:
         raise ClusterError(f"the number of workers must be at least 1, got {n}")
-    cluster = LocalCluster(n_workers=n, threads_per_worker=1, processes=True, dashboard_address=None,
+    cluster = LocalCluster(n_workers=n, threads_per_worker=1, processes=True, dashboard_address=":0",
                            silence_logs=40, env={"OMP_NUM_THREADS": "1", "OPENBLAS_NUM_THREADS": "1"})
     return Client(cluster)
 

@@ -26,7 +26,10 @@ Exceedance probability: the fraction of samples beyond the limit with the **Wils
 interval (it keeps its coverage near 0 and 1, where the normal approximation fails). Sensitivity: the
 Spearman rank correlation (scipy) between each input and each output, ranked by its magnitude: random
 sampling does not fit the structured designs that variance-based methods (SALib's Sobol) need, and rank
-correlation is robust to the monotone, nonlinear responses seen here.
+correlation is robust to monotone nonlinear responses. It does not see a response that is even in an
+input (the self-stress grows with |v_p . offset| whatever its sign): read it with the histograms.
+Quantiles are sample quantiles (``inverted_cdf``: an observed value, so an infinite buckling factor
+stays infinite instead of becoming NaN).
 """
 
 from __future__ import annotations
@@ -288,7 +291,7 @@ def _finite(obj: Any) -> Any:
 
 
 def _spearman(x: np.ndarray, y: np.ndarray) -> float:
-    if np.ptp(x) == 0 or np.ptp(y) == 0:
+    if np.unique(x).size < 2 or np.unique(y).size < 2:  # a constant carries no ranking
         return 0.0
     return float(stats.spearmanr(x, y).statistic)
 
@@ -300,7 +303,7 @@ def summarize(plan: MonteCarloPlan, columns: dict[str, np.ndarray], envelope: di
     ok = columns["status"] == "ok"
     failed = {str(s): int(c) for s, c in zip(*np.unique(columns["status"][~ok], return_counts=True))}
     outputs = [*OUTPUTS, *EXTRA_OUTPUTS]
-    quantiles = {k: {f"q{q:g}": float(np.quantile(columns[k][ok], q)) for q in QUANTILES} if ok.any() else {}
+    quantiles = {k: {f"q{q:g}": float(np.quantile(columns[k][ok], q, method="inverted_cdf")) for q in QUANTILES} if ok.any() else {}
                  for k in outputs}
     exceed, notes = [], []
     for key, limit in envelope.items():
