@@ -52,13 +52,13 @@ def closed_form_peak_tension(machine, offsets_m: np.ndarray) -> np.ndarray:
 
 def test_peak_tension_matches_closed_form_per_sample(tmp_path):
     """Each sample's worst tension against the linear closed form; the geometrically nonlinear solve differs
-    by its small-rotation terms (measured 1.4e-5 relative here): tolerance 1e-4 of the value."""
+    by its small-rotation terms (measured 5.7e-5 relative here): tolerance 2e-4 of the value."""
     plan = mc.plan_from_case(load_case(synthetic_case(tmp_path)), samples=25)
     cols = mc.evaluate_chunk(plan, 0, mc.chunk_seeds(plan)[0])
     offsets = np.column_stack([cols[f"actuator_length_offset_m.leg{i}"] for i in range(1, 5)])
     expected = closed_form_peak_tension(plan.machine, offsets)
     assert np.all(cols["status"] == "ok")
-    np.testing.assert_allclose(cols["max_tension_n"], expected, rtol=1e-4)
+    np.testing.assert_allclose(cols["max_tension_n"], expected, rtol=2e-4)
     assert np.ptp(expected) > 50  # the offsets really spread the answer
 
 
