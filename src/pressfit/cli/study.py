@@ -15,7 +15,7 @@ from pressfit.output.files import check_directory, to_json, write_directory
 
 @click.group("study")
 def study_group() -> None:
-    """Parameter studies: ``pressfit study preload``."""
+    """Parameter studies: ``pressfit study preload``, ``pressfit study montecarlo``."""
 
 
 @study_group.command("preload", context_settings={"ignore_unknown_options": True})  # negative numbers
@@ -66,4 +66,42 @@ def study_preload_cmd(case_file: Path | None, pose: tuple[float, ...] | None, cl
         return
     click.echo(preload_study.format_answers(study))
     for p in written:
+        click.echo(f"wrote {p}")
+
+
+@study_group.command("montecarlo")
+@click.argument("case_file", type=click.Path(path_type=Path))
+@click.option("--samples", type=click.IntRange(1), help="Number of samples (default: the case's [montecarlo]).")
+@click.option("--seed", type=click.IntRange(0), help="Seed (default: the case's).")
+@click.option("--chunk-size", type=click.IntRange(1), help="Samples per task (default: the case's).")
+@click.option("--workers", type=click.IntRange(1), help="Worker processes of the local cluster (default: one per core).")
+@click.option("--scheduler", help="Address of a running Dask scheduler, e.g. tcp://10.0.0.5:8786 (instead of --workers).")
+@click.option("--out", "out_dir", type=click.Path(path_type=Path), default=Path("out/montecarlo"), show_default=True,
+              help="Study directory: samples/*.parquet, summary.json, quantiles.csv, PNG plots; rerun to resume.")
+@click.option("--overwrite", is_flag=True, help="Discard an earlier study in --out and start afresh.")
+@click.option("--json", "as_json", is_flag=True, help="Print the summary as JSON.")
+@click.option("--progress/--no-progress", default=True, help="Show a progress bar over samples.")
+@user_errors
+def study_montecarlo_cmd(case_file: Path, samples: int | None, seed: int | None, chunk_size: int | None,
+                         workers: int | None, scheduler: str | None, out_dir: Path, overwrite: bool, as_json: bool,
+                         progress: bool) -> None:
+    """Monte Carlo tolerances: exceedance probability of each envelope limit (Wilson 95% interval) and a
+    sensitivity ranking, on a Dask cluster (SI units)."""
+    from pressfit.description.cases import load_case
+    from pressfit.output.montecarlo_files import run_montecarlo
+
+    run = run_montecarlo(load_case(case_file), out_dir, samples=samples, seed=seed, chunk_size=chunk_size,
+                         workers=workers, scheduler=scheduler, overwrite=overwrite, progress=progress)
+    if as_json:
+        click.echo(to_json(run.summary.to_dict() | {"outputs": [str(p) for p in run.written]}))
+        return
+    s = run.summary
+    click.echo(f"{s.samples} samples ({run.chunks_run} of {run.chunks_total} chunks run now, the rest resumed); "
+               f"failed solves: {s.failed or 'none'}")
+    for e in s.exceedance:
+        click.echo(f"P({e.key} beyond {e.limit:g}) = {e.probability:.4g}  (95% Wilson {e.ci95[0]:.4g} .. "
+                   f"{e.ci95[1]:.4g}; {e.count}/{e.samples})")
+    for note in s.notes:
+        click.echo(note)
+    for p in run.written:
         click.echo(f"wrote {p}")

@@ -206,6 +206,62 @@ class Study(_Strict):
     steps: Annotated[int, Field(ge=2, le=10000)] = 50
 
 
+class Distribution(_Strict):
+    """One random input (SI, the unit of the input it drives): ``normal`` (``mean``, ``std``), ``uniform``
+    (``low``, ``high``) or ``truncnormal`` (a normal ``mean``, ``std`` cut to [``low``, ``high``])."""
+
+    distribution: Literal["normal", "uniform", "truncnormal"]
+    mean: Finite = 0.0
+    std: NonNegative | None = None
+    low: Finite | None = None
+    high: Finite | None = None
+
+    @model_validator(mode="after")
+    def _parameters(self) -> Distribution:
+        needs_std, needs_bounds = self.distribution != "uniform", self.distribution != "normal"
+        if needs_std != (self.std is not None):
+            raise ValueError(f"{self.distribution} {'needs' if needs_std else 'takes no'} std")
+        if needs_bounds != (self.low is not None and self.high is not None) or (
+                not needs_bounds and (self.low is not None or self.high is not None)):
+            raise ValueError(f"{self.distribution} {'needs' if needs_bounds else 'takes no'} low and high")
+        if needs_bounds and not self.low < self.high:  # type: ignore[operator]
+            raise ValueError("low must be smaller than high")
+        if self.distribution == "truncnormal" and not (self.std > 0 and self.low <= self.mean + 8 * self.std  # type: ignore
+                                                       and self.high >= self.mean - 8 * self.std):  # type: ignore
+            raise ValueError("truncnormal needs std > 0 and [low, high] within 8 std of the mean")
+        return self
+
+
+class MonteCarloInputs(_Strict):
+    """The random inputs of a Monte Carlo study; each is drawn independently for every leg (and joint, and
+    axis) it applies to. Lengths m, angles rad."""
+
+    actuator_length_offset_m: Distribution | None = None  # per leg: held length minus commanded length
+    base_point_error_m: Distribution | None = None  # per leg and world axis: base cardan centre error
+    plate_point_error_m: Distribution | None = None  # per leg and world axis: plate cardan centre error
+    load_tilt_rad: Distribution | None = None  # angle of the load force off its nominal direction (azimuth uniform)
+    cardan_clearance_m: Distribution | None = None  # per cardan (8): axial play, m (values must stay in [0, 1e-2])
+
+    @model_validator(mode="after")
+    def _some(self) -> MonteCarloInputs:
+        if all(getattr(self, k) is None for k in type(self).model_fields):
+            raise ValueError("name at least one random input")
+        c = self.cardan_clearance_m
+        if c is not None and (c.distribution == "normal" or c.low < 0 or c.high > 1e-2):  # type: ignore[operator]
+            raise ValueError("cardan_clearance_m must be uniform or truncnormal within [0, 0.01] m")
+        return self
+
+
+class MonteCarlo(_Strict):
+    """``pressfit study montecarlo``: ``samples`` draws of ``inputs``, seeded by ``seed``, run in chunks of
+    ``chunk_size`` samples; every sample solves every pose and load of the case."""
+
+    samples: Annotated[int, Field(ge=1, le=10**9)] = 1000
+    seed: Annotated[int, Field(ge=0)] = 0
+    chunk_size: Annotated[int, Field(ge=1, le=100_000)] = 50
+    inputs: MonteCarloInputs
+
+
 class Case(_Strict):
     """A validated case file."""
 
@@ -221,6 +277,7 @@ class Case(_Strict):
     reference: Reference | None = None
     clearance: ClearanceSpec | None = None
     study: Study | None = None
+    montecarlo: MonteCarlo | None = None
     path: str = ""
 
     def machine(self) -> Machine:

@@ -48,9 +48,15 @@ class Geometry(_Strict):
 
 
 class LegLayout(_Strict):
+    """One leg's direction and cardan axes; ``base_point_error_m`` and ``plate_point_error_m`` (m, world
+    axes, default 0) move its base cardan centre B_i and its plate cardan centre d_i off the nominal
+    square (manufacturing errors; the leg lines then no longer meet at one point)."""
+
     radial_direction: Vector3
     cardan_axis: Vector3
     beta_axis: Vector3
+    base_point_error_m: Vector3 = [0.0, 0.0, 0.0]
+    plate_point_error_m: Vector3 = [0.0, 0.0, 0.0]
 
     @field_validator("radial_direction", "cardan_axis", "beta_axis")
     @classmethod
@@ -245,15 +251,29 @@ class Machine(_Strict):
     # --- derived geometry (arrays, SI) -------------------------------------------------------
     @cached_property
     def base_points_m(self) -> np.ndarray:
-        """(4, 3) base cardan centres B_i = p n_i + h_b y in the world frame, m (n_i radial, h_b joint height)."""
+        """(4, 3) base cardan centres B_i = p n_i + h_b y + e_i in the world frame, m (n_i radial, h_b the
+        joint height, e_i the leg's position error)."""
         radial = np.array([leg.radial_direction for leg in self.legs])
-        return self.geometry.base_half_side_m * radial + [0.0, self.geometry.base_joint_height_m, 0.0]
+        return (self.geometry.base_half_side_m * radial + [0.0, self.geometry.base_joint_height_m, 0.0]
+                + np.array([leg.base_point_error_m for leg in self.legs]))
 
     @cached_property
     def plate_offsets_m(self) -> np.ndarray:
-        """(4, 3) plate cardan centres relative to the plate centre, d_i = r n_i + h_p y, m."""
+        """(4, 3) plate cardan centres relative to the plate centre, d_i = r n_i + h_p y + e_i, m."""
         radial = np.array([leg.radial_direction for leg in self.legs])
-        return self.geometry.plate_half_side_m * radial + [0.0, self.geometry.plate_joint_height_m, 0.0]
+        return (self.geometry.plate_half_side_m * radial + [0.0, self.geometry.plate_joint_height_m, 0.0]
+                + np.array([leg.plate_point_error_m for leg in self.legs]))
+
+    @cached_property
+    def legs_concurrent(self) -> bool:
+        """True when every leg line meets the others at one point P* for every pose h (see
+        :func:`pressfit.kinematics.concurrency_point`), i.e. p (d_i - h_p y) = r (B_i - h_b y) for each leg (to
+        1e-12 m): false once a joint position error breaks it."""
+        g = self.geometry
+        p, r = g.base_half_side_m, g.plate_half_side_m
+        d = self.plate_offsets_m - [0.0, g.plate_joint_height_m, 0.0]
+        b = self.base_points_m - [0.0, g.base_joint_height_m, 0.0]
+        return bool(np.all(np.abs(p * d - r * b) <= 1e-12 * p))
 
     @cached_property
     def cardan_axes(self) -> np.ndarray:

@@ -134,6 +134,10 @@ class _Core:
 
 def _core(machine: Machine, h: np.ndarray) -> _Core:
     """Condensed springs and the two 3x3 blocks for poses h of shape (m, 3)."""
+    if not machine.legs_concurrent:
+        raise CondensedModelError(f"{machine.name}: the leg lines do not all meet at one point (joint position "
+                                  "errors d_i != (r/p) B_i); the condensed model assumes they do: use "
+                                  "pressfit.mechanics.statics")
     u = np.ascontiguousarray(np.moveaxis(leg_vectors(machine, h), (0, 1, 2), (2, 1, 0)))
     length = np.sqrt(u[0] * u[0] + u[1] * u[1] + u[2] * u[2])
     e = u / length

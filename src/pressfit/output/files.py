@@ -138,3 +138,12 @@ def save_figure(fig: Any, path: Path | str, overwrite: bool = False) -> Path:
     """Save a matplotlib figure atomically (format from the suffix: .png or .svg)."""
     fmt = Path(path).suffix.lstrip(".")
     return _atomic(path, lambda p: fig.savefig(p, format=fmt, dpi=120, bbox_inches="tight"), overwrite)
+
+
+def write_parquet(path: Path | str, columns: dict[str, np.ndarray], overwrite: bool = False) -> Path:
+    """Write named columns (equal-length arrays) as one Parquet file (pyarrow, zstd)."""
+    import pyarrow as pa
+    import pyarrow.parquet as pq
+
+    table = pa.table({k: np.asarray(v) for k, v in columns.items()})
+    return _atomic(path, lambda p: pq.write_table(table, p, compression="zstd"), overwrite)

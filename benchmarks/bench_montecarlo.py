@@ -1,0 +1,56 @@
+"""Monte Carlo throughput on Dask (pressfit.studies.montecarlo): samples per second with 1 and 2 worker
+processes, scaling efficiency, output volume per sample, and the projection to 1e5 and 1e8 samples.
+
+Run: ``python benchmarks/bench_montecarlo.py [SAMPLES]`` (default 400) on the shipped 3-pose case
+cases/studies/montecarlo_tolerances.toml, in two variants: its full input set (joint position errors: a
+Pinocchio model is built per sample) and lengths + load tilt only (one model per chunk). Goal of issue
+12: 1e5 samples of a 3-pose case in at most 5 minutes on 2 cores. Not a test: timings depend on the machine.
+"""
+
+from __future__ import annotations
+
+import os
+import sys
+import tempfile
+import time
+from pathlib import Path
+
+os.environ.setdefault("OMP_NUM_THREADS", "1")
+os.environ.setdefault("OPENBLAS_NUM_THREADS", "1")
+
+from pressfit.description.cases import load_case  # noqa: E402
+from pressfit.output.montecarlo_files import CHUNK_DIR, run_montecarlo  # noqa: E402
+from pressfit.shipped import cases_dir  # noqa: E402
+
+CASE = cases_dir() / "studies" / "montecarlo_tolerances.toml"
+
+
+def _run(case, samples: int, workers: int, out: Path) -> tuple[float, int]:
+    t = time.perf_counter()
+    run_montecarlo(case, out, samples=samples, chunk_size=25, workers=workers, progress=False)
+    dt = time.perf_counter() - t
+    return dt, sum(p.stat().st_size for p in (out / CHUNK_DIR).iterdir())
+
+
+def main() -> None:
+    samples = int(sys.argv[1]) if len(sys.argv) > 1 else 400
+    full = load_case(CASE)
+    light = full.model_copy(update={"montecarlo": full.montecarlo.model_copy(update={  # type: ignore[union-attr]
+        "inputs": full.montecarlo.inputs.model_copy(update={"base_point_error_m": None,  # type: ignore[union-attr]
+                                                            "plate_point_error_m": None})})})
+    with tempfile.TemporaryDirectory() as tmp:
+        for label, case in (("lengths + load tilt (model per chunk)", light),
+                            ("all inputs (model per sample)", full)):
+            rate = {}
+            for workers in (1, 2):
+                dt, size = _run(case, samples, workers, Path(tmp) / f"{label[:3]}{workers}")
+                rate[workers] = samples / dt
+                print(f"{label}, {workers} worker(s): {samples} samples in {dt:.1f} s = {rate[workers]:.1f} "
+                      f"samples/s (cluster start included); {size / samples:.0f} bytes/sample on disk")
+            print(f"  scaling efficiency 2 vs 1 workers: {rate[2] / (2 * rate[1]):.0%}; 1e5 samples on 2 workers: "
+                  f"{1e5 / rate[2] / 60:.1f} min; 1e8 samples on 256 workers: "
+                  f"{1e8 / (rate[2] / 2 * 256) / 3600:.1f} h")
+
+
+if __name__ == "__main__":
+    main()

@@ -1,0 +1,323 @@
+r"""Monte Carlo tolerance study: how likely is a leg to leave its envelope, and which input drives it.
+
+Each sample draws the case's ``[montecarlo.inputs]`` (SI) and solves the geometrically nonlinear
+equilibrium (:func:`pressfit.mechanics.statics.solve_equilibrium`) at every pose and load of the case:
+
+* ``base_point_error_m``, ``plate_point_error_m``: the real cardan centres B_i + e_B, d_i + e_d (world
+  axes, per leg); the leg lines then miss P*, so the condensed model refuses them and the Pinocchio
+  model is built on the real geometry.
+* ``actuator_length_offset_m``: held length minus commanded length, per leg. The drives are position-held
+  at the lengths the controller computes from the **nominal** geometry (plus the case's ``[preload]``
+  offsets on the nominal machine), so a joint position error also acts as a length offset
+  l_nominal - l_real: the redundant leg turns both into a self-stress.
+* ``load_tilt_rad``: every load force of the case turned by this angle off its direction, about an axis
+  at a uniform random azimuth (magnitude and moments kept).
+* ``cardan_clearance_m``: the axial play of each of the 8 cardans (:mod:`pressfit.mechanics.clearance`,
+  dead-zone springs in the Pinocchio model, the load applied in ``CLEARANCE_STEPS`` continuation steps).
+
+Per sample the worst value over poses, loads, legs and sections of every ``[envelope]`` load quantity
+(:data:`pressfit.studies.limit_check.LIMITS`, same names and definitions), the internal force
+|v_p . N| (N, the self-stress amplitude along the nominal preload vector v_p, equations 9-10) and the
+largest relative residual are recorded. A sample whose solve fails (unreachable pose, no convergence,
+a leg beyond its Euler load) gets NaN values and a non-"ok" ``status``; it counts as an exceedance of
+every limit (conservative) and is reported separately.
+
+Exceedance probability: the fraction of samples beyond the limit with the **Wilson score** 95%
+interval (it keeps its coverage near 0 and 1, where the normal approximation fails). Sensitivity: the
+Spearman rank correlation (scipy) between each input and each output, ranked by its magnitude: random
+sampling does not fit the structured designs that variance-based methods (SALib's Sobol) need, and rank
+correlation is robust to monotone nonlinear responses. It does not see a response that is even in an
+input (the self-stress grows with |v_p . offset| whatever its sign): read it with the histograms.
+Quantiles are sample quantiles (``inverted_cdf``: an observed value, so an infinite buckling factor
+stays infinite instead of becoming NaN).
+"""
+
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass, field
+from typing import Any
+
+import numpy as np
+from scipy import special, stats
+
+from pressfit import kinematics
+from pressfit.description.cases import Case, Distribution
+from pressfit.description.machine import Machine
+from pressfit.errors import PressfitError
+from pressfit.mechanics import buckling, statics
+from pressfit.mechanics.clearance import Clearance
+from pressfit.mechanics.model import MachineModel, build_model
+from pressfit.studies.limit_check import LIMITS, equilibrium_quantities
+
+OUTPUTS = ("max_tension_n", "max_compression_n", "max_shear_n", "max_bending_nm", "max_torsion_nm",
+           "max_actuator_force_n", "max_plate_deflection_m", "max_plate_tilt_rad", "min_buckling_safety_factor")
+EXTRA_OUTPUTS = ("internal_force_n", "residual")
+CLEARANCE_STEPS = 8  # load continuation steps with cardan clearances (the dead zone needs a path)
+_AXES = "xyz"
+_SHAPES = {"actuator_length_offset_m": [f"leg{i}" for i in range(1, 5)],
+           "base_point_error_m": [f"leg{i}.{a}" for i in range(1, 5) for a in _AXES],
+           "plate_point_error_m": [f"leg{i}.{a}" for i in range(1, 5) for a in _AXES],
+           "load_tilt_rad": [""], "cardan_clearance_m": [f"leg{i}.{e}" for i in range(1, 5) for e in ("base", "plate")]}
+
+
+@dataclass(frozen=True)
+class MonteCarloPlan:
+    """Everything a worker needs (picklable): the nominal machine, the case's poses (m) and load
+    wrenches (N, N m), the preload, the random inputs and the sampling plan."""
+
+    name: str
+    machine: Machine
+    poses_m: np.ndarray  # (P, 3)
+    wrenches: np.ndarray  # (W, 6)
+    preload_a4: float  # N (force mode) or m (length mode)
+    preload_mode: str
+    inputs: tuple[tuple[str, Distribution], ...]
+    samples: int
+    seed: int
+    chunk_size: int
+
+    @property
+    def n_chunks(self) -> int:
+        return -(-self.samples // self.chunk_size)
+
+    def chunk_range(self, k: int) -> tuple[int, int]:
+        """Sample indices [start, stop) of chunk k."""
+        return k * self.chunk_size, min((k + 1) * self.chunk_size, self.samples)
+
+    def input_columns(self) -> list[str]:
+        return [f"{name}.{s}" if s else name for name, _ in self.inputs for s in _SHAPES[name]]
+
+    def output_columns(self) -> list[str]:
+        return ["sample", "status", *self.input_columns(), *OUTPUTS, *EXTRA_OUTPUTS]
+
+    def fingerprint(self) -> dict[str, object]:
+        """What must match for a rerun to resume an earlier one (JSON-ready)."""
+        return {"name": self.name, "samples": self.samples, "seed": self.seed, "chunk_size": self.chunk_size,
+                "machine": self.machine.model_dump(exclude={"source"}), "poses_m": self.poses_m.tolist(),
+                "wrenches": self.wrenches.tolist(), "preload": [self.preload_a4, self.preload_mode],
+                "inputs": {n: d.model_dump() for n, d in self.inputs}}
+
+
+def plan_from_case(case: Case, samples: int | None = None, seed: int | None = None,
+                   chunk_size: int | None = None) -> MonteCarloPlan:
+    """The study of a case with a ``[montecarlo]`` table (``samples``/``seed``/``chunk_size`` override it)."""
+    mc = case.montecarlo
+    if mc is None:
+        raise PressfitError(f"{case.path}: a Monte Carlo study needs a [montecarlo] table with [montecarlo.inputs]")
+    if case.solver.linear:
+        raise PressfitError(f"{case.path}: the Monte Carlo study solves the nonlinear equilibrium; remove "
+                            "[solver] linear = true")
+    inputs = tuple((k, d) for k in _SHAPES if (d := getattr(mc.inputs, k)) is not None)
+    n = samples if samples is not None else mc.samples
+    if n < 1:
+        raise PressfitError(f"the number of samples must be at least 1, got {n}")
+    return MonteCarloPlan(case.name, case.machine(), case.poses.array(), case.loads.wrenches(), case.preload.a4,
+                          case.preload.mode, inputs, n, mc.seed if seed is None else seed,
+                          chunk_size or mc.chunk_size)
+
+
+def chunk_seeds(plan: MonteCarloPlan) -> list[np.random.SeedSequence]:
+    """One independent seed per chunk, ``SeedSequence(seed).spawn(n_chunks)``: the draws of a sample depend
+    on its chunk only, never on the number of workers or the order in which chunks finish."""
+    return np.random.SeedSequence(plan.seed).spawn(plan.n_chunks)
+
+
+def _draw(d: Distribution, rng: np.random.Generator, shape: tuple[int, int]) -> np.ndarray:
+    if d.distribution == "normal":
+        return d.mean + d.std * rng.standard_normal(shape)  # type: ignore[operator]
+    if d.distribution == "uniform":
+        return rng.uniform(d.low, d.high, shape)  # type: ignore[arg-type]
+    lo, hi = special.ndtr((d.low - d.mean) / d.std), special.ndtr((d.high - d.mean) / d.std)  # type: ignore
+    return np.clip(d.mean + d.std * special.ndtri(lo + (hi - lo) * rng.uniform(size=shape)), d.low, d.high)  # type: ignore
+
+
+def draw_inputs(plan: MonteCarloPlan, k: int, seed: np.random.SeedSequence) -> dict[str, np.ndarray]:
+    """The random inputs of chunk k, (n, columns) per input name, plus the load azimuths (n,), rad."""
+    rng = np.random.default_rng(seed)
+    start, stop = plan.chunk_range(k)
+    out = {name: _draw(d, rng, (stop - start, len(_SHAPES[name]))) for name, d in plan.inputs}
+    out["load_azimuth_rad"] = rng.uniform(0.0, 2 * np.pi, stop - start)
+    return out
+
+
+def _tilted(wrenches: np.ndarray, tilt: float, azimuth: float) -> np.ndarray:
+    """The wrenches with each force turned by ``tilt`` (rad) off its direction at ``azimuth`` (rad)."""
+    out = wrenches.copy()
+    for w in out:
+        f = np.linalg.norm(w[:3])
+        if f == 0:
+            continue
+        d = w[:3] / f
+        t = np.cross(d, [1.0, 0, 0] if abs(d[0]) < 0.9 else [0, 0, 1.0])
+        t /= np.linalg.norm(t)
+        s = np.cross(d, t)
+        w[:3] = f * (math.cos(tilt) * d + math.sin(tilt) * (math.cos(azimuth) * t + math.sin(azimuth) * s))
+    return out
+
+
+def _perturbed(machine: Machine, base: np.ndarray | None, plate: np.ndarray | None) -> Machine:
+    if base is None and plate is None:
+        return machine
+    legs = [leg.model_dump() for leg in machine.legs]
+    for i, leg in enumerate(legs):
+        if base is not None:
+            leg["base_point_error_m"] = base[3 * i:3 * i + 3].tolist()
+        if plate is not None:
+            leg["plate_point_error_m"] = plate[3 * i:3 * i + 3].tolist()
+    return machine.with_overrides({"legs": legs}, source=f"{machine.source} [montecarlo joint position errors]")
+
+
+def _solver_for(machine: Machine, clearance: Clearance | None, pose_m: np.ndarray) -> MachineModel:
+    """The one place a worker gets its solver: a Pinocchio model of the sample's machine (built at a
+    pose, retargeted by the solve to the others). Swap in a picklable solver object here once
+    :mod:`pressfit.mechanics.statics` offers one."""
+    return build_model(machine, pose_m, cardan_compliance=None if clearance is None else clearance.cardan_compliance())
+
+
+def _solve(mm: MachineModel, pose: np.ndarray, load: np.ndarray, offsets: np.ndarray,
+           clearance: Clearance | None) -> statics.Equilibrium:
+    if clearance is None:
+        return statics.solve_equilibrium(mm, pose, load, preload_offsets_m=offsets)
+    radius = max(0.5 * float(clearance.gaps_m.max()), 100 * clearance.smoothing_m)
+    eq = None
+    for f in np.linspace(0.0, 1.0, CLEARANCE_STEPS + 1):  # continuation: start each step from the last
+        eq = statics.solve_equilibrium(mm, pose, f * load, preload_offsets_m=offsets, start=eq, max_iter=200,
+                                       step_limit=lambda dv: min(1.0, radius / max(float(np.abs(dv).max()), 1e-300)))
+    return eq  # type: ignore[return-value]
+
+
+def evaluate_sample(plan: MonteCarloPlan, x: dict[str, np.ndarray], azimuth: float,
+                    model: MachineModel | None = None) -> dict[str, float]:
+    """Worst outputs over the case's poses and loads for one sample's inputs ``x`` (name -> values).
+    ``model``: the nominal machine's model, reused when the sample changes neither geometry nor joints."""
+    nominal = plan.machine
+    machine = _perturbed(nominal, x.get("base_point_error_m"), x.get("plate_point_error_m"))
+    g = x.get("cardan_clearance_m")
+    clearance = None if g is None else Clearance.per_joint(machine, g.tolist())
+    mm = model if machine is nominal and clearance is None and model is not None else \
+        _solver_for(machine, clearance, plan.poses_m[0])
+    wrenches = _tilted(plan.wrenches, float(x["load_tilt_rad"][0]), azimuth) if "load_tilt_rad" in x else plan.wrenches
+    worst = {k: (math.inf if LIMITS[k].sense == "min" else 0.0) for k in OUTPUTS} | {k: 0.0 for k in EXTRA_OUTPUTS}
+    for pose in plan.poses_m:
+        lengths = kinematics.inverse_kinematics(machine, pose).lengths_m
+        offsets = (kinematics.inverse_kinematics(nominal, pose).lengths_m - lengths
+                   + x.get("actuator_length_offset_m", np.zeros(4)))
+        if plan.preload_a4:
+            offsets = offsets + statics.preload_offsets(nominal, pose, plan.preload_a4, plan.preload_mode)
+        critical = np.array([buckling.leg_critical_load_n(machine, float(v)) for v in lengths])
+        vp = kinematics.preload_vector(nominal, pose)
+        for load in wrenches:
+            eq = _solve(mm, pose, load, offsets, clearance)
+            for key, v in equilibrium_quantities(eq, critical).items():
+                worst[key] = min(worst[key], float(v.min())) if LIMITS[key].sense == "min" else max(worst[key],
+                                                                                               float(v.max()))
+            worst["internal_force_n"] = max(worst["internal_force_n"], abs(float(vp @ eq.actuator_forces_n)))
+            worst["residual"] = max(worst["residual"], eq.residuals.worst())
+    return worst
+
+
+def evaluate_chunk(plan: MonteCarloPlan, k: int, seed: np.random.SeedSequence) -> dict[str, np.ndarray]:
+    """Chunk k of the study (the task a worker runs): inputs, outputs and status per sample, as columns."""
+    x = draw_inputs(plan, k, seed)
+    start, stop = plan.chunk_range(k)
+    rows: list[dict[str, float]] = []
+    status: list[str] = []
+    per_sample = {"base_point_error_m", "plate_point_error_m", "cardan_clearance_m"} & set(x)
+    model = None if per_sample else _solver_for(plan.machine, None, plan.poses_m[0])  # once per chunk
+    for j in range(stop - start):
+        try:
+            rows.append(evaluate_sample(plan, {name: v[j] for name, v in x.items()}, float(x["load_azimuth_rad"][j]),
+                                        model))
+            status.append("ok")
+        except PressfitError as exc:
+            rows.append(dict.fromkeys(OUTPUTS + EXTRA_OUTPUTS, math.nan))
+            status.append(type(exc).__name__)
+    cols: dict[str, np.ndarray] = {"sample": np.arange(start, stop, dtype=np.int64), "status": np.array(status)}
+    names = plan.input_columns()
+    cols.update(zip(names, np.concatenate([x[name] for name, _ in plan.inputs], axis=1).T))
+    cols.update({key: np.array([r[key] for r in rows]) for key in OUTPUTS + EXTRA_OUTPUTS})
+    return cols
+
+
+# --- summary ---------------------------------------------------------------------------------------------
+QUANTILES = (0.01, 0.05, 0.5, 0.95, 0.99)
+
+
+def wilson_interval(k: int, n: int, z: float = 1.959963984540054) -> tuple[float, float]:
+    """Wilson score interval of a binomial proportion k / n (default 95%, z = Phi^-1(0.975))."""
+    if n <= 0:
+        return 0.0, 1.0
+    p = k / n
+    centre, half = (p + z * z / (2 * n)), z * math.sqrt(p * (1 - p) / n + z * z / (4 * n * n))
+    return max(0.0, (centre - half) / (1 + z * z / n)), min(1.0, (centre + half) / (1 + z * z / n))
+
+
+@dataclass(frozen=True)
+class Exceedance:
+    """P(the worst value of a sample breaks the ``[envelope]`` limit), failed samples counted as breaking."""
+
+    key: str
+    limit: float
+    count: int
+    samples: int
+    probability: float
+    ci95: tuple[float, float]  # Wilson score interval
+
+
+@dataclass(frozen=True)
+class MonteCarloSummary:
+    samples: int
+    failed: dict[str, int]  # status -> count of samples whose solve failed
+    quantiles: dict[str, dict[str, float]]  # output -> {"q0.05": value, ...} over the samples that solved
+    exceedance: list[Exceedance]
+    sensitivity: dict[str, list[tuple[str, float]]]  # output -> [(input, Spearman rho)], by |rho|
+    notes: list[str] = field(default_factory=list)
+
+    def to_dict(self) -> dict[str, object]:
+        """JSON-ready; non-finite values (no compression: an infinite buckling factor) become None."""
+        return _finite({"samples": self.samples, "failed": self.failed, "quantiles": self.quantiles,
+                "exceedance": [e.__dict__ for e in self.exceedance],
+                "sensitivity": {k: [{"input": i, "spearman_rho": r} for i, r in v] for k, v in self.sensitivity.items()},
+                "notes": self.notes})
+
+
+def _finite(obj: Any) -> Any:
+    if isinstance(obj, dict):
+        return {k: _finite(v) for k, v in obj.items()}
+    if isinstance(obj, (list, tuple)):
+        return [_finite(v) for v in obj]
+    return None if isinstance(obj, float) and not math.isfinite(obj) else obj
+
+
+def _spearman(x: np.ndarray, y: np.ndarray) -> float:
+    if np.unique(x).size < 2 or np.unique(y).size < 2:  # a constant carries no ranking
+        return 0.0
+    return float(stats.spearmanr(x, y).statistic)
+
+
+def summarize(plan: MonteCarloPlan, columns: dict[str, np.ndarray], envelope: dict[str, float]) -> MonteCarloSummary:
+    """Quantiles, exceedance probabilities of the ``envelope`` limits (key -> limit, SI) with Wilson 95%
+    intervals, and the Spearman sensitivity ranking, from the per-sample columns of the whole study."""
+    n = len(columns["sample"])
+    ok = columns["status"] == "ok"
+    failed = {str(s): int(c) for s, c in zip(*np.unique(columns["status"][~ok], return_counts=True))}
+    outputs = [*OUTPUTS, *EXTRA_OUTPUTS]
+    quantiles = {k: {f"q{q:g}": float(np.quantile(columns[k][ok], q, method="inverted_cdf")) for q in QUANTILES} if ok.any() else {}
+                 for k in outputs}
+    exceed, notes = [], []
+    for key, limit in envelope.items():
+        if key not in OUTPUTS:
+            notes.append(f"{key}: geometric limit, not sampled (check it with pressfit check)")
+            continue
+        v = columns[key]
+        bad = ~ok | ((v > limit) if LIMITS[key].sense == "max" else (v < limit))
+        count = int(bad.sum())
+        exceed.append(Exceedance(key, float(limit), count, n, count / n, wilson_interval(count, n)))
+    names = plan.input_columns()
+    sens = {}
+    for key in outputs[:-1]:
+        if ok.sum() > 2:
+            rho = [(name, _spearman(columns[name][ok], columns[key][ok])) for name in names]
+            sens[key] = sorted(rho, key=lambda t: -abs(t[1]))
+    return MonteCarloSummary(n, failed, quantiles, exceed, sens, notes)

@@ -1,0 +1,133 @@
+"""The Dask runner: identical results with 1 and 2 workers and after an interrupted run is resumed, a killed
+worker, and a scheduler and worker started as separate processes (small clusters, 1 thread per worker)."""
+
+import os
+import signal
+import subprocess
+import sys
+import time
+from pathlib import Path
+
+import numpy as np
+import pytest
+
+from pressfit.description.cases import load_case
+from pressfit.output import montecarlo_files as mcf
+from pressfit.studies import distributed, montecarlo
+from tests.test_montecarlo import synthetic_case
+
+TILT = """[montecarlo.inputs.load_tilt_rad]
+distribution = "uniform"
+low = 0.0
+high = 0.05
+"""
+
+
+@pytest.fixture(scope="module")
+def case(tmp_path_factory):
+    return load_case(synthetic_case(tmp_path_factory.mktemp("case"), samples=24, extra=TILT))
+
+
+@pytest.fixture(scope="module")
+def cluster():
+    """One LocalCluster of 2 single-threaded worker processes shared by the tests (startup costs seconds)."""
+    from distributed import LocalCluster
+
+    with LocalCluster(n_workers=2, threads_per_worker=1, processes=True, dashboard_address=":0",
+                      silence_logs=50) as c:
+        yield c
+
+
+def _columns(out: Path) -> dict[str, np.ndarray]:
+    return mcf.read_samples(out)
+
+
+def _same(a: dict[str, np.ndarray], b: dict[str, np.ndarray]) -> None:
+    assert a.keys() == b.keys()
+    for k in a:
+        np.testing.assert_array_equal(a[k], b[k], err_msg=k)  # bit for bit
+
+
+def test_one_and_two_workers_and_a_resumed_run_agree(case, cluster, tmp_path, monkeypatch):
+    two_workers = {"scheduler": cluster.scheduler_address}
+    one = mcf.run_montecarlo(case, tmp_path / "one", chunk_size=4, workers=1, progress=False)
+    two = mcf.run_montecarlo(case, tmp_path / "two", chunk_size=4, **two_workers, progress=False)
+    assert one.chunks_run == two.chunks_run == 6
+    _same(_columns(tmp_path / "one"), _columns(tmp_path / "two"))
+    np.testing.assert_array_equal(_columns(tmp_path / "one")["sample"], np.arange(24))
+
+    real, written = mcf.io.write_parquet, []
+
+    def interrupt_after_two(path, cols, overwrite=False):  # the user presses Ctrl-C after two chunks
+        if len(written) == 2:
+            raise KeyboardInterrupt
+        written.append(path)
+        return real(path, cols, overwrite)
+
+    monkeypatch.setattr(mcf.io, "write_parquet", interrupt_after_two)
+    with pytest.raises(KeyboardInterrupt):
+        mcf.run_montecarlo(case, tmp_path / "resumed", chunk_size=4, **two_workers, progress=False)
+    monkeypatch.setattr(mcf.io, "write_parquet", real)
+    assert mcf.finished_chunks(tmp_path / "resumed") == {int(p.stem.split("-")[1]) for p in written}
+    resumed = mcf.run_montecarlo(case, tmp_path / "resumed", chunk_size=4, **two_workers, progress=False)
+    assert resumed.chunks_run == 4
+    _same(_columns(tmp_path / "one"), _columns(tmp_path / "resumed"))
+    with pytest.raises(mcf.OutputExistsError, match="different Monte Carlo study"):
+        mcf.run_montecarlo(case, tmp_path / "resumed", chunk_size=4, seed=99, workers=1, progress=False)
+
+
+def test_a_killed_worker_leaves_every_sample_exactly_once(case, cluster):
+    from distributed import Client
+
+    plan = montecarlo.plan_from_case(case, samples=32, chunk_size=2)
+    seeds = montecarlo.chunk_seeds(plan)
+    got: dict[int, dict] = {}
+    with Client(cluster) as client:
+        pids = list(client.run(os.getpid).values())
+
+        def sink(k, cols):
+            assert k not in got  # exactly once
+            got[k] = cols
+            if len(got) == 1:
+                os.kill(pids[0], signal.SIGKILL)  # one worker dies mid-study; its nanny restarts it
+
+        distributed.run_chunks(montecarlo.evaluate_chunk, [(plan, k, seeds[k]) for k in range(plan.n_chunks)],
+                               [2] * plan.n_chunks, sink, scheduler=cluster.scheduler_address, progress=False)
+        assert pids[0] not in client.run(os.getpid).values()  # the kill really happened
+    samples = np.sort(np.concatenate([c["sample"] for c in got.values()]))
+    np.testing.assert_array_equal(samples, np.arange(32))
+    single = montecarlo.evaluate_chunk(plan, 5, seeds[5])
+    for key in single:
+        np.testing.assert_array_equal(got[5][key], single[key])
+
+
+def test_scheduler_and_worker_as_separate_processes(case, tmp_path):
+    dask = [sys.executable, "-m", "distributed.cli.dask_scheduler"]
+    file = tmp_path / "scheduler.json"
+    env = os.environ | {"OMP_NUM_THREADS": "1", "OPENBLAS_NUM_THREADS": "1"}
+    procs = [subprocess.Popen([*dask, "--host", "127.0.0.1", "--port", "0", "--no-dashboard", "--scheduler-file",
+                               str(file)], env=env, stderr=subprocess.DEVNULL)]
+    try:
+        deadline = time.monotonic() + 30
+        while not file.exists() and time.monotonic() < deadline:
+            time.sleep(0.1)
+        import json
+
+        address = json.loads(file.read_text())["address"]
+        assert address.startswith("tcp://127.0.0.1:")
+        procs.append(subprocess.Popen([sys.executable, "-m", "distributed.cli.dask_worker", address, "--nthreads",
+                                       "1", "--no-dashboard"], env=env, stderr=subprocess.DEVNULL))
+        run = mcf.run_montecarlo(case, tmp_path / "remote", samples=8, chunk_size=4, scheduler=address,
+                                 progress=False)
+        assert run.chunks_run == 2
+        plan = montecarlo.plan_from_case(case, samples=8, chunk_size=4)
+        seeds = montecarlo.chunk_seeds(plan)
+        here = [montecarlo.evaluate_chunk(plan, k, seeds[k]) for k in range(2)]  # in this process
+        remote = _columns(tmp_path / "remote")
+        for key in remote:
+            np.testing.assert_array_equal(remote[key], np.concatenate([c[key] for c in here]), err_msg=key)
+    finally:
+        for p in procs:
+            p.terminate()
+        for p in procs:
+            p.wait(timeout=30)
