@@ -35,7 +35,7 @@ def workspace_cmd(heights: tuple[float, ...], out_dir: Path, overwrite: bool, as
         if not (np.isfinite(y) and rng.y_min_m <= y <= rng.y_max_m):
             raise PressfitError(f"--y {y:g}: the required square is reachable only for y_h in "
                                 f"[{rng.y_min_m:.5f}, {rng.y_max_m:.5f}] m")
-    summary, _ = map_files.write_kinematic_maps(machine, out_dir, heights or workspace.DEFAULT_HEIGHTS_M,
+    summary, _, _ = map_files.write_kinematic_maps(machine, out_dir, heights or workspace.DEFAULT_HEIGHTS_M,
                                          overwrite, progress)
     if as_json:
         click.echo(to_json(summary))
