@@ -39,9 +39,9 @@ def tables_cmd(as_json: bool, out_dir: Path | None, overwrite: bool) -> None:
 @MODEL_OPTION
 @user_errors
 def report_cmd(out_dir: Path, overwrite: bool, quick: bool, model_path: Path) -> None:
-    """Reproduce Tables 5 and 6 and write the full Markdown report (maps, envelope, stiffness, ...)."""
+    """Reproduce Tables 5 and 6 and write the full report (maps, envelope, stiffness, ...): report.md and report.html."""
     from pressfit.output.report import write_report
 
     path = write_report(load_machine(model_path), out_dir, overwrite=overwrite, quick=quick)
     click.echo((path.parent / "tables.md").read_text())  # the Tables 5-6 comparison the report just wrote
-    click.echo(f"report written to {path}")
+    click.echo(f"report written to {path} and {path.with_suffix('.html')}")

@@ -22,6 +22,7 @@ from pathlib import Path
 
 import numpy as np
 import plotly.graph_objects as go
+from plotly.colors import qualitative
 from plotly.offline import get_plotlyjs
 
 from pressfit.description.machine import Machine
@@ -37,6 +38,8 @@ from pressfit.studies.workspace_envelope import LEG_QUANTITIES, PLATE_QUANTITIES
 Record = dict[str, object]
 REL_ERROR_FORMULA = "relative error = (pressfit linear - paper) / |paper|, in the paper's axes and signs"
 _CONFIG = {"displaylogo": False, "responsive": True}
+_PALETTE = qualitative.Plotly
+_DASHES = ("solid", "dash", "dot", "dashdot", "longdash")
 _STYLE = """body{font-family:system-ui,sans-serif;margin:1.5em auto;max-width:1200px;padding:0 1em;color:#222}
 h2{border-bottom:1px solid #ccc;padding-bottom:.2em;margin-top:2em}p.how{color:#444;max-width:60em}
 table{border-collapse:collapse;font-size:.85em;margin:.5em 0}td,th{border:1px solid #ccc;padding:2px 6px}
@@ -45,7 +48,8 @@ th{background:#eef;cursor:pointer;user-select:none}th:hover{background:#dde}td{t
 _SORT_JS = """document.querySelectorAll("table.sortable th").forEach(th => th.addEventListener("click", () => {
   const body = th.closest("table").tBodies[0], col = th.cellIndex, dir = th.dataset.dir === "asc" ? -1 : 1;
   th.dataset.dir = dir > 0 ? "asc" : "desc";
-  const key = r => { const v = JSON.parse(r.cells[col].dataset.value); return typeof v === "number" ? [0, v] : [1, String(v)]; };
+  const key = r => { const v = JSON.parse(r.cells[col].dataset.value);
+    return typeof v === "number" ? [0, v] : [1, String(v)]; };
   Array.from(body.rows).sort((a, b) => { const x = key(a), y = key(b);
     return dir * (x[0] - y[0] || (x[1] < y[1] ? -1 : x[1] > y[1] ? 1 : 0)); }).forEach(r => body.appendChild(r));
 }));"""
@@ -221,8 +225,9 @@ def _stiffness_section(page: _Page, c: ReportContent) -> None:
 def _preload_section(page: _Page, c: ReportContent) -> None:
     page.section("preload", "6. Clearance and preload",
                  "Axial play g at each cardan, actuator preload a4 along v_p, then the press load 0 ... 700 N (+y). "
-                 "Left: plate stiffness against preload per clearance (dashed: small-load, solid: secant at the "
-                 "full load; the black line is the machine without clearance). Right: load-deflection curves. The "
+                 "First: plate stiffness against preload per clearance (dashed: small-load, solid: secant at the "
+                 "full load; the black line is the machine without clearance). Then the load-deflection curves "
+                 "(colour: preload, dash: clearance). The "
                  "critical preload is the smallest that keeps every cardan closed up to the full load.")
     for name, st in c.preload:
         unit = "N" if st.preload_mode == "force" else "m"
@@ -238,8 +243,9 @@ def _preload_section(page: _Page, c: ReportContent) -> None:
                           yaxis={"title": {"text": "stiffness [N/m]"}, "type": "log"})
         page.figure(fig)
         curves = go.Figure()
-        for g, p in np.ndindex(len(st.clearances_m), len(st.preloads)):
+        for g, p in np.ndindex(len(st.clearances_m), len(st.preloads)):  # colour: preload, dash: clearance
             curves.add_scatter(x=st.deflection_m[g, p] * 1e6, y=st.loads_n, mode="lines", legendgroup=str(g),
+                               line={"color": _PALETTE[p % len(_PALETTE)], "dash": _DASHES[g % len(_DASHES)]},
                                name=f"g = {st.clearances_m[g] * 1e6:g} um, a4 = {st.preloads[p]:g} {unit}")
         curves.update_layout(title={"text": f"{name}: load-deflection (click the legend to hide curves)"},
                              height=440, xaxis={"title": {"text": "deflection along the load [um]"}},

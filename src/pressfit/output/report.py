@@ -16,7 +16,7 @@ from pressfit.description.machine import Machine
 from pressfit.geometry import interference
 from pressfit.kinematics import workspace
 from pressfit.mechanics import condensed
-from pressfit.mechanics.statics import solve_equilibrium
+from pressfit.mechanics.statics import Equilibrium, solve_equilibrium
 from pressfit.output import maps
 from pressfit.output.files import write_csv, write_json, write_text
 from pressfit.output.html_report import ReportContent, write_html_report
@@ -40,7 +40,8 @@ def write_report(machine: Machine, out_dir: Path | str, overwrite: bool = False,
     """
     out = Path(out_dir)
     steps = tqdm(total=7, desc="report", disable=not progress, unit="section")
-    md = [f"# pressfit report: {machine.name}", "", f"Machine file: `{machine.source}`. SI units throughout. Interactive version "
+    md = [f"# pressfit report: {machine.name}", "",
+          f"Machine file: `{machine.source}`. SI units throughout. Interactive version "
           "(3D view of the loaded machine, sortable tables, zoomable plots): [report.html](report.html).", ""]
 
     solutions = tables.solve_paper_cases()
@@ -106,7 +107,8 @@ def write_report(machine: Machine, out_dir: Path | str, overwrite: bool = False,
     write_json(out / "summary.json", {"workspace": summ, "interference": sweep.kind_minima()}, overwrite)
     path = write_text(out / "report.md", "\n".join(md) + "\n", overwrite)
 
-    scene = [_worst_case(machine, env)] + [SceneCase(f"paper case {s.case.name}", s.nonlinear) for s in solutions]
+    scene = [_worst_case(machine, env)] + [_scene_case(f"paper case {s.case.name.removeprefix('paper-')}", s.nonlinear)
+                                               for s in solutions]
     write_html_report(out, ReportContent(
         machine, scene, [e.as_dict() for e in entries], plane_maps, env, [dict(zip(header, r)) for r in rows],
         stiffness, studies, sweep, [{"kind": k, **v} for k, v in sweep.kind_minima().items()]), overwrite)
@@ -118,9 +120,14 @@ def write_report(machine: Machine, out_dir: Path | str, overwrite: bool = False,
 def _worst_case(machine: Machine, env: workspace_envelope.LoadEnvelope) -> SceneCase:
     """The nonlinear equilibrium at the envelope's largest axial leg force (its pose and load)."""
     name, leg, pose, load = workspace_envelope.worst_axial(env)
-    label = (f"worst envelope pose ({name.removesuffix('_n')}, leg {leg}): ({', '.join(f'{v:.3f}' for v in pose)})"
-             f" m, load ({', '.join(f'{v:.0f}' for v in load)}) N")
-    return SceneCase(label, solve_equilibrium(machine, pose, load))
+    return _scene_case(f"worst envelope pose ({name.removesuffix('_n')}, leg {leg})",
+                       solve_equilibrium(machine, pose, load))
+
+
+def _scene_case(title: str, eq: Equilibrium) -> SceneCase:
+    """A 3D-view case labelled with its pose (m) and plate force (N)."""
+    return SceneCase(f"{title}: pose ({', '.join(f'{v:.3f}' for v in eq.pose_m)}) m, force "
+                     f"({', '.join(f'{v:.0f}' for v in eq.load[:3])}) N", eq)
 
 
 def _preload_section(machine: Machine, out: Path, overwrite: bool,

@@ -33,7 +33,8 @@ from pressfit.mechanics.statics import Equilibrium
 
 MAGNIFICATIONS = (0.0, 1.0, 10.0, 30.0, 100.0, 300.0, 1000.0, 3000.0)
 VISIBLE_DEFLECTION_M = 0.05  # the default magnification is the largest that keeps every cardan within this
-COLOURINGS = {  # key -> (button label, colour-bar title, colour scale (sent as a list: plotly.js lacks most names), symmetric)
+# key -> (button label, colour-bar title, colour scale (sent as a list: plotly.js lacks most names), symmetric)
+COLOURINGS = {
     "axial": ("axial force", "N [N]<br>(> 0 tension)", "RdBu_r", True),
     "torsion": ("torsion", "T [N m]", "PuOr", True),
     "bending": ("bending", "|M| [N m]", "Viridis", False),
@@ -153,7 +154,8 @@ def _case_traces(machine: Machine, case: SceneCase, shapes: list[Shape], magnifi
             tr.update(color=_BODY_COLOURS.get(shape.body, "#d9a441"), opacity=0.6 if shape.body == "base" else 1.0,
                       hovertemplate=f"<b>{shape.name}</b><br>plate displacement (x, y, z) "
                                     f"{np.round(eq.plate_displacement_m * 1e6, 2).tolist()} um<br>plate rotation "
-                                    f"{np.round(eq.plate_rotation_rad * 1e3, 4).tolist()} mrad<extra>{case.label}</extra>")
+                                    f"{np.round(eq.plate_rotation_rad * 1e3, 4).tolist()} mrad"
+                                    f"<extra>{case.label}</extra>")
         traces.append(tr)
     traces.append({"type": "scatter3d", "mode": "markers", "name": "cardans", "visible": visible, **_xyz(shown[-1]),
                    "marker": {"size": 4, "color": "black", "symbol": "diamond"},
@@ -166,8 +168,8 @@ def _colour_axis(colours: list[dict[str, np.ndarray]], key: str) -> dict[str, ob
     """Layout keys of the shared colour axis for one colouring (module doc)."""
     _, title, scale, symmetric = COLOURINGS[key]
     top = max(float(np.abs(c[key]).max()) for c in colours) or 1.0
-    return {"coloraxis.colorscale": get_colorscale(scale), "coloraxis.cmin": -top if symmetric else 0.0, "coloraxis.cmax": top,
-            "coloraxis.colorbar.title.text": title}
+    return {"coloraxis.colorscale": get_colorscale(scale), "coloraxis.cmin": -top if symmetric else 0.0,
+            "coloraxis.cmax": top, "coloraxis.colorbar.title.text": title}
 
 
 def scene_figure(machine: Machine, cases: list[SceneCase]) -> go.Figure:
@@ -197,7 +199,8 @@ def scene_figure(machine: Machine, cases: list[SceneCase]) -> go.Figure:
     axis = {"showbackground": False}
     fig = go.Figure(data=traces)
     fig.update_layout(
-        title={"text": _title(cases[0], mag), "y": 0.98}, height=760, margin={"l": 0, "r": 0, "t": 110, "b": 0}, showlegend=False,
+        title={"text": _title(cases[0], mag), "y": 0.98}, height=760, margin={"l": 0, "r": 0, "t": 110, "b": 0},
+        showlegend=False,
         scene={"aspectmode": "data", "camera": {"up": {"x": 0, "y": 1, "z": 0}, "eye": {"x": 1.5, "y": 0.9, "z": 1.6}},
                "xaxis": {**axis, "title": {"text": "x [m]"}}, "yaxis": {**axis, "title": {"text": "y [m] (up)"}},
                "zaxis": {**axis, "title": {"text": "z [m]"}}},
