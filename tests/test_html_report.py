@@ -174,3 +174,26 @@ def test_3d_geometry_follows_the_kinematics_and_the_solve(machine):
             np.testing.assert_allclose([s.min(), s.max()], [0.0, machine.cylinder.length_m], atol=1e-6)
     legs = [t for t in fig["data"] if t["name"].startswith("leg") and t["name"].endswith("cylinder")]
     np.testing.assert_allclose([t["intensity"][0] for t in legs], [leg.sections["actuator"].N for leg in eq.legs])
+
+
+def test_3d_view_opens_at_the_worst_axial_force_and_the_slider_moves_the_plate(page, report_dir, machine):
+    """Reference: the largest tension/compression entry of envelope/load_envelope.json gives the pose the
+    view opens at; slider step 0 (magnification 0) puts the plate cardans at h + d_i exactly (to the page's
+    0.1 um rounding), the last step moves them by far more than the solve's micrometres."""
+    rows = [r for r in json.loads((report_dir / "envelope/load_envelope.json").read_text())
+            if r["quantity"] in ("tension_n", "compression_n")]
+    worst = max(rows, key=lambda r: r["value"])
+    pose = np.array([worst["x_m"], worst["y_m"], worst["z_m"]])
+    cardans = ("(() => { const t = document.getElementById('fig-0').data.find(d => d.name === 'cardans' && d.visible);"
+               " return [t.x, t.y, t.z]; })()")
+    rail = page.locator("#fig-0 .slider-rail-touch-rect")
+    box = rail.bounding_box()
+    rail.click(position={"x": 3, "y": box["height"] / 2})  # the first step: magnification 0
+    page.wait_for_timeout(300)
+    nominal = np.array(page.evaluate(cardans)).T
+    np.testing.assert_allclose(nominal[4:], pose + machine.plate_offsets_m, atol=2e-7)
+    np.testing.assert_allclose(nominal[:4], machine.base_points_m, atol=2e-7)
+    rail.click(position={"x": box["width"] - 3, "y": box["height"] / 2})  # the last step
+    page.wait_for_timeout(300)
+    moved = np.array(page.evaluate(cardans)).T
+    assert np.abs(moved[4:] - nominal[4:]).max() > 1e-3 and np.allclose(moved[:4], nominal[:4])

@@ -39,7 +39,7 @@ def tables_cmd(as_json: bool, out_dir: Path | None, overwrite: bool) -> None:
 @MODEL_OPTION
 @user_errors
 def report_cmd(out_dir: Path, overwrite: bool, quick: bool, model_path: Path) -> None:
-    """Reproduce Tables 5 and 6 and write the full report (maps, envelope, stiffness, ...): report.md and report.html."""
+    """Reproduce Tables 5 and 6 and write the full report (maps, envelope, stiffness, ...) as report.md and .html."""
     from pressfit.output.report import write_report
 
     path = write_report(load_machine(model_path), out_dir, overwrite=overwrite, quick=quick)
