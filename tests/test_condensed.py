@@ -7,6 +7,7 @@ potential energy of 4 axial springs + 4 couple springs written directly here (se
 DESIGN.md's defaults, not from the package); the leg frames of pressfit.kinematics.
 """
 
+import json
 import math
 
 import numpy as np
@@ -243,7 +244,9 @@ def test_load_envelope_matches_brute_force(machine, tmp_path):
     np.testing.assert_allclose(env.entries["torsion_nm"].value, env.entries["torsion_nm"].value[0], rtol=1e-9)
     assert env.maps["tilt_rad"].shape == (7, 7)
     paths = map_files.write_load_envelope(env, tmp_path)
-    assert len(paths) == 4 and (tmp_path / "load_envelope.csv").read_text().count("\n") == 6 * 4 + 2 + 1
+    assert len(paths) == 5 and (tmp_path / "load_envelope.csv").read_text().count("\n") == 6 * 4 + 2 + 1
+    records = json.loads((tmp_path / "load_envelope.json").read_text())  # the same rows, keyed by the CSV header
+    assert [list(r.values()) for r in records] == workspace_envelope.envelope_rows(env)[1]
 
 
 def test_envelope_counts_unreachable_poses(machine):

@@ -51,7 +51,7 @@ def test_write_outputs_and_no_silent_overwrite(machine, tmp_path):
     with pytest.raises(OutputExistsError):  # checked before anything is computed or written
         maps.write_kinematic_maps(machine, tmp_path, [0.6])
     assert (tmp_path / "summary.json").read_text() == "keep" and not (tmp_path / "maps_y0.600.csv").exists()
-    summary, paths = maps.write_kinematic_maps(machine, tmp_path, [0.6], overwrite=True)
+    summary, paths, _ = maps.write_kinematic_maps(machine, tmp_path, [0.6], overwrite=True)
     assert sorted(p.name for p in paths) == ["maps_y0.600.csv", "maps_y0.600.png", "summary.json"]
     assert json.loads((tmp_path / "summary.json").read_text()) == json.loads(json.dumps(summary))
 

@@ -51,7 +51,7 @@ def tables_cmd(as_json: bool, out_dir: Path | None, overwrite: bool, cad: bool) 
 @MODEL_OPTION
 @user_errors
 def report_cmd(out_dir: Path, overwrite: bool, quick: bool, model_path: Path) -> None:
-    """Reproduce Tables 5 and 6 and write the full Markdown report (maps, envelope, stiffness, ...)."""
+    """Reproduce Tables 5 and 6 and write the full report (maps, envelope, stiffness, ...) as report.md and .html."""
     from pressfit.output.files import check_directory, write_directory
     from pressfit.output.report import write_report
 
@@ -59,4 +59,4 @@ def report_cmd(out_dir: Path, overwrite: bool, quick: bool, model_path: Path) ->
     machine = load_machine(model_path)
     path, = write_directory(out_dir, overwrite, lambda tmp: [write_report(machine, tmp, quick=quick)])
     click.echo((path.parent / "tables.md").read_text())  # the Tables 5-6 comparison the report just wrote
-    click.echo(f"report written to {path}")
+    click.echo(f"report written to {path} and {path.with_suffix('.html')}")

@@ -275,7 +275,12 @@ def preload_vector(machine: Machine, pose_m: np.ndarray) -> np.ndarray:
 def leg_frames(machine: Machine, pose_m: np.ndarray) -> np.ndarray:
     """Leg frames (..., 4, 3, 3), columns (e_x, e_y, e_z): e_z along the leg base -> plate,
     e_x = the base cardan axis a_i made normal to e_z, e_y = e_z x e_x (DESIGN.md conventions)."""
-    ez = inverse_kinematics(machine, pose_m).unit_vectors
+    return frames_along(machine, inverse_kinematics(machine, pose_m).unit_vectors)
+
+
+def frames_along(machine: Machine, ez: np.ndarray) -> np.ndarray:
+    """Leg frames (..., 4, 3, 3) for given unit leg directions ez (..., 4, 3) (e.g. of a displaced plate):
+    columns (e_x, e_y, e_z) with e_x = a_i made normal to e_z, e_y = e_z x e_x."""
     a = np.broadcast_to(machine.cardan_axes, ez.shape)
     ex = a - np.sum(a * ez, -1, keepdims=True) * ez
     ex /= np.linalg.norm(ex, axis=-1, keepdims=True)

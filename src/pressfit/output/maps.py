@@ -36,12 +36,13 @@ from pressfit.studies.workspace_envelope import (
 
 
 def write_load_envelope(env: LoadEnvelope, out_dir: Path | str, overwrite: bool = False) -> list[Path]:
-    """``load_envelope.csv`` (the table), ``load_envelope.png`` (per-leg bars) and x-z maps of the worst
+    """``load_envelope.csv`` and ``.json`` (the table), ``load_envelope.png`` (per-leg bars) and x-z maps of the worst
     values (``load_envelope_maps*``) into out_dir; returns the paths."""
 
     header, rows = envelope_rows(env)
     out = Path(out_dir)
-    paths = [io.write_csv(out / "load_envelope.csv", header, rows, overwrite)]
+    paths = [io.write_csv(out / "load_envelope.csv", header, rows, overwrite),
+             io.write_json(out / "load_envelope.json", [dict(zip(header, r)) for r in rows], overwrite)]
     legs = {k: (env.entries[k].value, f"[{u}]") for k, (u, _) in LEG_QUANTITIES.items()}
     paths.append(write_leg_bars(out / "load_envelope.png", legs, "workspace load envelope (condensed linear model)",
                                 overwrite))
@@ -59,7 +60,7 @@ def write_stiffness_maps(maps: StiffnessMaps, out_dir: Path | str, overwrite: bo
                          f"condensed linear model, y = {maps.y_m:g} m", overwrite)
 
 
-def _panels(pm: PlaneMap) -> plots.Fields:
+def kinematic_fields(pm: PlaneMap) -> plots.Fields:
     """The paper's Figures 7-11 as panels: n, F_x, F_y, F_z and leg 1's dl_1/dh (legs 2-4 follow by
     Table 2's symmetries; every leg is in the CSV)."""
     fields = {"n (eq. 4)": (pm.dexterity, "-")}
@@ -69,9 +70,11 @@ def _panels(pm: PlaneMap) -> plots.Fields:
 
 
 def write_kinematic_maps(machine: Machine, out_dir: Path | str, heights_m: Iterable[float] = DEFAULT_HEIGHTS_M,
-                  overwrite: bool = False, progress: bool = False) -> tuple[dict[str, object], list[Path]]:
+                  overwrite: bool = False, progress: bool = False
+                  ) -> tuple[dict[str, object], list[Path], list[PlaneMap]]:
     """Write per height ``maps_y<y>.csv`` (every field, every leg) and ``maps_y<y>.png`` (panels, the
-    required square dashed magenta, also at 45 deg on the F panels), then ``summary.json``.
+    required square dashed magenta, also at 45 deg on the F panels), then ``summary.json``; returns the
+    summary, the paths and the maps.
     Refuses to overwrite unless asked (checked for every file before anything is written)."""
     out = Path(out_dir)
     heights = [float(y) for y in heights_m]
@@ -86,12 +89,13 @@ def write_kinematic_maps(machine: Machine, out_dir: Path | str, heights_m: Itera
         raise OutputExistsError(f"{clash[0]} exists ({len(clash)} output files do); pass --overwrite "
                                 "to replace them")
     squares = [np.vstack([c, c[:1]]) for c in (square_corners(machine, 0.0), square_corners(machine, 45.0))]
-    written = []
+    written, plane_maps = [], []
     with tqdm(total=len(heights) + 1, desc="workspace", unit="step", disable=not progress) as bar:
         for y in heights:
             pm = plane_map(machine, y)
+            plane_maps.append(pm)
             written.append(io.write_csv(out / f"maps_y{y:.3f}.csv", *map_rows(pm), overwrite=overwrite))
-            fields = _panels(pm)
+            fields = kinematic_fields(pm)
             fig = plots.xz_map_figure(pm.x_m, pm.z_m, fields, f"4-UPU maps at y_h = {y:g} m "
                                       "(magenta: required square, also at 45 deg)")
             try:
@@ -105,7 +109,7 @@ def write_kinematic_maps(machine: Machine, out_dir: Path | str, heights_m: Itera
         result = summary(machine, heights)
         written.append(io.write_json(out / "summary.json", result, overwrite))
         bar.update()
-    return result, written
+    return result, written, plane_maps
 
 
 # --- output ---------------------------------------------------------------------------------------

@@ -16,8 +16,11 @@ from pressfit.description.machine import Machine
 from pressfit.geometry import interference
 from pressfit.kinematics import workspace
 from pressfit.mechanics import condensed
-from pressfit.output.files import write_csv, write_json, write_text
+from pressfit.mechanics.statics import Equilibrium, solve_equilibrium
 from pressfit.output import maps, plots
+from pressfit.output.files import write_csv, write_json, write_text
+from pressfit.output.html_report import ReportContent, write_html_report
+from pressfit.output.scene3d import SceneCase
 from pressfit.studies import cad_fit
 from pressfit.studies import paper_tables as tables
 from pressfit.studies import preload_study, workspace_envelope
@@ -31,17 +34,22 @@ def _md_table(header: list[str], rows: list[list[object]]) -> str:
 
 def write_report(machine: Machine, out_dir: Path | str, overwrite: bool = False, quick: bool = False,
                  progress: bool = True) -> Path:
-    """Compute every section and write ``report.md`` with its figures, CSV and JSON into ``out_dir``.
+    """Compute every section and write ``report.md`` with its figures, CSV and JSON into ``out_dir``, and
+    the interactive ``report.html`` (:mod:`pressfit.output.html_report`) beside it; returns report.md's path.
 
     ``quick`` uses coarser grids (for tests and previews); the default grids are the design ones.
     """
     out = Path(out_dir)
-    steps = tqdm(total=6, desc="report", disable=not progress, unit="section")
-    md = [f"# pressfit report: {machine.name}", "", f"Machine file: `{machine.source}`. SI units throughout.", ""]
+    steps = tqdm(total=7, desc="report", disable=not progress, unit="section")
+    md = [f"# pressfit report: {machine.name}", "",
+          f"Machine file: `{machine.source}`. SI units throughout. Interactive version "
+          "(3D view of the loaded machine, sortable tables, zoomable plots): [report.html](report.html).", ""]
 
-    entries = tables.paper_tables()
+    solutions = tables.solve_paper_cases()
+    entries = tables.paper_tables(solutions=solutions)
     write_text(out / "tables.md", tables.to_markdown(entries), overwrite)
     write_csv(out / "tables.csv", *tables.to_rows(entries), overwrite=overwrite)
+    write_json(out / "tables.json", [e.as_dict() for e in entries], overwrite)
     md += ["## 1. The paper's Tables 5 and 6", "",
            "Cases A, B, C of `cases/paper/` (700 N press reaction, +y, at the plate centre), actuator section. "
            "The map from the paper's CAD legs, signs and axes to ours is stated in `pressfit/tables.py`; "
@@ -51,7 +59,7 @@ def write_report(machine: Machine, out_dir: Path | str, overwrite: bool = False,
     steps.update()
 
     heights = [0.6] if quick else list(workspace.DEFAULT_HEIGHTS_M)
-    summ, _ = maps.write_kinematic_maps(machine, out / "kinematics", heights, overwrite=overwrite)
+    summ, _, plane_maps = maps.write_kinematic_maps(machine, out / "kinematics", heights, overwrite=overwrite)
     rng = summ["height_range"][0]
     md += ["## 2. Kinematics and workspace (paper section 4.1)", "",
            f"The required {2 * machine.workspace.x_half_width_m * 1000:g} x "
@@ -76,14 +84,15 @@ def write_report(machine: Machine, out_dir: Path | str, overwrite: bool = False,
     steps.update()
 
     md += ["## 4. Stiffness", ""]
-    for y in (0.6, 0.72):
-        smaps = condensed.stiffness_maps(machine, y, n=21 if quick else 51)
+    stiffness = [condensed.stiffness_maps(machine, y, n=21 if quick else 51) for y in (0.6, 0.72)]
+    for smaps in stiffness:
         paths = maps.write_stiffness_maps(smaps, out / "stiffness", overwrite)
         md += [f"![{p.name}](stiffness/{p.name})" for p in paths if p.suffix == ".png"]
     md += [""]
     steps.update()
 
-    md += _preload_section(machine, out, overwrite, quick)
+    preload_md, studies = _preload_section(machine, out, overwrite, quick)
+    md += preload_md
     steps.update()
 
     im = interference.build_interference(machine)
@@ -97,9 +106,17 @@ def write_report(machine: Machine, out_dir: Path | str, overwrite: bool = False,
                       for k, v in sweep.kind_minima().items()]), ""]
     md += [f"![{p.name}](interference/{p.name})" for p in sorted((out / "interference").glob("*.png"))] + [""]
     steps.update()
-    steps.close()
     write_json(out / "summary.json", {"workspace": summ, "interference": sweep.kind_minima()}, overwrite)
-    return write_text(out / "report.md", "\n".join(md) + "\n", overwrite)
+    path = write_text(out / "report.md", "\n".join(md) + "\n", overwrite)
+
+    scene = [_worst_case(machine, env)] + [_scene_case(f"paper case {s.case.name.removeprefix('paper-')}", s.nonlinear)
+                                               for s in solutions]
+    write_html_report(out, ReportContent(
+        machine, scene, [e.as_dict() for e in entries], plane_maps, env, [dict(zip(header, r)) for r in rows],
+        stiffness, studies, sweep, [{"kind": k, **v} for k, v in sweep.kind_minima().items()]), overwrite)
+    steps.update()
+    steps.close()
+    return path
 
 
 def cad_fit_section(out: Path, overwrite: bool, quick: bool) -> list[str]:
@@ -123,8 +140,22 @@ def cad_fit_section(out: Path, overwrite: bool, quick: bool) -> list[str]:
             " method in `pressfit/studies/cad_fit.py`).", "", text, f"![residuals]({png.name})", ""]
 
 
-def _preload_section(machine: Machine, out: Path, overwrite: bool, quick: bool) -> list[str]:
-    """Clearance vs preload at pose A and off-centre: the stiffness that preload buys back."""
+def _worst_case(machine: Machine, env: workspace_envelope.LoadEnvelope) -> SceneCase:
+    """The nonlinear equilibrium at the envelope's largest axial leg force (its pose and load)."""
+    name, leg, pose, load = workspace_envelope.worst_axial(env)
+    return _scene_case(f"worst envelope pose ({name.removesuffix('_n')}, leg {leg})",
+                       solve_equilibrium(machine, pose, load))
+
+
+def _scene_case(title: str, eq: Equilibrium) -> SceneCase:
+    """A 3D-view case labelled with its pose (m) and plate force (N)."""
+    return SceneCase(f"{title}: pose ({', '.join(f'{v:.3f}' for v in eq.pose_m)}) m, force "
+                     f"({', '.join(f'{v:.0f}' for v in eq.load[:3])}) N", eq)
+
+
+def _preload_section(machine: Machine, out: Path, overwrite: bool,
+                     quick: bool) -> tuple[list[str], list[tuple[str, preload_study.PreloadStudy]]]:
+    """Clearance vs preload at pose A and off-centre: the stiffness that preload buys back (Markdown and studies)."""
 
     md = ["## 5. Clearance and preload", "",
           "Axial play g at each cardan (smoothed dead zone, contact stiffness from the machine file), "
@@ -132,10 +163,12 @@ def _preload_section(machine: Machine, out: Path, overwrite: bool, quick: bool) 
           "preload is the smallest that keeps every cardan closed up to 700 N.", ""]
     preloads = [0.0, 200.0, 400.0, 600.0] if quick else [0.0, 100.0, 200.0, 300.0, 400.0, 500.0, 600.0, 800.0,
                                                          1000.0, 1200.0]
+    studies = []
     for name, pose in (("pose_A", (0.0, 0.72, 0.0)), ("off_centre", (0.2, 0.6, -0.2))):
         study = preload_study.preload_study(machine, pose, [0.0, 10e-6, 20e-6, 40e-6], preloads, 700.0,
                                         10 if quick else 50, progress=False)
+        studies.append((name, study))
         paths = maps.write_preload_study(study, out / "preload" / name, overwrite)
         md += [f"### {name.replace('_', ' ')} {list(pose)} m", "", "```", preload_study.format_answers(study), "```", ""]
         md += [f"![{p.name}](preload/{name}/{p.name})" for p in paths if p.suffix == ".png"] + [""]
-    return md
+    return md, studies

@@ -75,16 +75,28 @@ def paper_components(eq: Equilibrium, leg: int, axial_sign: int) -> dict[str, fl
             "M_x": s.M_x, "M_y": flip * s.M_y, "M_bend": float(np.hypot(s.M_x, s.M_y)), "M_z": flip * s.T}
 
 
-def compare_case(case: Case) -> list[TableEntry]:
-    """Solve a paper case (linear and nonlinear) and line it up with its printed reference."""
+@dataclass(frozen=True)
+class CaseSolution:
+    """A paper case and its two solutions: linear (the rigid-limit comparison) and geometrically nonlinear."""
+
+    case: Case
+    linear: Equilibrium
+    nonlinear: Equilibrium
+
+
+def solve_case(case: Case) -> CaseSolution:
+    """Solve a paper case (its first pose and load) linearly and nonlinearly."""
     if case.reference is None:
         raise PressfitError(f"{case.path}: case {case.name} has no [reference] table to compare with")
     machine = case.machine()
     pose, wrench = case.poses.array()[0], case.loads.wrenches()[0]
     solver = EquilibriumSolver(machine, pose_m=pose)
-    lin = solver.solve(pose, wrench, linear=True)
-    nonlin = solver.solve(pose, wrench, linear=False)
-    ref = case.reference
+    return CaseSolution(case, solver.solve(pose, wrench, linear=True), solver.solve(pose, wrench, linear=False))
+
+
+def compare_solution(solution: CaseSolution) -> list[TableEntry]:
+    """Line up a solved paper case with its printed reference."""
+    lin, nonlin, ref = solution.linear, solution.nonlinear, solution.case.reference
     out = []
     for q in QUANTITIES:
         for cad, kin in enumerate(ref.leg_order, start=1):
@@ -95,13 +107,23 @@ def compare_case(case: Case) -> list[TableEntry]:
             tiny = NEGLIGIBLE[q[0]]
             compared = q in COMPARED
             err = np.nan if not compared or max(abs(paper), abs(a)) < tiny else (a - paper) / abs(paper)
-            out.append(TableEntry(case.name, q, cad, kin, paper, a, b, float(err), compared))
+            out.append(TableEntry(solution.case.name, q, cad, kin, paper, a, b, float(err), compared))
     return out
 
 
-def paper_tables(directory: Path = PAPER_CASES) -> list[TableEntry]:
-    """Every entry of Tables 5 and 6 for the paper's cases A, B and C."""
-    return [e for name in "ABC" for e in compare_case(load_case(directory / f"{name}.toml"))]
+def compare_case(case: Case) -> list[TableEntry]:
+    """Solve a paper case (linear and nonlinear) and line it up with its printed reference."""
+    return compare_solution(solve_case(case))
+
+
+def solve_paper_cases(directory: Path = PAPER_CASES) -> list[CaseSolution]:
+    """The paper's cases A, B and C, solved."""
+    return [solve_case(load_case(directory / f"{name}.toml")) for name in "ABC"]
+
+
+def paper_tables(directory: Path = PAPER_CASES, solutions: list[CaseSolution] | None = None) -> list[TableEntry]:
+    """Every entry of Tables 5 and 6 for the paper's cases A, B and C (from ``solutions`` when given)."""
+    return [e for s in (solve_paper_cases(directory) if solutions is None else solutions) for e in compare_solution(s)]
 
 
 def to_markdown(entries: list[TableEntry]) -> str:

@@ -148,3 +148,12 @@ def envelope_rows(env: LoadEnvelope) -> tuple[list[str], list[list[object]]]:
             rows += [[k, unit, i + 1, float(e.value[i]), *e.pose_m[i].tolist(), *e.load_n[i].tolist()]
                      for i in range(e.value.size)]
     return header, rows
+
+
+def worst_axial(env: LoadEnvelope) -> tuple[str, int, np.ndarray, np.ndarray]:
+    """The largest axial leg force of the envelope, tension or compression: the quantity ('tension_n' or
+    'compression_n'), the leg (1-based), the pose (3,) in m and the force (3,) in N where it happens."""
+    name = max(("tension_n", "compression_n"), key=lambda k: float(env.entries[k].value.max()))
+    e = env.entries[name]
+    leg = int(np.argmax(e.value))
+    return name, leg + 1, e.pose_m[leg], e.load_n[leg]

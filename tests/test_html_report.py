@@ -1,0 +1,199 @@
+"""report.html in a real headless browser (Debian's chromium driven by Playwright), and the 3D view's
+geometry against the closed-form kinematics.
+
+The browser is never downloaded: Playwright launches /usr/bin/chromium. Without it these tests FAIL
+(they never skip); install it with `apt-get install -y chromium` (the README's test command does).
+"""
+
+import io
+import json
+import shutil
+from pathlib import Path
+
+import numpy as np
+import pinocchio as pin
+import pytest
+from PIL import Image
+
+from pressfit.mechanics.statics import solve_equilibrium
+from pressfit.output.report import write_report
+from pressfit.output.scene3d import MAGNIFICATIONS, SceneCase, scene_figure
+
+CHROMIUM = "/usr/bin/chromium"
+ARGS = ["--headless", "--no-sandbox", "--disable-gpu", "--disable-quic", "--no-first-run",
+        "--disable-background-networking", "--disable-component-update", "--disable-sync"]
+
+
+@pytest.fixture(scope="module")
+def report_dir(tmp_path_factory, machine):
+    out = tmp_path_factory.mktemp("report")
+    write_report(machine, out, quick=True, progress=False)
+    return out
+
+
+@pytest.fixture(scope="module")
+def browser():
+    if not Path(CHROMIUM).exists() or shutil.which("chromium") is None:
+        pytest.fail("chromium is missing: install Debian's package with `apt-get install -y chromium` "
+                    "(the README's test command does this); the browser tests never skip", pytrace=False)
+    from playwright.sync_api import sync_playwright
+
+    with sync_playwright() as p:
+        b = p.chromium.launch(executable_path=CHROMIUM, args=ARGS)
+        yield b
+        b.close()
+
+
+@pytest.fixture(scope="module")
+def page(browser, report_dir):
+    """The report loaded from file://, with its console errors, page errors and requests recorded."""
+    pg = browser.new_page(viewport={"width": 1300, "height": 900})
+    pg.errors, pg.requests = [], []
+    pg.on("console", lambda m: pg.errors.append(m.text) if m.type == "error" else None)
+    pg.on("pageerror", lambda e: pg.errors.append(str(e)))
+    pg.on("request", lambda r: pg.requests.append(r.url))
+    pg.goto((report_dir / "report.html").as_uri())
+    pg.wait_for_function("document.querySelectorAll('.plot').length > 0 && Array.from("
+                         "document.querySelectorAll('.plot')).every(d => d._fullLayout)")
+    pg.wait_for_timeout(500)  # WebGL draws after newPlot resolves
+    yield pg
+    pg.close()
+
+
+def _pixels(png: bytes) -> np.ndarray:
+    return np.asarray(Image.open(io.BytesIO(png)).convert("RGB"))
+
+
+def test_page_loads_offline_without_errors(page, report_dir):
+    assert page.errors == []
+    assert page.requests and all(u.startswith("file://") for u in page.requests), page.requests
+    text = (report_dir / "report.html").read_text()
+    assert "http://" not in text and "https://" not in text  # no external URL anywhere in the page
+    assert '<script src="plotly.min.js">' in text and (report_dir / "plotly.min.js").stat().st_size > 1e6
+    n_plots = page.evaluate("document.querySelectorAll('.plot').length")
+    assert n_plots >= 8 and page.evaluate("document.querySelectorAll('.plot .main-svg').length") >= n_plots
+
+
+def _new_colour_fraction(before: np.ndarray, after: np.ndarray) -> float:
+    """Fraction of the pixels of ``after`` whose colour (quantised to 16 levels per channel) is absent from
+    ``before``, over the left 90 % of the figure (the colour bar excluded). A re-layout that only moves
+    the scene scores ~1e-6 here (measured); recolouring the legs scores ~1.5e-2."""
+    def keys(img):
+        q = img[:, : int(0.9 * img.shape[1])].reshape(-1, 3).astype(np.int64) // 16
+        return q[:, 0] * 256 + q[:, 1] * 16 + q[:, 2]
+
+    return float(np.mean(~np.isin(keys(after), keys(before))))
+
+
+def test_3d_view_renders_and_the_colouring_toggle_changes_it(page):
+    view = page.locator("#fig-0")
+    before = _pixels(view.screenshot())
+    colours = np.unique(before.reshape(-1, 3), axis=0)
+    assert len(colours) > 500, len(colours)  # shaded tubes, plate and base: far from a blank canvas
+    for label, title in (("torsion", "T "), ("bending", "|M| "), ("axial force", "N ")):
+        page.locator("#fig-0 g.updatemenu-button", has_text=label).click()
+        page.wait_for_timeout(500)
+        after = _pixels(view.screenshot())
+        assert np.any(before != after)
+        assert _new_colour_fraction(before, after) > 3e-3, label  # the legs took new colours
+        assert page.evaluate("document.getElementById('fig-0').layout.coloraxis.colorbar.title.text").startswith(title)
+        before = after
+
+
+def _rows(page, table_id):
+    return page.evaluate(f"Array.from(document.querySelectorAll('#{table_id} tbody tr')).map(r => "
+                         "Array.from(r.cells).map(c => [c.dataset.key, c.dataset.value, c.textContent]))")
+
+
+def _text(v):
+    """The test's own statement of the page's format: floats to 4 significant digits, others as text."""
+    return f"{v:.4g}" if isinstance(v, float) else str(v)
+
+
+def _check_table(page, table_id, records, special=None):
+    rows = _rows(page, table_id)
+    assert len(rows) == len(records) > 0
+    for row, record in zip(rows, records):
+        for key, value, text in row:
+            assert json.loads(value) == record[key], (table_id, key)
+            expected = special[key](record) if special and key in special else _text(record[key])
+            assert text == expected, (table_id, key, text, expected)
+
+
+def test_tables_5_6_cells_equal_tables_json(page, report_dir):
+    records = json.loads((report_dir / "tables.json").read_text())
+    assert len(records) == 3 * 7 * 4  # cases A, B, C x 7 quantities x 4 legs
+
+    def rel(r):
+        if r["relative_error"] is None:
+            return "~0 both" if r["compared"] else "listed (frame)"
+        return f"{100 * r['relative_error']:+.2f} %"
+
+    _check_table(page, "tables-5-6", records, {"relative_error": rel})
+    assert "(pressfit linear - paper) / |paper|" in page.inner_text("#tables + p")
+
+
+def test_envelope_and_interference_cells_equal_their_json(page, report_dir):
+    _check_table(page, "envelope", json.loads((report_dir / "envelope/load_envelope.json").read_text()))
+    kinds = json.loads((report_dir / "summary.json").read_text())["interference"]
+    _check_table(page, "interference", [{"kind": k, **v} for k, v in kinds.items()],
+                 {"pose_m": lambda r: ", ".join(f"{v:.4g}" for v in r["pose_m"])})
+
+
+def test_clicking_a_header_sorts_the_table(page):
+    def column():
+        return [json.loads(r[4][1]) for r in _rows(page, "tables-5-6")]  # the 'paper' column
+
+    page.locator("#tables-5-6 th", has_text="paper").first.click()
+    assert column() == sorted(column())
+    page.locator("#tables-5-6 th", has_text="paper").first.click()
+    assert column() == sorted(column(), reverse=True)
+
+
+def test_3d_geometry_follows_the_kinematics_and_the_solve(machine):
+    """Reference: the closed-form placement of the cardans (B_i on the base; C_i = h + u + exp(m phi) d_i,
+    u and phi from the solve) and the leg radii of the machine's [collision] table; tolerance 1e-6 m is
+    the 0.1 um rounding of the page's coordinates plus float noise."""
+    pose, load = np.array([0.1, 0.6, -0.15]), np.array([30.0, 700.0, -20.0])
+    eq = solve_equilibrium(machine, pose, load)
+    fig = scene_figure(machine, [SceneCase("test", eq)]).to_plotly_json()
+    steps = fig["layout"]["sliders"][0]["steps"]
+    names = [t["name"] for t in fig["data"]]
+    for m in (0.0, 1.0, 100.0):
+        xyz = steps[MAGNIFICATIONS.index(m)]["args"][0]
+        at = lambda name: np.c_[[xyz[a][names.index(name)] for a in "xyz"]].T  # noqa: E731
+        cardans = pose + m * eq.plate_displacement_m + machine.plate_offsets_m @ pin.exp3(m * eq.plate_rotation_rad).T
+        np.testing.assert_allclose(at("cardans"), np.vstack([machine.base_points_m, cardans]), atol=1e-6)
+        for i in range(4):
+            b, c = machine.base_points_m[i], cardans[i]
+            e = (c - b) / np.linalg.norm(c - b)
+            v = at(f"leg{i + 1}.cylinder") - b
+            radial = np.linalg.norm(v - np.outer(v @ e, e), axis=1)
+            np.testing.assert_allclose(radial, machine.collision.cylinder_radius_m, atol=1e-6)
+            s = v @ e
+            np.testing.assert_allclose([s.min(), s.max()], [0.0, machine.cylinder.length_m], atol=1e-6)
+    legs = [t for t in fig["data"] if t["name"].startswith("leg") and t["name"].endswith("cylinder")]
+    np.testing.assert_allclose([t["intensity"][0] for t in legs], [leg.sections["actuator"].N for leg in eq.legs])
+
+
+def test_3d_view_opens_at_the_worst_axial_force_and_the_slider_moves_the_plate(page, report_dir, machine):
+    """Reference: the largest tension/compression entry of envelope/load_envelope.json gives the pose the
+    view opens at; slider step 0 (magnification 0) puts the plate cardans at h + d_i exactly (to the page's
+    0.1 um rounding), the last step moves them by far more than the solve's micrometres."""
+    rows = [r for r in json.loads((report_dir / "envelope/load_envelope.json").read_text())
+            if r["quantity"] in ("tension_n", "compression_n")]
+    worst = max(rows, key=lambda r: r["value"])
+    pose = np.array([worst["x_m"], worst["y_m"], worst["z_m"]])
+    cardans = ("(() => { const t = document.getElementById('fig-0').data.find(d => d.name === 'cardans' && d.visible);"
+               " return [t.x, t.y, t.z]; })()")
+    rail = page.locator("#fig-0 .slider-rail-touch-rect")
+    box = rail.bounding_box()
+    rail.click(position={"x": 3, "y": box["height"] / 2})  # the first step: magnification 0
+    page.wait_for_timeout(300)
+    nominal = np.array(page.evaluate(cardans)).T
+    np.testing.assert_allclose(nominal[4:], pose + machine.plate_offsets_m, atol=2e-7)
+    np.testing.assert_allclose(nominal[:4], machine.base_points_m, atol=2e-7)
+    rail.click(position={"x": box["width"] - 3, "y": box["height"] / 2})  # the last step
+    page.wait_for_timeout(300)
+    moved = np.array(page.evaluate(cardans)).T
+    assert np.abs(moved[4:] - nominal[4:]).max() > 1e-3 and np.allclose(moved[:4], nominal[:4])
