@@ -38,7 +38,7 @@ def workspace_cmd(heights: tuple[float, ...], out_dir: Path, overwrite: bool, as
     box: dict[str, dict] = {}
 
     def write(tmp: Path) -> list[Path]:
-        box["summary"], _, paths = map_files.write_kinematic_maps(machine, tmp, heights or workspace.DEFAULT_HEIGHTS_M,
+        box["summary"], paths, _ = map_files.write_kinematic_maps(machine, tmp, heights or workspace.DEFAULT_HEIGHTS_M,
                                                                   progress=progress)
         return paths
 

@@ -225,19 +225,24 @@ def _stiffness_section(page: _Page, c: ReportContent) -> None:
 def _preload_section(page: _Page, c: ReportContent) -> None:
     page.section("preload", "6. Clearance and preload",
                  "Axial play g at each cardan, actuator preload a4 along v_p, then the press load 0 ... 700 N (+y). "
-                 "First: plate stiffness against preload per clearance (dashed: small-load, solid: secant at the "
-                 "full load; the black line is the machine without clearance). Then the load-deflection curves "
+                 "First: plate stiffness against preload per clearance (dashed: secant at a small load, solid: secant "
+                 "at the full load; the black and dotted lines are the machine without clearance, with the cardan "
+                 "contact springs and with rigid cardans). Then the load-deflection curves "
                  "(colour: preload, dash: clearance). The "
                  "critical preload is the smallest that keeps every cardan closed up to the full load.")
     for name, st in c.preload:
         unit = "N" if st.preload_mode == "force" else "m"
         fig = go.Figure()
         for g, gap in enumerate(st.clearances_m):
-            fig.add_scatter(x=st.preloads, y=st.small_load_stiffness_n_per_m[g], mode="lines+markers",
-                            line={"dash": "dash"}, name=f"g = {gap * 1e6:g} um, small load", legendgroup=str(g))
+            fig.add_scatter(x=st.preloads, y=st.small_load_secant_stiffness_n_per_m[g], mode="lines+markers",
+                            line={"dash": "dash"}, name=f"g = {gap * 1e6:g} um, secant at {st.small_load_n:g} N",
+                            legendgroup=str(g))
             fig.add_scatter(x=st.preloads, y=st.press_secant_stiffness_n_per_m[g], mode="lines+markers",
                             name=f"g = {gap * 1e6:g} um, secant at {st.loads_n[-1]:g} N", legendgroup=str(g))
-        fig.add_hline(y=st.reference_stiffness_n_per_m, line={"color": "black", "width": 1})
+        fig.add_hline(y=st.no_clearance_contact_stiffness_n_per_m, line={"color": "black", "width": 1},
+                      annotation_text="no clearance, cardan contact springs in series")
+        fig.add_hline(y=st.rigid_cardan_stiffness_n_per_m, line={"color": "gray", "width": 1, "dash": "dot"},
+                      annotation_text="no clearance, rigid cardans")
         fig.update_layout(title={"text": f"{name}: pose {st.pose_m.tolist()} m"}, height=440,
                           xaxis={"title": {"text": f"preload a4 [{unit}]"}},
                           yaxis={"title": {"text": "stiffness [N/m]"}, "type": "log"})
