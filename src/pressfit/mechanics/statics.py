@@ -316,9 +316,11 @@ def _evaluate(pb: _Problem, q: np.ndarray, data: pin.Data, d_leg: np.ndarray | N
     p = np.empty((4, 6, 6))  # plate part (L, 6, 6)
     p[:, :3] = _skew(pd) @ sp[3:] - sp[:3]
     p[:, 3:] = -sp[3:]
-    jl = np.array([pin.Jlog3(r).T for r in rel])  # d log3(R_E R_D^T) = Jlog3^T (omega_E - omega_D)
+    # d log3(R) for R = R_E R_D^T, world angular velocities: exp(w_E) R = R exp(R^T w_E) and R exp(-w_D), so
+    # dc = Jlog3(R) (R^T w_E - w_D) = Jlog3(R)^T w_E - Jlog3(R) w_D  (Jlog3 R^T = Jlog3^T, its left form)
+    jl = np.array([pin.Jlog3(r) for r in rel])
     ja, jp = a.copy(), p.copy()
-    ja[:, 3:], jp[:, 3:] = jl @ a[:, 3:], jl @ p[:, 3:]
+    ja[:, 3:], jp[:, 3:] = jl.transpose(0, 2, 1) @ a[:, 3:], jl @ p[:, 3:]
     x = d_leg - pb.rest_rel
     g_leg = pb.k * x
     ktan = pb.k
