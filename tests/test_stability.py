@@ -149,3 +149,14 @@ def test_nonlinear_solution_tends_to_the_linear_one_at_small_loads(machine):
         eq = solve_equilibrium(machine, POSE, WRENCH / 700.0 * f)
         theta = float(np.linalg.norm(eq.plate_rotation_rad))
         assert np.abs(eq.actuator_forces_n / f / ref - 1).max() < 10 * theta + 1e-12
+
+
+def test_small_strain_range_is_a_leg_strain_not_a_plate_displacement(machine):
+    """1e7 N of tension at pose A stretches each leg by about 1e7 / (4 sin a) x c_axial / l ~ 9% (stable, but
+    far beyond small strains): refused. At (0, 0.8, 0) a 2.7 kN lateral force rotates the plate (the soft
+    plate-rotation mode) and moves it 17 mm with leg strains below 1e-4: accepted (a 20 mm displacement cap
+    refused its linear solve, 20.0 mm)."""
+    with pytest.raises(UnstableEquilibriumError, match=r"changes length by [89]\.\d+% .* 1% small-strain range"):
+        solve_equilibrium(machine, POSE_A, [0, 1e7, 0])
+    eq = solve_equilibrium(machine, [0, 0.8, 0], [0, 4775.36, 2686.14], linear=True)
+    assert np.linalg.norm(eq.plate_displacement_m) > 0.02 and eq.stability.stable

@@ -491,31 +491,36 @@ def solve_equilibrium(machine_or_model: Machine | MachineModel, pose_m: np.ndarr
     pb = _problem(mm, load, offsets, float(np.max(np.abs(kax * offsets))))
     data = mm.data
     eq = _solve_linear(pb, data) if linear else _solve_nonlinear(pb, data, tol, max_iter, start, step_limit)
-    _check_physical(eq)
+    _check_physical(machine, eq)
     return eq
 
 
-# Range of validity, not stability: 20 mm of plate motion takes leg forces of about k_axial x 20 mm = 1e6 N
-# (k_axial ~ 5e7 N/m), a stress of 1.4 GPa in the 30 mm stem, beyond the yield of any structural steel:
-# outside the linear-elastic springs of this model (stability itself is decided by the reduced stiffness).
-MAX_DISPLACEMENT_M = 0.02
+# Range of validity (not stability): a leg whose length changes by more than 1% is outside the model's small
+# strains. It takes an axial force of at least 0.01 l / c_axial ~ 2.5e5 N (c_axial ~ 2e-8 m/N, l >= 0.5 m), a
+# stress above 350 MPa in the 30 mm stem, beyond structural steel's yield. (A cap on the plate displacement
+# is not a strain limit: at (0, 0.8, 0) a 2.7 kN lateral force rotates the plate by 0.1 rad and moves it
+# 17 mm with every strain small.)
+MAX_AXIAL_STRAIN = 0.01
 
 
-def _check_physical(eq: Equilibrium) -> None:
-    """Refuse answers no real machine would give: an unstable equilibrium (the tangent stiffness on the
-    closure manifold is not positive definite: the load is beyond the machine's buckling load and the
-    branch Newton found is meaningless), or a plate displacement beyond the model's elastic range."""
-    s, where = eq.stability, _where(eq)
+def _check_physical(machine: Machine, eq: Equilibrium) -> None:
+    """Refuse an unstable equilibrium: the tangent stiffness on the closure manifold is not positive definite
+    (the load is beyond the machine's buckling load; the branch Newton found is meaningless); and a leg
+    strained beyond the model's small-strain range (MAX_AXIAL_STRAIN)."""
+    s = eq.stability
     if not s.stable:
         raise UnstableEquilibriumError(
-            f"no stable equilibrium {where}: the tangent stiffness on the closure manifold has smallest eigenvalue "
-            f"{s.min_eigenvalue_nm:.4g} N m (largest {s.max_eigenvalue_nm:.4g} N m) and the KKT matrix "
+            f"no stable equilibrium {_where(eq)}: the tangent stiffness on the closure manifold has smallest "
+            f"eigenvalue {s.min_eigenvalue_nm:.4g} N m (largest {s.max_eigenvalue_nm:.4g} N m) and the KKT matrix "
             f"{s.kkt_negative_eigenvalues} negative eigenvalues for {s.constraints} constraints: the load is "
             "beyond the machine's buckling load")
-    u = float(np.linalg.norm(eq.plate_displacement_m))
-    if u > MAX_DISPLACEMENT_M:
-        raise UnstableEquilibriumError(f"plate displacement {u:.4g} m {where} exceeds {MAX_DISPLACEMENT_M} m: "
-                                       "leg stresses beyond yield, outside this linear-elastic model")
+    lengths = kinematics.inverse_kinematics(machine, eq.pose_m).lengths_m
+    strain = np.abs(eq.actuator_forces_n) * machine.axial_compliance_m_per_n(lengths) / lengths
+    if strain.max() > MAX_AXIAL_STRAIN:
+        i = int(np.argmax(strain))
+        raise UnstableEquilibriumError(f"leg {i + 1} {_where(eq)} changes length by {100 * strain[i]:.3g}% "
+                                       f"(axial force {eq.actuator_forces_n[i]:.4g} N), beyond the "
+                                       f"{100 * MAX_AXIAL_STRAIN:g}% small-strain range of this linear-elastic model")
 
 
 def _where(eq: Equilibrium) -> str:
