@@ -23,8 +23,20 @@ H = K_springs - dQ_load/dq + d(J_c^T lambda)/dq, block-diagonal over the four le
 system is solved by eliminating each leg's own KKT block (batched) and a 6x6 Schur complement on the
 plate.
 
+Closure Jacobian: the constraint rows of the KKT matrix are the exact derivative of c, with
+d log3(R_E R_D^T) = Jlog3^T omega_E - Jlog3 omega_D (``pin.Jlog3``), so Newton is exact off the manifold;
+the stationarity rows keep J^T lambda with the twist map (lambda is the physical dead wrench; the two
+Jacobians agree on the manifold). Closure components below CLOSURE_FLOOR (64 ulp of 1 m) are set to 0: they
+are the round-off of positions of ~1 m and, left in, a 5e7 N/m actuator turns them into a ~1e-9 N
+self-stress that swamps tiny loads. Every solve reports its stability (:mod:`pressfit.mechanics.stability`):
+at convergence for the nonlinear solve, and for the linear solve the tangent at the reference with the
+geometric stiffness of its own multipliers (stable exactly when the machine's linearised buckling factor
+exceeds 1). Unstable solutions raise UnstableEquilibriumError.
+
 Linear solve (``linear=True``): one KKT solve at the assembled pose with the elastic stiffness only
-(small displacements; equilibrium written on the undeformed geometry).
+(small displacements; equilibrium written on the undeformed geometry), about a stress-free reference:
+the closed form of equation 1 is closed in exact arithmetic, so its round-off closure residual is taken
+as zero and the answer is exactly proportional to the load.
 
 Section resultants: there are no loads along a leg, so the wrench that the plate-side part exerts on the
 base-side part at any section is the plate's wrench on the leg end (-lambda_i) carried to the section
