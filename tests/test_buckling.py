@@ -33,3 +33,62 @@ def test_order_of_segments_does_not_matter():
 def test_vectorised_table_matches_direct_root(machine):
     for length in (0.5, 0.73, 1.0):
         assert leg_critical_loads_n(machine, [length])[0] == pytest.approx(leg_critical_load_n(machine, length), rel=1e-6)
+
+
+# --- whole-machine linearised buckling --------------------------------------------------------------------
+import numpy as np  # noqa: E402
+
+from pressfit import kinematics  # noqa: E402
+from pressfit.mechanics.buckling import machine_buckling  # noqa: E402
+from pressfit.mechanics.model import build_model  # noqa: E402
+
+POSE_A = np.array([0.0, 0.72, 0.0])
+
+
+def _euler_factor(machine, pose, leg, compression_n):
+    length = float(kinematics.inverse_kinematics(machine, pose).lengths_m[leg])
+    return leg_critical_load_n(machine, length) / compression_n
+
+
+@pytest.mark.parametrize("load,leg,first", [([0, -700, 0, 0, 0, 0], 0, 2), ([0, 0, 700, 0, 0, 0], 2, 1)])
+def test_leg_modes_converge_to_euler_as_one_over_n_squared(machine, load, leg, first):
+    """The legs' own buckling modes in the machine spectrum against Euler's pinned-pinned stepped column
+    (stepped_column_critical_load_n, Timoshenko & Gere 2.10). Pose A under -700 N: all four legs at 195.7 N
+    compression, 8 degenerate leg modes (4 legs x 2 planes) above the plate modes; under +700 N along z only
+    leg 3 is compressed (782.6 N) and its two modes are the 2nd and 3rd. The lumped legs (n springs per
+    segment) converge as 1/n^2: the error ratio between n = 4 and 8 is 4 to +-5%, and the Richardson
+    extrapolation (4 f_8 - f_4) / 3 matches Euler to 2e-4 (achieved 4e-5 and 7e-5)."""
+    n_modes = 8 if leg == 0 else 2
+    f = {}
+    for n in (4, 8):
+        res = machine_buckling(build_model(machine, POSE_A, springs_per_segment=n), POSE_A, load)
+        modes = res.load_factors[first:first + n_modes]
+        assert np.ptp(modes) < 1e-6 * modes[0]  # degenerate: the legs and planes are symmetric
+        f[n] = modes[0]
+    sin_a = 2 / math.sqrt(5)  # pose A: tan(alpha) = y_h / (p - r) = 0.72 / 0.36 = 2 (DESIGN.md)
+    compression = 700 / (4 * sin_a) if leg == 0 else 700 / (2 * math.sqrt(1 - sin_a**2))  # statics by hand
+    assert -res.axial_forces_n[leg] == pytest.approx(compression, rel=1e-9)
+    euler = _euler_factor(machine, POSE_A, leg, compression)
+    assert res.leg_euler_factors[leg] == pytest.approx(euler, rel=1e-6)
+    assert (euler - f[4]) / (euler - f[8]) == pytest.approx(4.0, rel=0.05)
+    assert (4 * f[8] - f[4]) / 3 == pytest.approx(euler, rel=2e-4)
+
+
+@pytest.mark.parametrize("pose", [POSE_A, (0.25, 0.6, 0.25), (0.2765, 0.72, -0.2765), (-0.2, 0.52, 0.22)])
+def test_machine_buckles_before_its_legs_at_press_poses(machine, pose):
+    """Under a downward press load the machine's factor is below every leg's Euler factor: its first mode is a
+    plate rotation about an axis through P* (where the leg lines meet), which only the legs' torsion and
+    bending resist and the legs' compression destabilises (pose A: factor 143 vs 1197; a hand estimate with
+    rigid legs, k_rot = 2 k_torsion cos^2(alpha) = 6.3e3 N m/rad against the compressed bars' and the dead
+    load's geometric terms, gives 155). The mode carries plate rotation, not only leg bending."""
+    res = machine_buckling(machine, pose, [0, -700, 0, 0, 0, 0])
+    assert res.load_factor < 0.5 * res.leg_euler_factors.min()
+    assert np.abs(res.plate_motion[3:]).max() > 0.5  # mode normalised to max |dq| = 1: the plate rotates
+
+
+def test_pose_a_machine_factor_is_independent_of_the_spring_count(machine):
+    """The plate-rotation mode bends the legs only by constant couples, which lumped springs carry exactly:
+    its factor is the same for n = 2 and 4 to 1e-9, unlike the leg modes."""
+    f = [machine_buckling(build_model(machine, POSE_A, springs_per_segment=n), POSE_A, [0, -700, 0, 0, 0, 0]
+                          ).load_factor for n in (2, 4)]
+    assert f[0] == pytest.approx(f[1], rel=1e-9)

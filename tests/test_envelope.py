@@ -125,3 +125,20 @@ def test_clearance_case_sheds_load_from_opened_legs(tmp_path):
                                             clearance={"gaps_m": [20e-6] * 8})))
     assert res.limits[0].worst == pytest.approx(700 / (2 * s), rel=5e-3)
     assert "clearance" in res.limits[0].method
+
+
+def test_buckling_limit_uses_the_whole_machine_factor(tmp_path):
+    """A downward press at pose A: the refined buckling line is the machine's linearised factor
+    (pressfit.mechanics.buckling.machine_buckling, a plate-rotation mode, 143), not the per-leg Euler factor
+    (1197, what the check reported before): a limit of 200 fails; the Euler check alone passed it."""
+    from pressfit.mechanics.buckling import machine_buckling
+
+    one = {k: {"min_m": v, "max_m": v, "count": 1} for k, v in (("x", 0.0), ("y", 0.72), ("z", 0.0))}
+    path = tmp_path / "b.toml"
+    path.write_text(tomli_w.dumps({"name": "b", "poses": one, "loads": {"press_force_n": 700.0,
+                                                                        "direction": [0.0, -1.0, 0.0]},
+                                   "envelope": {"min_buckling_safety_factor": 200.0}}))
+    line = evaluate_case(load_case(path)).limits[0]
+    ref = machine_buckling(load_case(path).machine(), [0, 0.72, 0], [0, -700, 0, 0, 0, 0])
+    assert line.worst == pytest.approx(ref.load_factor, rel=1e-9) and line.worst < 0.2 * ref.leg_euler_factors.min()
+    assert not line.passed and "whole-machine linearised buckling" in line.method

@@ -23,8 +23,20 @@ H = K_springs - dQ_load/dq + d(J_c^T lambda)/dq, block-diagonal over the four le
 system is solved by eliminating each leg's own KKT block (batched) and a 6x6 Schur complement on the
 plate.
 
+Closure Jacobian: the constraint rows of the KKT matrix are the exact derivative of c, with
+d log3(R_E R_D^T) = Jlog3^T omega_E - Jlog3 omega_D (``pin.Jlog3``), so Newton is exact off the manifold;
+the stationarity rows keep J^T lambda with the twist map (lambda is the physical dead wrench; the two
+Jacobians agree on the manifold). Closure components below CLOSURE_FLOOR (64 ulp of 1 m) are set to 0: they
+are the round-off of positions of ~1 m and, left in, a 5e7 N/m actuator turns them into a ~1e-9 N
+self-stress that swamps tiny loads. Every solve reports its stability (:mod:`pressfit.mechanics.stability`):
+at convergence for the nonlinear solve, and for the linear solve the tangent at the reference with the
+geometric stiffness of its own multipliers (stable exactly when the machine's linearised buckling factor
+exceeds 1). Unstable solutions raise UnstableEquilibriumError.
+
 Linear solve (``linear=True``): one KKT solve at the assembled pose with the elastic stiffness only
-(small displacements; equilibrium written on the undeformed geometry).
+(small displacements; equilibrium written on the undeformed geometry), about a stress-free reference:
+the closed form of equation 1 is closed in exact arithmetic, so its round-off closure residual is taken
+as zero and the answer is exactly proportional to the load.
 
 Section resultants: there are no loads along a leg, so the wrench that the plate-side part exerts on the
 base-side part at any section is the plate's wrench on the leg end (-lambda_i) carried to the section
@@ -62,8 +74,10 @@ from pressfit.errors import (
 from pressfit.mechanics.model import CardanComplianceSpec, MachineModel, ModelPose, SpringLaw, build_model
 from pressfit.mechanics.preload import ActuatorPreload, rest_length_offsets
 from pressfit.spatial import cross, skew
+from pressfit.mechanics.stability import Stability, reduced_stability
 
 SECTIONS = ("base", "actuator", "plate")
+CLOSURE_FLOOR = 64 * np.finfo(float).eps  # m or rad: closure components below it are round-off (module doc)
 NEWTON_TOL = 1e-10  # stopping tolerance (relative, module doc); the round-off floor is about 3e-12
 _LEGS = np.arange(4)
 _TAN_F = np.array([0, 1, 2, 3, 0, 1, 2, 3, 4])  # skew(f) factors of _tangent's nine products
@@ -98,7 +112,7 @@ class Residuals:
 
     plate_force: float  # |F_load + sum leg forces on the plate| / F_ref
     plate_moment: float  # |M_load + sum leg moments about the plate centre| / (F_ref L_ref)
-    machine_force: float  # |sum base reactions + F_load| / F_ref (reactions = minus the base-section wrenches)
+    machine_force: float  # |sum base reactions + F_load| / F_ref, reactions from the spring forces alone
     machine_moment: float  # same for moments about the world origin / (F_ref L_ref)
     closure_m: float  # largest loop-closure translation error (Pinocchio constraint data), m
     closure_rad: float  # largest loop-closure rotation error, rad
@@ -132,6 +146,7 @@ class Equilibrium:
     iterations: int
     linear: bool
     residuals: Residuals
+    stability: Stability  # of the tangent stiffness on the closure manifold (pressfit.mechanics.stability)
     preload_offsets_m: np.ndarray = field(default_factory=lambda: np.zeros(4))  # actuator rest-length offsets
 
     def is_valid(self, tol: float = 1e-9) -> bool:
@@ -146,7 +161,8 @@ class Equilibrium:
             "actuator_forces_n": self.actuator_forces_n.tolist(),
             "plate": {"displacement_m": self.plate_displacement_m.tolist(),
                       "rotation_rad": self.plate_rotation_rad.tolist()},
-            "residuals": self.residuals.to_dict(), "iterations": self.iterations,
+            "residuals": self.residuals.to_dict(), "stability": self.stability.to_dict(),
+            "iterations": self.iterations,
         }
 
 
@@ -272,8 +288,10 @@ class _State:
     pc: np.ndarray  # (3,) plate centre
     rp: np.ndarray  # (3, 3) plate rotation
     c: np.ndarray  # (4, 6) closure residual (world)
-    a: np.ndarray  # (4, 6, m) closure Jacobian, leg part
-    p: np.ndarray  # (4, 6, 6) closure Jacobian, plate part
+    a: np.ndarray  # (4, 6, m) wrench map (closure Jacobian on the manifold), leg part
+    p: np.ndarray  # (4, 6, 6) wrench map, plate part
+    ja: np.ndarray  # (4, 6, m) exact closure Jacobian dc/dq, leg part (rotation rows with Jlog3)
+    jp: np.ndarray  # (4, 6, 6) exact closure Jacobian, plate part
     g_leg: np.ndarray  # (4, m) spring forces
     g_plate: np.ndarray  # (6,) -Q_load
     ktan: np.ndarray  # (4, m) spring tangent stiffness
@@ -297,14 +315,21 @@ def _evaluate(pb: _Problem, q: np.ndarray, data: pin.Data, d_leg: np.ndarray | N
     pe = np.array([oe.translation for oe in ends])
     pd = pc + sc.anchors.T @ rp.T  # (4, 3)
     rd = rp @ sc.frames0  # (4, 3, 3) anchor orientations
+    rel = [oe.rotation @ rd[i].T for i, oe in enumerate(ends)]  # R_E R_D^T
     c = np.empty((4, 6))
     c[:, :3] = pe - pd
-    c[:, 3:] = [pin.log3(oe.rotation @ rd[i].T) for i, oe in enumerate(ends)]
-    a = s.copy()  # closure Jacobian, leg part (L, 6, m): twist about O -> (velocity of the point, omega)
+    c[:, 3:] = [pin.log3(r) for r in rel]
+    c[np.abs(c) < CLOSURE_FLOOR] = 0.0  # round-off of ~1 m positions: no information (module doc)
+    a = s.copy()  # wrench map, leg part (L, 6, m): twist about O -> (velocity of the point, omega)
     a[:, :3] -= _skew(pe) @ s[:, 3:]  # v + omega x p = v - skew(p) omega
     p = np.empty((4, 6, 6))  # plate part (L, 6, 6)
     p[:, :3] = _skew(pd) @ sp[3:] - sp[:3]
     p[:, 3:] = -sp[3:]
+    # d log3(R) for R = R_E R_D^T, world angular velocities: exp(w_E) R = R exp(R^T w_E) and R exp(-w_D), so
+    # dc = Jlog3(R) (R^T w_E - w_D) = Jlog3(R)^T w_E - Jlog3(R) w_D  (Jlog3 R^T = Jlog3^T, its left form)
+    jl = np.array([pin.Jlog3(r) for r in rel])
+    ja, jp = a.copy(), p.copy()
+    ja[:, 3:], jp[:, 3:] = jl.transpose(0, 2, 1) @ a[:, 3:], jl @ p[:, 3:]
     x = d_leg - pb.rest_rel
     g_leg = pb.k * x
     ktan = pb.k
@@ -315,7 +340,7 @@ def _evaluate(pb: _Problem, q: np.ndarray, data: pin.Data, d_leg: np.ndarray | N
             ktan[i, cc] = law.tangent(x[i, cc])
     f, m = pb.load[:3], pb.load[3:]
     g_plate = -(sp.T @ np.concatenate([f, _cross3(pc, f) + m]))
-    return _State(q, s, sp, pe, pd, pc, rp, c, a, p, g_leg, g_plate, ktan)
+    return _State(q, s, sp, pe, pd, pc, rp, c, a, p, ja, jp, g_leg, g_plate, ktan)
 
 
 @dataclass
@@ -338,9 +363,9 @@ def _kkt_solve(st: _State, h_leg: np.ndarray, h_plate: np.ndarray, r_leg: np.nda
     kkt = np.zeros((nl, m + 6, m + 6))
     kkt[:, :m, :m] = h_leg
     kkt[:, :m, m:] = st.a.transpose(0, 2, 1)
-    kkt[:, m:, :m] = st.a
+    kkt[:, m:, :m] = st.ja
     rhs = np.zeros((nl, m + 6, 7))
-    rhs[:, m:, :6] = -st.p
+    rhs[:, m:, :6] = -st.jp
     rhs[:, :m, 6] = r_leg
     rhs[:, m:, 6] = rhs_c
     sol = np.empty((nl, m + 6, 7))
@@ -535,23 +560,38 @@ def solve_equilibrium(system: Machine | MachineModel | EquilibriumSolver, pose_m
                         max_iter=max_iter, start=start, preload_offsets_m=preload_offsets_m, step_limit=step_limit)
 
 
-MAX_DISPLACEMENT_M = 0.02  # a plate motion above 20 mm is far outside this small-strain structural model
+# Range of validity (not stability): a leg whose length changes by more than 1% is outside the model's small
+# strains. It takes an axial force of at least 0.01 l / c_axial ~ 2.5e5 N (c_axial ~ 2e-8 m/N, l >= 0.5 m), a
+# stress above 350 MPa in the 30 mm stem, beyond structural steel's yield. (A cap on the plate displacement
+# is not a strain limit: at (0, 0.8, 0) a 2.7 kN lateral force rotates the plate by 0.1 rad and moves it
+# 17 mm with every strain small.)
+MAX_AXIAL_STRAIN = 0.01
 
 
 def _check_physical(machine: Machine, eq: Equilibrium) -> None:
-    """Refuse answers no real machine would give: a leg compressed beyond its Euler load (the state is
-    unstable, the equilibrium branch found is meaningless) or a plate displacement that is not small."""
-    from pressfit.mechanics.buckling import leg_critical_load_n
-
+    """Refuse an unstable equilibrium: the tangent stiffness on the closure manifold is not positive definite
+    (the load is beyond the machine's buckling load; the branch Newton found is meaningless); and a leg
+    strained beyond the model's small-strain range (MAX_AXIAL_STRAIN)."""
+    s = eq.stability
+    if not s.stable:
+        raise UnstableEquilibriumError(
+            f"no stable equilibrium {_where(eq)}: the tangent stiffness on the closure manifold has smallest "
+            f"eigenvalue {s.min_eigenvalue_nm:.4g} N m (largest {s.max_eigenvalue_nm:.4g} N m) and the KKT matrix "
+            f"{s.kkt_negative_eigenvalues} negative eigenvalues for {s.constraints} constraints: the load is "
+            "beyond the machine's buckling load")
     lengths = kinematics.inverse_kinematics(machine, eq.pose_m).lengths_m
-    for i, n in enumerate(eq.actuator_forces_n):
-        if n < 0 and -n > (p_cr := leg_critical_load_n(machine, float(lengths[i]))):
-            raise UnstableEquilibriumError(f"leg {i + 1}: compression {-n:.4g} N exceeds its Euler buckling load "
-                                           f"{p_cr:.4g} N (pinned-pinned stepped column): no stable equilibrium")
-    u = float(np.linalg.norm(eq.plate_displacement_m))
-    if u > MAX_DISPLACEMENT_M:
-        raise UnstableEquilibriumError(f"plate displacement {u:.4g} m exceeds {MAX_DISPLACEMENT_M} m: the load "
-                                       "is far beyond the structural range of this small-strain model")
+    strain = np.abs(eq.actuator_forces_n) * machine.axial_compliance_m_per_n(lengths) / lengths
+    if strain.max() > MAX_AXIAL_STRAIN:
+        i = int(np.argmax(strain))
+        raise UnstableEquilibriumError(f"leg {i + 1} {_where(eq)} changes length by {100 * strain[i]:.3g}% "
+                                       f"(axial force {eq.actuator_forces_n[i]:.4g} N), beyond the "
+                                       f"{100 * MAX_AXIAL_STRAIN:g}% small-strain range of this linear-elastic model")
+
+
+def _where(eq: Equilibrium) -> str:
+    pose = ", ".join(f"{x:.6g}" for x in eq.pose_m.tolist())
+    load = ", ".join(f"{x:.6g}" for x in eq.load.tolist())
+    return f"at pose ({pose}) m under the load ({load}) (N, N m)"
 
 
 def _force_rows(mm: MachineModel) -> np.ndarray:
@@ -566,11 +606,12 @@ def _solve_linear(pb: _Problem, data: pin.Data) -> Equilibrium:
     st = _evaluate(pb, mm.q0, data)
     k = st.ktan
     r_leg, r_plate = -st.g_leg, -st.g_plate
-    dq_leg, dp, lam, fa = _kkt_solve(st, _diag(k), np.zeros((6, 6)), r_leg, r_plate, -st.c)
+    # the reference is closed in exact arithmetic (equation 1): its closure residual, round-off, is taken as 0
+    dq_leg, dp, lam, fa = _kkt_solve(st, _diag(k), np.zeros((6, 6)), r_leg, r_plate, np.zeros((4, 6)))
 
     def errors():  # residual of the linear KKT system
         r_l, r_p = _stationarity(pb, st, lam)  # g + J^T lam (g = -r)
-        e_c = -st.c - (st.a @ dq_leg[:, :, None])[:, :, 0] - st.p @ dp
+        e_c = -(st.ja @ dq_leg[:, :, None])[:, :, 0] - st.jp @ dp
         return r_leg - k * dq_leg - (r_l - st.g_leg), r_plate - (r_p - st.g_plate), e_c
 
     d1, d2, d3 = _kkt_apply(fa, *errors())  # one step of iterative refinement: residuals ~3e-16 (1e-14 without;
@@ -673,12 +714,10 @@ def _result(pb: _Problem, st: _State, lam: np.ndarray, q: np.ndarray, d_leg: np.
                                                            M_x=ml[i][k][0], M_y=ml[i][k][1], T=ml[i][k][2])
                                              for k, name in enumerate(SECTIONS)}, frame=frames[i], actuator_force_n=a)
                  for i, a in enumerate(act.tolist()))
-    # residuals: the plate, and the whole machine from the base-section wrenches (what the legs put into
-    # the base, about the world origin) -------------------------------------------------------------
+    # residuals: the plate (from the multipliers), and the whole machine from the spring forces alone
     pc = st.pc
     plate = np.concatenate([f_load + lf.sum(0), m_load + (_cross3(st.pd - pc, lf) + lm).sum(0)])
-    base_m = mom[:, 0] + _cross3(pts[:, 0], force)
-    machine = np.concatenate([f_load - force.sum(0), m_load + _cross3(pc, f_load) - base_m.sum(0)])
+    machine = _machine_residual(pb, st, st.g_leg + st.ktan * d_leg if linear else st.g_leg)
     cds = sc.cds
     for cm, cd in zip(mm.constraint_models, cds):
         cm.calc(model, data, cd)
@@ -694,5 +733,51 @@ def _result(pb: _Problem, st: _State, lam: np.ndarray, q: np.ndarray, d_leg: np.
         disp, rot = dv[:3].copy(), dv[3:6].copy()
     else:
         disp, rot = pc - mm.pose_m, pin.log3(st.rp)
+    stab = reduced_stability(*_tangent(pb, st, lam), st.ja, st.jp, pb.is_force, pb.l_ref)
     return Equilibrium(mm.pose_m.copy(), pb.load.copy(), legs, act, disp, rot, q, lam.copy(),
-                       iterations, linear, res, pb.offsets.copy())
+                       iterations, linear, res, stab, pb.offsets.copy())
+
+
+@dataclass(frozen=True)
+class ReferenceTangent:
+    """Dense tangent data of the linear reference state (for :func:`pressfit.mechanics.buckling.machine_buckling`),
+    in the model's velocity coordinates (rad, m; plate: translation, rotation)."""
+
+    elastic: np.ndarray  # (nv, nv) spring stiffness K_e (N m/rad, N/m)
+    geometric: np.ndarray  # (nv, nv) geometric stiffness of the linear multipliers and the load
+    jacobian: np.ndarray  # (24, nv) closure Jacobian at the reference
+    leg_v: np.ndarray  # (4, m) velocity indices of each leg's coordinates
+    axial_forces_n: np.ndarray  # (4,) linear actuator forces, N, > 0 tension
+
+
+def reference_tangent(solver: EquilibriumSolver, pose_m: np.ndarray, plate_wrench: np.ndarray,
+                      offsets_m: np.ndarray | None) -> ReferenceTangent:
+    """Linear solve at a pose (m) under a plate wrench (6,) (N, N m) with actuator offsets (4,) (m), and the
+    tangent there split into K_e and the geometric part (linear in the wrench and the offsets)."""
+    offsets = np.zeros(4) if offsets_m is None else np.asarray(offsets_m, dtype=float)
+    pv = solver.model.pose_values(pose_m)
+    pb, data = solver._problem(pv, np.asarray(plate_wrench, dtype=float), offsets)
+    eq = _solve_linear(pb, data)
+    st = _evaluate(pb, pv.q0, data)
+    h_leg, h_plate = _tangent(pb, st, eq.multipliers)
+    nv = pb.mm.model.nv
+    full, jac = np.zeros((nv, nv)), np.zeros((24, nv))
+    full[:6, :6] = h_plate
+    for i, v in enumerate(pb.legv):
+        full[np.ix_(v, v)] = h_leg[i]
+        jac[6 * i:6 * i + 6, v], jac[6 * i:6 * i + 6, :6] = st.ja[i], st.jp[i]
+    k_e = np.zeros((nv, nv))
+    k_e[pb.legv, pb.legv] = st.ktan
+    return ReferenceTangent(k_e, full - k_e, jac, pb.legv, eq.actuator_forces_n)
+
+
+def _machine_residual(pb: _Problem, st: _State, g_leg: np.ndarray) -> np.ndarray:
+    """Sum of the base reactions plus the load (6,), (N, N m about the world origin), independent of the
+    multipliers: the wrench W_i (about O) that leg i carries is the one whose generalised forces on the
+    leg's joints balance its spring forces g_i (m equations for 6 unknowns: the cardans give S_k . W = 0,
+    the springs S_k . W = -g_k), solved by least squares over the joint twists S (from Pinocchio). At
+    equilibrium sum_i W_i + (F, M + p_c x F) = 0 (the legs are massless and unloaded along their length)."""
+    s = st.s  # (L, 6, m) twists about O
+    w = np.linalg.solve(s @ s.transpose(0, 2, 1), -(s @ g_leg[:, :, None]))[:, :, 0]  # (L, 6)
+    f = pb.load[:3]
+    return w.sum(0) + np.concatenate([f, pb.load[3:] + _cross3(st.pc, f)])
