@@ -62,18 +62,25 @@ def _dense_kkt(tangent, scale):
     return kkt
 
 
+def _problem(solver, pose, wrench):
+    """The solver's per-pose problem (pose values, problem, the thread's Pinocchio data) without preload."""
+    pv = solver.model.pose_values(pose)
+    pb, data = solver._problem(pv, np.asarray(wrench, dtype=float), np.zeros(4))
+    return pv, pb, data
+
+
 @pytest.mark.parametrize("scale,expect_stable", [(0.9, True), (1.1, False), (3.0, False)])
 def test_blockwise_inertia_equals_the_dense_kkt_inertia(machine, scale, expect_stable):
     """Count of negative eigenvalues from the blockwise algorithm = the dense KKT matrix's (numpy eigvalsh on
     the whole 146 x 146 matrix), below and beyond buckling (scale = multiple of the buckling load)."""
-    mm = build_model(machine, POSE_A)
-    lam = machine_buckling(mm, POSE_A, [0, -700, 0, 0, 0, 0]).load_factor
-    ref = statics.reference_tangent(mm, np.array([0, -700.0 * lam, 0, 0, 0, 0]), None)
+    solver = statics.EquilibriumSolver(build_model(machine, POSE_A))
+    lam = machine_buckling(solver, POSE_A, [0, -700, 0, 0, 0, 0]).load_factor
+    ref = statics.reference_tangent(solver, POSE_A, np.array([0, -700.0 * lam, 0, 0, 0, 0]), None)
     dense = np.linalg.eigvalsh(_dense_kkt(ref, scale))
     n_dense = int((dense < -1e-9 * np.abs(dense).max()).sum())
-    pb = statics._problem(mm, np.array([0, -700.0 * lam * scale, 0, 0, 0, 0]), np.zeros(4), 0.0)
-    eq = statics._solve_linear(pb, mm.data)
-    st = statics._evaluate(pb, mm.q0, mm.data)
+    pv, pb, data = _problem(solver, POSE_A, np.array([0, -700.0 * lam * scale, 0, 0, 0, 0]))
+    eq = statics._solve_linear(pb, data)
+    st = statics._evaluate(pb, pv.q0, data)
     s = reduced_stability(*statics._tangent(pb, st, eq.multipliers), st.ja, st.jp, pb.is_force, pb.l_ref)
     assert s.kkt_negative_eigenvalues == n_dense
     assert s.stable is expect_stable and (n_dense == 24) is expect_stable
@@ -85,20 +92,19 @@ def test_machine_residual_is_independent_of_the_multipliers(machine):
     the 700 N load, and corrupted multipliers leave it unchanged while the plate residual flags them."""
     eq = solve_equilibrium(machine, POSE, WRENCH)
     assert eq.residuals.machine_force < 1e-12 and eq.residuals.machine_moment < 1e-12
-    mm = statics._model_for(machine, POSE)
-    pb = statics._problem(mm, WRENCH, np.zeros(4), 0.0)
-    d_leg = eq.q[pb.legq] - mm.q0[pb.legq]
-    st = statics._evaluate(pb, eq.q, mm.data, d_leg)
+    pv, pb, data = _problem(statics.EquilibriumSolver(machine, pose_m=POSE), POSE, WRENCH)
+    d_leg = eq.q[pb.legq] - pv.q0[pb.legq]
+    st = statics._evaluate(pb, eq.q, data, d_leg)
     good = statics._machine_residual(pb, st, st.g_leg)  # d_leg from q - q0 here: 1e-16 m x 5e7 N/m = 5e-9 N
     assert np.abs(good[:3]).max() < 2e-11 * 700  # of noise (achieved 4.5e-12 of the load)
     bad_d = d_leg.copy()
     bad_d[0, pb.act_col[0]] += 1e-9
-    st_bad = statics._evaluate(pb, eq.q, mm.data, bad_d)
+    st_bad = statics._evaluate(pb, eq.q, data, bad_d)
     bad = statics._machine_residual(pb, st_bad, st_bad.g_leg)
     k = pb.k[0, pb.act_col[0]]
     assert np.linalg.norm(bad[:3]) == pytest.approx(k * 1e-9, rel=1e-3)  # the extra spring force, N
     lam_bad = eq.multipliers + 1.0
-    res_bad = statics._result(pb, st, lam_bad, eq.q, d_leg, 0.0, 1, linear=False, data=mm.data).residuals
+    res_bad = statics._result(pb, st, lam_bad, eq.q, d_leg, 0.0, 1, linear=False, data=data).residuals
     assert res_bad.machine_force == pytest.approx(np.linalg.norm(good[:3]) / pb.f_ref, rel=1e-12)
     assert res_bad.plate_force > 1e-3
 
@@ -108,9 +114,8 @@ def test_exact_closure_jacobian_by_finite_differences_off_the_manifold(machine):
     rad / m off closure, to 1e-7 of the largest entry (step 1e-6: truncation ~1e-12, round-off ~1e-10). The
     twist-only rows (no Jlog3) miss it by ~|c| = 1e-2: the check would fail on them."""
     mm = build_model(machine, POSE, springs_per_segment=2)
-    pb = statics._problem(mm, WRENCH, np.zeros(4), 0.0)
-    q = pin.integrate(mm.model, mm.q0, 1e-2 * np.random.default_rng(7).normal(size=mm.model.nv))
-    data = mm.model.createData()
+    pv, pb, data = _problem(statics.EquilibriumSolver(mm), POSE, WRENCH)
+    q = pin.integrate(pb.mm.model, pv.q0, 1e-2 * np.random.default_rng(7).normal(size=mm.model.nv))
     st = statics._evaluate(pb, q, data)
     assert np.abs(st.c).max() > 1e-3  # far off the manifold
     exact = np.zeros((4, 6, mm.model.nv))
@@ -119,8 +124,8 @@ def test_exact_closure_jacobian_by_finite_differences_off_the_manifold(machine):
         exact[i][:, v], exact[i][:, :6] = st.ja[i], st.jp[i]
         twist[i][:, v], twist[i][:, :6] = st.a[i], st.p[i]
     eps = 1e-6
-    fd = np.stack([(statics._evaluate(pb, pin.integrate(mm.model, q, eps * d), data).c
-                    - statics._evaluate(pb, pin.integrate(mm.model, q, -eps * d), data).c) / (2 * eps)
+    fd = np.stack([(statics._evaluate(pb, pin.integrate(pb.mm.model, q, eps * d), data).c
+                    - statics._evaluate(pb, pin.integrate(pb.mm.model, q, -eps * d), data).c) / (2 * eps)
                    for d in np.eye(mm.model.nv)], -1)
     scale = np.abs(exact).max()
     assert np.abs(fd - exact).max() < 1e-9 * scale  # achieved 1.5e-10
