@@ -13,8 +13,9 @@ G = V^T g(q), g Pinocchio's generalised gravity of the rigid-leg model, V its cl
 unit plate velocity; by virtual work, since A tau_a = V^T g in static equilibrium).
 
 Force limiter (on the measured contact force F_c along +y, limit F_lim), both parts of Figure 12:
-* force reference clamp: the vertical push of the loop beyond the feed-forward is clamped,
-  (Kp e + Kd dh_ref/dt + Ki int(e))_y >= -F_lim, so in a steady contact F_c <= F_lim; the integrator holds
+* force reference clamp: in contact (F_c > 0) the vertical push of the loop beyond the feed-forward is
+  clamped, (Kp e + Kd dh_ref/dt + Ki int(e))_y >= -F_lim, so in a steady contact F_c <= F_lim (in free motion
+  the loop keeps its full authority); the integrator holds
   while clamped (anti-windup) and the damping -Kd dh_est/dt acts after the clamp (a clamped tool on an
   elastic contact would otherwise ring undamped);
 * reference modification: the vertical reference is lifted by delta >= 0,
@@ -132,7 +133,7 @@ class ForceLimitedController:
         target = target + np.array([0.0, self.lift_m, 0.0])
         error = target - self.estimate_m
         pid = g.kp_n_per_m * error + g.kd_n_s_per_m * target_velocity + g.ki_n_per_m_s * self.integral_m_s
-        self.clamped = self.limiter and pid[1] < -g.force_limit_n
+        self.clamped = self.limiter and contact_force_n > 0.0 and pid[1] < -g.force_limit_n
         if self.clamped:
             pid[1] = -g.force_limit_n
             error[1] = 0.0  # anti-windup: the vertical integrator holds while clamped
