@@ -154,7 +154,8 @@ def test_scenario_tracks_and_keeps_the_loops_closed(runs):
 
 def test_simulate_cli_json_files_and_bad_input(tmp_path):
     path = short_case(tmp_path, dwell_s=0.3)
-    res = CliRunner().invoke(main, ["simulate", str(path), "--json", "--no-progress", "--out", str(tmp_path / "o")])
+    args = ["simulate", str(path), "--json", "--no-progress", "--out", str(tmp_path / "o")]
+    res = CliRunner().invoke(main, args)
     assert res.exit_code == 0, res.output
     out = json.loads(res.output)
     assert {"peak_contact_force_n", "overshoot_n", "max_insertion_depth_m", "tool_final_error_m",

@@ -61,10 +61,11 @@ def simulate_cmd(case_path: Path, out_dir: Path | None, no_limiter: bool, overwr
         return
     click.echo(f"{summary['case']}: {summary['simulated_time_s']:g} s simulated, limiter "
                f"{'on' if summary['limiter'] else 'off'} ({summary['force_limit_n']:g} N)")
-    click.echo(f"peak contact force {summary['peak_contact_force_n']:.2f} N (overshoot {summary['overshoot_n']:.2f} N), "
-               f"steady {summary['steady_insertion_force_n']:.2f} N at {summary['steady_insertion_depth_m'] * 1e3:.3f} mm")
-    click.echo(f"tool error: lateral at insertion {summary['tool_lateral_error_at_insertion_m'] * 1e6:.1f} um, "
-               f"final {summary['tool_final_error_m'] * 1e6:.1f} um; closure drift "
-               f"{summary['max_closure_drift_m']:.1e} m; actuator saturation {summary['actuator_saturation_time_s']:g} s")
+    s = summary
+    click.echo(f"peak contact force {s['peak_contact_force_n']:.2f} N (overshoot {s['overshoot_n']:.2f} N), "
+               f"steady {s['steady_insertion_force_n']:.2f} N at {s['steady_insertion_depth_m'] * 1e3:.3f} mm")
+    click.echo(f"tool error: lateral at insertion {s['tool_lateral_error_at_insertion_m'] * 1e6:.1f} um, "
+               f"final {s['tool_final_error_m'] * 1e6:.1f} um; closure drift {s['max_closure_drift_m']:.1e} m; "
+               f"actuator saturation {s['actuator_saturation_time_s']:g} s")
     for p in paths:
         click.echo(f"wrote {p}")
