@@ -1,4 +1,4 @@
-"""Commands about the machine in motion: ``pressfit modes``."""
+"""Commands about the machine in motion: ``pressfit modes``, ``pressfit simulate``."""
 
 from __future__ import annotations
 
@@ -37,5 +37,35 @@ def modes_cmd(x: float, y: float, z: float, count: int, out_dir: Path | None, ov
     for k, (f, u) in enumerate(zip(modes.frequencies_hz, modes.plate_shapes, strict=True)):
         click.echo(f"{k + 1:>4}  {f:<10.4g}  " + " ".join(f"{c:+.3e}" for c in u[:3]) + "  "
                    + " ".join(f"{c:+.3e}" for c in u[3:]))
+    for p in paths:
+        click.echo(f"wrote {p}")
+
+
+@click.command("simulate")
+@click.argument("case_path", type=click.Path(path_type=Path))
+@click.option("--out", "out_dir", type=click.Path(path_type=Path), default=None,
+              help="Directory for simulation.csv, simulation.json and simulation.png (nothing written without it).")
+@click.option("--no-limiter", "no_limiter", is_flag=True, help="Run without the insertion force limiter.")
+@click.option("--overwrite", is_flag=True, help="Replace existing output files.")
+@click.option("--json", "as_json", is_flag=True, help="Print the summary as JSON.")
+@click.option("--progress/--no-progress", default=True, help="Show a progress bar over simulated time.")
+@user_errors
+def simulate_cmd(case_path: Path, out_dir: Path | None, no_limiter: bool, overwrite: bool, as_json: bool,
+                 progress: bool) -> None:
+    """Simulate the insertion scenario of a case file's [simulation] table (Figures 13-14), SI units."""
+    from pressfit.output.simulation import run_simulation
+
+    summary, paths = run_simulation(case_path, out_dir, not no_limiter, overwrite, progress)
+    if as_json:
+        click.echo(to_json(summary))
+        return
+    click.echo(f"{summary['case']}: {summary['simulated_time_s']:g} s simulated, limiter "
+               f"{'on' if summary['limiter'] else 'off'} ({summary['force_limit_n']:g} N)")
+    s = summary
+    click.echo(f"peak contact force {s['peak_contact_force_n']:.2f} N (overshoot {s['overshoot_n']:.2f} N), "
+               f"steady {s['steady_insertion_force_n']:.2f} N at {s['steady_insertion_depth_m'] * 1e3:.3f} mm")
+    click.echo(f"tool error: lateral at insertion {s['tool_lateral_error_at_insertion_m'] * 1e6:.1f} um, "
+               f"final {s['tool_final_error_m'] * 1e6:.1f} um; closure drift {s['max_closure_drift_m']:.1e} m; "
+               f"actuator saturation {s['actuator_saturation_time_s']:g} s")
     for p in paths:
         click.echo(f"wrote {p}")

@@ -262,6 +262,66 @@ class MonteCarlo(_Strict):
     inputs: MonteCarloInputs
 
 
+class Contact(_Strict):
+    """Tool-board contact of the insertion simulation (:mod:`pressfit.dynamics.contact`). The board's top
+    face is the plane y = ``board_height_m``; the pin to insert sits on it at (x, z) = ``pin_position_m``.
+    ``law = "elastic"``: F = k d + b d_dot for an interference d > 0 (paper section 4.2: force proportional
+    to the interference); ``"press_fit"`` adds f_fit(d): ``fit = "linear"`` (``fit_stiffness_n_per_m`` d) or
+    ``"saturating"`` (``fit_force_n`` tanh(d / ``fit_depth_m``)). Defaults: an estimate of a compliant
+    pin-board stack, 30 N at 0.6 mm, no damping."""
+
+    board_height_m: Positive
+    pin_position_m: Annotated[list[Finite], Field(min_length=2, max_length=2)]
+    stiffness_n_per_m: Positive = 5.0e4
+    damping_n_s_per_m: NonNegative = 0.0
+    law: Literal["elastic", "press_fit"] = "elastic"
+    fit: Literal["linear", "saturating"] = "linear"
+    fit_stiffness_n_per_m: NonNegative = 0.0
+    fit_force_n: NonNegative = 0.0
+    fit_depth_m: Positive = 1e-3
+
+
+class Controller(_Strict):
+    """Figure 12's force-limited position control (:mod:`pressfit.dynamics.control`). PID gains of the
+    Cartesian position loop on the plate position estimated from the actuator lengths (N/m, N s/m, N/(m s));
+    the insertion force limit (N, paper: 30 N) and the limiter's reference back-off rate per newton over the
+    limit (m/(s N)); the gravity feed-forward (weight of the moving parts, Cartesian). Defaults: a ~5 Hz
+    position loop for the ~25 kg moving machine, well below the 40 Hz actuators."""
+
+    kp_n_per_m: Positive = 2.0e4
+    kd_n_s_per_m: NonNegative = 1.0e3
+    ki_n_per_m_s: NonNegative = 5.0e4
+    force_limit_n: Positive = 30.0
+    backoff_m_per_s_n: NonNegative = 1.0e-3
+    gravity_compensation: bool = True
+    estimator_iterations: Annotated[int, Field(ge=1, le=20)] = 2
+
+
+class Simulation(_Strict):
+    """The insertion scenario of Figures 13-14 (``pressfit simulate``; :mod:`pressfit.dynamics.insertion`).
+
+    The tool tip is the plate centre. The reference moves (minimum-jerk segments) from ``start_m`` to
+    ``approach_height_m`` above the pin in ``move_time_s``, down to ``interference_m`` below the board face
+    in ``descent_time_s``, holds ``dwell_s``, rises back above the pin in ``descent_time_s``, moves to
+    ``end_m`` in ``move_time_s`` and holds ``settle_s``. The commanded preload is ``[preload] a4_n`` (force
+    mode). ``clearance``: the cardans' lost motion (``[clearance]`` or the machine's plays) in series at the
+    tool. Time step (s) and the loop closures' Baumgarte rate (rad/s) of the multibody model."""
+
+    start_m: Vec3
+    end_m: Vec3
+    approach_height_m: Positive = 0.005
+    interference_m: Positive = 0.002
+    move_time_s: Positive = 1.0
+    descent_time_s: Positive = 1.0
+    dwell_s: Positive = 1.0
+    settle_s: NonNegative = 0.5
+    time_step_s: Annotated[float, Field(gt=0, le=2e-3, allow_inf_nan=False)] = 5e-4
+    baumgarte_rad_per_s: Positive = 200.0
+    clearance: bool = False
+    contact: Contact
+    controller: Controller = Controller()
+
+
 class Case(_Strict):
     """A validated case file."""
 
@@ -278,6 +338,9 @@ class Case(_Strict):
     clearance: ClearanceSpec | None = None
     study: Study | None = None
     montecarlo: MonteCarlo | None = None
+
+
+    simulation: Simulation | None = None
     path: str = ""
 
     def machine(self) -> Machine:

@@ -119,7 +119,13 @@ class Stem(_Strict):
 
 
 class Actuator(_Strict):
+    """The linear actuators: axial stiffness (N/m) and, for the insertion simulation, the force-controlled
+    drive's first-order force bandwidth (Hz; paper section 4.2: 40 Hz, feasible for servo-hydraulics) and its
+    force saturation (N, magnitude; an estimate, see the machine file)."""
+
     axial_stiffness_n_per_m: Positive
+    force_bandwidth_hz: Positive = 40.0
+    force_limit_n: Positive = 1000.0
 
 
 class Joints(_Strict):

@@ -1,0 +1,69 @@
+r"""The four force-controlled actuators and the redundant force distribution (paper section 4.2, equation 5).
+
+Forces are leg tensions N_i (N, positive = tension, the project's convention): leg i pulls the plate with
+-N_i e_i, so the actuators exert the Cartesian force -A N on the plate (A of equation 5, columns e_i).
+
+Distribution: a commanded Cartesian force W (N, on the plate) and a commanded preload a4 (N) give
+
+    N = -A^+ W + a4 v_p,
+
+A^+ = A^T (A A^T)^-1 the Moore-Penrose inverse (:func:`pressfit.kinematics.pseudo_inverse`) and v_p the unit
+null vector of A (equations 9-10, :func:`pressfit.kinematics.preload_vector`): -A N = W exactly and the
+preload changes no plate force.
+
+Drive: each actuator tracks its command with a first-order force response of bandwidth f_bw (Hz),
+tau dN/dt = sat(N_cmd) - N, tau = 1 / (2 pi f_bw), the command saturated at +-``force_limit_n`` (the drive
+cannot deliver more, so neither its output). The step is the exact zero-order-hold discretisation
+N' = s + (N - s) exp(-dt / tau) of the saturated command s, exact for any dt.
+"""
+
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass
+
+import numpy as np
+
+from pressfit import kinematics
+from pressfit.description.machine import Machine
+from pressfit.errors import PressfitError
+
+
+def distribute(machine: Machine, pose_m: np.ndarray, plate_force_n: np.ndarray, preload_n: float) -> np.ndarray:
+    """Actuator tensions (4,), N, that exert the Cartesian force ``plate_force_n`` (3,), N, on the plate at
+    ``pose_m`` (m) with the preload ``preload_n`` (N) along v_p (module docstring)."""
+    pinv = kinematics.pseudo_inverse(machine, pose_m)
+    return -pinv @ np.asarray(plate_force_n, dtype=float) + preload_n * kinematics.preload_vector(machine, pose_m)
+
+
+@dataclass(frozen=True)
+class ForceActuators:
+    """First-order force response with saturation (module docstring); bandwidth Hz, limit N."""
+
+    bandwidth_hz: float
+    force_limit_n: float
+
+    def __post_init__(self) -> None:
+        for name in ("bandwidth_hz", "force_limit_n"):
+            value = getattr(self, name)
+            if not (math.isfinite(value) and value > 0):
+                raise PressfitError(f"actuator {name} must be a positive number, got {value!r}")
+
+    @classmethod
+    def of(cls, machine: Machine) -> ForceActuators:
+        """The machine's drives (``[actuator] force_bandwidth_hz``, ``force_limit_n``)."""
+        return cls(machine.actuator.force_bandwidth_hz, machine.actuator.force_limit_n)
+
+    @property
+    def time_constant_s(self) -> float:
+        """tau = 1 / (2 pi f_bw), s."""
+        return 1.0 / (2.0 * math.pi * self.bandwidth_hz)
+
+    def saturated(self, command_n: np.ndarray) -> np.ndarray:
+        """True where a command exceeds the force limit."""
+        return np.abs(command_n) > self.force_limit_n
+
+    def step(self, force_n: np.ndarray, command_n: np.ndarray, dt_s: float) -> np.ndarray:
+        """The actuator forces (N) after ``dt_s`` (s) from ``force_n`` under the held command ``command_n`` (N)."""
+        target = np.clip(command_n, -self.force_limit_n, self.force_limit_n)
+        return target + (np.asarray(force_n, dtype=float) - target) * math.exp(-dt_s / self.time_constant_s)

@@ -1,0 +1,78 @@
+r"""Tool-board contact with the machine's compliance in series (quasi-static), for the insertion simulation.
+
+Contact law (case ``[simulation.contact]``): for an interference d > 0 (m) of the tool tip below the board
+face, F(d) = k d + f_fit(d) + b d_dot (N, pushing the tool up, +y), F = 0 out of contact and never negative
+(no adhesion). ``elastic``: f_fit = 0 (paper section 4.2: a force proportional to the interference);
+``press_fit``: f_fit(d) = k_fit d (linear) or F_fit tanh(d / d_fit) (saturating).
+
+The tool sees the machine's compliance: the rigid-leg multibody model (:mod:`pressfit.dynamics.multibody`)
+gives the rigid tool position r, the structure adds the deflection u(F) under the contact force, applied
+quasi-statically (in series, no inertia of its own). This holds below the first structural mode
+(``pressfit modes``: 18 Hz plate rocking at pose A, above the force loop's bandwidth of a few Hz). u(F) is
+either C F y (C the condensed plate compliance at the current pose, translation block,
+:func:`pressfit.mechanics.condensed.condensed_plate_compliance`) or, with the cardans' clearance on, the
+load-deflection curve of :func:`pressfit.mechanics.clearance.load_deflection` at the insertion pose (lost
+motion, preload and compliance together, interpolated in the load).
+
+Each step solves the scalar equation F = F(d(F)), d(F) = h_b - r_y - u_y(F), with the damping term taken
+backward in time (d_dot = (d - d_prev) / dt): the residual is increasing in F, so bisection on
+[0, F(d_rigid)] always converges (to 1e-9 of the bracket).
+"""
+
+from __future__ import annotations
+
+import math
+from collections.abc import Callable
+from dataclasses import dataclass
+
+import numpy as np
+
+from pressfit.description.cases import Contact
+
+_BISECTIONS = 60
+
+
+def contact_force_n(contact: Contact, depth_m: float, depth_rate_m_per_s: float = 0.0) -> float:
+    """The contact law F(d, d_dot) (N, >= 0) at interference ``depth_m`` (m) and its rate (m/s)."""
+    if depth_m <= 0.0:
+        return 0.0
+    force = contact.stiffness_n_per_m * depth_m + contact.damping_n_s_per_m * depth_rate_m_per_s
+    if contact.law == "press_fit":
+        force += (contact.fit_stiffness_n_per_m * depth_m if contact.fit == "linear"
+                  else contact.fit_force_n * math.tanh(depth_m / contact.fit_depth_m))
+    return max(force, 0.0)
+
+
+@dataclass(frozen=True)
+class ContactState:
+    """The contact at one instant: force (N, +y on the tool), interference (m), tool deflection (3,), m."""
+
+    force_n: float
+    depth_m: float
+    deflection_m: np.ndarray
+
+
+def solve_contact(contact: Contact, rigid_tip_m: np.ndarray, deflection: Callable[[float], np.ndarray],
+                  previous_depth_m: float, dt_s: float) -> ContactState:
+    """The contact force with the structure's deflection ``deflection(F)`` (m, (3,)) in series (module doc)."""
+    rigid_depth = contact.board_height_m - float(rigid_tip_m[1])
+
+    def residual(force: float) -> tuple[float, float, np.ndarray]:
+        u = deflection(force)
+        d = rigid_depth - float(u[1])
+        return force - contact_force_n(contact, d, (d - previous_depth_m) / dt_s), d, u
+
+    r0, d0, u0 = residual(0.0)
+    if r0 >= 0.0:
+        return ContactState(0.0, d0, u0)
+    lo, hi = 0.0, contact_force_n(contact, rigid_depth, max(rigid_depth - previous_depth_m, 0.0) / dt_s)
+    for _ in range(_BISECTIONS):
+        mid = 0.5 * (lo + hi)
+        if residual(mid)[0] < 0.0:
+            lo = mid
+        else:
+            hi = mid
+        if hi - lo <= 1e-9 * hi:
+            break
+    _, d, u = residual(hi)
+    return ContactState(hi, d, u)

@@ -1,0 +1,146 @@
+r"""Figure 12's force-limited position control: pose estimate from the actuator lengths, a Cartesian PID
+position loop, a force-limiting loop on the measured contact force, and the reference trajectory.
+
+Estimate (forward kinematics of the redundant set): Gauss-Newton on the four lengths l_i(h) = |h + d_i - B_i|
+(equation 1), h <- h - J^+ (l(h) - l_measured), J = dl/dh (rows e_i, equations 2-3), a few iterations from
+the last estimate (least squares over the four lengths; exact for consistent lengths). The velocity
+estimate is J^+ l_dot from the measured length rates.
+
+Position loop: W = Kp e + Kd e_dot + Ki int(e) + G, e = h_ref - h_est (m), W the Cartesian force (N) that
+the actuators are to exert on the plate (:func:`pressfit.dynamics.actuators.distribute`), G the gravity
+feed-forward (the Cartesian force that holds the moving parts, legs included, at the estimated pose:
+G = V^T g(q), g Pinocchio's generalised gravity of the rigid-leg model, V its closed-loop velocities per
+unit plate velocity; by virtual work, since A tau_a = V^T g in static equilibrium).
+
+Force limiter (on the measured contact force F_c along +y, limit F_lim), both parts of Figure 12:
+* force reference clamp: in contact (F_c > 0) the vertical push of the loop beyond the feed-forward is
+  clamped, (Kp e + Kd dh_ref/dt + Ki int(e))_y >= -F_lim, so in a steady contact F_c <= F_lim (in free motion
+  the loop keeps its full authority); the integrator holds
+  while clamped (anti-windup) and the damping -Kd dh_est/dt acts after the clamp (a clamped tool on an
+  elastic contact would otherwise ring undamped);
+* reference modification: the vertical reference is lifted by delta >= 0,
+  d delta/dt = c (F_c - F_lim) while F_c > F_lim or delta > 0 (c in m/(s N)): the reference stops advancing
+  and backs off while the force is over the limit, and catches up once it is below.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass, field
+
+import numpy as np
+import pinocchio as pin
+
+from pressfit import kinematics
+from pressfit.description.cases import Controller, Simulation
+from pressfit.description.machine import Machine
+from pressfit.dynamics.multibody import RigidLegModel
+
+
+def _legs(machine: Machine, pose_m: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    """Leg lengths l_i (4,), m, and unit vectors e_i (4, 3) at one pose (equation 1)."""
+    u = kinematics.leg_vectors(machine, pose_m)
+    lengths = np.sqrt(np.einsum("ij,ij->i", u, u))
+    return lengths, u / lengths[:, None]
+
+
+def estimate_pose(machine: Machine, lengths_m: np.ndarray, guess_m: np.ndarray,
+                  iterations: int = 2) -> tuple[np.ndarray, np.ndarray, float]:
+    """Plate position (3,), m, whose leg lengths best fit ``lengths_m`` (4,), m (Gauss-Newton from
+    ``guess_m``), the leg unit vectors there (4, 3) (rows of dl/dh) and the largest length residual (m)."""
+    h = np.asarray(guess_m, dtype=float).copy()
+    lengths, e = _legs(machine, h)
+    for _ in range(iterations):
+        h -= np.linalg.solve(e.T @ e, e.T @ (lengths - lengths_m))  # normal equations of the 4 x 3 problem
+        lengths, e = _legs(machine, h)
+    return h, e, float(np.max(np.abs(lengths - lengths_m)))
+
+
+def gravity_feedforward_n(rigid: RigidLegModel, pose_m: np.ndarray) -> np.ndarray:
+    """G (3,), N: the Cartesian force the actuators must exert to hold the moving parts at ``pose_m`` (m)."""
+    q = rigid.configuration_at(pose_m)
+    jac = rigid.closure_jacobian(q)
+    basis = np.zeros((rigid.model.nv, 3))
+    basis[:3] = np.eye(3)  # the plate is unrotated at configuration_at: local = world axes
+    basis[6:] = -np.linalg.lstsq(jac[:, 6:], jac[:, :3], rcond=None)[0]
+    return basis.T @ pin.computeGeneralizedGravity(rigid.model, rigid.data, q)
+
+
+def _quintic(s: float) -> tuple[float, float]:
+    """Minimum-jerk profile and its derivative on s in [0, 1]."""
+    s = min(max(s, 0.0), 1.0)
+    return s**3 * (10 - 15 * s + 6 * s * s), 30 * s * s * (1 - s) ** 2
+
+
+@dataclass(frozen=True)
+class Trajectory:
+    """Piecewise minimum-jerk reference through waypoints (m) with segment durations (s)."""
+
+    waypoints_m: np.ndarray  # (k + 1, 3)
+    durations_s: np.ndarray  # (k,)
+    phases: tuple[str, ...]  # (k,) segment names
+
+    @classmethod
+    def insertion(cls, sim: Simulation) -> Trajectory:
+        """The scenario of Figures 13-14 (:class:`pressfit.description.cases.Simulation`)."""
+        c = sim.contact
+        above = np.array([c.pin_position_m[0], c.board_height_m + sim.approach_height_m, c.pin_position_m[1]])
+        bottom = np.array([above[0], c.board_height_m - sim.interference_m, above[2]])
+        points = np.array([sim.start_m, above, bottom, bottom, above, sim.end_m, sim.end_m])
+        times = np.array([sim.move_time_s, sim.descent_time_s, sim.dwell_s, sim.descent_time_s, sim.move_time_s,
+                          max(sim.settle_s, 1e-9)])
+        return cls(points, times, ("approach", "descent", "dwell", "retract", "move", "settle"))
+
+    @property
+    def duration_s(self) -> float:
+        return float(self.durations_s.sum())
+
+    def segment(self, t_s: float) -> int:
+        """Index of the segment running at time ``t_s`` (the last one after the end)."""
+        return min(int(np.searchsorted(np.cumsum(self.durations_s), t_s, side="right")), len(self.durations_s) - 1)
+
+    def at(self, t_s: float) -> tuple[np.ndarray, np.ndarray]:
+        """Reference position (m) and velocity (m/s) at ``t_s`` (s)."""
+        k = self.segment(t_s)
+        t0 = float(self.durations_s[:k].sum())
+        s, ds = _quintic((t_s - t0) / self.durations_s[k])
+        delta = self.waypoints_m[k + 1] - self.waypoints_m[k]
+        return self.waypoints_m[k] + s * delta, ds / self.durations_s[k] * delta
+
+
+@dataclass
+class ForceLimitedController:
+    """Figure 12's controller (module docstring); state: estimate, integral, reference lift delta."""
+
+    machine: Machine
+    rigid: RigidLegModel
+    gains: Controller
+    limiter: bool
+    estimate_m: np.ndarray
+    integral_m_s: np.ndarray = field(default_factory=lambda: np.zeros(3))
+    lift_m: float = 0.0
+    clamped: bool = False
+    estimate_residual_m: float = 0.0
+
+    def command(self, lengths_m: np.ndarray, rates_m_per_s: np.ndarray, reference: tuple[np.ndarray, np.ndarray],
+                contact_force_n: float, dt_s: float) -> np.ndarray:
+        """The Cartesian force W (3,), N, from the measured lengths (m) and rates (m/s), the reference
+        (position m, velocity m/s) and the measured contact force (N); advances the loop states by dt_s."""
+        g = self.gains
+        self.estimate_m, jac, self.estimate_residual_m = estimate_pose(self.machine, lengths_m, self.estimate_m,
+                                                                       g.estimator_iterations)
+        velocity = np.linalg.solve(jac.T @ jac, jac.T @ rates_m_per_s)
+        target, target_velocity = reference
+        target = target + np.array([0.0, self.lift_m, 0.0])
+        error = target - self.estimate_m
+        pid = g.kp_n_per_m * error + g.kd_n_s_per_m * target_velocity + g.ki_n_per_m_s * self.integral_m_s
+        self.clamped = self.limiter and contact_force_n > 0.0 and pid[1] < -g.force_limit_n
+        if self.clamped:
+            pid[1] = -g.force_limit_n
+            error[1] = 0.0  # anti-windup: the vertical integrator holds while clamped
+        pid -= g.kd_n_s_per_m * velocity  # damping acts outside the clamp: a clamped contact stays damped
+        self.integral_m_s = self.integral_m_s + dt_s * error
+        if self.limiter and (contact_force_n > g.force_limit_n or self.lift_m > 0.0):
+            self.lift_m = max(0.0, self.lift_m + dt_s * g.backoff_m_per_s_n * (contact_force_n - g.force_limit_n))
+        if g.gravity_compensation:
+            pid = pid + gravity_feedforward_n(self.rigid, self.estimate_m)
+        return pid
