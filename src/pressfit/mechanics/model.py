@@ -146,12 +146,13 @@ class MachineModel:
     ``pose_m``, ``q0``, ``spring_k``, ``spring_rest`` and the springs' laws are the values at the pose the
     model was built at (:class:`ModelPose`); nothing changes them afterwards. Other poses: take
     :meth:`pose_values` and :meth:`place_stem` on a copy of ``model`` (what the equilibrium solver does).
-    ``data`` serves :meth:`closure_error` and :meth:`assemble` (one thread at a time).
+    :meth:`closure_error` and :meth:`assemble` create a Pinocchio Data per call: pin 4.1's Data holds
+    second-order derivative tensors of nv^3 entries (123 MB at 4 springs per segment, ~4.5 GB at 16), so
+    the model keeps none (the fast solver, :mod:`pressfit.mechanics.fast_statics`, needs none at all).
     """
 
     machine: Machine
     model: pin.Model
-    data: pin.Data
     constraint_models: list[pin.ConstraintModel]
     springs_per_segment: int
     pose_m: np.ndarray
@@ -204,7 +205,7 @@ class MachineModel:
 
     def closure_error(self, q: np.ndarray, data: pin.Data | None = None) -> tuple[float, float]:
         """Largest loop-closure error over the legs (m, rad), from Pinocchio's constraint placements."""
-        data = data or self.data
+        data = data or self.model.createData()
         pin.forwardKinematics(self.model, data, q)
         em, er = 0.0, 0.0
         for cm, cd in zip(self.constraint_models, self.constraint_datas()):
@@ -228,7 +229,7 @@ class MachineModel:
         r = self._rigid_idx
         free = np.concatenate([[3, 4, 5]] + [r[k] - 1 for k in ("base_a", "base_b", "prismatic", "plate_b",
                                                                     "plate_a")])
-        data, cds = self.data, self.constraint_datas()
+        data, cds = self.model.createData(), self.constraint_datas()
         for _ in range(max_iter):
             pin.computeJointJacobians(self.model, data, q)
             err = []
@@ -435,7 +436,7 @@ def build_model(machine: Machine, pose_m: np.ndarray, *, springs_per_segment: in
     var = [(k, 0 if sp.name == "actuator" else 2 if sp.name.endswith(".z") else 1, sp.leg)
            for k, sp in enumerate(springs) if sp.name == "actuator" or sp.name.startswith("stem[")]
     mm = MachineModel(
-        machine, model, model.createData(), constraints, b.n, h, np.zeros(model.nq), b.plate, b.ids,
+        machine, model, constraints, b.n, h, np.zeros(model.nq), b.plate, b.ids,
         [b.leg_velocities(i) for i in range(4)], springs, anchors,
         np.array([float(np.sign(frames0[i][:, 0] @ machine.beta_axes[i])) for i in range(4)]), frames0,
         b.sections, cardan_compliance,
