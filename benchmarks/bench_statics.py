@@ -29,6 +29,7 @@ import pinocchio as pin  # noqa: E402
 
 from pressfit import kinematics, load_machine  # noqa: E402
 from pressfit.mechanics import statics  # noqa: E402
+from pressfit.mechanics.fast_statics import FastEquilibriumSolver  # noqa: E402
 from pressfit.mechanics.model import build_model  # noqa: E402
 
 PIN_CALLS = ("computeJointJacobians", "forwardKinematics", "rnea", "integrate", "log3", "getConstraintsJacobian")
@@ -122,6 +123,13 @@ def main() -> None:
             print(f"  {name}: median {med * 1e6:8.1f} us/pose, throughput {1 / med:8.0f} poses/s "
                   f"(p10 {np.percentile(times, 10) * 1e6:.1f}, p90 {np.percentile(times, 90) * 1e6:.1f} us; "
                   f"Newton iterations median {statistics.median(iters):g}, max {max(iters)})")
+    print("fast batched path (fast_statics.FastEquilibriumSolver.solve_batch, all poses in one call) vs reference:")
+    fast = FastEquilibriumSolver(mm)
+    for linear in (True, False):
+        ref = statistics.median(run(solver, poses[:200], loads[:200], linear)[0])
+        t = min(timed_batch(fast, poses, loads, linear) for _ in range(3))
+        print(f"  {'linear   ' if linear else 'nonlinear'}: fast {t * 1e6:8.1f} us/pose, reference {ref * 1e6:8.1f} "
+              f"us/pose, ratio {ref / t:6.1f}")
     print("instrumented breakdown, new pose per solve (mean per pose; the wrappers add ~1 us per call):")
     for linear in (True, False):
         b = breakdown(solver, poses[:300], loads[:300], linear)
@@ -130,6 +138,14 @@ def main() -> None:
               f"{b['python+numpy'] * 1e6:6.1f} us")
     print("convenience function (a solver built per call):")
     convenience_cost(machine, poses[:50], loads[:50])
+
+
+def timed_batch(fast, poses, loads, linear: bool) -> float:
+    t0 = time.perf_counter()
+    out = fast.solve_batch(poses, loads, linear=linear)
+    t = (time.perf_counter() - t0) / len(poses)
+    assert out.residuals.max() <= 1e-9, out.residuals.max()
+    return t
 
 
 def convenience_cost(machine, poses, loads) -> None:

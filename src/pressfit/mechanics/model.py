@@ -146,12 +146,13 @@ class MachineModel:
     ``pose_m``, ``q0``, ``spring_k``, ``spring_rest`` and the springs' laws are the values at the pose the
     model was built at (:class:`ModelPose`); nothing changes them afterwards. Other poses: take
     :meth:`pose_values` and :meth:`place_stem` on a copy of ``model`` (what the equilibrium solver does).
-    ``data`` serves :meth:`closure_error` and :meth:`assemble` (one thread at a time).
+    :meth:`closure_error` and :meth:`assemble` create a Pinocchio Data per call: pin 4.1's Data holds
+    second-order derivative tensors of nv^3 entries (123 MB at 4 springs per segment, ~4.5 GB at 16), so
+    the model keeps none (the fast solver, :mod:`pressfit.mechanics.fast_statics`, needs none at all).
     """
 
     machine: Machine
     model: pin.Model
-    data: pin.Data
     constraint_models: list[pin.ConstraintModel]
     springs_per_segment: int
     pose_m: np.ndarray
@@ -178,23 +179,33 @@ class MachineModel:
         return self._configuration(h, kinematics.inverse_kinematics(self.machine, h))
 
     def _configuration(self, h: np.ndarray, ik: kinematics.LegKinematics) -> np.ndarray:
-        q = np.zeros(self.model.nq)
-        q[0:3] = h
-        q[6] = 1.0
+        """q (..., nq) for poses h (..., 3) and their inverse kinematics (batched)."""
+        q = np.zeros(h.shape[:-1] + (self.model.nq,))
+        q[..., 0:3] = h
+        q[..., 6] = 1.0
         r = self._rigid_idx
-        q[r["base_a"]] = ik.alpha_rad
-        q[r["base_b"]] = self.sigma * ik.beta_rad
-        q[r["prismatic"]] = ik.lengths_m
-        q[r["plate_b"]] = -self.sigma * ik.beta_rad
-        q[r["plate_a"]] = -ik.alpha_rad
+        q[..., r["base_a"]] = ik.alpha_rad
+        q[..., r["base_b"]] = self.sigma * ik.beta_rad
+        q[..., r["prismatic"]] = ik.lengths_m
+        q[..., r["plate_b"]] = -self.sigma * ik.beta_rad
+        q[..., r["plate_a"]] = -ik.alpha_rad
         return q
+
+    def configurations(self, poses_m: np.ndarray) -> np.ndarray:
+        """Rigid closed-form q (..., nq) at reachable poses (..., 3) (m), batched; raises
+        :class:`UnreachablePoseError` naming the first pose outside the joint limits."""
+        h = np.asarray(poses_m, dtype=float)
+        bad = ~kinematics.is_reachable(self.machine, h)
+        if np.any(bad):
+            kinematics.require_reachable(self.machine, h[bad][0] if h.ndim > 1 else h)
+        return self._configuration(h, kinematics.inverse_kinematics(self.machine, h))
 
     def constraint_datas(self) -> list[pin.ConstraintData]:
         return [cm.createData() for cm in self.constraint_models]
 
     def closure_error(self, q: np.ndarray, data: pin.Data | None = None) -> tuple[float, float]:
         """Largest loop-closure error over the legs (m, rad), from Pinocchio's constraint placements."""
-        data = data or self.data
+        data = data or self.model.createData()
         pin.forwardKinematics(self.model, data, q)
         em, er = 0.0, 0.0
         for cm, cd in zip(self.constraint_models, self.constraint_datas()):
@@ -218,7 +229,7 @@ class MachineModel:
         r = self._rigid_idx
         free = np.concatenate([[3, 4, 5]] + [r[k] - 1 for k in ("base_a", "base_b", "prismatic", "plate_b",
                                                                     "plate_a")])
-        data, cds = self.data, self.constraint_datas()
+        data, cds = self.model.createData(), self.constraint_datas()
         for _ in range(max_iter):
             pin.computeJointJacobians(self.model, data, q)
             err = []
@@ -245,27 +256,48 @@ class MachineModel:
         h = np.asarray(pose_m, dtype=float).reshape(3)
         ik = kinematics.inverse_kinematics(m, h)
         h = kinematics.require_reachable(m, h, ik)
-        n, sec = self.springs_per_segment, m.stem_section
-        ls = ik.lengths_m - m.cylinder.length_m
-        per_kind = np.stack([1.0 / m.axial_compliance_m_per_n(ik.lengths_m),  # actuator, stem bending, torsion
-                             n * (m.material.youngs_modulus_pa * sec.second_moment_m4) / ls,
-                             n * (m.material.shear_modulus_pa * sec.polar_moment_m4) / ls])
         q0 = self._configuration(h, ik)
-        k = self.spring_k.copy()
-        var, kind, leg = self._variable_springs
-        k[var] = per_kind[kind, leg]
-        return ModelPose(h, q0, ls, k, q0[[s.idx_q for s in self.springs]])
+        k = self.spring_stiffness(ik.lengths_m)
+        return ModelPose(h, q0, ik.lengths_m - m.cylinder.length_m, k, q0[[s.idx_q for s in self.springs]])
 
     def place_stem(self, model: pin.Model, stem_lengths_m: np.ndarray) -> None:
         """Write the stem joint placements for stem lengths (4,) (m) into ``model``: this model's
         Pinocchio model or a copy of it (every pose-dependent placement is written)."""
-        n = self.springs_per_segment
         jp = model.jointPlacements
-        for j0, ls in zip(self._stem_first, stem_lengths_m.tolist()):
-            jp[j0].translation[2] = -ls + ls / (2 * n)
-            for k in range(1, n):
-                jp[j0 + 3 * k].translation[2] = ls / n
-            jp[j0 + 3 * n].translation[2] = ls / (2 * n)  # plate cardan (or its virtual axial joint)
+        for ids, zs in zip(self.stem_joint_ids(), self.stem_placements_z(stem_lengths_m).tolist()):
+            for j, z in zip(ids, zs):
+                jp[j].translation[2] = z
+
+    def spring_stiffness(self, lengths_m: np.ndarray) -> np.ndarray:
+        """Linear spring stiffnesses (..., n_springs) for leg lengths (..., 4) (m), batched: the actuator
+        in series with the leg's axial compliance (N/m), stem bending n E I_s / L_s and torsion
+        n G J_s / L_s (N m/rad) with L_s = l - L_c, the other springs as built; NaN for a nonlinear law."""
+        m, n, sec = self.machine, self.springs_per_segment, self.machine.stem_section
+        lengths_m = np.asarray(lengths_m, dtype=float)
+        ls = lengths_m - m.cylinder.length_m
+        per_kind = np.stack([1.0 / m.axial_compliance_m_per_n(lengths_m),  # actuator, stem bending, torsion
+                             n * (m.material.youngs_modulus_pa * sec.second_moment_m4) / ls,
+                             n * (m.material.shear_modulus_pa * sec.polar_moment_m4) / ls], -2)  # (..., 3, 4)
+        var, kind, leg = self._variable_springs
+        k = np.broadcast_to(self.spring_k, lengths_m.shape[:-1] + self.spring_k.shape).copy()
+        k[..., var] = per_kind[..., kind, leg]
+        return k
+
+    def stem_joint_ids(self) -> list[list[int]]:
+        """Per leg, the n + 1 joints whose placements depend on the stem length: the stem springs' first
+        revolutes and the joint after the stem (the plate cardan or its virtual axial joint)."""
+        n = self.springs_per_segment
+        return [[j0 + 3 * k for k in range(n + 1)] for j0 in self._stem_first]
+
+    def stem_placements_z(self, stem_lengths_m: np.ndarray) -> np.ndarray:
+        """z translations (..., 4, n + 1) (m) of the :meth:`stem_joint_ids` placements for stem lengths
+        (..., 4): the stem springs at (k + 1/2) L_s / n from the cylinder end (module doc)."""
+        n = self.springs_per_segment
+        ls = np.asarray(stem_lengths_m, dtype=float)[..., None]
+        z = np.broadcast_to(ls / n, ls.shape[:-1] + (n + 1,)).copy()
+        z[..., :1] = -ls + ls / (2 * n)
+        z[..., n:] = ls / (2 * n)
+        return z
 
 
 def _tz(z: float) -> pin.SE3:
@@ -404,7 +436,7 @@ def build_model(machine: Machine, pose_m: np.ndarray, *, springs_per_segment: in
     var = [(k, 0 if sp.name == "actuator" else 2 if sp.name.endswith(".z") else 1, sp.leg)
            for k, sp in enumerate(springs) if sp.name == "actuator" or sp.name.startswith("stem[")]
     mm = MachineModel(
-        machine, model, model.createData(), constraints, b.n, h, np.zeros(model.nq), b.plate, b.ids,
+        machine, model, constraints, b.n, h, np.zeros(model.nq), b.plate, b.ids,
         [b.leg_velocities(i) for i in range(4)], springs, anchors,
         np.array([float(np.sign(frames0[i][:, 0] @ machine.beta_axes[i])) for i in range(4)]), frames0,
         b.sections, cardan_compliance,

@@ -1,0 +1,444 @@
+r"""Fast equilibrium of the VJM model (:mod:`pressfit.mechanics.model`), batched over poses, numpy only.
+
+Same model, same equations and same answers as :class:`pressfit.mechanics.statics.EquilibriumSolver`
+(the reference, which every result here is tested against); different algorithm and data layout:
+
+* Kinematics without Pinocchio: each leg is a serial chain of one-axis joints whose placements are
+  translations along the parent's z (the first one (R0_i, B_i)). The chain is walked once per Newton
+  iteration for every pose and leg at once (arrays (poses, 4 legs, ...)): rotating two columns of the
+  frame per revolute, so each numpy call works on the whole batch. Pose-dependent stem placements and
+  spring stiffnesses come from :meth:`MachineModel.stem_placements_z` and
+  :meth:`MachineModel.spring_stiffness` (batched).
+* Static condensation of each leg to its tip: with spring coordinates s (stiffness k_s > 0) and free
+  coordinates f (the cardans' revolutes), the leg's stationarity k_s dq_s + A_s^T lambda = -g_s and
+  A_f^T lambda = 0 eliminate dq_s = -x_s - k_s^-1 A_s^T lambda (x_s the spring extension), so closure
+  A dq + P dp = -c becomes, per leg, the (6 + n_f) system
+
+      [-C  A_f; A_f^T  0] [lambda; dq_f] = [-c + A_s x_s - P dp; 0],   C = A_s k_s^-1 A_s^T (tip compliance),
+
+  and the plate's 6x6 system  sum_i P_i^T lambda_i = (F, M)  closes it. One batched solve per iteration.
+* Modified Newton: the iteration matrix is the elastic one at the current configuration (closure
+  Jacobians A, P re-evaluated, geometric stiffness left out). It converges linearly at the ratio of
+  geometric to elastic stiffness (about 1e-3 here, so 1e-10 in 4-5 iterations) to the same fixed point:
+  the residual tested is the exact one (stationarity g + J^T lambda and closure c at the current q, the
+  reference's residuals and scales, :mod:`pressfit.mechanics.statics`).
+
+``linear=True``: one step from the assembled pose (the small-displacement KKT solve of the reference),
+sections on the undeformed geometry. Plate coordinates: centre translation (world) and a world rotation
+vector applied on the left (R <- exp(dtheta) R); closure rotation error log3(R_E R_D^T) as the reference.
+
+Supported: rigid or linear-spring cardans (``cardan_compliance`` with :class:`LinearSpring` laws, a
+cardan rotational stiffness), actuator preload (offsets). Refused: springs with nonlinear laws (the
+clearance dead zones; :mod:`pressfit.mechanics.clearance` keeps using the reference solver).
+Memory: no Pinocchio Data (whose size grows as nv^3 in pin 4.1), so it serves any spring count.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+
+import numpy as np
+import pinocchio as pin
+
+from pressfit.description.machine import Machine
+from pressfit.errors import ConvergenceError, PressfitError, SingularPoseError
+from pressfit.kinematics import inverse_kinematics
+from pressfit.mechanics.model import MachineModel, build_model
+from pressfit.mechanics.preload import rest_length_offsets
+from pressfit.mechanics.statics import (
+    NEWTON_TOL,
+    SECTIONS,
+    Equilibrium,
+    LegLoads,
+    Residuals,
+    SectionWrench,
+    _wrench,
+)
+from pressfit.spatial import cross, skew
+
+_CHUNK = 1024  # poses per block: the per-leg arrays of a block stay in the CPU cache
+
+
+class FastSolverError(PressfitError):
+    """The model has something the fast solver does not support (use the reference solver)."""
+
+
+@dataclass(frozen=True)
+class _Chain:
+    """Pose-independent structure of the four (identical) leg chains, columns in chain order."""
+
+    axis: np.ndarray  # (m,) local joint axis 0 x, 1 y, 2 z
+    prismatic: np.ndarray  # (m,) bool
+    z: np.ndarray  # (4, m) placement translation along the parent's z, m (stem columns set per pose)
+    stem_cols: np.ndarray  # (n + 1,) columns whose placement depends on the stem length
+    r0: np.ndarray  # (4, 3, 3) first placement's rotation
+    b: np.ndarray  # (4, 3) first placement's translation (base cardan centre), m
+    spring_cols: np.ndarray  # (m_s,) columns carrying a spring
+    free_cols: np.ndarray  # (m_f,) columns without one
+    spring_index: np.ndarray  # (4, m_s) index in mm.springs
+    rigid_cols: np.ndarray  # (5,) columns of base a, base b, prismatic, plate b, plate a
+    act_col: int
+    sec: tuple[tuple[int, float], ...]  # per section: (column, z offset along that body's z), m
+    anchors: np.ndarray  # (4, 3) plate cardan centres in the plate frame, m
+    frames0: np.ndarray  # (4, 3, 3) anchor orientations in the plate frame
+    force_rows: np.ndarray  # (m,) translation coordinate
+
+
+def _chain(mm: MachineModel) -> _Chain:
+    """The chain structure, checking that the legs are identical serial chains of one-axis joints placed
+    along z, with linear springs only (module doc)."""
+    model = mm.model
+    legv = np.array(mm.leg_v)
+    if np.isnan(mm.spring_k).any():
+        raise FastSolverError("the fast solver supports linear springs only; this model has nonlinear laws "
+                              "(cardan clearance): use pressfit.mechanics.statics.EquilibriumSolver")
+    jid = {int(model.joints[j].idx_v): j for j in range(1, model.njoints)}
+    joints = [[jid[int(v)] for v in row] for row in legv]
+    kinds = [[model.joints[j].shortname()[-2:] for j in row] for row in joints]
+    if any(k != kinds[0] for k in kinds):
+        raise FastSolverError("the fast solver needs four identical leg chains (same virtual joints on every leg)")
+    pl = model.jointPlacements
+    z = np.array([[pl[j].translation[2] for j in row] for row in joints])
+    z[:, 0] = 0.0
+    for row in joints:
+        for j in row[1:]:
+            if not (np.allclose(pl[j].rotation, np.eye(3)) and np.allclose(pl[j].translation[:2], 0)):
+                raise FastSolverError(f"joint {model.names[j]}: placement is not a translation along z")
+    col = {int(v): c for row in legv for c, v in enumerate(row)}
+    spring_at = np.array([[col[s.idx_v] for s in mm.springs if s.leg == i] for i in range(4)])
+    spring_idx = np.array([[k for k, s in enumerate(mm.springs) if s.leg == i] for i in range(4)])
+    if np.any(spring_at != spring_at[0]):
+        raise FastSolverError("the fast solver needs the springs at the same place on every leg")
+    order = np.argsort(spring_at[0])
+    scols = spring_at[0][order]
+    col_q = {int(v) + 1: c for c, v in enumerate(legv[0])}
+    rigid = np.array([col_q[int(mm._rigid_idx[k][0])] for k in ("base_a", "base_b", "prismatic", "plate_b",
+                                                                "plate_a")])
+    jcol = {j: c for c, j in enumerate(joints[0])}
+    act = int(scols[[mm.springs[k].name == "actuator" for k in spring_idx[0][order]]][0])
+    return _Chain(np.array(["XYZ".index(k[1]) for k in kinds[0]]), np.array([k[0] == "P" for k in kinds[0]]), z,
+                  np.array([jcol[j] for j in mm.stem_joint_ids()[0]]), np.array([pl[r[0]].rotation for r in joints]),
+                  np.array([pl[r[0]].translation for r in joints]), scols, np.setdiff1d(np.arange(legv.shape[1]), scols),
+                  spring_idx[:, order], rigid, act, tuple((jcol[mm.sections[0][s][0]], mm.sections[0][s][1])
+                                                          for s in SECTIONS),
+                  np.array([a.translation for a in mm.anchor_placements]), np.array(mm.leg_frames0),
+                  np.array([k[0] == "P" for k in kinds[0]]))
+
+
+@dataclass
+class _Kin:
+    """Kinematics of a block of poses (b poses, 4 legs, m columns)."""
+
+    w: np.ndarray  # (b, 4, m, 3) joint axes, world
+    p: np.ndarray  # (b, 4, m, 3) joint origins, world, m
+    sec: np.ndarray  # (b, 4, 3 sections, 3) section points, m
+    pe: np.ndarray  # (b, 4, 3) leg end (plate cardan centre), m
+    re: np.ndarray  # (b, 4, 3, 3) leg end orientation
+
+
+def _kinematics(ch: _Chain, q: np.ndarray, z: np.ndarray) -> _Kin:
+    """Walk the chains for leg coordinates q (b, 4, m) and placements z (b, 4, m)."""
+    nb, _, m = q.shape
+    cols = [np.broadcast_to(ch.r0[:, :, k], (nb, 4, 3)).copy() for k in range(3)]
+    pos = np.broadcast_to(ch.b, (nb, 4, 3)).copy()
+    cq, sq = np.cos(q)[..., None], np.sin(q)[..., None]
+    w, p = np.empty((nb, 4, m, 3)), np.empty((nb, 4, m, 3))
+    sec_col = {c: k for k, (c, _) in enumerate(ch.sec)}
+    sec = np.empty((nb, 4, 3, 3))
+    for c in range(m):
+        if c:
+            pos = pos + cols[2] * z[:, :, c, None]
+        a = int(ch.axis[c])
+        w[:, :, c], p[:, :, c] = cols[a], pos
+        if ch.prismatic[c]:
+            pos = pos + cols[a] * q[:, :, c, None]
+        else:
+            i, j = (a + 1) % 3, (a + 2) % 3
+            ci, cj, cc, ss = cols[i], cols[j], cq[:, :, c], sq[:, :, c]
+            cols[i], cols[j] = ci * cc + cj * ss, cj * cc - ci * ss
+        if c in sec_col:
+            k = sec_col[c]
+            sec[:, :, k] = pos + cols[2] * ch.sec[k][1]
+    return _Kin(w, p, sec, pos, np.stack(cols, -1))
+
+
+def _log3(r: np.ndarray) -> np.ndarray:
+    """Rotation vectors (..., 3) of rotation matrices (..., 3, 3) near the identity (|angle| < pi/2)."""
+    v = np.stack([r[..., 2, 1] - r[..., 1, 2], r[..., 0, 2] - r[..., 2, 0], r[..., 1, 0] - r[..., 0, 1]], -1) / 2
+    s = np.sqrt((v * v).sum(-1))
+    c = (np.trace(r, axis1=-2, axis2=-1) - 1) / 2
+    ang = np.arctan2(s, c)
+    return v * np.where(s > 1e-300, ang / np.where(s > 1e-300, s, 1.0), 1.0)[..., None]
+
+
+def _exp3(v: np.ndarray) -> np.ndarray:
+    """Rotation matrices (..., 3, 3) of rotation vectors (..., 3) (Rodrigues)."""
+    t = np.sqrt((v * v).sum(-1))[..., None, None]
+    k = skew(v)
+    small = t < 1e-8
+    a = np.where(small, 1 - t * t / 6, np.sin(t) / np.where(small, 1, t))
+    b = np.where(small, 0.5 - t * t / 24, (1 - np.cos(t)) / np.where(small, 1, t * t))
+    return np.eye(3) + a * k + b * (k @ k)
+
+
+@dataclass(frozen=True)
+class BatchEquilibrium:
+    """Equilibria at b poses (SI; legs in kinematic order; conventions of :class:`Equilibrium`)."""
+
+    pose_m: np.ndarray  # (b, 3) nominal plate-centre poses
+    load: np.ndarray  # (b, 6) plate wrench (N, N m), world, at the plate centre
+    actuator_forces_n: np.ndarray  # (b, 4), > 0 tension
+    sections: np.ndarray  # (b, 4, 3, 6) per leg and section (base, actuator, plate): N, V_x, V_y, M_x, M_y, T
+    frames: np.ndarray  # (b, 4, 3, 3) deformed leg frames (columns e_x, e_y, e_z)
+    plate_displacement_m: np.ndarray  # (b, 3)
+    plate_rotation_rad: np.ndarray  # (b, 3) rotation vector, world
+    multipliers: np.ndarray  # (b, 4, 6) force (N), couple (N m) each leg exerts on the plate, world
+    q: np.ndarray  # (b, nq) Pinocchio configuration of the reference model
+    iterations: np.ndarray  # (b,) Newton iterations to convergence
+    residuals: np.ndarray  # (b, 7) plate force, plate moment, machine force, machine moment, closure m, rad,
+    #                        stationarity (relative, :class:`Residuals`)
+    force_scale_n: np.ndarray  # (b,) F_ref
+    length_scale_m: float
+    preload_offsets_m: np.ndarray  # (b, 4) actuator rest-length offsets
+    linear: bool
+
+    def equilibrium(self, i: int) -> Equilibrium:
+        """Pose i as the reference solver's :class:`Equilibrium`."""
+        s = self.sections[i].tolist()
+        legs = tuple(LegLoads({name: SectionWrench(*s[leg][k]) for k, name in enumerate(SECTIONS)}, self.frames[i, leg],
+                              float(self.actuator_forces_n[i, leg])) for leg in range(4))
+        res = Residuals(*self.residuals[i].tolist(), float(self.force_scale_n[i]), self.length_scale_m)
+        return Equilibrium(self.pose_m[i].copy(), self.load[i].copy(), legs, self.actuator_forces_n[i].copy(),
+                           self.plate_displacement_m[i].copy(), self.plate_rotation_rad[i].copy(), self.q[i].copy(),
+                           self.multipliers[i].copy(), int(self.iterations[i]), self.linear, res,
+                           self.preload_offsets_m[i].copy())
+
+
+@dataclass
+class _Block:
+    """The pose-dependent constants of a block of poses."""
+
+    pose: np.ndarray  # (b, 3), m
+    load: np.ndarray  # (b, 6)
+    q0: np.ndarray  # (b, nq)
+    q0leg: np.ndarray  # (b, 4, m)
+    z: np.ndarray  # (b, 4, m) placements, m
+    ks: np.ndarray  # (b, 4, m_s) spring stiffnesses
+    rest: np.ndarray  # (b, 4, m_s) spring rest offsets from q0 (the actuator preload offsets)
+    offsets: np.ndarray  # (b, 4), m
+    f_ref: np.ndarray  # (b,), N
+    row_scale: np.ndarray  # (b, 1, m) 1 / (F_ref or F_ref L_ref) per leg stationarity row
+
+
+def _plate_jacobian(r: np.ndarray) -> np.ndarray:
+    """P (b, 4, 6, 6): closure rows of the plate coordinates (centre translation, world rotation) for
+    anchor arms r = p_D - p_C (b, 4, 3)."""
+    p = np.zeros(r.shape[:-1] + (6, 6))
+    p[..., :3, :3] = p[..., 3:, 3:] = -np.eye(3)
+    p[..., :3, 3:] = skew(r)
+    return p
+
+
+class FastEquilibriumSolver:
+    """Batched equilibrium of one machine model (module doc), tested against the reference solver.
+
+    Built like :class:`pressfit.mechanics.statics.EquilibriumSolver` (a built model, or a machine with
+    ``springs_per_segment``, ``cardan_compliance`` and the build pose). Holds no per-call state: thread-safe
+    and picklable (the model is rebuilt on unpickling only through the reference solver's pickling
+    contract; here the built model itself is pickled by description).
+    """
+
+    def __init__(self, machine_or_model: Machine | MachineModel, *, springs_per_segment: int | None = None,
+                 cardan_compliance: object = None, pose_m: np.ndarray | None = None) -> None:
+        if isinstance(machine_or_model, MachineModel):
+            self.model = machine_or_model
+        else:
+            from pressfit.kinematics import reference_pose_m
+
+            pose = reference_pose_m(machine_or_model) if pose_m is None else pose_m
+            self.model = build_model(machine_or_model, pose, springs_per_segment=springs_per_segment,
+                                     cardan_compliance=cardan_compliance)
+        self._chain = _chain(self.model)
+        self._legq = np.array(self.model.leg_v) + 1
+
+    @property
+    def machine(self) -> Machine:
+        return self.model.machine
+
+    def solve(self, pose_m: np.ndarray, plate_wrench: np.ndarray, *, preload: float | None = None,
+              preload_mode: str = "force", linear: bool = False, tol: float = NEWTON_TOL,
+              max_iter: int = 25) -> Equilibrium:
+        """One pose (convenience over :meth:`solve_batch`; batches are where the speed is), with the
+        reference's physical-range check."""
+        from pressfit.mechanics.statics import _check_physical
+
+        eq = self.solve_batch(np.asarray(pose_m, dtype=float).reshape(1, 3), _wrench(plate_wrench)[None],
+                              preload=preload, preload_mode=preload_mode, linear=linear, tol=tol,
+                              max_iter=max_iter).equilibrium(0)
+        _check_physical(self.machine, eq)
+        return eq
+
+    def solve_batch(self, poses_m: np.ndarray, plate_wrenches: np.ndarray, *, preload: float | None = None,
+                    preload_mode: str = "force", preload_offsets_m: np.ndarray | None = None, linear: bool = False,
+                    tol: float = NEWTON_TOL, max_iter: int = 25) -> BatchEquilibrium:
+        """Equilibria at reachable poses (b, 3) (m) under plate wrenches (b, 6) or (6,) (N, N m; world, at
+        the plate centre), after an actuator preload a4 along v_p (N in force mode, m in length mode;
+        :mod:`pressfit.mechanics.preload`) or explicit rest-length offsets (b, 4) (m). Geometrically
+        nonlinear by default (``tol``: the reference's relative stationarity and closure); ``linear=True``:
+        the small-displacement solve. Raises UnreachablePoseError, SingularPoseError, ConvergenceError."""
+        h = np.asarray(poses_m, dtype=float).reshape(-1, 3)
+        w = np.asarray(plate_wrenches, dtype=float)
+        w = np.broadcast_to(_wrench(w) if w.ndim == 1 else w, (len(h), 6))
+        if not np.all(np.isfinite(w)):
+            raise PressfitError("plate wrenches must be finite (F in N, then M in N m)")
+        if preload_offsets_m is not None:
+            offsets = np.broadcast_to(np.asarray(preload_offsets_m, dtype=float), (len(h), 4))
+        elif preload:
+            offsets = rest_length_offsets(self.machine, h, float(preload), preload_mode)
+        else:
+            offsets = np.zeros((len(h), 4))
+        parts = [self._solve_block(self._block(h[i:i + _CHUNK], w[i:i + _CHUNK], offsets[i:i + _CHUNK]), linear,
+                                   tol, max_iter) for i in range(0, len(h), _CHUNK)]
+        return BatchEquilibrium(*[np.concatenate([p[k] for p in parts]) for k in range(12)],
+                                self.machine.geometry.base_half_side_m, np.array(offsets, dtype=float), linear)
+
+    def _block(self, h: np.ndarray, w: np.ndarray, offsets: np.ndarray) -> _Block:
+        mm, ch = self.model, self._chain
+        q0 = mm.configurations(h)
+        q0leg = q0[:, self._legq]
+        lengths = q0leg[:, :, ch.rigid_cols[2]]
+        z = np.broadcast_to(ch.z, q0leg.shape).copy()
+        z[:, :, ch.stem_cols] = mm.stem_placements_z(lengths - self.machine.cylinder.length_m)
+        ks = mm.spring_stiffness(lengths)[:, ch.spring_index]
+        rest = np.zeros(ks.shape)
+        act = int(np.flatnonzero(ch.spring_cols == ch.act_col)[0])
+        rest[:, :, act] = offsets
+        l_ref = self.machine.geometry.base_half_side_m
+        f_ref = np.maximum.reduce([np.linalg.norm(w[:, :3], axis=1), np.linalg.norm(w[:, 3:], axis=1) / l_ref,
+                                   np.abs(ks[:, :, act] * offsets).max(1)])
+        f_ref = np.where(f_ref > 0, f_ref, 1.0)
+        row = np.where(ch.force_rows, 1.0, l_ref)[None, None] * f_ref[:, None, None]
+        return _Block(h, w, q0, q0leg, z, ks, rest, offsets, f_ref, 1.0 / row)
+
+    def _evaluate(self, bk: _Block, d: np.ndarray, pc: np.ndarray, rp: np.ndarray
+                  ) -> tuple[_Kin, np.ndarray, np.ndarray, np.ndarray]:
+        """Kinematics, closure residual c (b, 4, 6), leg Jacobian transposed A^T (b, 4, m, 6) and anchor
+        arms r = p_D - p_C (b, 4, 3) at leg offsets d from q0 and plate (pc, rp)."""
+        ch = self._chain
+        kin = _kinematics(ch, bk.q0leg + d, bk.z)
+        r = np.einsum("bij,lj->bli", rp, ch.anchors)
+        rd = rp[:, None] @ ch.frames0
+        c = np.concatenate([kin.pe - pc[:, None] - r, _log3(kin.re @ rd.swapaxes(-1, -2))], -1)
+        prism = ch.prismatic[:, None]
+        lin = np.where(prism, kin.w, cross(kin.w, kin.pe[:, :, None] - kin.p))
+        at = np.concatenate([lin, np.where(prism, 0.0, kin.w)], -1)
+        return kin, c, at, r
+
+    def _residuals(self, bk: _Block, c: np.ndarray, at: np.ndarray, r: np.ndarray, lam: np.ndarray,
+                   x: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+        """Relative stationarity and closure (b,) (the reference's scales, :mod:`pressfit.mechanics.statics`)."""
+        ch, l_ref = self._chain, self.machine.geometry.base_half_side_m
+        r_leg = (at @ lam[..., None])[..., 0]
+        r_leg[:, :, ch.spring_cols] += bk.ks * x
+        lf = lam[..., :3]
+        r_plate = np.concatenate([-bk.load[:, :3] - lf.sum(1), -bk.load[:, 3:] - (cross(r, lf) + lam[..., 3:]).sum(1)], 1)
+        stat = np.maximum(np.abs(r_leg * bk.row_scale).max((1, 2)),
+                          np.maximum(np.abs(r_plate[:, :3]).max(1), np.abs(r_plate[:, 3:]).max(1) / l_ref) / bk.f_ref)
+        clos = np.maximum(np.abs(c[..., :3]).max((1, 2)) / l_ref, np.abs(c[..., 3:]).max((1, 2)))
+        return stat, clos
+
+    def _step(self, bk: _Block, c: np.ndarray, at: np.ndarray, r: np.ndarray, x: np.ndarray
+              ) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray]:
+        """The condensed elastic KKT solve (module doc): (dq_f, dq_s, dp, lambda)."""
+        ch = self._chain
+        ast, aft = at[:, :, ch.spring_cols], at[:, :, ch.free_cols]
+        nf = aft.shape[2]
+        kkt = np.zeros(c.shape[:2] + (6 + nf, 6 + nf))
+        kkt[..., :6, :6] = -((ast / bk.ks[..., None]).swapaxes(-1, -2) @ ast)
+        kkt[..., :6, 6:] = aft.swapaxes(-1, -2)
+        kkt[..., 6:, :6] = aft
+        pj = _plate_jacobian(r)
+        rhs = np.zeros(c.shape[:2] + (6 + nf, 7))
+        rhs[..., :6, :6] = -pj
+        rhs[..., :6, 6] = -c + (ast.swapaxes(-1, -2) @ x[..., None])[..., 0]
+        try:
+            sol = np.linalg.solve(kkt, rhs)
+            pt = pj.swapaxes(-1, -2)
+            schur = (pt @ sol[..., :6, :6]).sum(1)
+            dp = np.linalg.solve(schur, (bk.load - (pt @ sol[..., :6, 6:]).sum(1)[..., 0])[..., None])[..., 0]
+        except np.linalg.LinAlgError:
+            raise SingularPoseError("the condensed elastic KKT system is singular at a pose of the batch "
+                                    f"(poses {bk.pose.tolist()})") from None
+        z = sol[..., 6] + (sol[..., :6] @ dp[:, None, :, None])[..., 0]
+        lam = z[..., :6]
+        dqs = -x - (ast @ lam[..., None])[..., 0] / bk.ks
+        return z[..., 6:], dqs, dp, lam
+
+    def _solve_block(self, bk: _Block, linear: bool, tol: float, max_iter: int) -> tuple[np.ndarray, ...]:
+        ch = self._chain
+        nb = len(bk.pose)
+        d, lam = np.zeros(bk.q0leg.shape), np.zeros((nb, 4, 6))
+        pc, rp = bk.pose.copy(), np.broadcast_to(np.eye(3), (nb, 3, 3)).copy()
+        iters = np.full(nb, -1)
+        for it in range(max_iter + 1):
+            kin, c, at, r = self._evaluate(bk, d, pc, rp)
+            x = d[:, :, ch.spring_cols] - bk.rest
+            stat, clos = self._residuals(bk, c, at, r, lam, x)
+            iters[(iters < 0) & (stat <= tol) & (clos <= tol)] = it
+            if not linear and np.all(iters >= 0):
+                break
+            if it == max_iter:
+                raise ConvergenceError("nonlinear equilibrium (condensed modified Newton)",
+                                       float(np.max(np.maximum(stat, clos))), tol, max_iter)
+            dqf, dqs, dp, lam = self._step(bk, c, at, r, x)
+            d[:, :, ch.free_cols] += dqf
+            d[:, :, ch.spring_cols] += dqs
+            if linear:  # the linear KKT residual, and the linearised closure (as the reference reports them)
+                stat, _ = self._residuals(bk, np.zeros_like(c), at, r, lam, d[:, :, ch.spring_cols] - bk.rest)
+                dq = np.zeros_like(d)
+                dq[:, :, ch.free_cols], dq[:, :, ch.spring_cols] = dqf, dqs
+                c = c + (at.swapaxes(-1, -2) @ dq[..., None])[..., 0] + (_plate_jacobian(r) @ dp[:, None, :, None])[..., 0]
+                return self._results(bk, kin, c, r, lam, d, pc + dp[:, :3], _exp3(dp[:, 3:]) @ rp, stat,
+                                     np.ones(nb, int), dp)
+            pc, rp = pc + dp[:, :3], _exp3(dp[:, 3:]) @ rp
+        return self._results(bk, kin, c, r, lam, d, pc, rp, stat, iters, None)
+
+    def _results(self, bk: _Block, kin: _Kin, c: np.ndarray, r: np.ndarray, lam: np.ndarray, d: np.ndarray,
+                 pc: np.ndarray, rp: np.ndarray, stat: np.ndarray, iters: np.ndarray, dp_linear: np.ndarray | None
+                 ) -> tuple[np.ndarray, ...]:
+        """Sections, plate motion and residuals (statics._result's definitions), in BatchEquilibrium order."""
+        ch, l_ref = self._chain, self.machine.geometry.base_half_side_m
+        f_load, m_load = bk.load[:, :3], bk.load[:, 3:]
+        lf, lm = lam[..., :3], lam[..., 3:]
+        pts = kin.sec
+        ez = pts[:, :, 2] - pts[:, :, 0]
+        ez /= np.linalg.norm(ez, axis=-1, keepdims=True)
+        ax = self.machine.cardan_axes
+        ex = ax - (ax * ez).sum(-1, keepdims=True) * ez
+        ex /= np.linalg.norm(ex, axis=-1, keepdims=True)
+        frames = np.stack([ex, cross(ez, ex), ez], -1)
+        force = -lf
+        mom = cross(kin.pe[:, :, None] - pts, force[:, :, None]) - lm[:, :, None]
+        fl = (force[:, :, None] @ frames)[:, :, 0]
+        ml = mom @ frames
+        sections = np.concatenate([np.broadcast_to(fl[:, :, None, [2, 0, 1]], ml.shape), ml], -1)
+        act = np.flatnonzero(ch.spring_cols == ch.act_col)[0]
+        act_force = bk.ks[:, :, act] * (d[:, :, ch.act_col] - bk.rest[:, :, act])
+        pg = pc if dp_linear is None else bk.pose  # the plate centre of the equilibrium geometry
+        plate = np.concatenate([f_load + lf.sum(1), m_load + (cross(r, lf) + lm).sum(1)], 1)
+        base_m = mom[:, :, 0] + cross(pts[:, :, 0], force)
+        mach = np.concatenate([f_load - force.sum(1), m_load + cross(pg, f_load) - base_m.sum(1)], 1)
+        scale = np.array([1.0, l_ref])
+        fm = np.linalg.norm(np.stack([plate, mach], 1).reshape(-1, 2, 2, 3), axis=-1).reshape(-1, 4)
+        fm /= bk.f_ref[:, None] * np.tile(scale, 2)
+        closure = np.linalg.norm(c.reshape(-1, 4, 2, 3), axis=-1).max(1)
+        res = np.concatenate([fm, closure, stat[:, None]], 1)
+        q = bk.q0.copy()
+        q[:, self._legq] = bk.q0leg + d
+        rot = _log3(rp)
+        q[:, :3] = pc
+        t = np.linalg.norm(rot, axis=-1, keepdims=True)
+        q[:, 3:6] = rot * np.where(t > 0, np.sin(t / 2) / np.where(t > 0, t, 1.0), 0.5)
+        q[:, 6] = np.cos(t[:, 0] / 2)
+        disp, rot = (pc - bk.pose, rot) if dp_linear is None else (dp_linear[:, :3], dp_linear[:, 3:])
+        return (bk.pose, bk.load, act_force, sections, frames, disp, rot, lam, q, iters, res, bk.f_ref)
