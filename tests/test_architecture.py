@@ -104,6 +104,14 @@ def test_no_global_mutable_state(layer, path):
                     raise AssertionError(f"{path}:{node.lineno}: module-level {t.value.id} is mutated")
 
 
+@pytest.mark.parametrize(("layer", "path"), [m for m in MODULES if m[0] == "cli"],
+                         ids=[str(p.relative_to(SRC)) for layer, p in MODULES if layer == "cli"])
+def test_the_cli_holds_no_physics(layer, path):
+    """The CLI parses, calls the library and prints: no numerical or physics engine of its own."""
+    for name in _imports(path):
+        assert not name.split(".")[0] in ("numpy", "scipy", "pinocchio", "coal", "matplotlib"), f"{path} imports {name}"
+
+
 def test_the_rules_catch_a_violation(tmp_path):
     """The checks are not vacuous: a physics module that plots and keeps a cache is refused."""
     bad = tmp_path / "bad.py"
@@ -113,5 +121,7 @@ def test_the_rules_catch_a_violation(tmp_path):
         test_physics_neither_plots_nor_writes("mechanics", bad)
     with pytest.raises(AssertionError, match="module-level _CACHE is mutated"):
         test_no_global_mutable_state("mechanics", bad)
+    with pytest.raises(AssertionError, match="imports matplotlib"):
+        test_the_cli_holds_no_physics("cli", bad)
     with pytest.raises(AssertionError, match=r"\(kinematics\) imports pressfit.output"):
         test_no_import_of_a_higher_layer("kinematics", bad)

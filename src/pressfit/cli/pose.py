@@ -4,10 +4,8 @@ from __future__ import annotations
 
 import sys
 from pathlib import Path
-from typing import Any
 
 import click
-import numpy as np
 
 from pressfit import kinematics
 from pressfit.cli.common import (
@@ -21,6 +19,7 @@ from pressfit.cli.common import (
 )
 from pressfit.description.machine import load_machine
 from pressfit.errors import PressfitError
+from pressfit.mechanics.statics import Equilibrium
 from pressfit.output.files import check_directory, to_json, write_directory
 
 
@@ -62,32 +61,22 @@ def kinematics_cmd(x: float, y: float, z: float, as_json: bool, model_path: Path
 def solve_cmd(values: tuple[str, ...], has_load: bool, a4: float | None, preload_mode: str | None, linear: bool,
               as_json: bool, model_path: Path) -> None:
     """Static equilibrium: pressfit solve X Y Z --load FX FY FZ [MX MY MZ], or pressfit solve CASE.toml."""
-    from pressfit.mechanics.statics import solve_equilibrium
+    from pressfit.mechanics.statics import solve_case, solve_equilibrium
 
     if len(values) == 1 and values[0].endswith(".toml"):
         from pressfit.description.cases import load_case
 
-        case = load_case(values[0])
         if a4 is not None or preload_mode is not None:
             raise PressfitError(f"--preload/--preload-mode cannot be combined with a case file: edit the [preload] "
                                 f"table of {values[0]}")
-        if case.clearance is not None:
-            raise PressfitError(f"{values[0]} has a [clearance] table, which solve does not model (rigid cardans): "
-                                "use 'pressfit study preload' or 'pressfit check' for cardan clearance")
-        machine = case.machine()
-        a4, preload_mode = (case.preload.a4 or None), case.preload.mode
-        linear = linear or case.solver.linear
-        jobs = [(h, w) for h in case.poses.array() for w in case.loads.wrenches()]
+        results = solve_case(load_case(values[0]), linear)
     else:
         numbers = parse_numbers(values, "expected X Y Z --load FX FY FZ [MX MY MZ] (finite numbers) or CASE.toml")
         if not has_load or len(numbers) not in (6, 9):
             raise click.UsageError("expected X Y Z --load FX FY FZ [MX MY MZ]")
-        wrench = np.zeros(6)
-        wrench[:len(numbers) - 3] = numbers[3:]
-        machine = load_machine(model_path)
-        jobs = [(np.array(numbers[:3]), wrench)]
-    results = [solve_equilibrium(machine, h, w, preload=a4, preload_mode=preload_mode or "force", linear=linear)
-               for h, w in jobs]
+        wrench = numbers[3:] + [0.0] * (9 - len(numbers))
+        results = [solve_equilibrium(load_machine(model_path), numbers[:3], wrench, preload=a4,
+                                     preload_mode=preload_mode or "force", linear=linear)]
     if as_json:
         click.echo(to_json(results[0].to_dict() if len(results) == 1 else [r.to_dict() for r in results]))
         return
@@ -95,7 +84,7 @@ def solve_cmd(values: tuple[str, ...], has_load: bool, a4: float | None, preload
         _print_equilibrium(eq)
 
 
-def _print_equilibrium(eq: Any) -> None:
+def _print_equilibrium(eq: Equilibrium) -> None:
     from pressfit.mechanics.statics import SECTIONS
 
     kind = "linear (small displacements)" if eq.linear else f"nonlinear, {eq.iterations} Newton iterations"
@@ -141,16 +130,7 @@ def stiffness_cmd(x: float, y: float, z: float, as_json: bool, maps: bool, out_d
         for p in write_directory(out_dir, overwrite, lambda tmp: map_files.write_stiffness_maps(m, tmp)):
             click.echo(f"wrote {p}")
         return
-    h = kinematics.require_reachable(machine, [x, y, z])
-    out = condensed.stiffness_report(machine, h)
-    c_pin = compliance.vjm_plate_compliance(machine, h)
-    c_tan = compliance.vjm_plate_compliance(machine, h, load=np.array([0.0, out["press_load_n"], 0, 0, 0, 0]))
-    scale = np.abs(c_pin).max()
-    out["pinocchio_linear_compliance_6x6"] = c_pin.tolist()
-    out["condensed_vs_pinocchio_max_difference_relative"] = float(
-        np.abs(np.array(out["compliance_6x6"]) - c_pin).max() / scale)
-    out["tangent_compliance_6x6_under_press_load"] = c_tan.tolist()
-    out["tangent_vertical_stiffness_under_press_load_n_per_m"] = float(1 / c_tan[1, 1])
+    out = compliance.pose_stiffness_report(machine, [x, y, z])
     if as_json:
         click.echo(to_json(out))
         return

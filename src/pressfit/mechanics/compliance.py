@@ -8,7 +8,10 @@ from __future__ import annotations
 
 import numpy as np
 
+from pressfit import kinematics
 from pressfit.description.machine import Machine
+from pressfit.mechanics import condensed
+from pressfit.mechanics.condensed import PRESS_LOAD_N
 from pressfit.mechanics.statics import Equilibrium, EquilibriumSolver
 
 
@@ -43,3 +46,19 @@ def vjm_plate_compliance(machine: Machine, pose_m: np.ndarray, load: np.ndarray 
             minus = _response(solver.solve(pose_m, base - d, preload=preload))
             cols.append((plus - minus) / (2 * d[j]))
     return np.stack(cols, axis=1)
+
+
+def pose_stiffness_report(machine: Machine, pose_m: np.ndarray, press_load_n: float = PRESS_LOAD_N) -> dict[str, object]:
+    """Everything ``pressfit stiffness`` reports at one reachable pose (m), JSON-ready and SI: the condensed
+    model's report (:func:`pressfit.mechanics.condensed.stiffness_report`), the same compliance from the
+    Pinocchio model with their largest difference relative to its largest entry (an independent
+    cross-check, ~1e-9), and the tangent compliance of the nonlinear equilibrium under the press load (+y)."""
+    h = kinematics.require_reachable(machine, pose_m)
+    out = condensed.stiffness_report(machine, h, press_load_n)
+    c_pin = vjm_plate_compliance(machine, h)
+    c_tan = vjm_plate_compliance(machine, h, load=np.array([0.0, press_load_n, 0.0, 0.0, 0.0, 0.0]))
+    difference = np.abs(np.asarray(out["compliance_6x6"]) - c_pin).max() / np.abs(c_pin).max()
+    return out | {"pinocchio_linear_compliance_6x6": c_pin.tolist(),
+                  "condensed_vs_pinocchio_max_difference_relative": float(difference),
+                  "tangent_compliance_6x6_under_press_load": c_tan.tolist(),
+                  "tangent_vertical_stiffness_under_press_load_n_per_m": float(1.0 / c_tan[1, 1])}

@@ -38,11 +38,9 @@ from __future__ import annotations
 from dataclasses import dataclass
 
 import numpy as np
-import pinocchio as pin
 
 from pressfit.description.machine import Machine
 from pressfit.errors import ConvergenceError, PressfitError, SingularPoseError
-from pressfit.kinematics import inverse_kinematics
 from pressfit.mechanics.model import MachineModel, build_model
 from pressfit.mechanics.preload import rest_length_offsets
 from pressfit.mechanics.statics import (

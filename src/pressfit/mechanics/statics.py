@@ -64,6 +64,7 @@ from scipy.linalg.lapack import dgetrf as _getrf
 from scipy.linalg.lapack import dgetrs as _getrs
 
 from pressfit import kinematics
+from pressfit.description.cases import Case
 from pressfit.description.machine import Machine
 from pressfit.errors import (
     ConvergenceError,
@@ -73,8 +74,8 @@ from pressfit.errors import (
 )
 from pressfit.mechanics.model import CardanComplianceSpec, MachineModel, ModelPose, SpringLaw, build_model
 from pressfit.mechanics.preload import ActuatorPreload, rest_length_offsets
-from pressfit.spatial import cross, skew
 from pressfit.mechanics.stability import Stability, reduced_stability
+from pressfit.spatial import cross, skew
 
 SECTIONS = ("base", "actuator", "plate")
 CLOSURE_FLOOR = 64 * np.finfo(float).eps  # m or rad: closure components below it are round-off (module doc)
@@ -781,3 +782,16 @@ def _machine_residual(pb: _Problem, st: _State, g_leg: np.ndarray) -> np.ndarray
     w = np.linalg.solve(s @ s.transpose(0, 2, 1), -(s @ g_leg[:, :, None]))[:, :, 0]  # (L, 6)
     f = pb.load[:3]
     return w.sum(0) + np.concatenate([f, pb.load[3:] + _cross3(st.pc, f)])
+
+
+def solve_case(case: Case, linear: bool = False) -> list[Equilibrium]:
+    """Every (pose, load) pair of a case file (poses outer, loads inner), after the case's preload, with one
+    solver; ``linear`` or the case's ``[solver] linear`` selects the small-displacement solve. A case with
+    ``[clearance]`` is refused: this solver has rigid cardans (:mod:`pressfit.mechanics.clearance` models the play)."""
+    if case.clearance is not None:
+        raise PressfitError(f"{case.path} has a [clearance] table, which this solve does not model (rigid cardans): "
+                            "use 'pressfit study preload' or 'pressfit check' for cardan clearance")
+    poses, loads = case.poses.array(), case.loads.wrenches()
+    solver = EquilibriumSolver(case.machine(), pose_m=poses[0])
+    preload = ActuatorPreload.from_case(case.preload) if case.preload.a4 else None
+    return [solver.solve(h, w, preload=preload, linear=linear or case.solver.linear) for h in poses for w in loads]
