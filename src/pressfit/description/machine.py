@@ -346,7 +346,7 @@ def _validate(data: dict[str, Any], source: str) -> Machine:
         raise validation_error(source, exc) from None
 
 
-def validation_error(path: object, exc: ValidationError) -> ModelFileError:
+def validation_error(path: Path | str, exc: ValidationError) -> ModelFileError:
     """Turn pydantic's first error into a :class:`ModelFileError` naming the key and expectation."""
     err = exc.errors()[0]
     key = ".".join(str(p) for p in err["loc"]) or "<top level>"

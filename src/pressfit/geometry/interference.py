@@ -49,6 +49,7 @@ from typing import Any, Protocol
 
 import coal
 import numpy as np
+from numpy.typing import ArrayLike
 import pinocchio as pin
 
 from pressfit import kinematics
@@ -69,7 +70,7 @@ class InterferenceError(PressfitError):
 
 
 class Rig(Protocol):
-    """A Pinocchio model whose joints carry the leg parts and the plate (``pressfit.model`` satisfies it)."""
+    """A Pinocchio model whose joints carry the leg parts and the plate (:class:`pressfit.mechanics.model.MachineModel` satisfies it)."""
 
     model: pin.Model
     leg_joint_ids: list[dict[str, int]]
@@ -120,8 +121,8 @@ class ClosedFormRig:
         return self.configurations(np.asarray(pose_m, dtype=float).reshape(1, 3))[0]
 
 
-def make_rig(machine: Machine, rig: str = "auto") -> Any:
-    """'closed-form' (:class:`ClosedFormRig`), 'model' (``pressfit.model.build_model``) or 'auto' (the
+def make_rig(machine: Machine, rig: str = "auto") -> Rig:
+    """'closed-form' (:class:`ClosedFormRig`), 'model' (:func:`pressfit.mechanics.model.build_model`) or 'auto' (the
     latter when importable, else the former)."""
     if rig not in ("auto", "closed-form", "model"):
         raise InterferenceError(f"rig must be 'auto', 'closed-form' or 'model' (got {rig!r})")
@@ -130,7 +131,7 @@ def make_rig(machine: Machine, rig: str = "auto") -> Any:
             from pressfit.mechanics.model import build_model
         except ImportError:
             if rig == "model":
-                raise InterferenceError("pressfit.model is not available") from None
+                raise InterferenceError("pressfit.mechanics.model is not available") from None
         else:
             return build_model(machine, reference_pose_m(machine))
     return ClosedFormRig(machine)
@@ -144,7 +145,7 @@ class Shape:
 
     body: str
     name: str
-    geometry: Any  # coal.CollisionGeometry
+    geometry: coal.CollisionGeometry
     carrier: tuple[str, int]  # ('cylinder'|'stem', leg index 0..3) or ('plate'|'world', -1)
     local: pin.SE3 = field(default_factory=pin.SE3.Identity)  # in the leg frame / plate / world frame
 
@@ -262,7 +263,7 @@ class InterferenceModel:
     """Coal shapes attached to a rig's joints, the checked body pairs and their geometry pairs."""
 
     machine: Machine
-    rig: Any
+    rig: Rig
     geometry_model: pin.GeometryModel
     pairs: tuple[str, ...]  # checked body pairs 'a|b'
     kinds: tuple[str, ...]  # pair_kind of each
@@ -287,7 +288,7 @@ class AffineConfigurations:
     Rigid configurations built from equation 1 are affine in these (``pressfit.model``'s are); a rig
     for which the check fails keeps its per-pose ``configuration_at``."""
 
-    def __init__(self, machine: Machine, rig: Any, probes: int = 48, seed: int = 0) -> None:
+    def __init__(self, machine: Machine, rig: Rig, probes: int = 48, seed: int = 0) -> None:
         self.machine = machine
         ws, y_ref = machine.workspace, reference_pose_m(machine)[1]
         rng = np.random.default_rng(seed)
@@ -310,7 +311,7 @@ class AffineConfigurations:
         return self.features(h) @ self.weights
 
 
-def build_interference(machine: Machine, rig: str | Any = "auto", include: list[str] | tuple[str, ...] = (),
+def build_interference(machine: Machine, rig: str | Rig = "auto", include: list[str] | tuple[str, ...] = (),
                        exclude: list[str] | tuple[str, ...] = ()) -> InterferenceModel:
     """Shapes, pairs and a ``pin.GeometryModel`` attached to ``rig`` (a :class:`Rig` or a name for
     :func:`make_rig`). ``include``/``exclude`` add to the machine's ``include_pairs``/``exclude_pairs``."""
@@ -416,7 +417,7 @@ class _Evaluator:
 
 
 def clearance_at_configuration(im: InterferenceModel, q: np.ndarray, margin_m: float | None = None,
-                               pose_m: Any = ()) -> PoseClearance:
+                               pose_m: ArrayLike = ()) -> PoseClearance:
     """Every checked pair at a rig configuration ``q`` (need not close the loops)."""
     ev = _Evaluator(im)
     d = ev.distances(np.asarray(q, dtype=float))
@@ -430,7 +431,7 @@ def clearance_at_configuration(im: InterferenceModel, q: np.ndarray, margin_m: f
     return PoseClearance(tuple(map(float, pose_m)), margin, tuple(out), im.excluded)
 
 
-def clearance_at(im: InterferenceModel, pose_m: Any, margin_m: float | None = None,
+def clearance_at(im: InterferenceModel, pose_m: ArrayLike, margin_m: float | None = None,
                  check_reachable: bool = True) -> PoseClearance:
     """Every checked pair at the plate pose h (m); raises UnreachablePoseError unless reachable."""
     h = kinematics.require_reachable(im.machine, pose_m) if check_reachable else np.asarray(pose_m, float).reshape(3)

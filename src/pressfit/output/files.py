@@ -8,11 +8,14 @@ import shutil
 import tempfile
 from collections.abc import Callable, Iterable, Sequence
 from pathlib import Path
-from typing import Any
+from typing import TYPE_CHECKING, Any
 
 import numpy as np
 
 from pressfit.errors import OutputError, OutputExistsError
+
+if TYPE_CHECKING:
+    from matplotlib.figure import Figure
 
 
 def _umask() -> int:
@@ -134,7 +137,7 @@ def _fmt(v: Any) -> str:
     return repr(float(v)) if isinstance(v, (float, np.floating)) else str(v)
 
 
-def save_figure(fig: Any, path: Path | str, overwrite: bool = False) -> Path:
+def save_figure(fig: Figure, path: Path | str, overwrite: bool = False) -> Path:
     """Save a matplotlib figure atomically (format from the suffix: .png or .svg)."""
     fmt = Path(path).suffix.lstrip(".")
     return _atomic(path, lambda p: fig.savefig(p, format=fmt, dpi=120, bbox_inches="tight"), overwrite)
