@@ -32,7 +32,7 @@ def main() -> None:
     im = interference.build_interference(machine, rig=args.rig)
     ws = machine.workspace
     rng = np.random.default_rng(0)
-    # the required square at the heights where it is reachable (DESIGN.md: y_h in about [0.4877, 0.7519] m)
+    # the required square at the heights where it is reachable (docs/conventions.md: y_h in about [0.4877, 0.7519] m)
     poses = np.column_stack([rng.uniform(-ws.x_half_width_m, ws.x_half_width_m, args.poses),
                              rng.uniform(0.488, 0.751, args.poses),
                              rng.uniform(-ws.z_half_width_m, ws.z_half_width_m, args.poses)])

@@ -6,6 +6,7 @@ from __future__ import annotations
 
 import json
 import os
+import shutil
 import subprocess
 import sys
 import zipfile
@@ -21,7 +22,10 @@ def installed(tmp_path_factory):
     """The wheel, built from the repository and unpacked as site-packages of its own (dependencies from the
     test environment)."""
     tmp = tmp_path_factory.mktemp("wheel")
-    subprocess.run([sys.executable, "-m", "pip", "wheel", "-q", "--no-deps", "-w", str(tmp), str(ROOT)],
+    source = tmp / "source"  # a copy: an in-tree build would leave build/ in the repository
+    shutil.copytree(ROOT, source, ignore=shutil.ignore_patterns(".git", ".venv", "build", "*.egg-info", "__pycache__",
+                                                                 ".pytest_cache", ".hypothesis", "report", "out"))
+    subprocess.run([sys.executable, "-m", "pip", "wheel", "-q", "--no-deps", "-w", str(tmp), str(source)],
                    check=True, capture_output=True)
     (wheel,) = tmp.glob("pressfit-*.whl")
     site = tmp / "site"

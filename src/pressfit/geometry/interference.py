@@ -1,6 +1,6 @@
 """Leg interference: Coal shapes in a Pinocchio ``GeometryModel``, signed distances per body pair (m).
 
-Bodies (world frame of DESIGN.md, y up; every length in m):
+Bodies (world frame of docs/conventions.md, y up; every length in m):
 
 - ``leg{i}.cylinder``: a capsule of radius ``collision.cylinder_radius_m`` on the segment from the base
   cardan B_i to B_i + L_cyl e_i (L_cyl = ``cylinder.length_m``, e_i the leg's unit vector).
@@ -84,7 +84,7 @@ class ClosedFormRig:
     """Rigid kinematic tree: per leg RX (about a_i) and RY at B_i (the base cardan, carrying the
     cylinder), PZ along the leg (the actuator, q = l_i, carrying the stem); the plate on a translation
     joint (q = h). Joint frames: at B_i the axes (a_i, w_i x a_i, w_i) with w_i inward horizontal; after
-    the cardan they are the DESIGN.md leg frame. Configurations in closed form, vectorised."""
+    the cardan they are the docs/conventions.md leg frame. Configurations in closed form, vectorised."""
 
     def __init__(self, machine: Machine) -> None:
         self.machine = machine

@@ -44,7 +44,7 @@ def leg_vectors(machine: Machine, pose_m: np.ndarray) -> np.ndarray:
 
 
 def inverse_kinematics(machine: Machine, pose_m: np.ndarray) -> LegKinematics:
-    """Leg lengths and cardan angles (equation 1 with its atan/asin restored, DESIGN.md)."""
+    """Leg lengths and cardan angles (equation 1 with its atan/asin restored, docs/conventions.md)."""
     u = leg_vectors(machine, pose_m)
     length = np.linalg.norm(u, axis=-1)
     alpha = np.arctan2(u[..., 1], np.einsum("...ij,ij->...i", u, machine.inward_directions))
@@ -274,7 +274,7 @@ def preload_vector(machine: Machine, pose_m: np.ndarray) -> np.ndarray:
 
 def leg_frames(machine: Machine, pose_m: np.ndarray) -> np.ndarray:
     """Leg frames (..., 4, 3, 3), columns (e_x, e_y, e_z): e_z along the leg base -> plate,
-    e_x = the base cardan axis a_i made normal to e_z, e_y = e_z x e_x (DESIGN.md conventions)."""
+    e_x = the base cardan axis a_i made normal to e_z, e_y = e_z x e_x (docs/conventions.md conventions)."""
     return frames_along(machine, inverse_kinematics(machine, pose_m).unit_vectors)
 
 

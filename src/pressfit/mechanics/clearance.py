@@ -16,7 +16,7 @@ defaults), which bounds the smoothing error of every contact-state result. A joi
 contact) when |x| >= g.
 
 Why only the axial play: a UPU leg carries its axial force and one couple along c_i = a_i x b_i, and
-no shear (DESIGN.md "Facts"). The play along the leg is in series with the axial spring and is what
+no shear (docs/conventions.md "Mechanics facts"). The play along the leg is in series with the axial spring and is what
 produces lost motion: a leg of two cardans has 2g of play from the centred state (4g end to end), and
 the plate moves by 2g / sin(alpha) at pose A before the legs engage. Lateral plays carry no load in the
 small-displacement model (no shear), so they cause no lost motion; in the nonlinear state the shears are

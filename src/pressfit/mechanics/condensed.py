@@ -297,7 +297,7 @@ def solve_linear(machine: Machine, poses_m: np.ndarray, plate_wrench: np.ndarray
         plate_wrench: (F, M) at the plate centre in world axes, (..., 6) or (6,), N and N m; a force
             (..., 3) means zero moment. Broadcast against the poses.
 
-    Geometrically linear (the DESIGN.md default, nonlinear, solve is :mod:`pressfit.mechanics.statics`). Poses
+    Geometrically linear (the docs/conventions.md default, nonlinear, solve is :mod:`pressfit.mechanics.statics`). Poses
     are processed in cache-sized blocks; no Python loop runs over single poses.
     """
     h, w = _poses(machine, poses_m), _as_wrench(plate_wrench)

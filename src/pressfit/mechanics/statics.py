@@ -4,8 +4,8 @@ Equilibrium = stationarity of  E(q) - W_load(q)  subject to the four 6D loop clo
 
     g(q) + J_c(q)^T lambda = 0,   c(q) = 0,     g = dE/dq - Q_load,
 
-solved by Newton on the KKT system  [H J_c^T; J_c 0] [dq; lambda+] = [-g; -c]  (DESIGN.md "Physics
-approach"). Closure i is written world-aligned at the plate cardan: c_i = (p_E - p_D, log3(R_E R_D^T)),
+solved by Newton on the KKT system  [H J_c^T; J_c 0] [dq; lambda+] = [-g; -c]  (docs/conventions.md,
+"Mechanics facts"). Closure i is written world-aligned at the plate cardan: c_i = (p_E - p_D, log3(R_E R_D^T)),
 with J_c built from the joint twists of ``pin.computeJointJacobians`` (it equals Pinocchio's
 ``FrameAnchorConstraintModel`` Jacobian up to the rotation of its frame, checked in the tests); lambda_i
 = (force, couple) that leg i exerts on the plate, world axes, at the plate cardan centre.

@@ -78,7 +78,7 @@ def write_report(machine: Machine, out_dir: Path | str, overwrite: bool = False,
     header, rows = workspace_envelope.envelope_rows(env)
     md += ["## 3. Workspace load envelope (design loads)", "",
            f"700 N press reaction within a 5 degree cone, over the required square at y_h = {ys[0]:g} ... "
-           f"{ys[-1]:g} m; exact condensed linear model (DESIGN.md). Use `pressfit check` with a case "
+           f"{ys[-1]:g} m; exact condensed linear model (docs/conventions.md). Use `pressfit check` with a case "
            "file to refine the worst poses with the nonlinear solver.", "", _md_table(header, rows), ""]
     md += [f"![{p.name}](envelope/{p.name})" for p in sorted((out / "envelope").glob("*.png"))] + [""]
     steps.update()
