@@ -130,9 +130,10 @@ def test_outputs_name_the_geometry(machine, tmp_path):
     """Study JSON, CSV rows and text, and the check's method line name the geometry they assume."""
     study = preload_study.preload_study(machine, OFF, [G], [0.0], 700.0, 5, geometry="box", progress=False)
     text = C.GEOMETRY_DESCRIPTIONS["box"]
-    assert study.to_dict()["clearance_geometry"] == text
+    assert study.to_dict()["clearance_geometry"] == "box"
+    assert study.to_dict()["clearance_geometry_description"] == text
     header, rows = study.rows()
-    assert rows[0][header.index("clearance_geometry")] == text
+    assert rows[0][header.index("clearance_geometry")] == "box"  # the CSV cell: the name, no commas
     assert text in preload_study.format_answers(study)
     path = tmp_path / "k.toml"
     path.write_text(tomli_w.dumps({"name": "k", "poses": {"points_m": [OFF.tolist()]},

@@ -18,6 +18,7 @@ from pressfit.mechanics.clearance import (
     clearance_from_case,
     Clearance,
     ClearanceError,
+    GEOMETRY_DESCRIPTIONS,
     LoadDeflection,
     _branch,
     _direction,
@@ -40,7 +41,7 @@ class PreloadStudy:
     direction: np.ndarray
     preload_mode: str
     clearances_m: np.ndarray  # (G,) mean play g of each clearance variant, m (in the shape clearance_geometry names)
-    clearance_geometry: str  # Clearance.description of the variants' geometry
+    clearance_geometry: str  # the variants' Clearance.geometry: "axial", "box" or "sphere"
     preloads: np.ndarray  # (P,) N (force) or m (length)
     loads_n: np.ndarray  # (n,)
     deflection_m: np.ndarray  # (G, P, n) along the direction, loading
@@ -83,6 +84,7 @@ class PreloadStudy:
         return {"pose_m": self.pose_m.tolist(), "direction": self.direction.tolist(),
                 "preload_mode": self.preload_mode, "load_max_n": float(self.loads_n[-1]),
                 "clearance_geometry": self.clearance_geometry,
+                "clearance_geometry_description": GEOMETRY_DESCRIPTIONS[self.clearance_geometry],
                 "steps": len(self.loads_n) - 1, "contact_stiffness_n_per_m": self.contact_stiffness_n_per_m,
                 "smoothing_m": self.smoothing_m, "small_load_n": self.small_load_n,
                 "no_clearance_contact_stiffness_n_per_m": self.no_clearance_contact_stiffness_n_per_m,
@@ -161,7 +163,7 @@ def preload_study(machine: Machine, pose_m: Any, clearances_m: Any, preloads: An
         return np.array([[f(c) for c in row] for row in curves])
 
     return PreloadStudy(
-        pose, d, preload_mode, gaps, variants[0].description, pre, loads, grid(lambda c: c.deflection_m), float(small[1]), np.array(secants),
+        pose, d, preload_mode, gaps, variants[0].geometry, pre, loads, grid(lambda c: c.deflection_m), float(small[1]), np.array(secants),
         grid(lambda c: c.press_stiffness_n_per_m),
         grid(lambda c: c.press_secant_stiffness_n_per_m), grid(lambda c: c.lost_motion_m),
         grid(lambda c: np.nanmin(c.opening_loads_n) if np.any(~np.isnan(c.opening_loads_n)) else np.nan),
@@ -190,7 +192,7 @@ def format_answers(study: PreloadStudy) -> str:
              f"{study.no_clearance_contact_stiffness_n_per_m:.4g} N/m with the cardan contact springs "
              f"({study.contact_stiffness_n_per_m:.3g} N/m each) in series, {study.rigid_cardan_stiffness_n_per_m:.4g}"
              f" N/m with rigid cardans (as 'pressfit stiffness'); small-load secant at {study.small_load_n:g} N; "
-             f"clearance geometry {study.clearance_geometry}"]
+             f"clearance geometry {GEOMETRY_DESCRIPTIONS[study.clearance_geometry]}"]
     for a in study.answers():
         s = (f"g = {a['clearance_m'] * 1e6:g} um: critical preload {a['critical_preload']:.4g} {unit}; without "
              f"preload lost motion {a['lost_motion_without_preload_m'] * 1e6:.3g} um, small-load secant "
