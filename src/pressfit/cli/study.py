@@ -41,7 +41,8 @@ def study_group() -> None:
 @MODEL_OPTION
 @user_errors
 def study_preload_cmd(case_file: Path | None, pose: tuple[float, ...] | None, clearances: list[float] | None,
-                      geometry: str | None, preloads: list[float] | None, preload_mode: str, load_max: float, steps: int,
+                      geometry: str | None, preloads: list[float] | None, preload_mode: str, load_max: float,
+                      steps: int,
                       direction: tuple[float, ...], out_dir: Path, overwrite: bool, as_json: bool, progress: bool,
                       model_path: Path) -> None:
     """How much preload keeps every cardan closed up to the load, and what stiffness it buys (SI)."""

@@ -65,7 +65,8 @@ def rest_length_offsets(machine: Machine, pose_m: np.ndarray, a4: float, mode: s
                         clearance: Clearance | None = None) -> np.ndarray:
     """Actuator rest-length offsets (4,), m, for a preload a4 along v_p at one pose (m) (module doc).
 
-    ``clearance``: the cardans' plays (effective axial gaps at the pose), closed by the preload in force mode (None: rigid cardans).
+    ``clearance``: the cardans' plays (effective axial gaps at the pose), closed by the preload in force mode
+    (None: rigid cardans).
     """
     pre = ActuatorPreload(float(a4), mode)  # type: ignore[arg-type]
     vp = kinematics.preload_vector(machine, pose_m)

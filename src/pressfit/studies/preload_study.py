@@ -123,7 +123,8 @@ def preload_study(machine: Machine, pose_m: Any, clearances_m: Any, preloads: An
     """Load-deflection curves (loading, small-displacement solver) for every clearance (a number: m, uniform
     on the eight cardans with the contact law and geometry of ``template`` or the machine, ``geometry``
     overriding it; or a :class:`Clearance`; an empty list: ``template`` itself; all of one geometry) and
-    preload (N, or m in length mode), 0..load_max_n (N) in ``steps`` steps along ``direction``; plus the critical preload per clearance.
+    preload (N, or m in length mode), 0..load_max_n (N) in ``steps`` steps along ``direction``; plus the
+    critical preload per clearance.
 
     The preload a4 = 0 (the baseline "without preload") is always part of the grid; preloads are sorted.
     The small-load stiffness is the secant at the stated load ``SMALL_LOAD_FRACTION * load_max_n`` from its
@@ -163,7 +164,8 @@ def preload_study(machine: Machine, pose_m: Any, clearances_m: Any, preloads: An
         return np.array([[f(c) for c in row] for row in curves])
 
     return PreloadStudy(
-        pose, d, preload_mode, gaps, variants[0].geometry, pre, loads, grid(lambda c: c.deflection_m), float(small[1]), np.array(secants),
+        pose, d, preload_mode, gaps, variants[0].geometry, pre, loads, grid(lambda c: c.deflection_m), float(small[1]),
+        np.array(secants),
         grid(lambda c: c.press_stiffness_n_per_m),
         grid(lambda c: c.press_secant_stiffness_n_per_m), grid(lambda c: c.lost_motion_m),
         grid(lambda c: np.nanmin(c.opening_loads_n) if np.any(~np.isnan(c.opening_loads_n)) else np.nan),
