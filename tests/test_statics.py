@@ -173,7 +173,8 @@ def test_axial_forces_are_the_concurrent_truss_about_p_star(machine):
 
 def test_stiff_limit_nonlinear_tends_to_the_linear_rigid_limit(machine):
     """Scaling every stiffness by s leaves the linear forces unchanged (they depend on stiffness ratios)
-    and shrinks displacements as 1/s, so the nonlinear - linear gap must fall ~ 1/s."""
+    and shrinks displacements as 1/s, so the nonlinear - linear gap must fall ~ 1/s (achieved within 0.8%,
+    the next order 1/s^2; 2%)."""
     gaps = []
     for s in (1.0, 1e1, 1e2):
         mach = machine.with_overrides({"material": {"youngs_modulus_pa": 210e9 * s, "shear_modulus_pa": 81e9 * s},
@@ -185,8 +186,8 @@ def test_stiff_limit_nonlinear_tends_to_the_linear_rigid_limit(machine):
         assert np.allclose(lin.actuator_forces_n, ref, rtol=1e-8)  # LU round-off grows ~ s (unscaled KKT)
         gaps.append(np.abs(non.actuator_forces_n - lin.actuator_forces_n).max())
     assert gaps[0] > 0.1  # the nonlinearity is real at nominal stiffness (~1 N of 300 N)
-    assert gaps[1] == pytest.approx(gaps[0] / 1e1, rel=0.05)
-    assert gaps[2] == pytest.approx(gaps[0] / 1e2, rel=0.05)
+    assert gaps[1] == pytest.approx(gaps[0] / 1e1, rel=0.02)
+    assert gaps[2] == pytest.approx(gaps[0] / 1e2, rel=0.02)
 
 
 MIRRORS = {  # reflection S, leg permutation (leg i -> image leg)
@@ -321,7 +322,8 @@ def test_plate_compliance_by_finite_differences(machine):
 def test_segment_spring_error_falls_as_one_over_n_squared(machine):
     """Nonlinear axial forces with n = 1, 2, 4, 8 springs per segment against the Richardson limit
     (4 N_8 - N_4) / 3 (error model C / n^2). Measured at this corner pose (case B + 40 N m): relative errors
-    1.4e-3, 3.4e-4, 8.5e-5, 2.1e-5, ratios 4.00. n = 4 (the default) errs < 1e-4 of max |N|.
+    1.4e-3, 3.4e-4, 8.5e-5, 2.1e-5, ratios 4.00 (achieved within 1.6e-3; 5e-3). n = 4 (the default) errs
+    < 1e-4 of max |N|.
     (Pinocchio 4.1's Data grows steeply with nv: n = 16 needs ~4.5 GB, so the test stops at 8.)"""
     pose, w = (0.2765, 0.72, -0.2765), np.array([0, 700, 0, 40, 0, 0])
     n = {k: solve_equilibrium(build_model(machine, pose, springs_per_segment=k), pose, w).actuator_forces_n
@@ -329,8 +331,8 @@ def test_segment_spring_error_falls_as_one_over_n_squared(machine):
     limit = (4 * n[8] - n[4]) / 3
     err = {k: np.abs(n[k] - limit).max() for k in (1, 2, 4)}
     scale = np.abs(limit).max()
-    assert err[1] / err[2] == pytest.approx(4, rel=0.02)
-    assert err[2] / err[4] == pytest.approx(4, rel=0.02)
+    assert err[1] / err[2] == pytest.approx(4, rel=5e-3)
+    assert err[2] / err[4] == pytest.approx(4, rel=5e-3)
     assert err[4] < 1e-4 * scale
 
 

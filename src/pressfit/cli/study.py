@@ -22,7 +22,10 @@ def study_group() -> None:
 @click.argument("case_file", required=False, type=click.Path(path_type=Path))
 @click.option("--pose", nargs=3, type=COORDINATE, help="Plate pose X Y Z, m (without CASE_FILE).")
 @click.option("--clearance", "clearances", type=FloatList(0.0, 1e-2),
-              help="Cardan axial clearances g, m, comma-separated (default: the model's).")
+              help="Cardan clearances g, m, comma-separated (default: the model's).")
+@click.option("--clearance-geometry", "geometry", type=click.Choice(["axial", "box", "sphere"]),
+              help="Play of each cardan: +-g along the leg (axial), +-g on its three translations (box) or a ball "
+                   "of radius g (sphere) (default: the model's [joints] cardan_clearance_geometry).")
 @click.option("--preload", "preloads", type=FloatList(-MAX_FORCE_N, MAX_FORCE_N),
               help="Preloads a4 along v_p, comma-separated: N (force mode) or m (length).")
 @click.option("--mode", "preload_mode", type=click.Choice(["force", "length"]), default="force", show_default=True)
@@ -38,7 +41,8 @@ def study_group() -> None:
 @MODEL_OPTION
 @user_errors
 def study_preload_cmd(case_file: Path | None, pose: tuple[float, ...] | None, clearances: list[float] | None,
-                      preloads: list[float] | None, preload_mode: str, load_max: float, steps: int,
+                      geometry: str | None, preloads: list[float] | None, preload_mode: str, load_max: float,
+                      steps: int,
                       direction: tuple[float, ...], out_dir: Path, overwrite: bool, as_json: bool, progress: bool,
                       model_path: Path) -> None:
     """How much preload keeps every cardan closed up to the load, and what stiffness it buys (SI)."""
@@ -47,8 +51,8 @@ def study_preload_cmd(case_file: Path | None, pose: tuple[float, ...] | None, cl
 
     check_directory(out_dir, overwrite)
     if case_file is not None:
-        if pose or clearances or preloads:
-            raise PressfitError("give either CASE_FILE or --pose/--clearance/--preload")
+        if pose or clearances or preloads or geometry:
+            raise PressfitError("give either CASE_FILE or --pose/--clearance/--clearance-geometry/--preload")
         from pressfit.description.cases import load_case
 
         kw = preload_study.study_from_case(load_case(case_file))
@@ -56,7 +60,7 @@ def study_preload_cmd(case_file: Path | None, pose: tuple[float, ...] | None, cl
         if not pose or not preloads:
             raise PressfitError("give CASE_FILE, or --pose X Y Z and --preload P1,P2,...")
         machine = load_machine(model_path)
-        kw = {"machine": machine, "pose_m": list(pose), "clearances_m": clearances or [],
+        kw = {"machine": machine, "geometry": geometry, "pose_m": list(pose), "clearances_m": clearances or [],
               "preloads": preloads, "load_max_n": load_max, "steps": steps,
               "direction": direction, "preload_mode": preload_mode}
     study = preload_study.preload_study(**kw, progress=progress)

@@ -175,13 +175,16 @@ class Reference(_Strict):
 class ClearanceSpec(_Strict):
     """Axial plays of the eight cardans (:mod:`pressfit.clearance`): ``gaps_m`` (8 values: leg 1 base, leg 1
     plate, leg 2 base, ...) or ``random_m`` = [low, high] with ``seed``; default: the machine's uniform
-    clearance. Contact stiffness N/m and smoothing width m default to the machine's and 1e-9 m."""
+    clearance. ``geometry`` ("axial": +-g along the leg; "box": +-g on the joint's three translations in the
+    cardan's axes; "sphere": radius g) defaults to the machine's ``[joints] cardan_clearance_geometry``.
+    Contact stiffness N/m and smoothing width m default to the machine's and 1e-9 m."""
 
     gaps_m: Annotated[list[Annotated[float, Field(ge=0, le=1e-2, allow_inf_nan=False)]],
                       Field(min_length=8, max_length=8)] | None = None
     random_m: Annotated[list[Annotated[float, Field(ge=0, le=1e-2, allow_inf_nan=False)]],
                         Field(min_length=2, max_length=2)] | None = None
     seed: int = 0
+    geometry: Literal["axial", "box", "sphere"] | None = None
     contact_stiffness_n_per_m: Positive | None = None
     smoothing_m: Annotated[float, Field(gt=0, le=1e-5, allow_inf_nan=False)] = 1e-9
 

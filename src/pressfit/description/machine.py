@@ -129,11 +129,14 @@ class Actuator(_Strict):
 
 
 class Joints(_Strict):
-    """Cardan compliance. ``cardan_axial_clearance_m``: the play g of each cardan **along its leg axis**
-    (+-g, a dead zone in series with the leg, :mod:`pressfit.mechanics.clearance`); lateral play carries no
-    load in a UPU leg and is not modelled."""
+    """Cardan compliance. ``cardan_axial_clearance_m``: the play g of each cardan, m, in the shape
+    ``cardan_clearance_geometry`` gives it: "axial" (default) +-g along the leg axis; "box" +-g on each of
+    the joint's three translations in the cardan's axes (a, b, c = a x b); "sphere" a ball of radius g.
+    Each enters as a dead zone in series with the leg of its effective axial gap at the pose (its support
+    function along the leg: g, g (|cos beta| + |sin beta|), g; :mod:`pressfit.mechanics.clearance`)."""
 
     cardan_axial_clearance_m: NonNegative = 0.0
+    cardan_clearance_geometry: Literal["axial", "box", "sphere"] = "axial"
     cardan_contact_stiffness_n_per_m: Positive = 1.0e9  # per cardan, along the leg (pressfit.clearance)
     cardan_rotational_stiffness_nm_per_rad: Positive | None = None
 

@@ -3,8 +3,8 @@ every joint closed (paper section 4.1's promise, quantified). SI units throughou
 
 Clearance law (:class:`DeadZone`)
 --------------------------------
-Each cardan gets an **axial** play along its leg: a virtual translation x (m, > 0 = the leg lengthens)
-between the cardan and the leg segment with the smoothed dead-zone force
+Each cardan gets a play along its leg (of the effective gap g of its geometry, below): a virtual
+translation x (m, > 0 = the leg lengthens) between the cardan and the leg segment with the smoothed dead-zone force
 
     f(x) = k_c (s(x - g) - s(-x - g)),   s(u) = (u + sqrt(u^2 + w^2)) / 2,
 
@@ -15,14 +15,30 @@ law tends to the sharp dead zone; the force at the contact edge x = g is k_c w /
 defaults), which bounds the smoothing error of every contact-state result. A joint is **closed** (in
 contact) when |x| >= g.
 
-Why only the axial play: a UPU leg carries its axial force and one couple along c_i = a_i x b_i, and
-no shear (docs/conventions.md "Mechanics facts"). The play along the leg is in series with the axial spring and is what
-produces lost motion: a leg of two cardans has 2g of play from the centred state (4g end to end), and
-the plate moves by 2g / sin(alpha) at pose A before the legs engage. Lateral plays carry no load in the
-small-displacement model (no shear), so they cause no lost motion; in the nonlinear state the shears are
-below 1 N at 700 N, and a lateral shift s <= g of a leg end changes its length by s^2 / l (nm): they are
-left out. The play of the rotation about c_i (``rotation_gaps_rad``) is optional: in series with the
-leg's couple stiffness k_r, it lets the plate rock before torsion takes the moment.
+Why only the play along the leg, and the three geometries (``Clearance.geometry``)
+------------------------------------------------------------------------------------
+A UPU leg carries its axial force and one couple along c_i = a_i x b_i, and no shear (docs/conventions.md,
+"Mechanics facts"). A cardan's translational play t (a vector, m) changes the leg's length by e_i . t to first
+order (e_i the unit leg direction); the components of t normal to e_i carry no load (no shear) and
+change the length only by |t|^2 / l (nm): to first order the only play that produces lost motion is its
+projection on the leg. Under an axial force the joint slides to the point of its play region furthest
+along +-e_i, so each geometry enters as an **effective axial gap**, the support function of its play
+region along the current leg direction (:meth:`Clearance.effective_gaps_m`):
+
+* ``"axial"``: +-g along the leg axis: g_eff = g (the region is the segment [-g, g] e_i).
+* ``"box"``: +-g on each of the joint's three translations, in the cardan's own axes a_i, b_i and
+  c_i = a_i x b_i (a cube of half-side g): g_eff = g (|e.a| + |e.b| + |e.c|). With b_i normal to the
+  leg and c_i in the plane of a_i and e_i, e.a = sin(beta_i), e.b = 0, e.c = cos(beta_i), so
+  g_eff = g (|cos beta_i| + |sin beta_i|): g at beta = 0, up to sqrt(2) g at |beta| = 45 degrees. The
+  plate cardan's axes are parallel to the base cardan's (Tsai's condition): the same factor at both ends.
+* ``"sphere"``: a ball of radius g: g_eff = g in every direction, so to first order it equals ``"axial"``
+  (they differ only in the second-order lateral slide, left out as above).
+
+A leg of two cardans has 2 g_eff of play from the centred state (4 g_eff end to end); at pose A
+(beta = 0, every geometry alike) the plate moves by 2g / sin(alpha) before the legs engage. The
+effective gaps are taken at the solve's pose (the nonlinear solver keeps them through the deformation:
+beta changes by mrad). The play of the rotation about c_i (``rotation_gaps_rad``) is optional: in
+series with the leg's couple stiffness k_r, it lets the plate rock before torsion takes the moment.
 
 Preload (:func:`pressfit.mechanics.preload.rest_length_offsets` with a :class:`Clearance`)
 ---------------------------------------------------------------------------------------------
@@ -46,8 +62,8 @@ the previous solution. The two agree to the geometric nonlinearity (about 1e-3 a
 
 from __future__ import annotations
 
-from dataclasses import dataclass
-from typing import Any
+from dataclasses import dataclass, replace
+from typing import Any, Literal, get_args
 
 import numpy as np
 from numpy.typing import ArrayLike
@@ -62,6 +78,13 @@ from pressfit.mechanics.preload import rest_length_offsets
 ENDS = ("base", "plate")
 DEFAULT_SMOOTHING_M = 1e-9
 NEWTON_TOL = 1e-10  # relative force residual of the small-displacement solve
+Geometry = Literal["axial", "box", "sphere"]
+GEOMETRY_DESCRIPTIONS: dict[str, str] = {
+    "axial": "axial: +-g along the leg axis at each cardan",
+    "box": "box: +-g on the three translations of each cardan in its own axes (a, b, c = a x b); "
+           "effective axial gap g (|cos beta| + |sin beta|)",
+    "sphere": "sphere: a ball of radius g at each cardan; effective axial gap g (equal to axial to first order)",
+}
 
 
 class ClearanceError(PressfitError):
@@ -130,10 +153,12 @@ def invert_law(force: np.ndarray, gap: np.ndarray, stiffness: float, width: floa
 # --- clearance description ---------------------------------------------------------------------------------
 @dataclass(frozen=True)
 class Clearance:
-    """Axial plays of the eight cardans and their contact law (SI).
+    """Plays of the eight cardans and their contact law (SI).
 
-    ``gaps_m`` (4, 2): [leg 0..3, end 'base' | 'plate'], m. ``rotation_gaps_rad`` (4, 2) or None (rigid):
-    the play of the rotation about c_i, rad, with ``rotation_stiffness_nm_per_rad``.
+    ``gaps_m`` (4, 2): [leg 0..3, end 'base' | 'plate'], m: the play g of each cardan, in the shape
+    ``geometry`` gives it (module doc: "axial" +-g along the leg, "box" of half-side g in the cardan's axes,
+    "sphere" of radius g). ``rotation_gaps_rad`` (4, 2) or None (rigid): the play of the rotation about
+    c_i, rad, with ``rotation_stiffness_nm_per_rad``.
     """
 
     gaps_m: np.ndarray
@@ -142,8 +167,12 @@ class Clearance:
     rotation_gaps_rad: np.ndarray | None = None
     rotation_stiffness_nm_per_rad: float = 1e7
     rotation_smoothing_rad: float = 1e-8
+    geometry: Geometry = "axial"
 
     def __post_init__(self) -> None:
+        if self.geometry not in get_args(Geometry):
+            raise ClearanceError(f"clearance geometry must be one of {', '.join(get_args(Geometry))}, "
+                                 f"got {self.geometry!r}")
         g = np.broadcast_to(np.asarray(self.gaps_m, dtype=float), (4, 2)).copy()
         if not np.all(np.isfinite(g)) or np.any(g < 0) or np.any(g > 1e-2):
             raise ClearanceError(f"clearances must be in [0, 0.01] m, got {g.ravel().tolist()}")
@@ -161,6 +190,7 @@ class Clearance:
         """Every cardan with the same play (default: the machine's ``joints.cardan_axial_clearance_m``)."""
         g = machine.joints.cardan_axial_clearance_m if gap_m is None else gap_m
         kw.setdefault("contact_stiffness_n_per_m", machine.joints.cardan_contact_stiffness_n_per_m)
+        kw.setdefault("geometry", machine.joints.cardan_clearance_geometry)
         return cls(np.full((4, 2), float(g)), **kw)
 
     @classmethod
@@ -169,6 +199,7 @@ class Clearance:
         if len(gaps_m) != 8:
             raise ClearanceError(f"give 8 clearances (leg 1 base, leg 1 plate, ...), got {len(gaps_m)}")
         kw.setdefault("contact_stiffness_n_per_m", machine.joints.cardan_contact_stiffness_n_per_m)
+        kw.setdefault("geometry", machine.joints.cardan_clearance_geometry)
         return cls(np.asarray(gaps_m, dtype=float).reshape(4, 2), **kw)
 
     @classmethod
@@ -177,11 +208,34 @@ class Clearance:
         if not 0 <= low_m <= high_m:
             raise ClearanceError(f"need 0 <= low_m <= high_m, got {low_m}, {high_m}")
         kw.setdefault("contact_stiffness_n_per_m", machine.joints.cardan_contact_stiffness_n_per_m)
+        kw.setdefault("geometry", machine.joints.cardan_clearance_geometry)
         return cls(np.random.default_rng(seed).uniform(low_m, high_m, (4, 2)), **kw)
 
     def with_gap(self, gap_m: float) -> Clearance:
-        return Clearance(np.full((4, 2), float(gap_m)), self.contact_stiffness_n_per_m, self.smoothing_m,
-                         self.rotation_gaps_rad, self.rotation_stiffness_nm_per_rad, self.rotation_smoothing_rad)
+        """The same contact law and geometry with every cardan's play g = gap_m (m)."""
+        return replace(self, gaps_m=np.full((4, 2), float(gap_m)))
+
+    @property
+    def description(self) -> str:
+        """The geometry in words (for outputs)."""
+        return GEOMETRY_DESCRIPTIONS[self.geometry]
+
+    def effective_gaps_m(self, machine: Machine, pose_m: ArrayLike) -> np.ndarray:
+        """(4, 2) effective axial gaps, m: the support function of each play region along the leg direction
+        e_i at the pose (module doc): g (axial, sphere) or g (|e.a| + |e.b| + |e.c|) = g (|cos beta| +
+        |sin beta|) (box; e.b = 0, e.c = sqrt(1 - (e.a)^2))."""
+        if self.geometry != "box":
+            return self.gaps_m.copy()
+        u = kinematics.leg_vectors(machine, np.asarray(pose_m, dtype=float).reshape(3))
+        ea = np.abs(np.sum(u / np.linalg.norm(u, axis=-1, keepdims=True) * machine.cardan_axes, -1))
+        return self.gaps_m * (ea + np.sqrt(np.clip(1.0 - ea * ea, 0.0, 1.0)))[:, None]
+
+    def at_pose(self, machine: Machine, pose_m: ArrayLike) -> Clearance:
+        """The equivalent axial clearance at a pose (m): gaps = :meth:`effective_gaps_m`, geometry "axial"
+        (idempotent: an axial clearance is returned unchanged). Every solver applies it at its entry."""
+        if self.geometry == "axial":
+            return self
+        return replace(self, gaps_m=self.effective_gaps_m(machine, pose_m), geometry="axial")
 
     def law(self, leg: int, end: int) -> DeadZone:
         return DeadZone(float(self.gaps_m[leg, end]), self.contact_stiffness_n_per_m, self.smoothing_m)
@@ -193,19 +247,27 @@ class Clearance:
                         self.rotation_smoothing_rad)
 
     def cardan_compliance(self) -> dict:
-        """The ``cardan_compliance`` argument of :func:`pressfit.mechanics.model.build_model`."""
+        """The ``cardan_compliance`` argument of :func:`pressfit.mechanics.model.build_model` (axial
+        geometry; resolve a box or sphere at its pose with :meth:`at_pose` first)."""
         from pressfit.mechanics.model import CardanCompliance
+
+        if self.geometry != "axial":
+            raise ClearanceError(f"a {self.geometry} clearance depends on the pose: resolve it with "
+                                 "Clearance.at_pose(machine, pose) before building a model")
 
         return {(i, e): CardanCompliance(axial=self.law(i, j), rotation=self.rotation_law(i, j))
                 for i in range(4) for j, e in enumerate(ENDS)}
 
-    def play_extension_m(self, axial_forces_n: np.ndarray) -> np.ndarray:
-        """The summed extension (4,), m, of each leg's two axial plays under its axial force (4,), N."""
-        return invert_law(np.repeat(np.asarray(axial_forces_n, float)[:, None], 2, 1), self.gaps_m,
+    def play_extension_m(self, machine: Machine, pose_m: ArrayLike, axial_forces_n: np.ndarray) -> np.ndarray:
+        """The summed extension (4,), m, of each leg's two plays (effective axial gaps at the pose, m) under
+        its axial force (4,), N."""
+        return invert_law(np.repeat(np.asarray(axial_forces_n, float)[:, None], 2, 1),
+                          self.effective_gaps_m(machine, pose_m),
                           self.contact_stiffness_n_per_m, self.smoothing_m).sum(1)
 
     def to_dict(self) -> dict[str, Any]:
-        return {"gaps_m": self.gaps_m.tolist(), "contact_stiffness_n_per_m": self.contact_stiffness_n_per_m,
+        return {"geometry": self.geometry, "gaps_m": self.gaps_m.tolist(),
+                "contact_stiffness_n_per_m": self.contact_stiffness_n_per_m,
                 "smoothing_m": self.smoothing_m,
                 "rotation_gaps_rad": None if self.rotation_gaps_rad is None else self.rotation_gaps_rad.tolist()}
 
@@ -293,7 +355,7 @@ class _SmallModel:
             if (c.contact_stiffness_n_per_m, c.smoothing_m, c.rotation_gaps_rad is None) != \
                     (cl0.contact_stiffness_n_per_m, cl0.smoothing_m, cl0.rotation_gaps_rad is None):
                 raise ClearanceError("a batch needs the same contact law for every clearance")
-        gaps = np.array([c.gaps_m for c in clearances])
+        gaps = np.array([c.effective_gaps_m(machine, pose) for c in clearances])
         trans = _Chain(core.e[:, :, 0].T, core.k_a[:, 0], gaps, cl0.contact_stiffness_n_per_m, cl0.smoothing_m)
         rg = None if cl0.rotation_gaps_rad is None else np.array([c.rotation_gaps_rad for c in clearances])
         rot = _Chain(core.c[:, :, 0].T, core.k_r[:, 0], rg, cl0.rotation_stiffness_nm_per_rad, cl0.rotation_smoothing_rad)
@@ -336,7 +398,8 @@ class LoadDeflection:
     preload: float  # a4: N (force mode) or m (length mode)
     preload_mode: str
     method: str  # 'small' | 'nonlinear'
-    clearance: Clearance
+    clearance: Clearance  # as given (its geometry named in the summary)
+    effective_gaps_m: np.ndarray  # (4, 2) the effective axial gaps at the pose (Clearance.effective_gaps_m), m
     loading: Branch
     unloading: Branch | None
 
@@ -351,9 +414,9 @@ class LoadDeflection:
         return d - d[0] if self.loads_n[0] == 0 else d
 
     def closed(self, branch: str = "loading") -> np.ndarray:
-        """(n, 4, 2) True where the joint is in contact (|x| >= gap)."""
+        """(n, 4, 2) True where the joint is in contact (|x| >= effective gap)."""
         x = getattr(self, branch).joint_axial_m
-        return np.abs(x) >= self.clearance.gaps_m
+        return np.abs(x) >= self.effective_gaps_m
 
     @property
     def lost_motion_m(self) -> float:
@@ -381,10 +444,10 @@ class LoadDeflection:
         """(4, 2) load at which each joint first opens on loading (|x| < g), N: 0 if open without load, NaN
         if it stays closed. Between the last closed step and the first open one, the joint force (linear in
         the load while closed) is extrapolated from the closed steps to the contact-edge force k_c w / 2."""
-        cl = self.clearance
+        cl, g = self.clearance, self.effective_gaps_m
         x = self.loading.joint_axial_m
-        f = np.abs(_laws_force(x, cl.gaps_m, cl.contact_stiffness_n_per_m, cl.smoothing_m)[1])
-        edge = np.abs(_laws_force(cl.gaps_m, cl.gaps_m, cl.contact_stiffness_n_per_m, cl.smoothing_m)[1])
+        f = np.abs(_laws_force(x, g, cl.contact_stiffness_n_per_m, cl.smoothing_m)[1])
+        edge = np.abs(_laws_force(g, g, cl.contact_stiffness_n_per_m, cl.smoothing_m)[1])
         is_open, ld = ~self.closed(), self.loads_n
         out = np.full((4, 2), np.nan)
         for i, j in np.ndindex(4, 2):
@@ -406,6 +469,8 @@ class LoadDeflection:
         op = self.opening_loads_n
         return {"pose_m": self.pose_m.tolist(), "direction": self.direction.tolist(), "preload": self.preload,
                 "preload_mode": self.preload_mode, "method": self.method, "clearance": self.clearance.to_dict(),
+                "clearance_geometry": self.clearance.description,
+                "effective_gaps_m": self.effective_gaps_m.tolist(),
                 "load_max_n": float(self.loads_n[-1]), "lost_motion_m": self.lost_motion_m,
                 "small_load_stiffness_n_per_m": self.small_load_stiffness_n_per_m,
                 "press_stiffness_n_per_m": self.press_stiffness_n_per_m,
@@ -456,6 +521,7 @@ def _sweep_nonlinear(machine: Machine, pose: np.ndarray, direction: np.ndarray, 
                      clearance: Clearance, offsets: np.ndarray, unload: bool) -> tuple[list, list]:
     from pressfit.mechanics.statics import EquilibriumSolver
 
+    clearance = clearance.at_pose(machine, pose)
     solver = EquilibriumSolver(machine, cardan_compliance=clearance.cardan_compliance(), pose_m=pose)
     idx = np.zeros((4, 2), dtype=int)
     for s in solver.model.springs:
@@ -490,12 +556,14 @@ def load_deflection(machine: Machine, pose_m: ArrayLike, direction: ArrayLike, l
     """Load-deflection curve of the plate at a reachable pose (m) under loads_n (N, from 0, increasing)
     along ``direction`` (world, at the plate centre), after the preload a4 (N, or m in length mode).
 
-    ``clearance`` defaults to the machine's uniform clearance (:meth:`Clearance.uniform`). Loading, then
-    (``unload``) unloading by continuation. ``method``: 'small' or 'nonlinear' (module doc).
+    ``clearance`` defaults to the machine's uniform clearance (:meth:`Clearance.uniform`); its geometry
+    enters as the effective axial gaps at the pose. Loading, then (``unload``) unloading by continuation.
+    ``method``: 'small' or 'nonlinear' (module doc).
     """
     pose = kinematics.require_reachable(machine, pose_m)
     d, loads = _direction(direction), _loads(loads_n)
-    cl = clearance or Clearance.uniform(machine)
+    given = clearance or Clearance.uniform(machine)
+    cl = given.at_pose(machine, pose)
     offsets = rest_length_offsets(machine, pose, float(preload), preload_mode, cl)
     if method == "small":
         up, down = _sweep_small(machine, pose, d, loads, [cl], offsets[None], unload)
@@ -503,7 +571,7 @@ def load_deflection(machine: Machine, pose_m: ArrayLike, direction: ArrayLike, l
         up, down = _sweep_nonlinear(machine, pose, d, loads, cl, offsets, unload)
     else:
         raise ClearanceError(f"method must be 'small' or 'nonlinear', got {method!r}")
-    return LoadDeflection(pose, d, float(preload), preload_mode, method, cl, _branch(loads, up, 0),
+    return LoadDeflection(pose, d, float(preload), preload_mode, method, given, cl.gaps_m, _branch(loads, up, 0),
                           _branch(loads, down, 0) if unload else None)
 
 
@@ -524,7 +592,7 @@ def _all_closed(machine: Machine, pose: np.ndarray, d: np.ndarray, loads: np.nda
                 a4: np.ndarray, mode: str) -> np.ndarray:
     offsets = np.array([rest_length_offsets(machine, pose, float(a), mode, c) for c, a in zip(cls, a4)])
     up, _ = _sweep_small(machine, pose, d, loads, cls, offsets, unload=False)
-    gaps = np.array([c.gaps_m for c in cls])
+    gaps = np.array([c.effective_gaps_m(machine, pose) for c in cls])
     return np.array([np.all(np.abs(s["joint_axial_m"]) >= gaps, axis=(1, 2)) for s in up]).all(0)
 
 
@@ -534,6 +602,7 @@ def critical_preloads(machine: Machine, pose_m: ArrayLike, direction: ArrayLike,
     """:func:`critical_preload` for several clearances at once (batched bisections)."""
     pose = kinematics.require_reachable(machine, pose_m)
     d = _direction(direction)
+    clearances = [c.at_pose(machine, pose) for c in clearances]
     loads = np.linspace(0.0, float(press_load_n), steps + 1)
     scale = float(press_load_n) if preload_mode == "force" else float(press_load_n) * float(
         machine.axial_compliance_m_per_n(kinematics.inverse_kinematics(machine, pose).lengths_m).max())
@@ -564,7 +633,7 @@ def critical_preload(machine: Machine, pose_m: ArrayLike, direction: ArrayLike, 
                      clearance: Clearance | None = None, preload_mode: str = "force", steps: int = 50,
                      tol: float | None = None) -> CriticalPreload:
     """The smallest preload a4 (N in force mode, m in length mode) that keeps every cardan closed
-    (|x| >= g) at each of ``steps`` load steps up to press_load_n (N) along ``direction``.
+    (|x| >= its effective gap) at each of ``steps`` load steps up to press_load_n (N) along ``direction``.
 
     Bisection on the small-displacement model; ``tol`` (default 1e-4 of the press load in N, or of the
     press load times the largest axial compliance in m) is the final bracket width. The smoothing adds a
@@ -578,6 +647,8 @@ def clearance_from_case(case: Case, machine: Machine) -> Clearance:
     """The cardan clearances a case's ``[clearance]`` table describes (default: the machine's uniform one)."""
     spec = case.clearance
     kw: dict[str, Any] = {"smoothing_m": spec.smoothing_m if spec else DEFAULT_SMOOTHING_M}
+    if spec and spec.geometry:
+        kw["geometry"] = spec.geometry
     if spec and spec.contact_stiffness_n_per_m:
         kw["contact_stiffness_n_per_m"] = spec.contact_stiffness_n_per_m
     if spec and spec.gaps_m:

@@ -65,7 +65,8 @@ def rest_length_offsets(machine: Machine, pose_m: np.ndarray, a4: float, mode: s
                         clearance: Clearance | None = None) -> np.ndarray:
     """Actuator rest-length offsets (4,), m, for a preload a4 along v_p at one pose (m) (module doc).
 
-    ``clearance``: the cardans' axial plays, closed by the preload in force mode (None: rigid cardans).
+    ``clearance``: the cardans' plays (effective axial gaps at the pose), closed by the preload in force mode
+    (None: rigid cardans).
     """
     pre = ActuatorPreload(float(a4), mode)  # type: ignore[arg-type]
     vp = kinematics.preload_vector(machine, pose_m)
@@ -73,7 +74,7 @@ def rest_length_offsets(machine: Machine, pose_m: np.ndarray, a4: float, mode: s
         return -pre.a4 * vp
     n = pre.a4 * vp
     offsets = -n * machine.axial_compliance_m_per_n(kinematics.inverse_kinematics(machine, pose_m).lengths_m)
-    return offsets if clearance is None else offsets - clearance.play_extension_m(n)
+    return offsets if clearance is None else offsets - clearance.play_extension_m(machine, pose_m, n)
 
 
 def self_stress_forces_n(machine: Machine, poses_m: np.ndarray, a4_n: float) -> np.ndarray:

@@ -24,6 +24,7 @@ from pressfit.description.cases import Case, discover, load_case
 from pressfit.description.machine import Machine
 from pressfit.errors import PressfitError, UnstableEquilibriumError
 from pressfit.mechanics import buckling, condensed, preload
+from pressfit.mechanics.clearance import clearance_from_case, load_deflection
 from pressfit.mechanics.statics import Equilibrium, EquilibriumSolver
 
 SECTIONS = ("base", "actuator", "plate")
@@ -258,9 +259,10 @@ def evaluate_case(case: Case, progress: bool = False) -> CaseResult:
                     unstable.setdefault((int(j), int(p)), str(exc))
                     continue
                 if worse(w, best, spec.sense):
-                    best = (w, int(j), int(p), leg, "with the case's cardan clearances (axial play along each leg, "
-                            f"small-displacement "
-                            f"clearance solver, 20 load steps) at the {len(candidates)} worst poses")
+                    geometry = clearance_from_case(case, machine).description
+                    best = (w, int(j), int(p), leg, f"with the case's cardan clearances ({geometry}; "
+                            "small-displacement clearance solver, 20 load steps) at the "
+                            f"{len(candidates)} worst poses")
         if best is None:  # shear with every refined solve unstable: the stability line below reports it
             continue
         lines.append(_line(key, spec, limit, best[0], best[3], poses[best[2]], loads[best[1]], best[4]))
@@ -318,15 +320,13 @@ def worse(value: float, best: tuple | None, sense: str) -> bool:
 def _with_clearance(case: Case, machine: Machine, pose: np.ndarray, load: np.ndarray, a4: float,
                     critical: np.ndarray, key: str, sense: str) -> tuple[float, int | None]:
     """A quantity at the full load with the case's cardan clearances: the preload, then the load in 20
-    steps along its direction (lost motion and joints that open both change it). Axial clearance does not
+    steps along its direction (lost motion and joints that open both change it). Play along the leg does not
     change the leg couples (they follow the plate rotation about P*), so moments are not re-evaluated."""
-    from pressfit.mechanics import clearance
-
     f = float(np.linalg.norm(load[:3]))
     if f == 0 or np.any(load[3:]):
         raise PressfitError(f"{case.path}: [clearance] in an envelope check needs pure force loads")
-    ld = clearance.load_deflection(machine, pose, load[:3] / f, np.linspace(0.0, f, 21),
-                                   clearance.clearance_from_case(case, machine), a4, "force", unload=False)
+    ld = load_deflection(machine, pose, load[:3] / f, np.linspace(0.0, f, 21), clearance_from_case(case, machine), a4,
+                         "force", unload=False)
     last = ld.loading
     n = last.axial_forces_n[-1][None]
     q = _axial_quantities(n, critical)

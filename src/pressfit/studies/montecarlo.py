@@ -12,8 +12,10 @@ equilibrium (:func:`pressfit.mechanics.statics.solve_equilibrium`) at every pose
   l_nominal - l_real: the redundant leg turns both into a self-stress.
 * ``load_tilt_rad``: every load force of the case turned by this angle off its direction, about an axis
   at a uniform random azimuth (magnitude and moments kept).
-* ``cardan_clearance_m``: the axial play of each of the 8 cardans (:mod:`pressfit.mechanics.clearance`,
-  dead-zone springs in the Pinocchio model, the load applied in ``CLEARANCE_STEPS`` continuation steps).
+* ``cardan_clearance_m``: the axial play of each of the 8 cardans (+-g along the leg, geometry "axial"
+  whatever the machine's ``cardan_clearance_geometry``: one model serves every pose, and a box's effective
+  gap changes with the pose; :mod:`pressfit.mechanics.clearance`, dead-zone springs in the Pinocchio model,
+  the load applied in ``CLEARANCE_STEPS`` continuation steps).
 
 Per sample the worst value over poses, loads, legs and sections of every ``[envelope]`` load quantity
 (:data:`pressfit.studies.limit_check.LIMITS`, same names and definitions), the internal force
@@ -194,7 +196,7 @@ def evaluate_sample(plan: MonteCarloPlan, x: dict[str, np.ndarray], azimuth: flo
     nominal = plan.machine
     machine = _perturbed(nominal, x.get("base_point_error_m"), x.get("plate_point_error_m"))
     g = x.get("cardan_clearance_m")
-    clearance = None if g is None else Clearance.per_joint(machine, g.tolist())
+    clearance = None if g is None else Clearance.per_joint(machine, g.tolist(), geometry="axial")
     mm = model if machine is nominal and clearance is None and model is not None else \
         _solver_for(machine, clearance, plan.poses_m[0])
     wrenches = _tilted(plan.wrenches, float(x["load_tilt_rad"][0]), azimuth) if "load_tilt_rad" in x else plan.wrenches

@@ -5,7 +5,7 @@ curves, lost motion, stiffness and the critical preload that keeps every cardan 
 
 from __future__ import annotations
 
-from dataclasses import dataclass
+from dataclasses import dataclass, replace
 from typing import Any
 
 import numpy as np
@@ -18,6 +18,7 @@ from pressfit.mechanics.clearance import (
     clearance_from_case,
     Clearance,
     ClearanceError,
+    GEOMETRY_DESCRIPTIONS,
     LoadDeflection,
     _branch,
     _direction,
@@ -28,7 +29,6 @@ from pressfit.mechanics.clearance import (
 from pressfit.mechanics.preload import rest_length_offsets
 
 
-CLEARANCE_GEOMETRY = "axial: +-g along the leg axis at each cardan"
 SMALL_LOAD_FRACTION = 0.1  # the small load of the small-load secant stiffness, as a fraction of the largest load
 
 
@@ -40,7 +40,8 @@ class PreloadStudy:
     pose_m: np.ndarray
     direction: np.ndarray
     preload_mode: str
-    clearances_m: np.ndarray  # (G,) mean play of each clearance variant, m
+    clearances_m: np.ndarray  # (G,) mean play g of each clearance variant, m (in the shape clearance_geometry names)
+    clearance_geometry: str  # the variants' Clearance.geometry: "axial", "box" or "sphere"
     preloads: np.ndarray  # (P,) N (force) or m (length)
     loads_n: np.ndarray  # (n,)
     deflection_m: np.ndarray  # (G, P, n) along the direction, loading
@@ -63,13 +64,13 @@ class PreloadStudy:
         return int(np.flatnonzero(self.preloads == 0.0)[0])
 
     def rows(self) -> tuple[list[str], list[list[Any]]]:
-        header = ["clearance_m", f"preload_{'n' if self.preload_mode == 'force' else 'm'}",
+        header = ["clearance_m", "clearance_geometry", f"preload_{'n' if self.preload_mode == 'force' else 'm'}",
                   "small_load_secant_stiffness_n_per_m", "press_stiffness_n_per_m", "press_secant_stiffness_n_per_m",
                   "lost_motion_m", "deflection_at_max_m", "first_opening_load_n", "critical_preload",
                   "stiffness_gain_vs_no_preload"]
         rows, b = [], self.baseline
         for g, p in np.ndindex(len(self.clearances_m), len(self.preloads)):
-            rows.append([float(self.clearances_m[g]), float(self.preloads[p]),
+            rows.append([float(self.clearances_m[g]), self.clearance_geometry, float(self.preloads[p]),
                          float(self.small_load_secant_stiffness_n_per_m[g, p]),
                          float(self.press_stiffness_n_per_m[g, p]),
                          float(self.press_secant_stiffness_n_per_m[g, p]), float(self.lost_motion_m[g, p]),
@@ -82,7 +83,8 @@ class PreloadStudy:
         header, rows = self.rows()
         return {"pose_m": self.pose_m.tolist(), "direction": self.direction.tolist(),
                 "preload_mode": self.preload_mode, "load_max_n": float(self.loads_n[-1]),
-                "clearance_geometry": CLEARANCE_GEOMETRY,
+                "clearance_geometry": self.clearance_geometry,
+                "clearance_geometry_description": GEOMETRY_DESCRIPTIONS[self.clearance_geometry],
                 "steps": len(self.loads_n) - 1, "contact_stiffness_n_per_m": self.contact_stiffness_n_per_m,
                 "smoothing_m": self.smoothing_m, "small_load_n": self.small_load_n,
                 "no_clearance_contact_stiffness_n_per_m": self.no_clearance_contact_stiffness_n_per_m,
@@ -116,11 +118,13 @@ def _opt(v: float) -> float | str:
 
 def preload_study(machine: Machine, pose_m: Any, clearances_m: Any, preloads: Any, load_max_n: float = 700.0,
                   steps: int = 50, *, direction: Any = (0.0, 1.0, 0.0), preload_mode: str = "force",
-                  template: Clearance | None = None, progress: bool = True) -> PreloadStudy:
+                  template: Clearance | None = None, geometry: str | None = None,
+                  progress: bool = True) -> PreloadStudy:
     """Load-deflection curves (loading, small-displacement solver) for every clearance (a number: m, uniform
-    on the eight cardans with the contact law of ``template`` or the machine; or a :class:`Clearance`; an
-    empty list: ``template`` itself) and preload (N, or m in length mode),
-    0..load_max_n (N) in ``steps`` steps along ``direction``; plus the critical preload per clearance.
+    on the eight cardans with the contact law and geometry of ``template`` or the machine, ``geometry``
+    overriding it; or a :class:`Clearance`; an empty list: ``template`` itself; all of one geometry) and
+    preload (N, or m in length mode), 0..load_max_n (N) in ``steps`` steps along ``direction``; plus the
+    critical preload per clearance.
 
     The preload a4 = 0 (the baseline "without preload") is always part of the grid; preloads are sorted.
     The small-load stiffness is the secant at the stated load ``SMALL_LOAD_FRACTION * load_max_n`` from its
@@ -129,8 +133,12 @@ def preload_study(machine: Machine, pose_m: Any, clearances_m: Any, preloads: An
     d = _direction(direction)
     pre = np.unique(np.append(np.atleast_1d(np.asarray(preloads, float)), 0.0))
     base = template or Clearance.uniform(machine)
+    base = base if geometry is None else replace(base, geometry=geometry)
     variants = [c if isinstance(c, Clearance) else base.with_gap(float(c)) for c in clearances_m] or [base]
     gaps = np.array([float(c.gaps_m.mean()) for c in variants])
+    if len({c.geometry for c in variants}) != 1:
+        raise ClearanceError("a preload study compares clearances of one geometry, got "
+                             f"{sorted({c.geometry for c in variants})}")
     if pre.size == 0 or not np.all(np.isfinite(pre)):
         raise ClearanceError("give at least one finite preload")
     if not (load_max_n > 0 and steps >= 2):
@@ -142,7 +150,8 @@ def preload_study(machine: Machine, pose_m: Any, clearances_m: Any, preloads: An
         cls = [var] * len(pre)
         offsets = np.array([rest_length_offsets(machine, pose, float(a), preload_mode, var) for a in pre])
         up, _ = _sweep_small(machine, pose, d, loads, cls, offsets, unload=False)
-        curves.append([LoadDeflection(pose, d, float(a), preload_mode, "small", cls[0], _branch(loads, up, p), None)
+        eff = var.effective_gaps_m(machine, pose)
+        curves.append([LoadDeflection(pose, d, float(a), preload_mode, "small", var, eff, _branch(loads, up, p), None)
                        for p, a in enumerate(pre)])
         at, _ = _sweep_small(machine, pose, d, small, cls, offsets, unload=False)
         secants.append(small[1] / ((at[1]["displacement_m"] - at[0]["displacement_m"]) @ d))
@@ -155,7 +164,8 @@ def preload_study(machine: Machine, pose_m: Any, clearances_m: Any, preloads: An
         return np.array([[f(c) for c in row] for row in curves])
 
     return PreloadStudy(
-        pose, d, preload_mode, gaps, pre, loads, grid(lambda c: c.deflection_m), float(small[1]), np.array(secants),
+        pose, d, preload_mode, gaps, variants[0].geometry, pre, loads, grid(lambda c: c.deflection_m), float(small[1]),
+        np.array(secants),
         grid(lambda c: c.press_stiffness_n_per_m),
         grid(lambda c: c.press_secant_stiffness_n_per_m), grid(lambda c: c.lost_motion_m),
         grid(lambda c: np.nanmin(c.opening_loads_n) if np.any(~np.isnan(c.opening_loads_n)) else np.nan),
@@ -184,7 +194,7 @@ def format_answers(study: PreloadStudy) -> str:
              f"{study.no_clearance_contact_stiffness_n_per_m:.4g} N/m with the cardan contact springs "
              f"({study.contact_stiffness_n_per_m:.3g} N/m each) in series, {study.rigid_cardan_stiffness_n_per_m:.4g}"
              f" N/m with rigid cardans (as 'pressfit stiffness'); small-load secant at {study.small_load_n:g} N; "
-             f"clearance geometry {CLEARANCE_GEOMETRY}"]
+             f"clearance geometry {GEOMETRY_DESCRIPTIONS[study.clearance_geometry]}"]
     for a in study.answers():
         s = (f"g = {a['clearance_m'] * 1e6:g} um: critical preload {a['critical_preload']:.4g} {unit}; without "
              f"preload lost motion {a['lost_motion_without_preload_m'] * 1e6:.3g} um, small-load secant "
