@@ -65,6 +65,26 @@ def test_mass_matrices_agree_at_the_reference_configuration(rigid, exported):
     np.testing.assert_allclose(mass, reference, atol=1e-13)
 
 
+def test_state_map_keeps_the_plate_pose_and_twist(rigid, exported):
+    """With the plate rotated (a state off the closures: only the plate's own kinematics matter here) the mapped
+    MuJoCo state puts the plate body at Pinocchio's placement and gives it Pinocchio's body-frame twist
+    (mj_objectVelocity, local frame): the two free-joint conventions (quaternion order, world vs plate-frame
+    linear velocity) are mapped correctly. Round-off tolerance."""
+    model, data = exported
+    rng = np.random.default_rng(7)
+    q, v = rigid.reference_q.copy(), rng.normal(size=rigid.model.nv)
+    q[3:7] = pin.Quaternion(pin.rpy.rpyToMatrix(0.3, -0.2, 0.5)).coeffs()
+    data.qpos[:], data.qvel[:] = mujoco_state(rigid, q, v)
+    mujoco.mj_forward(model, data)
+    plate = mujoco.mj_name2id(model, mujoco.mjtObj.mjOBJ_BODY, "plate")
+    twist = np.zeros(6)  # MuJoCo's order: angular, linear
+    mujoco.mj_objectVelocity(model, data, mujoco.mjtObj.mjOBJ_XBODY, plate, twist, 1)  # body frame
+    placement = pin.XYZQUATToSE3(q[:7])
+    np.testing.assert_allclose(data.xpos[plate], placement.translation, atol=1e-15)
+    np.testing.assert_allclose(data.xmat[plate].reshape(3, 3), placement.rotation, atol=1e-15)
+    np.testing.assert_allclose(np.concatenate([twist[3:], twist[:3]]), v[:6], atol=1e-14)
+
+
 def test_initial_state_satisfies_the_closures_in_mujoco(rigid, exported):
     """At the exported keyframe (equation 1's closed configuration) the 24 weld rows' violations (efc_pos) are at
     round-off, and the admissible velocity of the throw (J v = 0 in Pinocchio) gives zero weld velocities

@@ -98,7 +98,6 @@ def machine_mjcf(rigid: RigidLegModel, timestep_s: float = 1e-4) -> str:
     for joint in range(1, model.njoints):  # parents come first in Pinocchio's depth-first order, as in MJCF
         bodies[joint] = _body(bodies[model.parents[joint]], model, joint)
     equality = ET.SubElement(root, "equality")
-    omega = rigid.baumgarte_rad_per_s
     for i, cm in enumerate(rigid.constraint_models):
         anchor = cm.joint2_placement  # the leg end's closure frame in the plate frame
         ET.SubElement(equality, "weld", name=f"leg{i + 1}.closure", body1=model.names[cm.joint2_id],
@@ -152,7 +151,8 @@ def _weld_error_m(model: mujoco.MjModel, data: mujoco.MjData) -> float:
     return worst
 
 
-def passive_motion(machine: Machine, pose_m: np.ndarray, plate_velocity_m_per_s: np.ndarray = (0.0, 0.0, 0.0),
+def passive_motion(machine: Machine, pose_m: np.ndarray,
+                   plate_velocity_m_per_s: np.ndarray | tuple[float, float, float] = (0.0, 0.0, 0.0),
                    duration_s: float = 0.5, timestep_s: float = 1e-4,
                    baumgarte_rad_per_s: float = 200.0) -> PassiveMotion:
     """Run the rigid-leg machine passively for ``duration_s`` (s) at ``timestep_s`` (s) in both engines, from the
