@@ -1,4 +1,4 @@
-"""Commands about the machine in motion: ``pressfit modes``, ``pressfit simulate``."""
+"""Commands about the machine in motion: ``pressfit modes``, ``pressfit simulate``, ``pressfit export-mjcf``."""
 
 from __future__ import annotations
 
@@ -6,7 +6,7 @@ from pathlib import Path
 
 import click
 
-from pressfit.cli.common import MODEL_OPTION, user_errors
+from pressfit.cli.common import MODEL_OPTION, FiniteFloat, user_errors
 from pressfit.description.machine import load_machine
 from pressfit.output.files import to_json
 
@@ -69,3 +69,24 @@ def simulate_cmd(case_path: Path, out_dir: Path | None, no_limiter: bool, overwr
                f"actuator saturation {s['actuator_saturation_time_s']:g} s")
     for p in paths:
         click.echo(f"wrote {p}")
+
+
+@click.command("export-mjcf", context_settings={"ignore_unknown_options": True})  # negative coordinates
+@click.argument("x", type=float)
+@click.argument("y", type=float)
+@click.argument("z", type=float)
+@click.option("--timestep", "timestep_s", type=FiniteFloat(0.0, 0.01, open_low=True), default=1e-4,
+              show_default=True, help="MuJoCo time step (s); the welds' time constant is twice it.")
+@click.option("--out", type=click.Path(path_type=Path), default=None,
+              help="MJCF file to write (printed to standard output without it).")
+@click.option("--overwrite", is_flag=True, help="Replace an existing output file.")
+@MODEL_OPTION
+@user_errors
+def export_mjcf_cmd(x: float, y: float, z: float, timestep_s: float, out: Path | None, overwrite: bool,
+                    model_path: Path) -> None:
+    """The rigid-leg machine closed at the plate pose X Y Z (m) as a MuJoCo model (MJCF, SI units): bodies,
+    masses, gravity, the four loop closures as welds, a keyframe 'reference' at the pose."""
+    from pressfit.output.mjcf import export_mjcf
+
+    text, path = export_mjcf(load_machine(model_path), [x, y, z], timestep_s, out, overwrite)
+    click.echo(f"wrote {path}" if path is not None else text)
