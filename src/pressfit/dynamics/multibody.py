@@ -18,6 +18,15 @@ Accelerations: ``pin.constraintDynamics`` (proximal KKT; the four closures are r
 and the proximal iterations handle it) with Baumgarte stabilisation a_c = -Kp e - Kd e_dot of the closure
 error e, Kp = omega_b^2, Kd = 2 omega_b. Time stepping: semi-implicit (symplectic) Euler, v += a dt,
 q = q (+) v dt. The closure drift (largest translation error of the four closures, m) is reported per step.
+
+Leg loads (:meth:`RigidLegModel.leg_loads`): the closure force of leg i (``data.lambda_c``, 6 per closure,
+in the frame of the leg's last body at the plate cardan centre) is the wrench the plate exerts on the leg
+there: the plate section of :mod:`pressfit.mechanics.statics` with its conventions (leg frame e_z base ->
+plate; the bending magnitude needs no e_x): axial force N = f . e_z (> 0 tension), torsion T = m . e_z,
+bending |M_b| = |m - T e_z|. N differs from the actuator tension by the weight and inertia of
+the stem. The couples are statically indeterminate in the rigid model (the one self-stress of the closures,
+rank 23 of 24, is a set of couples along the legs' free couple axes); Pinocchio's proximal solver returns
+the least-squares (minimum-norm) split of that redundancy, the split of four legs equally stiff in torsion.
 """
 
 from __future__ import annotations
@@ -53,6 +62,7 @@ class RigidLegModel:
     sigma: np.ndarray  # (4,) sign of the b-revolutes against beta (as in the elastic model)
     reference_q: np.ndarray  # rigid configuration at the model's pose
     baumgarte_rad_per_s: float
+    end_joints: tuple[int, ...] = ()  # the last joint of each leg (plate cardan a): joint1 of its closure
 
     def configuration_at(self, pose_m: np.ndarray) -> np.ndarray:
         """Closed rigid configuration (nq,) at a reachable pose (m), from equation 1 (closed form)."""
@@ -73,7 +83,20 @@ class RigidLegModel:
 
     def closure_error_m(self) -> float:
         """Largest loop-closure translation error (m) at the last :meth:`accelerations` call."""
-        return max(float(np.linalg.norm(cd.contact_placement_error.linear)) for cd in self.constraint_datas)
+        errors = np.array([cd.contact_placement_error.np[:3] for cd in self.constraint_datas])
+        return float(np.sqrt(np.einsum("ij,ij->i", errors, errors).max()))
+
+    def leg_loads(self) -> np.ndarray:
+        """(4, 3): axial force N (N, > 0 tension), torsion T (N m) and bending |M_b| (N m) of each leg at its
+        plate cardan, from the closure forces of the last :meth:`accelerations` call (module docstring)."""
+        lam = np.asarray(self.data.lambda_c).reshape(4, 2, 3)
+        placements = [self.data.oMi[j] for j in self.end_joints]
+        world = np.einsum("lij,lkj->lki", np.array([m.rotation for m in placements]), lam)  # (leg, f|m, xyz)
+        axes = np.array([m.translation for m in placements]) - self.machine.base_points_m
+        axes /= np.sqrt(np.einsum("li,li->l", axes, axes))[:, None]
+        axial = np.einsum("lki,li->lk", world, axes)  # N, T
+        bent = world[:, 1] - axial[:, 1:] * axes
+        return np.column_stack([axial, np.sqrt(np.einsum("li,li->l", bent, bent))])
 
     def energy_j(self, q: np.ndarray, v: np.ndarray) -> tuple[float, float]:
         """Kinetic and gravitational potential energy (J) at (q, v)."""
@@ -128,6 +151,7 @@ def rigid_leg_model(machine: Machine, pose_m: np.ndarray, baumgarte_rad_per_s: f
                           np.array([model.joints[model.getJointId(f"leg{i + 1}.actuator")].idx_q for i in range(4)]),
                           mm.sigma.copy(), np.zeros(model.nq), baumgarte_rad_per_s)
     rigid.reference_q = rigid.configuration_at(mm.pose_m)
+    rigid.end_joints = tuple(model.getJointId(f"leg{i + 1}.plate_cardan.a") for i in range(4))
     data = model.createData()
     pin.forwardKinematics(model, data, rigid.reference_q)
     for j, body in owner.items():
