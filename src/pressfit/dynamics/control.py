@@ -29,7 +29,6 @@ Force limiter (on the measured contact force F_c along +y, limit F_lim), both pa
 
 from __future__ import annotations
 
-from collections.abc import Callable
 from dataclasses import dataclass, field
 
 import numpy as np
@@ -39,7 +38,7 @@ from pressfit import kinematics
 from pressfit.description.cases import Controller, Simulation
 from pressfit.description.machine import Machine
 from pressfit.dynamics.actuators import distribution
-from pressfit.dynamics.multibody import RigidLegModel
+from pressfit.dynamics.multibody import PoseCache, RigidLegModel
 
 
 def _legs(machine: Machine, pose_m: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
@@ -72,22 +71,6 @@ def gravity_feedforward_n(rigid: RigidLegModel, pose_m: np.ndarray) -> np.ndarra
 
 
 GRAVITY_UPDATE_M = 1e-3  # the gravity feed-forward is recomputed when the estimate moved more than this, m
-
-
-@dataclass
-class PoseCache:
-    """``function(pose)`` recomputed only when the pose (m) moved more than ``tolerance_m`` from the pose of
-    the cached value (infinity norm); the caller states the error bound (|d function / d pose| tolerance)."""
-
-    function: Callable[[np.ndarray], np.ndarray]
-    tolerance_m: float
-    pose_m: np.ndarray | None = None
-    value: np.ndarray | None = None
-
-    def __call__(self, pose_m: np.ndarray) -> np.ndarray:
-        if self.value is None or np.max(np.abs(pose_m - self.pose_m)) > self.tolerance_m:
-            self.pose_m, self.value = np.array(pose_m, dtype=float), self.function(pose_m)
-        return self.value
 
 
 def _quintic(s: float) -> tuple[float, float]:
