@@ -1,13 +1,17 @@
-"""Files of ``pressfit simulate``: the insertion's time series (CSV), its summary (JSON) and plots (PNG)."""
+"""Files of ``pressfit simulate`` (the insertion's time series CSV, summary JSON, plots PNG) and of
+``pressfit study insertion`` (table CSV/JSON, plot PNG)."""
 
 from __future__ import annotations
 
 from pathlib import Path
 from typing import Any
 
+import numpy as np
+
 from pressfit.description.cases import load_case
 from pressfit.dynamics.insertion import LEGS, SERIES_COLUMNS, InsertionResult, simulate_insertion
 from pressfit.output import files as io
+from pressfit.studies.insertion_study import COLUMNS, InsertionStudy, insertion_study
 from pressfit.output.plots import plt
 
 
@@ -79,3 +83,47 @@ def run_simulation(case_path: Path | str, out_dir: Path | None, limiter: bool = 
     comparison = simulate_insertion(case, False, progress) if limiter else None
     paths = write_simulation(result, out_dir, overwrite, comparison) if out_dir is not None else []
     return _summary(result, comparison), paths
+
+
+def insertion_study_figure(study: InsertionStudy) -> plt.Figure:
+    """The play's share of the tool error and the force overshoot against the preload, one line per clearance,
+    with each clearance's critical preload marked."""
+    fig, axes = plt.subplots(1, 2, figsize=(12, 4.5), layout="constrained")
+    for g in np.unique(study.column("clearance_m")):
+        rows = study.column("clearance_m") == g
+        p = study.column("preload_n")[rows]
+        line, = axes[0].plot(p, study.column("play_error_m")[rows] * 1e6, "o-", label=f"g = {g * 1e6:g} um")
+        axes[0].axvline(study.column("critical_preload_n")[rows][0], color=line.get_color(), ls=":", lw=1)
+        axes[1].plot(p, study.column("overshoot_n")[rows], "o-", color=line.get_color(), label=f"g = {g * 1e6:g} um")
+    axes[0].set(xlabel="preload a4 [N]", ylabel="tool error from the play [um]",
+                title="tool offset hidden from the length-based estimate (dotted: critical preload)")
+    axes[1].set(xlabel="preload a4 [N]", ylabel="overshoot [N]", title="contact force over the insertion limit")
+    for ax in axes:
+        ax.grid(alpha=0.3)
+        ax.legend(fontsize=8)
+    return fig
+
+
+def write_insertion_study(study: InsertionStudy, out_dir: Path) -> list[Path]:
+    """``insertion_study.csv`` (one row per preload x clearance), ``insertion_study.json``, ``insertion_study.png``
+    into a fresh directory (used through :func:`pressfit.output.files.write_directory`)."""
+    paths = [io.write_csv(out_dir / "insertion_study.csv", COLUMNS, study.rows),
+             io.write_json(out_dir / "insertion_study.json", study.to_dict())]
+    fig = insertion_study_figure(study)
+    try:
+        paths.append(io.save_figure(fig, out_dir / "insertion_study.png"))
+    finally:
+        plt.close(fig)
+    return paths
+
+
+def run_insertion_study(case_path: Path | str, preloads_n: list[float] | None, clearances_m: list[float] | None,
+                        out_dir: Path, overwrite: bool = False, progress: bool = False) -> tuple[InsertionStudy,
+                                                                                                  list[Path]]:
+    """The insertion study of a case file (:func:`pressfit.studies.insertion_study.insertion_study`; defaults:
+    preloads 0 N and the case's a4, clearances 10 and 50 um) and its files in ``out_dir``."""
+    io.check_directory(out_dir, overwrite)
+    case = load_case(case_path)
+    study = insertion_study(case, preloads_n or sorted({0.0, case.preload.a4_n}), clearances_m or [1e-5, 5e-5],
+                            progress)
+    return study, io.write_directory(out_dir, overwrite, lambda tmp: write_insertion_study(study, tmp))
