@@ -173,3 +173,22 @@ def test_simulation_table_is_strict(tmp_path):
     with pytest.raises(ModelFileError, match="simulation.contact.stiffnes"):
         load_case(short_case(tmp_path, contact={"board_height_m": 0.6, "pin_position_m": [0.0, 0.0],
                                                 "stiffnes_n_per_m": 1.0}))
+
+
+def test_contact_damping_in_series_is_the_backward_difference_closed_form():
+    """F = k d + b d_dot with the rate taken backward (d_dot = (d - d_prev) / dt) in series with a compliance
+    c (closed form): F = ((k + b/dt) d_r - b d_prev / dt) / (1 + c (k + b/dt)); a damped contact pushes harder
+    while the tool enters (b d_dot > 0) and never pulls while it leaves fast (no adhesion: F = 0 although the
+    interference is positive)."""
+    k, b, c, dt = 5e4, 400.0, 2e-5, 1e-3
+    contact = Contact(board_height_m=0.6, pin_position_m=[0.0, 0.0], stiffness_n_per_m=k, damping_n_s_per_m=b)
+    rigid_depth, previous = 1e-3, 0.3e-3  # the tool enters: d = 0.34 mm after the step
+    state = solve_contact(contact, np.array([0.0, 0.6 - rigid_depth, 0.0]), lambda f: np.array([0.0, c * f, 0.0]),
+                          previous, dt)
+    keff = k + b / dt
+    assert state.force_n == pytest.approx((keff * rigid_depth - b * previous / dt) / (1 + c * keff), rel=1e-8)
+    undamped = Contact(board_height_m=0.6, pin_position_m=[0.0, 0.0], stiffness_n_per_m=k)
+    assert state.force_n > solve_contact(undamped, np.array([0.0, 0.6 - rigid_depth, 0.0]),
+                                         lambda f: np.array([0.0, c * f, 0.0]), previous, dt).force_n
+    leaving = solve_contact(contact, np.array([0.0, 0.6 - 0.1e-3, 0.0]), lambda f: np.zeros(3), 0.5e-3, dt)
+    assert leaving.force_n == 0.0 and leaving.depth_m > 0.0

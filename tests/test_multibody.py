@@ -66,3 +66,42 @@ def test_passive_undamped_motion_conserves_energy(rigid):
 def test_bad_baumgarte_rate(machine):
     with pytest.raises(PressfitError, match="baumgarte"):
         rigid_leg_model(machine, POSE, baumgarte_rad_per_s=0.0)
+
+
+def test_holding_a_pose_under_a_constant_load_gives_the_static_actuator_forces(machine):
+    """A constant plate force W (N) at pose POSE, gravity off. Reference: the linear elastic statics
+    (mechanics.statics, the VJM model with its leg and cardan springs). Its axial forces balance W alone (a
+    UPU leg carries no shear at linear order, so A N = W exactly) and split the redundancy by the legs'
+    stiffnesses: N_static = A^+ W + (v_p . N_static) v_p. Commanding the drives with equation 5's
+    Moore-Penrose inverse plus that same preload a4 = v_p . N_static (the same redundancy resolution) must
+    then give N_static to the statics' residual (1e-9 relative), the rigid-leg dynamics (Pinocchio's
+    constraint dynamics, which knows nothing of equation 5) must stay at rest (accelerations at round-off,
+    1e-9 of W / m) and the closure forces must carry the tensions to the plate (axial force at the plate
+    cardan = tension: massless legs without gravity). With gravity on, the feed-forward G added to the
+    command holds the pose as well."""
+    from pressfit.dynamics.actuators import distribute
+    from pressfit.dynamics.control import gravity_feedforward_n
+    from pressfit.mechanics.statics import solve_equilibrium
+
+    w = np.array([25.0, -300.0, 40.0])
+    eq = solve_equilibrium(machine, POSE, np.concatenate([w, np.zeros(3)]), linear=True)
+    a4 = float(kinematics.preload_vector(machine, POSE) @ eq.actuator_forces_n)
+    tension = distribute(machine, POSE, -w, a4)  # the drives push back against W
+    np.testing.assert_allclose(tension, eq.actuator_forces_n, rtol=0, atol=1e-9 * np.abs(w).max())
+    rigid = rigid_leg_model(machine, POSE)
+    mass = pin.computeTotalMass(rigid.model)
+    q, v, tau = rigid.reference_q.copy(), np.zeros(rigid.model.nv), np.zeros(rigid.model.nv)
+    tau[rigid.actuator_v], tau[0:3] = -tension, w  # the plate is unrotated: local = world axes
+    weight = rigid.model.gravity
+    rigid.model.gravity = pin.Motion.Zero()
+    try:
+        assert np.abs(rigid.accelerations(q, v, tau)).max() < 1e-9 * np.abs(w).max() / mass
+        np.testing.assert_allclose(rigid.leg_loads()[:, 0], tension, rtol=1e-9)
+        for _ in range(100):
+            q, v = rigid.step(q, v, tau, 1e-3)
+        assert np.abs(q[0:3] - POSE).max() < 1e-10
+    finally:
+        rigid.model.gravity = weight
+    q = rigid.reference_q.copy()
+    tau[rigid.actuator_v] = -distribute(machine, POSE, -w + gravity_feedforward_n(rigid, POSE), a4)
+    assert np.abs(rigid.accelerations(q, np.zeros(rigid.model.nv), tau)).max() < 1e-8 * np.abs(w).max() / mass

@@ -67,6 +67,18 @@ def simulate_cmd(case_path: Path, out_dir: Path | None, no_limiter: bool, overwr
     click.echo(f"tool error: lateral at insertion {s['tool_lateral_error_at_insertion_m'] * 1e6:.1f} um, "
                f"final {s['tool_final_error_m'] * 1e6:.1f} um; closure drift {s['max_closure_drift_m']:.1e} m; "
                f"actuator saturation {s['actuator_saturation_time_s']:g} s")
+    settle = s["settling_time_s"]
+    click.echo(f"settling (contact force within {100 * s['settling_band']:g}% of steady): "
+               + ("no contact" if settle is None else f"{settle:.3f} s")
+               + f"; internal force along v_p {s['internal_force_range_n'][0]:.1f} .. "
+               f"{s['internal_force_range_n'][1]:.1f} N (commanded {s['commanded_preload_n']:g} N)")
+    click.echo("peak per leg: axial " + " ".join(f"{x:.1f}" for x in s["peak_leg_axial_force_n"]) + " N, torsion "
+               + " ".join(f"{x:.2f}" for x in s["peak_leg_torsion_nm"]) + " N m, bending "
+               + " ".join(f"{x:.2f}" for x in s["peak_leg_bending_nm"]) + " N m")
+    if "comparison" in s:
+        c = s["comparison"]
+        click.echo(f"without the limiter: peak {c['peak_contact_force_n']:.2f} N, steady "
+                   f"{c['steady_insertion_force_n']:.2f} N")
     for p in paths:
         click.echo(f"wrote {p}")
 

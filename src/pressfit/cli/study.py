@@ -15,7 +15,7 @@ from pressfit.output.files import check_directory, to_json, write_directory
 
 @click.group("study")
 def study_group() -> None:
-    """Parameter studies: ``pressfit study preload``, ``pressfit study montecarlo``."""
+    """Parameter studies: ``pressfit study preload``, ``montecarlo``, ``insertion``."""
 
 
 @study_group.command("preload", context_settings={"ignore_unknown_options": True})  # negative numbers
@@ -108,4 +108,34 @@ def study_montecarlo_cmd(case_file: Path, samples: int | None, seed: int | None,
     for note in s.notes:
         click.echo(note)
     for p in run.written:
+        click.echo(f"wrote {p}")
+
+
+@study_group.command("insertion")
+@click.argument("case_file", type=click.Path(path_type=Path))
+@click.option("--preload", "preloads", type=FloatList(0.0, MAX_FORCE_N),
+              help="Preloads a4 along v_p, N, comma-separated (default: 0 and the case's).")
+@click.option("--clearance", "clearances", type=FloatList(0.0, 1e-2),
+              help="Cardan axial clearances g, m, comma-separated (default: 1e-5,5e-5).")
+@click.option("--out", "out_dir", type=click.Path(path_type=Path), default=Path("out/study_insertion"),
+              show_default=True, help="Directory for insertion_study.csv/.json/.png.")
+@click.option("--overwrite", is_flag=True, help="Replace existing output files.")
+@click.option("--json", "as_json", is_flag=True, help="Print the table as JSON.")
+@click.option("--progress/--no-progress", default=True, help="Show a progress bar over the runs.")
+@user_errors
+def study_insertion_cmd(case_file: Path, preloads: list[float] | None, clearances: list[float] | None, out_dir: Path,
+                        overwrite: bool, as_json: bool, progress: bool) -> None:
+    """The insertion scenario over preload and joint clearance: the tool error the play hides from the
+    length-based estimate, and the overshoot (SI)."""
+    from pressfit.output.simulation import run_insertion_study
+
+    study, written = run_insertion_study(case_file, preloads, clearances, out_dir, overwrite, progress)
+    if as_json:
+        click.echo(to_json(study.to_dict() | {"outputs": [str(p) for p in written]}))
+        return
+    click.echo("preload [N]  clearance [um]  critical [N]  play error [um]  lateral [um]  peak [N]  overshoot [N]")
+    for r in study.rows:
+        click.echo(f"{r[0]:>11.4g}  {r[1] * 1e6:>14.4g}  {r[2]:>12.4g}  {r[4] * 1e6:>15.3f}  {r[5] * 1e6:>12.3f}  "
+                   f"{r[6]:>8.3f}  {r[7]:>13.3f}")
+    for p in written:
         click.echo(f"wrote {p}")

@@ -300,6 +300,24 @@ class Controller(_Strict):
     estimator_iterations: Annotated[int, Field(ge=1, le=20)] = 2
 
 
+class SimulationLimits(_Strict):
+    """Limits ``pressfit check`` asserts on the simulated insertion (all optional; SI), one report line each:
+    peak contact force and its overshoot over the insertion limit (N), tool positioning error (the larger of
+    the lateral error at the pin and the final 3D error, m), settling time of the contact force (s), peak
+    actuator tension |N| (N), peak per-leg axial force |N|, torsion |T| and bending |M_b| at the plate cardans
+    (N, N m). ``limiter``: whether the checked run uses the insertion force limiter."""
+
+    limiter: bool = True
+    max_contact_force_n: NonNegative | None = None
+    max_overshoot_n: NonNegative | None = None
+    max_positioning_error_m: NonNegative | None = None
+    max_settling_time_s: NonNegative | None = None
+    max_actuator_force_n: NonNegative | None = None
+    max_axial_force_n: NonNegative | None = None
+    max_torsion_nm: NonNegative | None = None
+    max_bending_nm: NonNegative | None = None
+
+
 class Simulation(_Strict):
     """The insertion scenario of Figures 13-14 (``pressfit simulate``; :mod:`pressfit.dynamics.insertion`).
 
@@ -308,7 +326,8 @@ class Simulation(_Strict):
     in ``descent_time_s``, holds ``dwell_s``, rises back above the pin in ``descent_time_s``, moves to
     ``end_m`` in ``move_time_s`` and holds ``settle_s``. The commanded preload is ``[preload] a4_n`` (force
     mode). ``clearance``: the cardans' lost motion (``[clearance]`` or the machine's plays) in series at the
-    tool. Time step (s) and the loop closures' Baumgarte rate (rad/s) of the multibody model."""
+    tool. Time step (s) and the loop closures' Baumgarte rate (rad/s) of the multibody model. ``limits``:
+    what ``pressfit check`` asserts on the run (:class:`SimulationLimits`)."""
 
     start_m: Vec3
     end_m: Vec3
@@ -323,6 +342,7 @@ class Simulation(_Strict):
     clearance: bool = False
     contact: Contact
     controller: Controller = Controller()
+    limits: SimulationLimits = SimulationLimits()
 
 
 class Case(_Strict):

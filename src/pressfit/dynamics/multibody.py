@@ -18,11 +18,24 @@ Accelerations: ``pin.constraintDynamics`` (proximal KKT; the four closures are r
 and the proximal iterations handle it) with Baumgarte stabilisation a_c = -Kp e - Kd e_dot of the closure
 error e, Kp = omega_b^2, Kd = 2 omega_b. Time stepping: semi-implicit (symplectic) Euler, v += a dt,
 q = q (+) v dt. The closure drift (largest translation error of the four closures, m) is reported per step.
+
+Leg loads (:meth:`RigidLegModel.leg_loads`): the closure force of leg i (``data.lambda_c``, 6 per closure,
+in the frame of the leg's last body at the plate cardan centre) is the wrench the plate exerts on the leg
+there: the plate section of :mod:`pressfit.mechanics.statics` with its conventions (leg frame e_z base ->
+plate; the bending magnitude needs no e_x): axial force N = f . e_z (> 0 tension), torsion T = m . e_z,
+bending |M_b| = |m - T e_z|. N differs from the actuator tension by the weight and inertia of
+the stem. The couples are statically indeterminate in the rigid model (the one self-stress of the closures,
+rank 23 of 24, is a set of couples along the legs' free couple axes, s the left null vector of the closure
+Jacobian); Pinocchio's proximal solver leaves an arbitrary, step-to-step varying amount of it in lambda, so
+the loads are taken from the minimum-norm closure force lambda - (s . lambda) s, the split of four legs equally
+stiff in torsion. s is recomputed when the plate moved 1 mm (``SELF_STRESS_UPDATE_M``): it turns by about
+1 mm / l (2e-3 rad, l ~ 0.5 m), which bounds the error of the couples at 0.2%.
 """
 
 from __future__ import annotations
 
-from dataclasses import dataclass
+from collections.abc import Callable
+from dataclasses import dataclass, field
 
 import numpy as np
 import pinocchio as pin
@@ -36,6 +49,23 @@ from pressfit.mechanics.model import build_model
 RIGID_JOINTS = (("RX", "base_cardan.a"), ("RY", "base_cardan.b"), ("PZ", "actuator"), ("RY", "plate_cardan.b"),
                 ("RX", "plate_cardan.a"))
 _JOINT_TYPES = {"RX": pin.JointModelRX, "RY": pin.JointModelRY, "PZ": pin.JointModelPZ}
+SELF_STRESS_UPDATE_M = 1e-3  # the closures' self-stress direction is recomputed when the plate moved this far, m
+
+
+@dataclass
+class PoseCache:
+    """``function(pose)`` recomputed only when the pose (m) moved more than ``tolerance_m`` from the pose of
+    the cached value (infinity norm); the caller states the error bound (|d function / d pose| tolerance)."""
+
+    function: Callable[[np.ndarray], np.ndarray]
+    tolerance_m: float
+    pose_m: np.ndarray | None = None
+    value: np.ndarray | None = None
+
+    def __call__(self, pose_m: np.ndarray) -> np.ndarray:
+        if self.value is None or np.max(np.abs(pose_m - self.pose_m)) > self.tolerance_m:
+            self.pose_m, self.value = np.array(pose_m, dtype=float), self.function(pose_m)
+        return self.value
 
 
 @dataclass
@@ -53,6 +83,15 @@ class RigidLegModel:
     sigma: np.ndarray  # (4,) sign of the b-revolutes against beta (as in the elastic model)
     reference_q: np.ndarray  # rigid configuration at the model's pose
     baumgarte_rad_per_s: float
+    end_joints: tuple[int, ...] = ()  # the last joint of each leg (plate cardan a): joint1 of its closure
+    self_stress: PoseCache = field(init=False)
+
+    def __post_init__(self) -> None:
+        self.self_stress = PoseCache(self._self_stress, SELF_STRESS_UPDATE_M)
+
+    def _self_stress(self, pose_m: np.ndarray) -> np.ndarray:
+        """Unit left null vector (24,) of the closure Jacobian at the closed configuration of ``pose_m``."""
+        return np.linalg.svd(self.closure_jacobian(self.configuration_at(pose_m), scratch=True))[0][:, -1]
 
     def configuration_at(self, pose_m: np.ndarray) -> np.ndarray:
         """Closed rigid configuration (nq,) at a reachable pose (m), from equation 1 (closed form)."""
@@ -73,18 +112,36 @@ class RigidLegModel:
 
     def closure_error_m(self) -> float:
         """Largest loop-closure translation error (m) at the last :meth:`accelerations` call."""
-        return max(float(np.linalg.norm(cd.contact_placement_error.linear)) for cd in self.constraint_datas)
+        errors = np.array([cd.contact_placement_error.np[:3] for cd in self.constraint_datas])
+        return float(np.sqrt(np.einsum("ij,ij->i", errors, errors).max()))
+
+    def leg_loads(self) -> np.ndarray:
+        """(4, 3): axial force N (N, > 0 tension), torsion T (N m) and bending |M_b| (N m) of each leg at its
+        plate cardan, from the closure forces of the last :meth:`accelerations` call (module docstring)."""
+        lam = np.asarray(self.data.lambda_c)
+        s = self.self_stress(np.array(self.data.oMi[1].translation))
+        lam = (lam - (s @ lam) * s).reshape(4, 2, 3)  # the minimum-norm split of the redundant couples
+        placements = [self.data.oMi[j] for j in self.end_joints]
+        world = np.einsum("lij,lkj->lki", np.array([m.rotation for m in placements]), lam)  # (leg, f|m, xyz)
+        axes = np.array([m.translation for m in placements]) - self.machine.base_points_m
+        axes /= np.sqrt(np.einsum("li,li->l", axes, axes))[:, None]
+        axial = np.einsum("lki,li->lk", world, axes)  # N, T
+        bent = world[:, 1] - axial[:, 1:] * axes
+        return np.column_stack([axial, np.sqrt(np.einsum("li,li->l", bent, bent))])
 
     def energy_j(self, q: np.ndarray, v: np.ndarray) -> tuple[float, float]:
         """Kinetic and gravitational potential energy (J) at (q, v)."""
         return (float(pin.computeKineticEnergy(self.model, self.data, q, v)),
                 float(pin.computePotentialEnergy(self.model, self.data, q)))
 
-    def closure_jacobian(self, q: np.ndarray) -> np.ndarray:
-        """The (24, nv) Jacobian of the four loop closures at q."""
-        pin.computeJointJacobians(self.model, self.data, q)
-        return np.vstack([pin.getConstraintJacobian(self.model, self.data, cm, cd)
-                          for cm, cd in zip(self.constraint_models, self.constraint_datas, strict=True)])
+    def closure_jacobian(self, q: np.ndarray, scratch: bool = False) -> np.ndarray:
+        """The (24, nv) Jacobian of the four loop closures at q (``scratch``: in fresh Pinocchio datas, leaving
+        those of the last :meth:`accelerations` call intact)."""
+        data = self.model.createData() if scratch else self.data
+        datas = [cm.createData() for cm in self.constraint_models] if scratch else self.constraint_datas
+        pin.computeJointJacobians(self.model, data, q)
+        return np.vstack([pin.getConstraintJacobian(self.model, data, cm, cd)
+                          for cm, cd in zip(self.constraint_models, datas, strict=True)])
 
     def admissible_velocity(self, q: np.ndarray, plate_velocity_m_per_s: np.ndarray) -> np.ndarray:
         """Joint velocities (nv,) with the plate translating at the given velocity (m/s, world axes; the plate
@@ -128,6 +185,7 @@ def rigid_leg_model(machine: Machine, pose_m: np.ndarray, baumgarte_rad_per_s: f
                           np.array([model.joints[model.getJointId(f"leg{i + 1}.actuator")].idx_q for i in range(4)]),
                           mm.sigma.copy(), np.zeros(model.nq), baumgarte_rad_per_s)
     rigid.reference_q = rigid.configuration_at(mm.pose_m)
+    rigid.end_joints = tuple(model.getJointId(f"leg{i + 1}.plate_cardan.a") for i in range(4))
     data = model.createData()
     pin.forwardKinematics(model, data, rigid.reference_q)
     for j, body in owner.items():

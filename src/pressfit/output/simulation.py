@@ -1,44 +1,63 @@
-"""Files of ``pressfit simulate``: the insertion's time series (CSV), its summary (JSON) and plots (PNG)."""
+"""Files of ``pressfit simulate`` (the insertion's time series CSV, summary JSON, plots PNG) and of
+``pressfit study insertion`` (table CSV/JSON, plot PNG)."""
 
 from __future__ import annotations
 
 from pathlib import Path
 from typing import Any
 
+import numpy as np
+
 from pressfit.description.cases import load_case
-from pressfit.dynamics.insertion import SERIES_COLUMNS, InsertionResult, simulate_insertion
+from pressfit.dynamics.insertion import LEGS, SERIES_COLUMNS, InsertionResult, simulate_insertion
 from pressfit.output import files as io
+from pressfit.studies.insertion_study import COLUMNS, InsertionStudy, insertion_study
 from pressfit.output.plots import plt
 
 
-def simulation_figure(result: InsertionResult) -> plt.Figure:
-    """Three panels against time: plate positions (reference, estimate, tool), contact force with the
-    limit, actuator tensions (commanded dashed, delivered solid)."""
+def simulation_figure(result: InsertionResult, comparison: InsertionResult | None = None) -> plt.Figure:
+    """Five panels against time: plate positions (reference dashed, tool solid), the contact force with the
+    limit (and ``comparison``'s, the run with the limiter the other way, on the same axes), actuator
+    tensions (commanded dashed, delivered solid), leg axial forces, leg torsion (solid) and bending (dashed)
+    at the plate cardans."""
     t = result.column("time_s")
-    fig, axes = plt.subplots(3, 1, figsize=(10, 10), sharex=True, layout="constrained")
+    fig, axes = plt.subplots(5, 1, figsize=(10, 15), sharex=True, layout="constrained")
     for axis, colour in zip("xyz", ("tab:blue", "tab:orange", "tab:green"), strict=True):
         axes[0].plot(t, result.column(f"ref_{axis}_m"), "--", color=colour, lw=1, label=f"{axis} reference")
         axes[0].plot(t, result.column(f"tool_{axis}_m"), color=colour, lw=1.5, label=f"{axis} tool")
     axes[0].set(ylabel="position [m]", title="plate centre (tool tip)")
-    axes[1].plot(t, result.column("contact_force_n"), color="tab:red", label="contact force")
+    runs = [result] if comparison is None else [result, comparison]
+    for run, colour in zip(runs, ("tab:red", "tab:gray"), strict=False):
+        axes[1].plot(run.column("time_s"), run.column("contact_force_n"), color=colour,
+                     label="with limiter" if run.limiter else "without limiter")
     axes[1].axhline(result.summary["force_limit_n"], color="k", ls=":", label="insertion limit")
-    axes[1].set(ylabel="force [N]", title="contact force, limiter " + ("on" if result.limiter else "off"))
-    for i in range(1, 5):
+    axes[1].set(ylabel="force [N]", title="contact force")
+    for i in LEGS:
         line, = axes[2].plot(t, result.column(f"act_n{i}"), lw=1.5, label=f"leg {i}")
         axes[2].plot(t, result.column(f"cmd_n{i}"), "--", lw=0.8, color=line.get_color())
-    axes[2].set(xlabel="time [s]", ylabel="tension [N]", title="actuator forces (dashed: commanded)")
+        axes[3].plot(t, result.column(f"axial_n{i}"), lw=1.5, color=line.get_color(), label=f"leg {i}")
+        axes[4].plot(t, result.column(f"torsion_nm{i}"), lw=1.5, color=line.get_color(), label=f"leg {i} torsion")
+        axes[4].plot(t, result.column(f"bending_nm{i}"), "--", lw=1, color=line.get_color())
+    limiter = "on" if result.limiter else "off"
+    axes[2].set(ylabel="tension [N]", title=f"actuator forces, limiter {limiter} (dashed: commanded)")
+    axes[3].set(ylabel="axial force [N]", title=f"leg axial force at the plate cardan (> 0 tension), limiter {limiter}")
+    axes[4].set(xlabel="time [s]", ylabel="moment [N m]",
+                title=f"leg torsion (solid) and bending |M_b| (dashed) at the plate cardan, limiter {limiter}")
     for ax in axes:
         ax.grid(alpha=0.3)
         ax.legend(fontsize=8, ncols=3)
     return fig
 
 
-def write_simulation(result: InsertionResult, out_dir: Path | str, overwrite: bool = False) -> list[Path]:
-    """``simulation.csv`` (one row per time step), ``simulation.json`` (summary), ``simulation.png``."""
+def write_simulation(result: InsertionResult, out_dir: Path | str, overwrite: bool = False,
+                     comparison: InsertionResult | None = None) -> list[Path]:
+    """``simulation.csv`` (one row per time step of ``result``), ``simulation.json`` (its summary, with the
+    comparison's under ``"comparison"``), ``simulation.png``."""
     out = Path(out_dir)
+    summary = _summary(result, comparison)
     paths = [io.write_csv(out / "simulation.csv", SERIES_COLUMNS, result.series, overwrite),
-             io.write_json(out / "simulation.json", result.summary, overwrite)]
-    fig = simulation_figure(result)
+             io.write_json(out / "simulation.json", summary, overwrite)]
+    fig = simulation_figure(result, comparison)
     try:
         paths.append(io.save_figure(fig, out / "simulation.png", overwrite))
     finally:
@@ -46,9 +65,65 @@ def write_simulation(result: InsertionResult, out_dir: Path | str, overwrite: bo
     return paths
 
 
+def _summary(result: InsertionResult, comparison: InsertionResult | None) -> dict[str, Any]:
+    if comparison is None:
+        return result.summary
+    keys = ("limiter", "peak_contact_force_n", "overshoot_n", "steady_insertion_force_n", "steady_insertion_depth_m",
+            "positioning_error_m", "settling_time_s")
+    return {**result.summary, "comparison": {k: comparison.summary[k] for k in keys}}
+
+
 def run_simulation(case_path: Path | str, out_dir: Path | None, limiter: bool = True, overwrite: bool = False,
                    progress: bool = False) -> tuple[dict[str, Any], list[Path]]:
-    """Simulate the case file's insertion (:func:`pressfit.dynamics.insertion.simulate_insertion`); its
-    summary, and its files in ``out_dir`` if given."""
-    result = simulate_insertion(load_case(case_path), limiter, progress)
-    return result.summary, (write_simulation(result, out_dir, overwrite) if out_dir is not None else [])
+    """Simulate the case file's insertion (:func:`pressfit.dynamics.insertion.simulate_insertion`); with the
+    limiter on, the same scenario also runs without it (the comparison of the contact-force plot and of the
+    summary's ``"comparison"``). The summary, and the files in ``out_dir`` if given."""
+    case = load_case(case_path)
+    result = simulate_insertion(case, limiter, progress)
+    comparison = simulate_insertion(case, False, progress) if limiter else None
+    paths = write_simulation(result, out_dir, overwrite, comparison) if out_dir is not None else []
+    return _summary(result, comparison), paths
+
+
+def insertion_study_figure(study: InsertionStudy) -> plt.Figure:
+    """The play's share of the tool error and the force overshoot against the preload, one line per clearance,
+    with each clearance's critical preload marked."""
+    fig, axes = plt.subplots(1, 2, figsize=(12, 4.5), layout="constrained")
+    for g in np.unique(study.column("clearance_m")):
+        rows = study.column("clearance_m") == g
+        p = study.column("preload_n")[rows]
+        line, = axes[0].plot(p, study.column("play_error_m")[rows] * 1e6, "o-", label=f"g = {g * 1e6:g} um")
+        axes[0].axvline(study.column("critical_preload_n")[rows][0], color=line.get_color(), ls=":", lw=1)
+        axes[1].plot(p, study.column("overshoot_n")[rows], "o-", color=line.get_color(), label=f"g = {g * 1e6:g} um")
+    axes[0].set(xlabel="preload a4 [N]", ylabel="tool error from the play [um]",
+                title="tool offset hidden from the length-based estimate (dotted: critical preload)")
+    axes[1].set(xlabel="preload a4 [N]", ylabel="overshoot [N]", title="contact force over the insertion limit")
+    for ax in axes:
+        ax.grid(alpha=0.3)
+        ax.legend(fontsize=8)
+    return fig
+
+
+def write_insertion_study(study: InsertionStudy, out_dir: Path) -> list[Path]:
+    """``insertion_study.csv`` (one row per preload x clearance), ``insertion_study.json``, ``insertion_study.png``
+    into a fresh directory (used through :func:`pressfit.output.files.write_directory`)."""
+    paths = [io.write_csv(out_dir / "insertion_study.csv", COLUMNS, study.rows),
+             io.write_json(out_dir / "insertion_study.json", study.to_dict())]
+    fig = insertion_study_figure(study)
+    try:
+        paths.append(io.save_figure(fig, out_dir / "insertion_study.png"))
+    finally:
+        plt.close(fig)
+    return paths
+
+
+def run_insertion_study(case_path: Path | str, preloads_n: list[float] | None, clearances_m: list[float] | None,
+                        out_dir: Path, overwrite: bool = False, progress: bool = False) -> tuple[InsertionStudy,
+                                                                                                  list[Path]]:
+    """The insertion study of a case file (:func:`pressfit.studies.insertion_study.insertion_study`; defaults:
+    preloads 0 N and the case's a4, clearances 10 and 50 um) and its files in ``out_dir``."""
+    io.check_directory(out_dir, overwrite)
+    case = load_case(case_path)
+    study = insertion_study(case, preloads_n or sorted({0.0, case.preload.a4_n}), clearances_m or [1e-5, 5e-5],
+                            progress)
+    return study, io.write_directory(out_dir, overwrite, lambda tmp: write_insertion_study(study, tmp))

@@ -8,19 +8,23 @@ refined nonlinear solutions only (stated in the report). Geometry-only quantitie
 margins, interference distance) are exact at every pose. A case with a ``[clearance]`` table also
 re-evaluates the axial quantities, deflection and tilt at the refined poses with its cardan clearances
 (lost motion adds to the deflection; a leg whose joints open sheds load to the others).
+
+A case whose ``[simulation]`` has ``[simulation.limits]`` also gets one line per simulation limit, from one
+run of its insertion scenario (:func:`evaluate_simulation`, lines keyed ``simulation.<limit>``).
 """
 
 from __future__ import annotations
 
 from collections.abc import Callable
-from dataclasses import dataclass, field
+from dataclasses import dataclass, field, replace
+from typing import Any
 from pathlib import Path
 
 import numpy as np
 from tqdm import tqdm
 
 from pressfit import kinematics
-from pressfit.description.cases import Case, discover, load_case
+from pressfit.description.cases import Case, SimulationLimits, discover, load_case
 from pressfit.description.machine import Machine
 from pressfit.errors import PressfitError, UnstableEquilibriumError
 from pressfit.mechanics import buckling, condensed, preload
@@ -122,9 +126,10 @@ def check_files(paths: list[Path | str], progress: bool = False) -> CheckRun:
             cases.append(case)
         except PressfitError as exc:
             errors.append(FileError(str(f), str(exc)))
-    checked = [c for c in cases if c.envelope.model_dump(exclude_none=True)]
+    checked = [c for c in cases if c.envelope.model_dump(exclude_none=True) or _simulation_limits(c)]
     if not checked and not errors:
-        raise PressfitError("no case among " + ", ".join(map(str, paths)) + " has an [envelope] to check")
+        raise PressfitError("no case among " + ", ".join(map(str, paths)) + " has an [envelope] or "
+                            "[simulation.limits] to check")
     results = []
     for case in checked:
         try:
@@ -176,6 +181,12 @@ def _worst(values: np.ndarray, sense: str) -> tuple[float, int, int | None]:
 
 
 def evaluate_case(case: Case, progress: bool = False) -> CaseResult:
+    """Evaluate every ``[envelope]`` and ``[simulation.limits]`` limit of a case (module docstring)."""
+    result = evaluate_envelope(case, progress)
+    return replace(result, limits=[*result.limits, *evaluate_simulation(case, progress)])
+
+
+def evaluate_envelope(case: Case, progress: bool = False) -> CaseResult:
     """Evaluate every ``[envelope]`` limit of a case (module docstring for the method)."""
     machine = case.machine()
     poses_all, loads = case.poses.array(), case.loads.wrenches()
@@ -350,3 +361,55 @@ def _interference(machine: object, poses: np.ndarray, progress: bool) -> np.ndar
     )
 
     return interference.min_distance_over_poses(machine, poses, progress=progress)
+
+
+# --- simulation limits ---------------------------------------------------------------------------------------
+SIMULATION_LIMITS: dict[str, tuple[Limit, str]] = {  # [simulation.limits] key -> (line, summary key)
+    "max_contact_force_n": (Limit("peak contact force", "N", "max"), "peak_contact_force_n"),
+    "max_overshoot_n": (Limit("contact force overshoot over the insertion limit", "N", "max"), "overshoot_n"),
+    "max_positioning_error_m": (Limit("tool positioning error", "m", "max"), "positioning_error_m"),
+    "max_settling_time_s": (Limit("settling time of the contact force", "s", "max"), "settling_time_s"),
+    "max_actuator_force_n": (Limit("peak actuator tension |N|", "N", "max"), "peak_actuator_tension_n"),
+    "max_axial_force_n": (Limit("peak leg axial force |N| at the plate cardan", "N", "max"),
+                          "peak_leg_axial_force_n"),
+    "max_torsion_nm": (Limit("peak leg torsion |T| at the plate cardan", "N m", "max"), "peak_leg_torsion_nm"),
+    "max_bending_nm": (Limit("peak leg bending |M_b| at the plate cardan", "N m", "max"), "peak_leg_bending_nm"),
+}
+
+
+def _simulation_limits(case: Case) -> dict[str, float]:
+    limits = case.simulation.limits if case.simulation is not None else SimulationLimits()
+    return limits.model_dump(exclude_none=True, exclude={"limiter"})
+
+
+def evaluate_simulation(case: Case, progress: bool = False) -> list[LimitResult]:
+    """Run the case's insertion scenario once (with or without the limiter, ``[simulation.limits] limiter``)
+    and evaluate its ``[simulation.limits]`` (:func:`simulation_lines`); no lines without limits."""
+    from pressfit.dynamics.insertion import simulate_insertion
+
+    wanted = _simulation_limits(case)
+    if not wanted:
+        return []
+    result = simulate_insertion(case, case.simulation.limits.limiter, progress)
+    return simulation_lines(wanted, result.summary, case.simulation.contact.pin_position_m,
+                            case.simulation.contact.board_height_m)
+
+
+def simulation_lines(wanted: dict[str, float], summary: dict[str, Any], pin_xz_m: list[float],
+                     board_height_m: float) -> list[LimitResult]:
+    """One line per simulation limit from a run's summary (:func:`pressfit.dynamics.insertion.summarise`):
+    per-leg peaks report their worst leg; a settling time of a run that never touches the board fails
+    (reported as infinite). The pose of every line is the pin on the board face."""
+    pin_pose = np.array([pin_xz_m[0], board_height_m, pin_xz_m[1]])
+    how = "insertion simulation, limiter " + ("on" if summary["limiter"] else "off")
+    lines = []
+    for key, limit in wanted.items():
+        spec, name = SIMULATION_LIMITS[key]
+        value, leg, method = summary[name], None, how
+        if value is None:
+            value, method = float("inf"), how + ": the tool never touched the board"
+        elif np.ndim(value):
+            leg = int(np.argmax(value)) + 1
+            value = float(np.max(value))
+        lines.append(_line(f"simulation.{key}", spec, limit, value, leg, pin_pose, None, method))
+    return lines
