@@ -48,13 +48,17 @@ def worst_difference(ref, fast):
 def test_fast_equals_reference(machine, linear, tol, preload):
     poses, loads = random_cases(machine, 12, seed=7)
     ref = EquilibriumSolver(machine, pose_m=poses[0])
-    batch = FastEquilibriumSolver(ref.model).solve_batch(poses, loads, preload=preload, linear=linear)
+    solver = FastEquilibriumSolver(ref.model)
+    batch = solver.solve_batch(poses, loads, preload=preload, linear=linear)
     for i in range(len(poses)):
         eq = ref.solve(poses[i], loads[i], preload=preload, linear=linear)
-        fast = batch.equilibrium(i)
+        fast = solver.equilibrium(batch, i)
         assert worst_difference(eq, fast) < tol, i
         assert fast.is_valid(1e-9), fast.residuals
         np.testing.assert_allclose(fast.q[7:], eq.q[7:], atol=1e-9)  # leg coordinates (m, rad)
+        # the stability report at the fast solution is the reference's (same tangent, states equal to ~1e-11)
+        assert fast.stability.stable and eq.stability.stable
+        assert fast.stability.min_eigenvalue_nm == pytest.approx(eq.stability.min_eigenvalue_nm, rel=1e-6)
 
 
 @pytest.mark.parametrize("linear, tol", [(True, 1e-9), (False, 1e-7)])
@@ -65,10 +69,12 @@ def test_linear_cardan_springs_match_reference(machine, linear, tol):
     cc = CardanCompliance(translation=LinearSpring(2e8), rotation=LinearSpring(5e4))
     poses, loads = random_cases(machine, 4, seed=3)
     mm = build_model(machine, poses[0], cardan_compliance=cc)
-    batch = FastEquilibriumSolver(mm).solve_batch(poses, loads, preload=300.0, linear=linear)
+    solver = FastEquilibriumSolver(mm)
+    batch = solver.solve_batch(poses, loads, preload=300.0, linear=linear)
     ref = EquilibriumSolver(mm)
     for i in range(len(poses)):
-        assert worst_difference(ref.solve(poses[i], loads[i], preload=300.0, linear=linear), batch.equilibrium(i)) < tol
+        assert worst_difference(ref.solve(poses[i], loads[i], preload=300.0, linear=linear),
+                                solver.equilibrium(batch, i)) < tol
 
 
 def test_nonlinear_spring_laws_refused(machine):

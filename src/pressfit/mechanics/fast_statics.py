@@ -54,13 +54,16 @@ from pressfit.errors import ConvergenceError, PressfitError, SingularPoseError
 from pressfit.kinematics import inverse_kinematics
 from pressfit.mechanics.model import MachineModel, build_model
 from pressfit.mechanics.preload import rest_length_offsets
+from pressfit.mechanics.stability import Stability
 from pressfit.mechanics.statics import (
     NEWTON_TOL,
     SECTIONS,
     Equilibrium,
+    EquilibriumSolver,
     LegLoads,
     Residuals,
     SectionWrench,
+    _check_physical,
     _wrench,
 )
 from pressfit.spatial import cross, skew
@@ -250,15 +253,16 @@ class BatchEquilibrium:
     preload_offsets_m: np.ndarray  # (b, 4) actuator rest-length offsets
     linear: bool
 
-    def equilibrium(self, i: int) -> Equilibrium:
-        """Pose i as the reference solver's :class:`Equilibrium`."""
+    def equilibrium(self, i: int, stability: Stability) -> Equilibrium:
+        """Pose i as the reference solver's :class:`Equilibrium`, with its stability report (computed by
+        :meth:`FastEquilibriumSolver.equilibrium`)."""
         s = self.sections[i].tolist()
         legs = tuple(LegLoads({name: SectionWrench(*s[leg][k]) for k, name in enumerate(SECTIONS)}, self.frames[i, leg],
                               float(self.actuator_forces_n[i, leg])) for leg in range(4))
         res = Residuals(*self.residuals[i].tolist(), float(self.force_scale_n[i]), self.length_scale_m)
         return Equilibrium(self.pose_m[i].copy(), self.load[i].copy(), legs, self.actuator_forces_n[i].copy(),
                            self.plate_displacement_m[i].copy(), self.plate_rotation_rad[i].copy(), self.q[i].copy(),
-                           self.multipliers[i].copy(), int(self.iterations[i]), self.linear, res,
+                           self.multipliers[i].copy(), int(self.iterations[i]), self.linear, res, stability,
                            self.preload_offsets_m[i].copy())
 
 
@@ -307,6 +311,7 @@ class FastEquilibriumSolver:
             self.model = build_model(machine_or_model, pose, springs_per_segment=springs_per_segment,
                                      cardan_compliance=cardan_compliance)
         self._chain = _chain(self.model)
+        self._reference = EquilibriumSolver(self.model)  # stability reports (Pinocchio Data made on first use)
         self._straight = _straight(self._chain)
         self._legq = np.array(self.model.leg_v) + 1
 
@@ -319,11 +324,17 @@ class FastEquilibriumSolver:
               max_iter: int = 25) -> Equilibrium:
         """One pose (convenience over :meth:`solve_batch`; batches are where the speed is), with the
         reference's physical-range check."""
-        from pressfit.mechanics.statics import _check_physical
+        batch = self.solve_batch(np.asarray(pose_m, dtype=float).reshape(1, 3), _wrench(plate_wrench)[None],
+                                 preload=preload, preload_mode=preload_mode, linear=linear, tol=tol, max_iter=max_iter)
+        return self.equilibrium(batch, 0)
 
-        eq = self.solve_batch(np.asarray(pose_m, dtype=float).reshape(1, 3), _wrench(plate_wrench)[None],
-                              preload=preload, preload_mode=preload_mode, linear=linear, tol=tol,
-                              max_iter=max_iter).equilibrium(0)
+    def equilibrium(self, batch: BatchEquilibrium, i: int) -> Equilibrium:
+        """Pose i of a batch as the reference solve reports it: with its stability (the reference's exact
+        tangent at this solution, :meth:`EquilibriumSolver.stability_at`, ~1 ms) and the same physical
+        checks (raises UnstableEquilibriumError for an unstable or over-strained solution)."""
+        stab = self._reference.stability_at(batch.pose_m[i], batch.load[i], batch.q[i], batch.multipliers[i],
+                                            linear=batch.linear, preload_offsets_m=batch.preload_offsets_m[i])
+        eq = batch.equilibrium(i, stab)
         _check_physical(self.machine, eq)
         return eq
 
