@@ -33,7 +33,8 @@ transmitted wrenches, N = [(e_z, 0), (f, n)]: the axial force and the couple n =
 both plate cardan axes with the force f (normal to e_z) that makes it do no work on the base cardan
 axes w_1, w_2 ((w_k x L e_z) . f = -w_k . n). With lambda = N mu each leg reduces to the 2x2
 S = N^T C N (C the tip compliance), the plate to K = sum_i Q_i S_i^-1 Q_i^T (Q_i = P_i^T N_i): one 6x6
-solve per pose, the free joint motions from the closure in the dual bases of the cardan axes. Plate coordinates: centre translation (world) and a world rotation
+solve per pose, the free joint motions from the closure in the dual bases of the cardan axes.
+Plate coordinates: centre translation (world) and a world rotation
 vector applied on the left (R <- exp(dtheta) R); closure rotation error log3(R_E R_D^T) as the reference.
 
 Supported: rigid or linear-spring cardans (``cardan_compliance`` with :class:`LinearSpring` laws, a
@@ -577,8 +578,8 @@ class FastEquilibriumSolver:
         return self._results(bk, pts, g["pe"], fit - t, r, lam, d, bk.pose + dp[:, :3], _exp3(dp[:, 3:]), stat,
                              np.ones(len(dp), int), dp)
 
-    def _results(self, bk: _Block, pts: np.ndarray, pe: np.ndarray, c: np.ndarray, r: np.ndarray, lam: np.ndarray, d: np.ndarray,
-                 pc: np.ndarray, rp: np.ndarray, stat: np.ndarray, iters: np.ndarray, dp_linear: np.ndarray | None
+    def _results(self, bk: _Block, pts: np.ndarray, pe: np.ndarray, c: np.ndarray, r: np.ndarray, lam: np.ndarray,
+                 d: np.ndarray, pc: np.ndarray, rp: np.ndarray, stat: np.ndarray, iters: np.ndarray, dp_linear: np.ndarray | None
                  ) -> tuple[np.ndarray, ...]:
         """Sections, plate motion and residuals (statics._result's definitions), in BatchEquilibrium order."""
         ch, l_ref = self._chain, self.machine.geometry.base_half_side_m
