@@ -5,7 +5,8 @@ required workspace (x, z in +-0.25 m, y in [0.5, 0.75] m), a 700 N press load pl
 wrench; one solver is built once and reused over the poses (as a sweep would; each solve takes the
 pose-dependent values afresh), and the same loads are also solved at one fixed pose. Also times the
 convenience ``solve_equilibrium(machine, ...)``, which builds a solver per call. Prints the median time per pose and the
-throughput for the linear and the nonlinear solve, then an instrumented run that splits the time into
+throughput for the linear and the nonlinear solve, the batched fast path beside the reference with the ratio,
+the end-to-end wall times of the pressfit commands (``--no-end-to-end`` skips them), then an instrumented run that splits the time into
 Pinocchio calls, LAPACK / numpy.linalg calls and the rest (Python and small numpy operations, including
 the per-pose values and the result objects). Not a test. Goals (issue 3): linear <= 25 us, nonlinear <= 250 us.
 
