@@ -5,7 +5,8 @@ required workspace (x, z in +-0.25 m, y in [0.5, 0.75] m), a 700 N press load pl
 wrench; one solver is built once and reused over the poses (as a sweep would; each solve takes the
 pose-dependent values afresh), and the same loads are also solved at one fixed pose. Also times the
 convenience ``solve_equilibrium(machine, ...)``, which builds a solver per call. Prints the median time per pose and the
-throughput for the linear and the nonlinear solve, then an instrumented run that splits the time into
+throughput for the linear and the nonlinear solve, the batched fast path beside the reference with the ratio,
+the end-to-end wall times of the pressfit commands (``--no-end-to-end`` skips them), then an instrumented run that splits the time into
 Pinocchio calls, LAPACK / numpy.linalg calls and the rest (Python and small numpy operations, including
 the per-pose values and the result objects). Not a test. Goals (issue 3): linear <= 25 us, nonlinear <= 250 us.
 
@@ -19,7 +20,11 @@ from __future__ import annotations
 import argparse
 import os
 import statistics
+import subprocess
+import sys
+import tempfile
 import time
+from pathlib import Path
 
 os.environ.setdefault("OMP_NUM_THREADS", "1")
 os.environ.setdefault("OPENBLAS_NUM_THREADS", "1")
@@ -105,6 +110,8 @@ def main() -> None:
     parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     parser.add_argument("--poses", type=int, default=1000)
     parser.add_argument("--springs", type=int, default=None, help="springs per segment (default: the model's)")
+    parser.add_argument("--end-to-end", action=argparse.BooleanOptionalAction, default=True,
+                        help="also time the pressfit commands (report --quick, report, check, study preload)")
     args = parser.parse_args()
     machine = load_machine()
     rng = np.random.default_rng(0)
@@ -138,6 +145,8 @@ def main() -> None:
               f"{b['python+numpy'] * 1e6:6.1f} us")
     print("convenience function (a solver built per call):")
     convenience_cost(machine, poses[:50], loads[:50])
+    if args.end_to_end:
+        end_to_end()
 
 
 def timed_batch(fast, poses, loads, linear: bool) -> float:
@@ -158,6 +167,26 @@ def convenience_cost(machine, poses, loads) -> None:
             statics.solve_equilibrium(system, h, w, linear=True)
             times.append(time.perf_counter() - t0)
         print(f"  solve_equilibrium({what}, ..., linear=True): median {statistics.median(times) * 1e3:.2f} ms per call")
+
+
+ROOT = Path(__file__).resolve().parents[1]
+COMMANDS = (("report --quick", ["report", "--quick", "--out", "r"]), ("report", ["report", "--out", "r"]),
+            ("check envelope", ["check", str(ROOT / "cases/envelope/press_workspace.toml"), "--no-progress"]),
+            ("study preload", ["study", "preload", str(ROOT / "cases/studies/preload_pose_A.toml"), "--no-progress"]))
+
+
+def end_to_end() -> None:
+    """Wall time of each command as a fresh subprocess (imports included) in its own temporary directory."""
+    print("end to end (wall time of one run each, a subprocess in a temporary directory; the machine is shared):")
+    times = {}
+    for name, argv in COMMANDS:
+        with tempfile.TemporaryDirectory() as tmp:
+            t0 = time.perf_counter()
+            run_ = subprocess.run([sys.executable, "-m", "pressfit", *argv], cwd=tmp, capture_output=True, text=True)
+            times[name] = time.perf_counter() - t0
+        status = "ok" if run_.returncode == 0 else f"exit {run_.returncode}: {run_.stderr.strip()[-200:]}"
+        print(f"  pressfit {name:16s} {times[name]:7.2f} s  ({status})")
+    print(f"  report --quick / report: {times['report --quick'] / times['report']:.2f}")
 
 
 if __name__ == "__main__":

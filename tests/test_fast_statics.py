@@ -48,24 +48,33 @@ def worst_difference(ref, fast):
 def test_fast_equals_reference(machine, linear, tol, preload):
     poses, loads = random_cases(machine, 12, seed=7)
     ref = EquilibriumSolver(machine, pose_m=poses[0])
-    batch = FastEquilibriumSolver(ref.model).solve_batch(poses, loads, preload=preload, linear=linear)
+    solver = FastEquilibriumSolver(ref.model)
+    batch = solver.solve_batch(poses, loads, preload=preload, linear=linear)
     for i in range(len(poses)):
         eq = ref.solve(poses[i], loads[i], preload=preload, linear=linear)
-        fast = batch.equilibrium(i)
+        fast = solver.equilibrium(batch, i)
         assert worst_difference(eq, fast) < tol, i
         assert fast.is_valid(1e-9), fast.residuals
         np.testing.assert_allclose(fast.q[7:], eq.q[7:], atol=1e-9)  # leg coordinates (m, rad)
+        # the stability report at the fast solution is the reference's (same tangent, states equal to ~1e-11)
+        assert fast.stability.stable and eq.stability.stable
+        assert fast.stability.min_eigenvalue_nm == pytest.approx(eq.stability.min_eigenvalue_nm, rel=1e-6)
 
 
-def test_linear_cardan_springs_match_reference(machine):
-    """Linear-spring cardan compliance (all eight cardans, translations and the c rotation)."""
+@pytest.mark.parametrize("linear, tol", [(True, 1e-9), (False, 1e-7)])
+def test_linear_cardan_springs_match_reference(machine, linear, tol):
+    """Linear-spring cardan compliance (all eight cardans, translations and the c rotation): the general
+    condensed step (the closed-form linear solve needs rigid cardans; the default model's linear solves
+    above are the closed form)."""
     cc = CardanCompliance(translation=LinearSpring(2e8), rotation=LinearSpring(5e4))
     poses, loads = random_cases(machine, 4, seed=3)
     mm = build_model(machine, poses[0], cardan_compliance=cc)
-    batch = FastEquilibriumSolver(mm).solve_batch(poses, loads)
+    solver = FastEquilibriumSolver(mm)
+    batch = solver.solve_batch(poses, loads, preload=300.0, linear=linear)
     ref = EquilibriumSolver(mm)
     for i in range(len(poses)):
-        assert worst_difference(ref.solve(poses[i], loads[i]), batch.equilibrium(i)) < 1e-7
+        assert worst_difference(ref.solve(poses[i], loads[i], preload=300.0, linear=linear),
+                                solver.equilibrium(batch, i)) < tol
 
 
 def test_nonlinear_spring_laws_refused(machine):
@@ -106,3 +115,39 @@ def test_spring_count_convergence_to_32(machine):
     e4, e8 = (np.abs(forces[n] - forces[32]).max() for n in (4, 8))
     assert 3.5 < e4 / e8 < 5.0
     assert e4 < 1e-4 * np.abs(forces[32]).max()
+
+
+def test_compliance_and_check_refinement_equal_reference(machine):
+    """The wired fast paths: vjm_plate_compliance (linear: exact, 1e-9; tangent: central differences of
+    nonlinear solves, whose 1e-7 agreement is amplified by |load| / step ~ 10^3 at most) and the limit
+    check's batched refinement, against the Pinocchio solve of the same pairs."""
+    from pressfit.mechanics.compliance import vjm_plate_compliance
+    from pressfit.studies.limit_check import _refine, equilibrium_quantities
+
+    pose, load = np.array([0.2, 0.6, -0.15]), np.array([30.0, 700.0, -20.0, 1.0, 2.0, 3.0])
+    ref = EquilibriumSolver(machine, pose_m=pose)
+    for wrench, tol in ((None, 1e-9), (load, 1e-6)):
+        d = np.diag([1.0] * 3 + [0.1] * 3)
+        cols = [np.concatenate([ref.solve(pose, e, linear=True).plate_displacement_m,
+                                ref.solve(pose, e, linear=True).plate_rotation_rad]) for e in np.eye(6)] \
+            if wrench is None else \
+            [(np.concatenate([(a := ref.solve(pose, wrench + e)).plate_displacement_m, a.plate_rotation_rad])
+              - np.concatenate([(b := ref.solve(pose, wrench - e)).plate_displacement_m, b.plate_rotation_rad]))
+             / (2 * e.max()) for e in d]
+        expected = np.stack(cols, 1)
+        got = vjm_plate_compliance(machine, pose, wrench)
+        assert np.abs(got - expected).max() < tol * np.abs(expected).max()
+    poses, loads = random_cases(machine, 3, seed=5)
+    pairs = [(0, 0), (1, 2), (2, 1)]
+    critical = np.full((1, 4), 1e5)
+    for linear, tol in ((True, 1e-9), (False, 1e-7)):
+        refined = _refine(machine, poses, loads, pairs, linear, 300.0)
+        for j, p in pairs:
+            eq = ref.solve(poses[p], loads[j], linear=linear, preload=300.0)
+            a, b = equilibrium_quantities(eq, critical), equilibrium_quantities(refined[(j, p)], critical)
+            for key in set(a) - {"min_buckling_safety_factor"}:  # that one is critical / N of the forces compared
+                scale = np.abs(eq.actuator_forces_n).max() if key == "max_shear_n" else np.abs(a[key]).max()
+                assert np.abs(a[key] - b[key]).max() <= tol * scale, key  # shear: 0 in the linear model
+            stab = refined[(j, p)].stability
+            assert stab.stable and eq.stability.stable
+            assert stab.min_eigenvalue_nm == pytest.approx(eq.stability.min_eigenvalue_nm, rel=1e-6)

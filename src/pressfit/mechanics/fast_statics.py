@@ -24,7 +24,17 @@ Same model, same equations and same answers as :class:`pressfit.mechanics.static
   reference's residuals and scales, :mod:`pressfit.mechanics.statics`).
 
 ``linear=True``: one step from the assembled pose (the small-displacement KKT solve of the reference),
-sections on the undeformed geometry. Plate coordinates: centre translation (world) and a world rotation
+sections on the undeformed geometry. With rigid cardans (the default model) this step is closed form
+(:func:`_straight`): at the assembled pose every leg is straight, so all the joints between the two
+cardans share the leg frame R and lie on the leg axis (p_c = B + s_c e_z), and a spring column's twist
+in the leg frame is (e_a x e_z u_c, e_a) (revolute about e_a, lever u_c = L - s_c to the tip) or
+(e_a, 0) (prismatic). The four free cardan revolutes (two at B, two at the tip) leave a leg two
+transmitted wrenches, N = [(e_z, 0), (f, n)]: the axial force and the couple n = w_3 x w_4 normal to
+both plate cardan axes with the force f (normal to e_z) that makes it do no work on the base cardan
+axes w_1, w_2 ((w_k x L e_z) . f = -w_k . n). With lambda = N mu each leg reduces to the 2x2
+S = N^T C N (C the tip compliance), the plate to K = sum_i Q_i S_i^-1 Q_i^T (Q_i = P_i^T N_i): one 6x6
+solve per pose, the free joint motions from the closure in the dual bases of the cardan axes.
+Plate coordinates: centre translation (world) and a world rotation
 vector applied on the left (R <- exp(dtheta) R); closure rotation error log3(R_E R_D^T) as the reference.
 
 Supported: rigid or linear-spring cardans (``cardan_compliance`` with :class:`LinearSpring` laws, a
@@ -43,13 +53,16 @@ from pressfit.description.machine import Machine
 from pressfit.errors import ConvergenceError, PressfitError, SingularPoseError
 from pressfit.mechanics.model import MachineModel, build_model
 from pressfit.mechanics.preload import rest_length_offsets
+from pressfit.mechanics.stability import Stability
 from pressfit.mechanics.statics import (
     NEWTON_TOL,
     SECTIONS,
     Equilibrium,
+    EquilibriumSolver,
     LegLoads,
     Residuals,
     SectionWrench,
+    _check_physical,
     _wrench,
 )
 from pressfit.spatial import cross, skew
@@ -121,6 +134,45 @@ def _chain(mm: MachineModel) -> _Chain:
                                                           for s in SECTIONS),
                   np.array([a.translation for a in mm.anchor_placements]), np.array(mm.leg_frames0),
                   np.array([k[0] == "P" for k in kinds[0]]))
+
+
+@dataclass(frozen=True)
+class _Straight:
+    """Constants of the closed-form linear solve (module doc), per spring column in chain order."""
+
+    base: np.ndarray  # (m_s, 6) local twist part independent of the lever: (e_a, 0) prismatic, (0, e_a) revolute
+    lever: np.ndarray  # (m_s, 6) part per metre of lever to the tip: (e_a x e_z, 0) revolute, 0 prismatic
+
+
+def _straight(ch: _Chain) -> _Straight | None:
+    """The closed-form constants when the chain is cardan (2 free revolutes at B), springs and prismatic
+    joints along z, cardan (2 free revolutes at the tip), with the sections on the straight part or at the
+    tip; None otherwise (cardan springs: the general condensed step)."""
+    m = len(ch.axis)
+    free = [0, 1, m - 2, m - 1]
+    if (list(ch.free_cols) != free or ch.prismatic[free].any() or np.any(ch.axis[ch.prismatic] != 2)
+            or np.any(ch.z[:, [1, m - 1]] != 0) or np.isin([1, m - 1], ch.stem_cols).any()
+            or any(not (1 <= c <= m - 3 or (c == m - 1 and off == 0)) for c, off in ch.sec)):
+        return None
+    e = np.eye(3)[ch.axis[ch.spring_cols]]
+    prism = ch.prismatic[ch.spring_cols, None]
+    zero = np.zeros_like(e)
+    return _Straight(np.concatenate([np.where(prism, e, 0.0), np.where(prism, 0.0, e)], -1),
+                     np.concatenate([np.where(prism, 0.0, np.cross(e, [0.0, 0.0, 1.0])), zero], -1))
+
+
+def _turn(frame: np.ndarray, axis: int, q: np.ndarray) -> np.ndarray:
+    """Frames (..., 3, 3) (columns) turned by the angles q (...) about their own axis 0 x, 1 y, 2 z."""
+    i, j = (axis + 1) % 3, (axis + 2) % 3
+    c, s = np.cos(q)[..., None], np.sin(q)[..., None]
+    out = frame.copy()
+    out[..., :, i] = frame[..., :, i] * c + frame[..., :, j] * s
+    out[..., :, j] = frame[..., :, j] * c - frame[..., :, i] * s
+    return out
+
+
+def _dot(a: np.ndarray, b: np.ndarray) -> np.ndarray:
+    return (a * b).sum(-1)
 
 
 @dataclass
@@ -200,15 +252,16 @@ class BatchEquilibrium:
     preload_offsets_m: np.ndarray  # (b, 4) actuator rest-length offsets
     linear: bool
 
-    def equilibrium(self, i: int) -> Equilibrium:
-        """Pose i as the reference solver's :class:`Equilibrium`."""
+    def equilibrium(self, i: int, stability: Stability) -> Equilibrium:
+        """Pose i as the reference solver's :class:`Equilibrium`, with its stability report (computed by
+        :meth:`FastEquilibriumSolver.equilibrium`)."""
         s = self.sections[i].tolist()
         legs = tuple(LegLoads({name: SectionWrench(*s[leg][k]) for k, name in enumerate(SECTIONS)}, self.frames[i, leg],
                               float(self.actuator_forces_n[i, leg])) for leg in range(4))
         res = Residuals(*self.residuals[i].tolist(), float(self.force_scale_n[i]), self.length_scale_m)
         return Equilibrium(self.pose_m[i].copy(), self.load[i].copy(), legs, self.actuator_forces_n[i].copy(),
                            self.plate_displacement_m[i].copy(), self.plate_rotation_rad[i].copy(), self.q[i].copy(),
-                           self.multipliers[i].copy(), int(self.iterations[i]), self.linear, res,
+                           self.multipliers[i].copy(), int(self.iterations[i]), self.linear, res, stability,
                            self.preload_offsets_m[i].copy())
 
 
@@ -257,6 +310,8 @@ class FastEquilibriumSolver:
             self.model = build_model(machine_or_model, pose, springs_per_segment=springs_per_segment,
                                      cardan_compliance=cardan_compliance)
         self._chain = _chain(self.model)
+        self._reference = EquilibriumSolver(self.model)  # stability reports (Pinocchio Data made on first use)
+        self._straight = _straight(self._chain)
         self._legq = np.array(self.model.leg_v) + 1
 
     @property
@@ -268,11 +323,17 @@ class FastEquilibriumSolver:
               max_iter: int = 25) -> Equilibrium:
         """One pose (convenience over :meth:`solve_batch`; batches are where the speed is), with the
         reference's physical-range check."""
-        from pressfit.mechanics.statics import _check_physical
+        batch = self.solve_batch(np.asarray(pose_m, dtype=float).reshape(1, 3), _wrench(plate_wrench)[None],
+                                 preload=preload, preload_mode=preload_mode, linear=linear, tol=tol, max_iter=max_iter)
+        return self.equilibrium(batch, 0)
 
-        eq = self.solve_batch(np.asarray(pose_m, dtype=float).reshape(1, 3), _wrench(plate_wrench)[None],
-                              preload=preload, preload_mode=preload_mode, linear=linear, tol=tol,
-                              max_iter=max_iter).equilibrium(0)
+    def equilibrium(self, batch: BatchEquilibrium, i: int) -> Equilibrium:
+        """Pose i of a batch as the reference solve reports it: with its stability (the reference's exact
+        tangent at this solution, :meth:`EquilibriumSolver.stability_at`, ~1 ms) and the same physical
+        checks (raises UnstableEquilibriumError for an unstable or over-strained solution)."""
+        stab = self._reference.stability_at(batch.pose_m[i], batch.load[i], batch.q[i], batch.multipliers[i],
+                                            linear=batch.linear, preload_offsets_m=batch.preload_offsets_m[i])
+        eq = batch.equilibrium(i, stab)
         _check_physical(self.machine, eq)
         return eq
 
@@ -335,15 +396,22 @@ class FastEquilibriumSolver:
     def _residuals(self, bk: _Block, c: np.ndarray, at: np.ndarray, r: np.ndarray, lam: np.ndarray,
                    x: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
         """Relative stationarity and closure (b,) (the reference's scales, :mod:`pressfit.mechanics.statics`)."""
-        ch, l_ref = self._chain, self.machine.geometry.base_half_side_m
         r_leg = (at @ lam[..., None])[..., 0]
-        r_leg[:, :, ch.spring_cols] += bk.ks * x
+        r_leg[:, :, self._chain.spring_cols] += bk.ks * x
+        return self._stationarity(bk, r_leg, r, lam), self._closure(c)
+
+    def _stationarity(self, bk: _Block, r_leg: np.ndarray, r: np.ndarray, lam: np.ndarray) -> np.ndarray:
+        """Relative stationarity (b,) of leg rows r_leg (b, 4, m) (N or N m) and the plate."""
+        l_ref = self.machine.geometry.base_half_side_m
         lf = lam[..., :3]
         r_plate = np.concatenate([-bk.load[:, :3] - lf.sum(1), -bk.load[:, 3:] - (cross(r, lf) + lam[..., 3:]).sum(1)], 1)
-        stat = np.maximum(np.abs(r_leg * bk.row_scale).max((1, 2)),
+        return np.maximum(np.abs(r_leg * bk.row_scale).max((1, 2)),
                           np.maximum(np.abs(r_plate[:, :3]).max(1), np.abs(r_plate[:, 3:]).max(1) / l_ref) / bk.f_ref)
-        clos = np.maximum(np.abs(c[..., :3]).max((1, 2)) / l_ref, np.abs(c[..., 3:]).max((1, 2)))
-        return stat, clos
+
+    def _closure(self, c: np.ndarray) -> np.ndarray:
+        """Relative closure (b,) of c (b, 4, 6) (m, rad)."""
+        return np.maximum(np.abs(c[..., :3]).max((1, 2)) / self.machine.geometry.base_half_side_m,
+                          np.abs(c[..., 3:]).max((1, 2)))
 
     def _step(self, bk: _Block, c: np.ndarray, at: np.ndarray, r: np.ndarray, x: np.ndarray
               ) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray]:
@@ -373,6 +441,8 @@ class FastEquilibriumSolver:
         return z[..., 6:], dqs, dp, lam
 
     def _solve_block(self, bk: _Block, linear: bool, tol: float, max_iter: int) -> tuple[np.ndarray, ...]:
+        if linear and self._straight is not None:
+            return self._solve_straight(bk)
         ch = self._chain
         nb = len(bk.pose)
         d, lam = np.zeros(bk.q0leg.shape), np.zeros((nb, 4, 6))
@@ -396,19 +466,123 @@ class FastEquilibriumSolver:
                 dq = np.zeros_like(d)
                 dq[:, :, ch.free_cols], dq[:, :, ch.spring_cols] = dqf, dqs
                 c = c + (at.swapaxes(-1, -2) @ dq[..., None])[..., 0] + (_plate_jacobian(r) @ dp[:, None, :, None])[..., 0]
-                return self._results(bk, kin, c, r, lam, d, pc + dp[:, :3], _exp3(dp[:, 3:]) @ rp, stat,
+                return self._results(bk, kin.sec, kin.pe, c, r, lam, d, pc + dp[:, :3], _exp3(dp[:, 3:]) @ rp, stat,
                                      np.ones(nb, int), dp)
             pc, rp = pc + dp[:, :3], _exp3(dp[:, 3:]) @ rp
-        return self._results(bk, kin, c, r, lam, d, pc, rp, stat, iters, None)
+        return self._results(bk, kin.sec, kin.pe, c, r, lam, d, pc, rp, stat, iters, None)
 
-    def _results(self, bk: _Block, kin: _Kin, c: np.ndarray, r: np.ndarray, lam: np.ndarray, d: np.ndarray,
-                 pc: np.ndarray, rp: np.ndarray, stat: np.ndarray, iters: np.ndarray, dp_linear: np.ndarray | None
+    def _straight_legs(self, bk: _Block) -> dict[str, np.ndarray]:
+        """Closed-form geometry of the straight legs at the assembled pose (module doc): leg frame rl, tip
+        frame re, joint abscissae s (m) along e_z, free axes w (b, 4, 4, 3), closure c, transmitted
+        wrenches n_w (b, 4, 6, 2) (world) and n_l (leg frame), and the dual-basis helpers of the cardan axes."""
+        ch, q = self._chain, bk.q0leg
+        a = ch.axis
+        f0 = np.broadcast_to(ch.r0, q.shape[:2] + (3, 3))
+        f1 = _turn(f0, a[0], q[..., 0])
+        rl = _turn(f1, a[1], q[..., 1])
+        f3 = _turn(rl, a[-2], q[..., -2])
+        re = _turn(f3, a[-1], q[..., -1])
+        inc = bk.z.copy()
+        inc[..., 1:] += np.where(ch.prismatic, q, 0.0)[..., :-1]
+        s = np.cumsum(inc, -1)
+        ln = s[..., -1]
+        ez = rl[..., :, 2]
+        pe = ch.b + ez * ln[..., None]
+        c = np.concatenate([pe - bk.pose[:, None] - ch.anchors, _log3(re @ ch.frames0.swapaxes(-1, -2))], -1)
+        w = np.stack([f0[..., :, a[0]], rl[..., :, a[1]], rl[..., :, a[-2]], f3[..., :, a[-1]]], -2)
+        u = cross(w[..., :2, :], ez[..., None, :])  # base cardan axes x e_z
+        v = cross(u, ez[..., None, :])
+        det = _dot(u[..., 0, :], v[..., 1, :])
+        n = cross(w[..., 2, :], w[..., 3, :])
+        nn = _dot(n, n)
+        if np.any(np.abs(det) < 1e-9) or np.any(nn < 1e-9):
+            bad = np.flatnonzero((np.abs(det) < 1e-9).any(1) | (nn < 1e-9).any(1))[0]
+            raise SingularPoseError(f"pose {bk.pose[bad].tolist()} m: a cardan axis is along its leg or the plate "
+                                    "cardan axes are parallel (the leg's transmitted wrenches degenerate)")
+        b = -_dot(w[..., :2, :], n[..., None, :]) / ln[..., None]
+        f = (b[..., :1] * v[..., 1, :] - b[..., 1:] * v[..., 0, :]) / det[..., None]
+        n_w = np.zeros(q.shape[:2] + (6, 2))
+        n_w[..., :3, 0], n_w[..., :3, 1], n_w[..., 3:, 1] = ez, f, n
+        n_l = np.concatenate([rl.swapaxes(-1, -2) @ n_w[..., :3, :], rl.swapaxes(-1, -2) @ n_w[..., 3:, :]], -2)
+        return {"rl": rl, "s": s, "ln": ln, "ez": ez, "pe": pe, "c": c, "w": w, "u": u, "v": v, "det": det, "n": n,
+                "nn": nn, "n_w": n_w, "n_l": n_l}
+
+    def _solve_straight(self, bk: _Block) -> tuple[np.ndarray, ...]:
+        """The linear solve in closed form for straight legs (module doc), in BatchEquilibrium order."""
+        ch = self._chain
+        g = self._straight_legs(bk)
+        ln, n_w = g["ln"], g["n_w"]
+        lever = ln[..., None] - g["s"][..., ch.spring_cols]  # (b, 4, m_s), m
+        gm = self._spring_rows(g["n_l"].swapaxes(-1, -2), lever)  # (b, 4, 2, m_s): the two transmitted wrenches
+        comp = 1.0 / bk.ks
+        gc = gm * comp[..., None, :]
+        sm = np.stack([_dot(gc[..., 0, :], gm[..., 0, :]), _dot(gc[..., 0, :], gm[..., 1, :]),
+                       _dot(gc[..., 1, :], gm[..., 1, :])], -1)[..., [0, 1, 1, 2]].reshape(gm.shape[:2] + (2, 2))
+        sinv = np.stack([sm[..., 1, 1], -sm[..., 0, 1], -sm[..., 1, 0], sm[..., 0, 0]], -1).reshape(sm.shape)
+        sinv /= (sm[..., 0, 0] * sm[..., 1, 1] - sm[..., 0, 1] * sm[..., 1, 0])[..., None, None]
+        x = -bk.rest
+        r = np.broadcast_to(ch.anchors, bk.q0leg.shape[:2] + (3,))
+        pj = _plate_jacobian(r)
+        qm = pj.swapaxes(-1, -2) @ n_w  # (b, 4, 6, 2)
+        nr0 = -(n_w.swapaxes(-1, -2) @ g["c"][..., None])[..., 0] + _dot(gm, x[..., None, :])
+        qs = qm @ sinv
+        try:
+            dp = np.linalg.solve((qs @ qm.swapaxes(-1, -2)).sum(1),
+                                 (bk.load + (qs @ nr0[..., None])[..., 0].sum(1))[..., None])[..., 0]
+        except np.linalg.LinAlgError:
+            raise SingularPoseError(f"the plate stiffness is singular at a pose of the batch (poses {bk.pose.tolist()})"
+                                    ) from None
+        mu = (sinv @ ((qm.swapaxes(-1, -2) @ dp[:, None, :, None])[..., 0] - nr0)[..., None])[..., 0]
+        lam = (n_w @ mu[..., None])[..., 0]
+        dqs = -x - comp * (gm * mu[..., None]).sum(-2)
+        return self._straight_finish(bk, g, lever, pj, dp, lam, dqs)
+
+    def _spring_rows(self, wrench_l: np.ndarray, lever: np.ndarray) -> np.ndarray:
+        """A_s^T lambda (b, 4, [k,] m_s) for leg-frame wrenches (b, 4, [k,] 6) (N, N m at the tip) and the springs'
+        levers (b, 4, m_s) (m): each spring column's twist is base + lever * per-metre part (module doc)."""
+        st = self._straight
+        lever = lever.reshape(lever.shape[:2] + (1,) * (wrench_l.ndim - 3) + lever.shape[2:])
+        return np.tensordot(wrench_l, st.base, ([-1], [1])) + lever * np.tensordot(wrench_l, st.lever, ([-1], [1]))
+
+    def _straight_finish(self, bk: _Block, g: dict[str, np.ndarray], lever: np.ndarray, pj: np.ndarray,
+                         dp: np.ndarray, lam: np.ndarray, dqs: np.ndarray) -> tuple[np.ndarray, ...]:
+        """Free joint motions from the linearised closure A_f dq_f = t (dual bases of the cardan axes), the
+        residuals (free-joint stationarity A_f^T lambda, spring rows, plate; the closure left by dq_f) and
+        the results."""
+        ch, st, rl, ln, w, u, v, n = self._chain, self._straight, g["rl"], g["ln"], g["w"], g["u"], g["v"], g["n"]
+        tl = (dqs @ st.base + (lever * dqs) @ st.lever)[..., None]  # A_s dq_s in the leg frame
+        t = -g["c"] - (pj @ dp[:, None, :, None])[..., 0] - np.concatenate([rl @ tl[..., :3, :], rl @ tl[..., 3:, :]],
+                                                                         -2)[..., 0]
+        scale = ln * g["det"]
+        dq = np.empty(w.shape[:3])
+        dq[..., 0], dq[..., 1] = _dot(t[..., :3], v[..., 1, :]) / scale, -_dot(t[..., :3], v[..., 0, :]) / scale
+        om = t[..., 3:] - dq[..., 0, None] * w[..., 0, :] - dq[..., 1, None] * w[..., 1, :]
+        dq[..., 2] = _dot(om, cross(w[..., 3, :], n)) / g["nn"]
+        dq[..., 3] = _dot(om, cross(n, w[..., 2, :])) / g["nn"]
+        fit = np.concatenate([ln[..., None] * (dq[..., :2, None] * u).sum(-2), (dq[..., None] * w).sum(-2)], -1)
+        lf, lm = lam[..., :3], lam[..., 3:]
+        d = np.zeros(bk.q0leg.shape)
+        d[..., ch.free_cols], d[..., ch.spring_cols] = dq, dqs
+        r_leg = np.zeros(d.shape)
+        r_leg[..., ch.free_cols[:2]] = ln[..., None] * _dot(u, lf[..., None, :]) + _dot(w[..., :2, :], lm[..., None, :])
+        r_leg[..., ch.free_cols[2:]] = _dot(w[..., 2:, :], lm[..., None, :])
+        lam_l = np.concatenate([(lf[..., None, :] @ rl)[..., 0, :], (lm[..., None, :] @ rl)[..., 0, :]], -1)
+        r_leg[..., ch.spring_cols] = self._spring_rows(lam_l, lever) + bk.ks * (dqs - bk.rest)
+        r = np.broadcast_to(ch.anchors, lam.shape[:2] + (3,))
+        stat = self._stationarity(bk, r_leg, r, lam)
+        s, ez = g["s"], g["ez"]
+        pts = np.stack([g["pe"] if col == len(ch.axis) - 1 else ch.b + ez * (s[..., col, None] + off)
+                        for col, off in ch.sec], -2)
+        return self._results(bk, pts, g["pe"], fit - t, r, lam, d, bk.pose + dp[:, :3], _exp3(dp[:, 3:]), stat,
+                             np.ones(len(dp), int), dp)
+
+    def _results(self, bk: _Block, pts: np.ndarray, pe: np.ndarray, c: np.ndarray, r: np.ndarray, lam: np.ndarray,
+                 d: np.ndarray, pc: np.ndarray, rp: np.ndarray, stat: np.ndarray, iters: np.ndarray, dp_linear: np.ndarray | None
                  ) -> tuple[np.ndarray, ...]:
         """Sections, plate motion and residuals (statics._result's definitions), in BatchEquilibrium order."""
         ch, l_ref = self._chain, self.machine.geometry.base_half_side_m
         f_load, m_load = bk.load[:, :3], bk.load[:, 3:]
         lf, lm = lam[..., :3], lam[..., 3:]
-        pts = kin.sec
         ez = pts[:, :, 2] - pts[:, :, 0]
         ez /= np.linalg.norm(ez, axis=-1, keepdims=True)
         ax = self.machine.cardan_axes
@@ -416,7 +590,7 @@ class FastEquilibriumSolver:
         ex /= np.linalg.norm(ex, axis=-1, keepdims=True)
         frames = np.stack([ex, cross(ez, ex), ez], -1)
         force = -lf
-        mom = cross(kin.pe[:, :, None] - pts, force[:, :, None]) - lm[:, :, None]
+        mom = cross(pe[:, :, None] - pts, force[:, :, None]) - lm[:, :, None]
         fl = (force[:, :, None] @ frames)[:, :, 0]
         ml = mom @ frames
         sections = np.concatenate([np.broadcast_to(fl[:, :, None, [2, 0, 1]], ml.shape), ml], -1)

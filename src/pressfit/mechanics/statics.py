@@ -512,6 +512,19 @@ class EquilibriumSolver:
         _check_physical(self.machine, eq)
         return eq
 
+    def stability_at(self, pose_m: np.ndarray, plate_wrench: np.ndarray, q: np.ndarray, multipliers: np.ndarray,
+                     *, linear: bool, preload_offsets_m: np.ndarray) -> Stability:
+        """The stability report every solve here carries, for an equilibrium of this model found elsewhere
+        (the batched :mod:`pressfit.mechanics.fast_statics`): the exact tangent at configuration q (the
+        assembled one if ``linear``, as :func:`_solve_linear` takes it) with the multipliers (4, 6) (N, N m),
+        under the plate wrench (N, N m) after the actuator rest-length offsets (4,) (m)."""
+        pv = self.model.pose_values(pose_m)
+        pb, data = self._problem(pv, _wrench(plate_wrench), np.asarray(preload_offsets_m, dtype=float).reshape(4))
+        q = np.asarray(q, dtype=float)
+        st = _evaluate(pb, pb.mm.q0, data) if linear else _evaluate(pb, q, data, q[pb.legq] - pb.mm.q0[pb.legq])
+        return reduced_stability(*_tangent(pb, st, np.asarray(multipliers, dtype=float)), st.ja, st.jp, pb.is_force,
+                                 pb.l_ref)
+
     def _problem(self, pv: ModelPose, load: np.ndarray, offsets: np.ndarray) -> tuple[_Problem, pin.Data]:
         """The problem at one pose on this thread's model copy, its stem placed for the pose first."""
         w = self._worker()

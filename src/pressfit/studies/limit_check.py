@@ -26,9 +26,10 @@ from tqdm import tqdm
 from pressfit import kinematics
 from pressfit.description.cases import Case, SimulationLimits, discover, load_case
 from pressfit.description.machine import Machine
-from pressfit.errors import PressfitError, UnstableEquilibriumError
+from pressfit.errors import ConvergenceError, PressfitError, SingularPoseError, UnstableEquilibriumError
 from pressfit.mechanics import buckling, condensed, preload
 from pressfit.mechanics.clearance import clearance_from_case, load_deflection
+from pressfit.mechanics.fast_statics import FastEquilibriumSolver
 from pressfit.mechanics.statics import Equilibrium, EquilibriumSolver
 
 SECTIONS = ("base", "actuator", "plate")
@@ -224,28 +225,18 @@ def evaluate_envelope(case: Case, progress: bool = False) -> CaseResult:
 
     lines: list[LimitResult] = []
     unstable: dict[tuple[int, int], str] = {}  # (load, pose) -> why no stable equilibrium was found
-    solver = EquilibriumSolver(machine, pose_m=poses[0])  # one model for every refined pose
+    plans = {key: _candidates(LIMITS[key].sense, stacked.get(key), stacked, len(loads), len(poses),
+                              case.solver.refine_worst) for key in wanted if LIMITS[key].load_dependent}
+    refined = _refine(machine, poses, loads, sorted({c for key, (cands, _) in plans.items()
+                                                      if key != "min_buckling_safety_factor" for c in cands}),
+                      case.solver.linear, a4)
     for key, limit in wanted.items():
         spec = LIMITS[key]
         if not spec.load_dependent:
             worst, p, leg = _worst(geometry[key](), spec.sense)
             lines.append(_line(key, spec, limit, worst, leg, poses[p], None, "exact at every pose"))
             continue
-        lin = stacked.get(key)
-        candidates: list[tuple[int, int]] = []
-        best: tuple[float, int, int, int | None, str] | None = None
-        if lin is not None:
-            flat = lin.reshape(len(loads), len(poses), -1).max(-1) if spec.sense == "max" else \
-                lin.reshape(len(loads), len(poses), -1).min(-1)
-            order = np.argsort(-flat if spec.sense == "max" else flat, axis=None)
-            candidates = [tuple(np.unravel_index(i, flat.shape)) for i in order[:case.solver.refine_worst]]
-            j, p = np.unravel_index(order[0], flat.shape)  # the worst of the whole sweep, refined or not
-            w, _, leg = _worst(lin[j], spec.sense)
-            best = (w, int(j), int(p), leg, f"linear condensed over {len(poses)} poses x {len(loads)} loads")
-        else:  # shear: only the refined nonlinear solutions carry it; refine the worst bending poses
-            b = stacked["max_bending_nm"].reshape(len(loads), len(poses), -1).max(-1)
-            order = np.argsort(-b, axis=None)
-            candidates = [tuple(np.unravel_index(i, b.shape)) for i in order[:max(1, case.solver.refine_worst)]]
+        candidates, best = plans[key]
         for j, p in candidates:
             if key == "min_buckling_safety_factor":  # refined: the whole machine's linearised buckling factor
                 w, leg = machine_buckling_factor(machine, poses[p], loads[j], a4)
@@ -253,15 +244,14 @@ def evaluate_envelope(case: Case, progress: bool = False) -> CaseResult:
                     best = (w, int(j), int(p), leg, f"whole-machine linearised buckling at the {len(candidates)} "
                             "worst poses (per-leg Euler in the sweep)")
                 continue
-            try:
-                eq = solver.solve(poses[p], loads[j], linear=case.solver.linear, preload=a4 or None)
-            except UnstableEquilibriumError as exc:
-                unstable.setdefault((int(j), int(p)), str(exc))
+            eq = refined[(j, p)]
+            if isinstance(eq, str):
+                unstable.setdefault((int(j), int(p)), eq)
                 continue
             w, _, leg = _worst(equilibrium_quantities(eq, critical[p:p + 1])[key], spec.sense)
             if worse(w, best, spec.sense):
                 how = "linear" if case.solver.linear else "nonlinear"
-                best = (w, int(j), int(p), leg, f"{how} Pinocchio solve at the {len(candidates)} worst poses")
+                best = (w, int(j), int(p), leg, f"{how} solve at the {len(candidates)} worst poses")
             if case.clearance is not None and key in CLEARANCE_SENSITIVE:
                 try:
                     w, leg = _with_clearance(case, machine, poses[p], loads[j], a4, critical[p:p + 1], key,
@@ -280,6 +270,48 @@ def evaluate_envelope(case: Case, progress: bool = False) -> CaseResult:
     if unstable:
         lines = _instability_line(lines, unstable, poses, loads, wanted.get("min_buckling_safety_factor"))
     return CaseResult(case.name, case.path, len(poses_all), len(loads), unreachable, lines)
+
+
+def _candidates(sense: str, lin: np.ndarray | None, stacked: dict[str, np.ndarray], n_loads: int, n_poses: int,
+                refine_worst: int) -> tuple[list[tuple[int, int]], tuple[float, int, int, int | None, str] | None]:
+    """The (load, pose) pairs to refine for one quantity (its linear sweep ``lin`` (L, P, ...), or None for
+    shear: the worst bending pairs) and the sweep's worst as the starting best."""
+    if lin is None:  # shear: only the refined nonlinear solutions carry it; refine the worst bending poses
+        b = stacked["max_bending_nm"].reshape(n_loads, n_poses, -1).max(-1)
+        order = np.argsort(-b, axis=None)
+        return [tuple(int(k) for k in np.unravel_index(i, b.shape)) for i in order[:max(1, refine_worst)]], None
+    flat = lin.reshape(n_loads, n_poses, -1)
+    flat = flat.max(-1) if sense == "max" else flat.min(-1)
+    order = np.argsort(-flat if sense == "max" else flat, axis=None)
+    candidates = [tuple(int(k) for k in np.unravel_index(i, flat.shape)) for i in order[:refine_worst]]
+    j, p = np.unravel_index(order[0], flat.shape)  # the worst of the whole sweep, refined or not
+    w, _, leg = _worst(lin[j], sense)
+    return candidates, (w, int(j), int(p), leg, f"linear condensed over {n_poses} poses x {n_loads} loads")
+
+
+def _refine(machine: Machine, poses: np.ndarray, loads: np.ndarray, pairs: list[tuple[int, int]], linear: bool,
+            a4: float) -> dict[tuple[int, int], Equilibrium | str]:
+    """The refined solves of every (load, pose) pair in one batch (:mod:`pressfit.mechanics.fast_statics`,
+    equal to the Pinocchio solve to 1e-9 linear, 1e-7 nonlinear), each with the reference's stability report;
+    an unstable one maps to the reason. A batch the fast solver cannot finish (Newton diverging beyond
+    buckling, a singular pose) is solved pose by pose with the Pinocchio solver instead, as before."""
+    if not pairs:
+        return {}
+    fast = FastEquilibriumSolver(machine, pose_m=poses[0])
+    idx = np.array(pairs)
+    out: dict[tuple[int, int], Equilibrium | str] = {}
+    try:
+        batch = fast.solve_batch(poses[idx[:, 1]], loads[idx[:, 0]], preload=a4 or None, linear=linear)
+        solve = lambda k, j, p: fast.equilibrium(batch, k)  # noqa: E731
+    except (ConvergenceError, SingularPoseError):
+        ref = EquilibriumSolver(fast.model)
+        solve = lambda k, j, p: ref.solve(poses[p], loads[j], linear=linear, preload=a4 or None)  # noqa: E731
+    for k, (j, p) in enumerate(pairs):
+        try:
+            out[(j, p)] = solve(k, j, p)
+        except UnstableEquilibriumError as exc:
+            out[(j, p)] = str(exc)
+    return out
 
 
 STABILITY = Limit("stable equilibrium under the full load (1 = stable, 0 = none found)", "-", "min")
