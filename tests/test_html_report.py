@@ -197,3 +197,14 @@ def test_3d_view_opens_at_the_worst_axial_force_and_the_slider_moves_the_plate(p
     page.wait_for_timeout(300)
     moved = np.array(page.evaluate(cardans)).T
     assert np.abs(moved[4:] - nominal[4:]).max() > 1e-3 and np.allclose(moved[:4], nominal[:4])
+
+
+def test_insertion_cells_equal_the_simulation_json(page, report_dir):
+    """Section 8 (issue: 'and, once it exists, the insertion simulation'): the summary table shows the values of
+    insertion/simulation.json, the run with the limiter at its top level and the one without under 'comparison'."""
+    js = json.loads((report_dir / "insertion" / "simulation.json").read_text())
+    keys = ("peak_contact_force_n", "overshoot_n", "steady_insertion_force_n", "steady_insertion_depth_m",
+            "positioning_error_m", "settling_time_s")
+    _check_table(page, "insertion", [{"quantity": k, "with_limiter": js[k], "without_limiter": js["comparison"][k]}
+                                     for k in keys])
+    assert js["peak_contact_force_n"] < js["comparison"]["peak_contact_force_n"]  # the limiter limits

@@ -26,6 +26,7 @@ from plotly.colors import qualitative
 from plotly.offline import get_plotlyjs
 
 from pressfit.description.machine import Machine
+from pressfit.dynamics.insertion import InsertionResult
 from pressfit.geometry.interference import SweepResult
 from pressfit.kinematics.workspace import PlaneMap, square_corners
 from pressfit.mechanics.condensed import StiffnessMaps
@@ -69,6 +70,7 @@ class ReportContent:
     preload: list[tuple[str, PreloadStudy]]  # (directory name under preload/, study)
     interference: SweepResult
     interference_table: list[Record]  # summary.json "interference", one record per pair kind
+    insertion: tuple[InsertionResult, InsertionResult] | None = None  # the paper's scenario with / without limiter
 
 
 def cell_text(value: object) -> str:
@@ -278,6 +280,29 @@ def _interference_section(page: _Page, c: ReportContent) -> None:
     page.add(_links("summary.json", "interference/interference_pairs.csv", "interference/interference_poses.csv"))
 
 
+def _insertion_section(page: _Page, c: ReportContent) -> None:
+    if c.insertion is None:
+        return
+    page.section("insertion", "8. Pin insertion (paper section 4.2, Figures 12-14)",
+                 "The paper's scenario (cases/paper/insertion.toml): force-limited position control over four 40 Hz "
+                 "force-controlled actuators, the machine's compliance in series with an elastic pin-board contact. "
+                 "The contact force against time with and without the force limiter (dashed: the limit); the table "
+                 "gives the summary of both runs.")
+    fig = go.Figure()
+    for run, name in zip(c.insertion, ("with the limiter", "without the limiter")):
+        fig.add_scatter(x=run.column("time_s"), y=run.column("contact_force_n"), mode="lines", name=name)
+    fig.add_hline(y=c.insertion[0].summary["force_limit_n"], line={"dash": "dash", "color": "black"})
+    fig.update_layout(height=420, xaxis={"title": {"text": "time [s]"}}, yaxis={"title": {"text": "contact force [N]"}})
+    page.figure(fig)
+    keys = ("peak_contact_force_n", "overshoot_n", "steady_insertion_force_n", "steady_insertion_depth_m",
+            "positioning_error_m", "settling_time_s")
+    records = [{"quantity": k, "with_limiter": c.insertion[0].summary[k], "without_limiter": c.insertion[1].summary[k]}
+               for k in keys]
+    page.add(_table("insertion", [("quantity", "quantity (SI)"), ("with_limiter", "with the limiter"),
+                                  ("without_limiter", "without")], records))
+    page.add(_links("insertion/simulation.json", "insertion/simulation.csv"))
+
+
 def write_html_report(out_dir: Path | str, content: ReportContent, overwrite: bool = False) -> Path:
     """Write ``report.html`` and ``plotly.min.js`` (the offline plotly bundle) into out_dir; returns the page."""
     out = Path(out_dir)
@@ -286,7 +311,7 @@ def write_html_report(out_dir: Path | str, content: ReportContent, overwrite: bo
     page.add(f"<h1>pressfit report: {html.escape(m.name)}</h1><p>Machine file: <code>{html.escape(m.source)}</code>. "
              "SI units throughout. The same numbers as <a href=\"report.md\">report.md</a>, interactive.</p>")
     for section in (_scene_section, _tables_section, _kinematics_section, _envelope_section, _stiffness_section,
-                    _preload_section, _interference_section):
+                    _preload_section, _interference_section, _insertion_section):
         section(page, content)
     write_text(out / "plotly.min.js", get_plotlyjs(), overwrite)
     doc = (f"<!DOCTYPE html>\n<html lang=\"en\"><head><meta charset=\"utf-8\"><title>pressfit report: "

@@ -12,7 +12,9 @@ from pathlib import Path
 import numpy as np
 from tqdm import tqdm
 
+from pressfit.description.cases import load_case
 from pressfit.description.machine import Machine
+from pressfit.dynamics.insertion import simulate_insertion
 from pressfit.geometry import interference
 from pressfit.kinematics import workspace
 from pressfit.mechanics import condensed
@@ -21,9 +23,10 @@ from pressfit.output import maps, plots
 from pressfit.output.files import write_csv, write_json, write_text
 from pressfit.output.html_report import ReportContent, write_html_report
 from pressfit.output.scene3d import SceneCase
-from pressfit.studies import cad_fit
+from pressfit.output.simulation import write_simulation
+from pressfit.shipped import cases_dir
+from pressfit.studies import cad_fit, preload_study, workspace_envelope
 from pressfit.studies import paper_tables as tables
-from pressfit.studies import preload_study, workspace_envelope
 
 
 def _md_table(header: list[str], rows: list[list[object]]) -> str:
@@ -40,83 +43,116 @@ def write_report(machine: Machine, out_dir: Path | str, overwrite: bool = False,
     ``quick`` uses coarser grids (for tests and previews); the default grids are the design ones.
     """
     out = Path(out_dir)
-    steps = tqdm(total=7, desc="report", disable=not progress, unit="section")
+    steps = tqdm(total=8, desc="report", disable=not progress, unit="section")
     md = [f"# pressfit report: {machine.name}", "",
           f"Machine file: `{machine.source}`. SI units throughout. Interactive version "
           "(3D view of the loaded machine, sortable tables, zoomable plots): [report.html](report.html).", ""]
-
-    solutions = tables.solve_paper_cases()
-    entries = tables.paper_tables(solutions=solutions)
-    write_text(out / "tables.md", tables.to_markdown(entries), overwrite)
-    write_csv(out / "tables.csv", *tables.to_rows(entries), overwrite=overwrite)
-    write_json(out / "tables.json", [e.as_dict() for e in entries], overwrite)
-    md += ["## 1. The paper's Tables 5 and 6", "",
-           "Cases A, B, C of `cases/paper/` (700 N press reaction, +y, at the plate centre), actuator section. "
-           "The map from the paper's CAD legs, signs and axes to ours is stated in `pressfit/tables.py`; "
-           "why B and C differ from the paper is explained in README.md (\"Tables 5 and 6\").", "",
-           tables.to_markdown(entries)]
-    md += cad_fit_section(out, overwrite, quick)
-    steps.update()
-
-    heights = [0.6] if quick else list(workspace.DEFAULT_HEIGHTS_M)
-    summ, _, plane_maps = maps.write_kinematic_maps(machine, out / "kinematics", heights, overwrite=overwrite)
-    rng = summ["height_range"][0]
-    md += ["## 2. Kinematics and workspace (paper section 4.1)", "",
-           f"The required {2 * machine.workspace.x_half_width_m * 1000:g} x "
-           f"{2 * machine.workspace.z_half_width_m * 1000:g} mm square is reachable for y_h in "
-           f"[{rng['y_min_m']:.5f}, {rng['y_max_m']:.5f}] m.", "",
-           _md_table(["y_h [m]", "square rotation [deg]", "n min", "n max", "n variation", "F_y max"],
-                     [[s["y_m"], s["angle_deg"], s["dexterity_min"], s["dexterity_max"],
-                       s["dexterity_variation"], s["force_index_max"][1]] for s in summ["squares"]]), ""]
-    md += [f"![maps y={y:.3f}](kinematics/maps_y{y:.3f}.png)" for y in heights] + [""]
-    steps.update()
-
-    ys = np.linspace(0.5, 0.75, 3 if quick else 11)
-    env = workspace_envelope.load_envelope(machine, ys, n_xz=11 if quick else 41,
-                                  loads_n=workspace_envelope.press_loads(700.0, np.radians(5.0)), progress=False)
-    maps.write_load_envelope(env, out / "envelope", overwrite)
-    header, rows = workspace_envelope.envelope_rows(env)
-    md += ["## 3. Workspace load envelope (design loads)", "",
-           f"700 N press reaction within a 5 degree cone, over the required square at y_h = {ys[0]:g} ... "
-           f"{ys[-1]:g} m; exact condensed linear model (docs/conventions.md). Use `pressfit check` with a case "
-           "file to refine the worst poses with the nonlinear solver.", "", _md_table(header, rows), ""]
-    md += [f"![{p.name}](envelope/{p.name})" for p in sorted((out / "envelope").glob("*.png"))] + [""]
-    steps.update()
-
-    md += ["## 4. Stiffness", ""]
-    stiffness = [condensed.stiffness_maps(machine, y, n=21 if quick else 51) for y in (0.6, 0.72)]
-    for smaps in stiffness:
-        paths = maps.write_stiffness_maps(smaps, out / "stiffness", overwrite)
-        md += [f"![{p.name}](stiffness/{p.name})" for p in paths if p.suffix == ".png"]
-    md += [""]
-    steps.update()
-
-    preload_md, studies = _preload_section(machine, out, overwrite, quick)
-    md += preload_md
-    steps.update()
-
-    im = interference.build_interference(machine)
-    sweep = interference.workspace_sweep(im, points=11 if quick else 41, heights=3 if quick else 9)
-    maps.write_interference_sweep(sweep, out / "interference", overwrite)
-    md += ["## 6. Leg interference (Coal)", "",
-           f"Minimum signed distance per pair kind over the required workspace (capsule legs; margin "
-           f"{sweep.margin_m * 1000:g} mm: {'PASS' if sweep.passed else 'FAIL'}).", "",
-           _md_table(["pair kind", "min distance [m]", "pair", "pose [m]"],
-                     [[k, v["distance_m"], v["pair"], np.round(v["pose_m"], 4).tolist()]
-                      for k, v in sweep.kind_minima().items()]), ""]
-    md += [f"![{p.name}](interference/{p.name})" for p in sorted((out / "interference").glob("*.png"))] + [""]
-    steps.update()
-    write_json(out / "summary.json", {"workspace": summ, "interference": sweep.kind_minima()}, overwrite)
+    sections = (_tables_section, _kinematics_section, _envelope_section, _stiffness_section, _preload_section,
+                _interference_section, _insertion_section)
+    parts: dict[str, object] = {}
+    for section in sections:
+        md += section(machine, out, overwrite, quick, parts)
+        steps.update()
+    write_json(out / "summary.json", {"workspace": parts["summary"], "interference": parts["interference"]
+                                      .kind_minima()}, overwrite)
     path = write_text(out / "report.md", "\n".join(md) + "\n", overwrite)
-
-    scene = [_worst_case(machine, env)] + [_scene_case(f"paper case {s.case.name.removeprefix('paper-')}", s.nonlinear)
-                                               for s in solutions]
+    scene = [_worst_case(machine, parts["envelope"])] + [
+        _scene_case(f"paper case {s.case.name.removeprefix('paper-')}", s.nonlinear) for s in parts["solutions"]]
+    sweep = parts["interference"]
     write_html_report(out, ReportContent(
-        machine, scene, [e.as_dict() for e in entries], plane_maps, env, [dict(zip(header, r)) for r in rows],
-        stiffness, studies, sweep, [{"kind": k, **v} for k, v in sweep.kind_minima().items()]), overwrite)
+        machine, scene, [e.as_dict() for e in parts["entries"]], parts["plane_maps"], parts["envelope"],
+        parts["envelope_table"], parts["stiffness"], parts["studies"], sweep,
+        [{"kind": k, **v} for k, v in sweep.kind_minima().items()], parts["insertion"]), overwrite)
     steps.update()
     steps.close()
     return path
+
+
+Parts = dict[str, object]  # what one section computed and a later one (or the HTML page) shows
+
+
+def _tables_section(machine: Machine, out: Path, overwrite: bool, quick: bool, parts: Parts) -> list[str]:
+    parts["solutions"] = solutions = tables.solve_paper_cases()
+    parts["entries"] = entries = tables.paper_tables(solutions=solutions)
+    write_text(out / "tables.md", tables.to_markdown(entries), overwrite)
+    write_csv(out / "tables.csv", *tables.to_rows(entries), overwrite=overwrite)
+    write_json(out / "tables.json", [e.as_dict() for e in entries], overwrite)
+    md = ["## 1. The paper's Tables 5 and 6", "",
+          "Cases A, B, C of `cases/paper/` (700 N press reaction, +y, at the plate centre), actuator section. "
+          "The map from the paper's CAD legs, signs and axes to ours is stated in `pressfit/studies/paper_tables.py`;"
+          " why B and C differ from the paper is explained in README.md (\"Tables 5 and 6\").", "",
+          tables.to_markdown(entries)]
+    return md + cad_fit_section(out, overwrite, quick)
+
+
+def _kinematics_section(machine: Machine, out: Path, overwrite: bool, quick: bool, parts: Parts) -> list[str]:
+    heights = [0.6] if quick else list(workspace.DEFAULT_HEIGHTS_M)
+    summ, _, parts["plane_maps"] = maps.write_kinematic_maps(machine, out / "kinematics", heights, overwrite=overwrite)
+    parts["summary"] = summ
+    rng = summ["height_range"][0]
+    return ["## 2. Kinematics and workspace (paper section 4.1)", "",
+            f"The required {2 * machine.workspace.x_half_width_m * 1000:g} x "
+            f"{2 * machine.workspace.z_half_width_m * 1000:g} mm square is reachable for y_h in "
+            f"[{rng['y_min_m']:.5f}, {rng['y_max_m']:.5f}] m.", "",
+            _md_table(["y_h [m]", "square rotation [deg]", "n min", "n max", "n variation", "F_y max"],
+                      [[s["y_m"], s["angle_deg"], s["dexterity_min"], s["dexterity_max"],
+                        s["dexterity_variation"], s["force_index_max"][1]] for s in summ["squares"]]), ""
+            ] + [f"![maps y={y:.3f}](kinematics/maps_y{y:.3f}.png)" for y in heights] + [""]
+
+
+def _envelope_section(machine: Machine, out: Path, overwrite: bool, quick: bool, parts: Parts) -> list[str]:
+    ys = np.linspace(0.5, 0.75, 3 if quick else 11)
+    parts["envelope"] = env = workspace_envelope.load_envelope(
+        machine, ys, n_xz=11 if quick else 41, loads_n=workspace_envelope.press_loads(700.0, np.radians(5.0)),
+        progress=False)
+    maps.write_load_envelope(env, out / "envelope", overwrite)
+    header, rows = workspace_envelope.envelope_rows(env)
+    parts["envelope_table"] = [dict(zip(header, r)) for r in rows]
+    return ["## 3. Workspace load envelope (design loads)", "",
+            f"700 N press reaction within a 5 degree cone, over the required square at y_h = {ys[0]:g} ... "
+            f"{ys[-1]:g} m; exact condensed linear model (docs/conventions.md). Use `pressfit check` with a case "
+            "file to refine the worst poses with the nonlinear solver.", "", _md_table(header, rows), ""
+            ] + [f"![{p.name}](envelope/{p.name})" for p in sorted((out / "envelope").glob("*.png"))] + [""]
+
+
+def _stiffness_section(machine: Machine, out: Path, overwrite: bool, quick: bool, parts: Parts) -> list[str]:
+    md = ["## 4. Stiffness", ""]
+    parts["stiffness"] = stiffness = [condensed.stiffness_maps(machine, y, n=21 if quick else 51) for y in (0.6, 0.72)]
+    for smaps in stiffness:
+        paths = maps.write_stiffness_maps(smaps, out / "stiffness", overwrite)
+        md += [f"![{p.name}](stiffness/{p.name})" for p in paths if p.suffix == ".png"]
+    return md + [""]
+
+
+def _interference_section(machine: Machine, out: Path, overwrite: bool, quick: bool, parts: Parts) -> list[str]:
+    im = interference.build_interference(machine)
+    parts["interference"] = sweep = interference.workspace_sweep(im, points=11 if quick else 41,
+                                                                 heights=3 if quick else 9)
+    maps.write_interference_sweep(sweep, out / "interference", overwrite)
+    return ["## 6. Leg interference (Coal)", "",
+            f"Minimum signed distance per pair kind over the required workspace (capsule legs; margin "
+            f"{sweep.margin_m * 1000:g} mm: {'PASS' if sweep.passed else 'FAIL'}).", "",
+            _md_table(["pair kind", "min distance [m]", "pair", "pose [m]"],
+                      [[k, v["distance_m"], v["pair"], np.round(v["pose_m"], 4).tolist()]
+                       for k, v in sweep.kind_minima().items()]), ""
+            ] + [f"![{p.name}](interference/{p.name})" for p in sorted((out / "interference").glob("*.png"))] + [""]
+
+
+def _insertion_section(machine: Machine, out: Path, overwrite: bool, quick: bool, parts: Parts) -> list[str]:
+    """The paper's insertion scenario (``cases/paper/insertion.toml``) with and without the force limiter."""
+    case = load_case(cases_dir() / "paper" / "insertion.toml")
+    runs = simulate_insertion(case, limiter=True), simulate_insertion(case, limiter=False)
+    parts["insertion"] = runs
+    write_simulation(runs[0], out / "insertion", overwrite, comparison=runs[1])
+    keys = ("peak_contact_force_n", "overshoot_n", "steady_insertion_force_n", "steady_insertion_depth_m",
+            "positioning_error_m", "settling_time_s")
+    return ["## 7. Pin insertion (paper section 4.2, Figures 12-14)", "",
+            f"`{case.path}`: force-limited position control, 40 Hz force-controlled actuators, the machine's "
+            "compliance in series with an elastic pin-board contact; with and without the force limiter "
+            "(`pressfit simulate`).", "",
+            _md_table(["quantity", "with the limiter", "without"],
+                      [[k, runs[0].summary[k], runs[1].summary[k]] for k in keys]), "",
+            "![insertion](insertion/simulation.png)", ""]
 
 
 def cad_fit_section(out: Path, overwrite: bool, quick: bool) -> list[str]:
@@ -153,10 +189,8 @@ def _scene_case(title: str, eq: Equilibrium) -> SceneCase:
                      f"({', '.join(f'{v:.0f}' for v in eq.load[:3])}) N", eq)
 
 
-def _preload_section(machine: Machine, out: Path, overwrite: bool,
-                     quick: bool) -> tuple[list[str], list[tuple[str, preload_study.PreloadStudy]]]:
-    """Clearance vs preload at pose A and off-centre: the stiffness that preload buys back (Markdown and studies)."""
-
+def _preload_section(machine: Machine, out: Path, overwrite: bool, quick: bool, parts: Parts) -> list[str]:
+    """Clearance vs preload at pose A and off-centre: the stiffness that preload buys back."""
     md = ["## 5. Clearance and preload", "",
           "Axial play g at each cardan (smoothed dead zone, contact stiffness from the machine file), "
           "actuator preload a4 along v_p (force mode), then the press load 0 ... 700 N (+y). The critical "
@@ -171,4 +205,5 @@ def _preload_section(machine: Machine, out: Path, overwrite: bool,
         paths = maps.write_preload_study(study, out / "preload" / name, overwrite)
         md += [f"### {name.replace('_', ' ')} {list(pose)} m", "", "```", preload_study.format_answers(study), "```", ""]
         md += [f"![{p.name}](preload/{name}/{p.name})" for p in paths if p.suffix == ".png"] + [""]
-    return md, studies
+    parts["studies"] = studies
+    return md
