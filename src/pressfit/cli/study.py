@@ -110,8 +110,8 @@ def study_montecarlo_cmd(case_file: Path, samples: int | None, seed: int | None,
 @study_group.command("design")
 @click.argument("case_file", type=click.Path(path_type=Path))
 @click.option("--trials", type=click.IntRange(1), help="Designs to evaluate (NSGA-II; default: the case's [design]).")
-@click.option("--workers", type=click.IntRange(1), help="Worker processes of the local cluster (default: one per core).")
-@click.option("--scheduler", help="Address of a running Dask scheduler, e.g. tcp://10.0.0.5:8786 (instead of --workers).")
+@click.option("--workers", type=click.IntRange(1), help="Local cluster worker processes (default: one per core).")
+@click.option("--scheduler", help="Address of a running Dask scheduler, e.g. tcp://10.0.0.5:8786 (not with --workers).")
 @click.option("--out", "out_dir", type=click.Path(path_type=Path), default=Path("out/design"), show_default=True,
               help="Directory for trials.parquet, pareto.parquet, summary.json, pareto.png, designs/*.toml.")
 @click.option("--overwrite", is_flag=True, help="Replace existing output files.")

@@ -318,7 +318,8 @@ class Design(_Strict):
     population: Annotated[int, Field(ge=2, le=10_000)] = 16
     grid_points: Annotated[int, Field(ge=2, le=1000)] = 5
     seed: Annotated[int, Field(ge=0)] = 0
-    objectives: Annotated[list[Literal[DESIGN_OBJECTIVES]], Field(min_length=1, max_length=5)]  # type: ignore[valid-type]
+    objectives: Annotated[list[Literal[DESIGN_OBJECTIVES]],  # type: ignore[valid-type]
+                          Field(min_length=1, max_length=5)]
     heights_m: Range
     height_levels: Annotated[int, Field(ge=1, le=100)] = 3
     grid_xz: Annotated[int, Field(ge=2, le=201)] = 11

@@ -120,7 +120,8 @@ def violation(plan: DesignPlan, metrics: dict[str, float]) -> float:
     """Sum of the relative constraint violations (0: feasible), the required heights included."""
     d = plan.design
     span = max(d.heights_m[1] - d.heights_m[0], 1e-3)
-    total = (max(0.0, metrics["height_min_m"] - d.heights_m[0]) + max(0.0, d.heights_m[1] - metrics["height_max_m"])) / span
+    lo, hi = d.heights_m
+    total = (max(0.0, metrics["height_min_m"] - lo) + max(0.0, hi - metrics["height_max_m"])) / span
     for key, limit in d.constraints.model_dump().items():
         if limit is None:
             continue

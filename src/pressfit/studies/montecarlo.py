@@ -286,7 +286,8 @@ def _fast_rows(plan: MonteCarloPlan, nominal: _Nominal, setups: list[_SampleLoad
     """The samples of ``setups`` (sharing ``solver``'s machine) in one batched solve over samples x poses x
     loads; a failing batch is split to find the failing samples. Checks the small-strain range per solve."""
     n, p, w = len(setups), len(plan.poses_m), len(plan.wrenches)
-    per_solve = lambda a: np.stack([np.broadcast_to(a(s)[:, None], (p, w) + a(s).shape[1:]) for s in setups])  # noqa: E731
+    per_solve = lambda a: np.stack(  # noqa: E731
+        [np.broadcast_to(a(s)[:, None], (p, w) + a(s).shape[1:]) for s in setups])
     try:
         be = solver.solve_batch(np.broadcast_to(plan.poses_m[None, :, None], (n, p, w, 3)).reshape(-1, 3),
                                 np.stack([np.broadcast_to(s.wrenches, (p, w, 6)) for s in setups]).reshape(-1, 6),
@@ -356,11 +357,12 @@ def evaluate_chunk(plan: MonteCarloPlan, k: int, seed: np.random.SeedSequence) -
     else:
         rows = _evaluate_fast(plan, samples, azimuths)
     failed = dict.fromkeys(OUTPUTS + EXTRA_OUTPUTS, math.nan)
-    cols: dict[str, np.ndarray] = {"sample": np.arange(start, stop, dtype=np.int64),
-                                   "status": np.array(["ok" if isinstance(r, dict) else type(r).__name__ for r in rows])}
+    status = ["ok" if isinstance(r, dict) else type(r).__name__ for r in rows]
+    cols: dict[str, np.ndarray] = {"sample": np.arange(start, stop, dtype=np.int64), "status": np.array(status)}
     names = plan.input_columns()
     cols.update(zip(names, np.concatenate([x[name] for name, _ in plan.inputs], axis=1).T))
-    cols.update({key: np.array([(r if isinstance(r, dict) else failed)[key] for r in rows]) for key in OUTPUTS + EXTRA_OUTPUTS})
+    cols.update({key: np.array([(r if isinstance(r, dict) else failed)[key] for r in rows])
+                 for key in OUTPUTS + EXTRA_OUTPUTS})
     return cols
 
 
