@@ -91,11 +91,13 @@ def _run(client: Client, task: Callable[..., object], chunk_args: Sequence[tuple
     try:
         with tqdm(total=int(sum(sizes)), initial=int(sum(sizes)) - int(sum(sizes[k] for k in todo)), unit="sample",
                   disable=not progress, desc=name) as bar:
-            for fut in as_completed(futures):
+            # results fetched on the client's event loop (a fut.result() from this thread can race with the
+            # rescheduling of a chunk whose worker died: "Event bound to a different event loop")
+            for fut, result in as_completed(futures, with_results=True, raise_errors=False):
                 k = futures[fut]
                 if fut.status == "error":
-                    raise ClusterError(f"{name} {k} failed on the cluster: {fut.exception()!r}")
-                sink(k, fut.result())
+                    raise ClusterError(f"{name} {k} failed on the cluster: {result!r}")
+                sink(k, result)
                 bar.update(sizes[k])
     finally:
         client.cancel(list(futures))
