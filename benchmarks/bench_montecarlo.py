@@ -3,7 +3,8 @@ processes, scaling efficiency, output volume per sample, and the projection to 1
 
 Run: ``python benchmarks/bench_montecarlo.py [SAMPLES]`` (default 400) on the shipped 3-pose case
 cases/studies/montecarlo_tolerances.toml, in two variants: its full input set (joint position errors: a
-Pinocchio model is built per sample) and lengths + load tilt only (one model per chunk). Goal of issue
+model is built per sample; chunks of 50) and lengths + load tilt only (one model and one batched fast solve
+per chunk of 500). Goal of issue
 12: 1e5 samples of a 3-pose case in at most 5 minutes on 2 cores. Not a test: timings depend on the machine.
 """
 
@@ -21,13 +22,22 @@ os.environ.setdefault("OPENBLAS_NUM_THREADS", "1")
 from pressfit.description.cases import load_case  # noqa: E402
 from pressfit.output.montecarlo_files import CHUNK_DIR, run_montecarlo  # noqa: E402
 from pressfit.shipped import cases_dir  # noqa: E402
+from pressfit.studies import montecarlo  # noqa: E402
 
 CASE = cases_dir() / "studies" / "montecarlo_tolerances.toml"
 
 
-def _run(case, samples: int, workers: int, out: Path) -> tuple[float, int]:
+def _in_process(case, chunk: int) -> float:
+    """Seconds per sample of one chunk evaluated in this process (no cluster)."""
+    plan = montecarlo.plan_from_case(case, samples=chunk, chunk_size=chunk)
     t = time.perf_counter()
-    run_montecarlo(case, out, samples=samples, chunk_size=25, workers=workers, progress=False)
+    montecarlo.evaluate_chunk(plan, 0, montecarlo.chunk_seeds(plan)[0])
+    return (time.perf_counter() - t) / chunk
+
+
+def _run(case, samples: int, workers: int, out: Path, chunk: int) -> tuple[float, int]:
+    t = time.perf_counter()
+    run_montecarlo(case, out, samples=samples, chunk_size=chunk, workers=workers, progress=False)
     dt = time.perf_counter() - t
     return dt, sum(p.stat().st_size for p in (out / CHUNK_DIR).iterdir())
 
@@ -39,11 +49,12 @@ def main() -> None:
         "inputs": full.montecarlo.inputs.model_copy(update={"base_point_error_m": None,  # type: ignore[union-attr]
                                                             "plate_point_error_m": None})})})
     with tempfile.TemporaryDirectory() as tmp:
-        for label, case in (("lengths + load tilt (model per chunk)", light),
-                            ("all inputs (model per sample)", full)):
+        for label, case, chunk in (("lengths + load tilt (model per chunk)", light, 500),
+                                   ("all inputs (model per sample)", full, 50)):
+            print(f"{label}: {_in_process(case, chunk) * 1e3:.2f} ms/sample in process (chunk of {chunk})")
             rate = {}
             for workers in (1, 2):
-                dt, size = _run(case, samples, workers, Path(tmp) / f"{label[:3]}{workers}")
+                dt, size = _run(case, samples, workers, Path(tmp) / f"{label[:3]}{workers}", chunk)
                 rate[workers] = samples / dt
                 print(f"{label}, {workers} worker(s): {samples} samples in {dt:.1f} s = {rate[workers]:.1f} "
                       f"samples/s (cluster start included); {size / samples:.0f} bytes/sample on disk")

@@ -15,7 +15,7 @@ from pressfit.output.files import check_directory, to_json, write_directory
 
 @click.group("study")
 def study_group() -> None:
-    """Parameter studies: ``pressfit study preload``, ``montecarlo``, ``insertion``."""
+    """Parameter studies: ``pressfit study preload``, ``montecarlo``, ``design``, ``insertion``."""
 
 
 @study_group.command("preload", context_settings={"ignore_unknown_options": True})  # negative numbers
@@ -138,4 +138,34 @@ def study_insertion_cmd(case_file: Path, preloads: list[float] | None, clearance
         click.echo(f"{r[0]:>11.4g}  {r[1] * 1e6:>14.4g}  {r[2]:>12.4g}  {r[4] * 1e6:>15.3f}  {r[5] * 1e6:>12.3f}  "
                    f"{r[6]:>8.3f}  {r[7]:>13.3f}")
     for p in written:
+        click.echo(f"wrote {p}")
+
+
+@study_group.command("design")
+@click.argument("case_file", type=click.Path(path_type=Path))
+@click.option("--trials", type=click.IntRange(1), help="Designs to evaluate (NSGA-II; default: the case's [design]).")
+@click.option("--workers", type=click.IntRange(1), help="Local cluster worker processes (default: one per core).")
+@click.option("--scheduler", help="Address of a running Dask scheduler, e.g. tcp://10.0.0.5:8786 (not with --workers).")
+@click.option("--out", "out_dir", type=click.Path(path_type=Path), default=Path("out/design"), show_default=True,
+              help="Directory for trials.parquet, pareto.parquet, summary.json, pareto.png, designs/*.toml.")
+@click.option("--overwrite", is_flag=True, help="Replace existing output files.")
+@click.option("--json", "as_json", is_flag=True, help="Print the summary as JSON.")
+@click.option("--progress/--no-progress", default=True, help="Show a progress bar over designs.")
+@user_errors
+def study_design_cmd(case_file: Path, trials: int | None, workers: int | None, scheduler: str | None, out_dir: Path,
+                     overwrite: bool, as_json: bool, progress: bool) -> None:
+    """Design search: the Pareto front of the case's objectives under its constraints over the workspace,
+    and the best designs as machine files, on a Dask cluster (SI units)."""
+    from pressfit.description.cases import load_case
+    from pressfit.output.design_files import run_design_study, summary
+
+    run = run_design_study(load_case(case_file), out_dir, trials=trials, workers=workers, scheduler=scheduler,
+                           overwrite=overwrite, progress=progress)
+    s = summary(run.result)
+    if as_json:
+        click.echo(to_json(s | {"outputs": [str(p) for p in run.written]}))
+        return
+    click.echo(f"{s['trials']} designs ({s['feasible']} feasible, {s['failed']} failed); Pareto front of "
+               f"{', '.join(s['objectives'])}: {len(s['pareto'])} designs")  # type: ignore[arg-type]
+    for p in run.written:
         click.echo(f"wrote {p}")

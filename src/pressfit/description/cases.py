@@ -265,6 +265,80 @@ class MonteCarlo(_Strict):
     inputs: MonteCarloInputs
 
 
+Range = Annotated[list[Positive], Field(min_length=2, max_length=2)]
+DESIGN_PARAMETERS = {  # [design.parameters] key -> the machine file key it sets (SI)
+    "base_half_side_m": "geometry.base_half_side_m", "plate_half_side_m": "geometry.plate_half_side_m",
+    "cylinder_outer_diameter_m": "cylinder.outer_diameter_m", "cylinder_wall_thickness_m": "cylinder.wall_thickness_m",
+    "stem_diameter_m": "stem.diameter_m", "actuator_axial_stiffness_n_per_m": "actuator.axial_stiffness_n_per_m"}
+DESIGN_OBJECTIVES = ("peak_torsion_nm", "peak_bending_nm", "peak_axial_force_n", "moving_mass_kg",
+                     "max_vertical_compliance_m_per_n")  # all minimised
+
+
+class DesignParameters(_Strict):
+    """Design variables, each a range [min, max] in the unit of its name (DESIGN_PARAMETERS: the machine key)."""
+
+    base_half_side_m: Range | None = None
+    plate_half_side_m: Range | None = None
+    cylinder_outer_diameter_m: Range | None = None
+    cylinder_wall_thickness_m: Range | None = None
+    stem_diameter_m: Range | None = None
+    actuator_axial_stiffness_n_per_m: Range | None = None
+
+    @model_validator(mode="after")
+    def _ranges(self) -> DesignParameters:
+        given = self.ranges()
+        if not given:
+            raise ValueError("name at least one design parameter range")
+        for k, (lo, hi) in given.items():
+            if not lo < hi:
+                raise ValueError(f"{k} must be [min, max] with min < max")
+        return self
+
+    def ranges(self) -> dict[str, tuple[float, float]]:
+        return {k: tuple(v) for k in DESIGN_PARAMETERS if (v := getattr(self, k)) is not None}  # type: ignore[misc]
+
+
+class DesignConstraints(_Strict):
+    """Limits every accepted design meets (SI), over the workspace of the design study."""
+
+    max_peak_torsion_nm: Positive | None = None
+    max_peak_bending_nm: Positive | None = None
+    max_peak_axial_force_n: Positive | None = None
+    max_moving_mass_kg: Positive | None = None
+    min_vertical_stiffness_n_per_m: Positive | None = None  # 1 / vertical compliance at every workspace pose
+
+
+class Design(_Strict):
+    """``pressfit study design``: search the ``parameters`` ranges for designs that minimise ``objectives``
+    (DESIGN_OBJECTIVES) under ``constraints`` and the ``[loads]``, over the required square at
+    ``height_levels`` heights spanning ``heights_m`` (m), which every design must reach entirely (the
+    height-range constraint). ``search = "nsga2"``: Optuna's NSGA-II, ``trials`` designs in generations of
+    ``population``, seeded by ``seed``; ``"grid"``: ``grid_points`` values per parameter. ``best``: machine
+    files written from the Pareto front; ``grid_xz``: workspace grid points per side."""
+
+    search: Literal["nsga2", "grid"] = "nsga2"
+    trials: Annotated[int, Field(ge=1, le=1_000_000)] = 64
+    population: Annotated[int, Field(ge=2, le=10_000)] = 16
+    grid_points: Annotated[int, Field(ge=2, le=1000)] = 5
+    seed: Annotated[int, Field(ge=0)] = 0
+    objectives: Annotated[list[Literal[DESIGN_OBJECTIVES]],  # type: ignore[valid-type]
+                          Field(min_length=1, max_length=5)]
+    heights_m: Range
+    height_levels: Annotated[int, Field(ge=1, le=100)] = 3
+    grid_xz: Annotated[int, Field(ge=2, le=201)] = 11
+    best: Annotated[int, Field(ge=1, le=100)] = 3
+    parameters: DesignParameters
+    constraints: DesignConstraints = DesignConstraints()
+
+    @model_validator(mode="after")
+    def _checks(self) -> Design:
+        if len(set(self.objectives)) != len(self.objectives):
+            raise ValueError("objectives must be distinct")
+        if self.heights_m[0] > self.heights_m[1]:
+            raise ValueError("heights_m must be [low, high] with low <= high")
+        return self
+
+
 class Contact(_Strict):
     """Tool-board contact of the insertion simulation (:mod:`pressfit.dynamics.contact`). The board's top
     face is the plane y = ``board_height_m``; the pin to insert sits on it at (x, z) = ``pin_position_m``.
@@ -361,8 +435,7 @@ class Case(_Strict):
     clearance: ClearanceSpec | None = None
     study: Study | None = None
     montecarlo: MonteCarlo | None = None
-
-
+    design: Design | None = None
     simulation: Simulation | None = None
     path: str = ""
 

@@ -15,7 +15,6 @@ run of its insertion scenario (:func:`evaluate_simulation`, lines keyed ``simula
 
 from __future__ import annotations
 
-from collections.abc import Callable
 from dataclasses import dataclass, field, replace
 from typing import Any
 from pathlib import Path
@@ -157,18 +156,26 @@ def condensed_quantities(res: condensed.CondensedResult, critical: np.ndarray) -
     return out
 
 
+def section_quantities(forces_n: np.ndarray, sections: np.ndarray, displacement_m: np.ndarray,
+                       rotation_rad: np.ndarray, critical: np.ndarray) -> dict[str, np.ndarray]:
+    """The limit quantities of a batch of solves (leading shape b): actuator forces (b, 4) (N, > 0 tension),
+    section wrenches (b, 4, sections, 6) (N, V_x, V_y in N; M_x, M_y, T in N m), plate displacement (b, 3), m,
+    and rotation (b, 3), rad, Euler loads ``critical`` (N, broadcast to (b, 4)). Per (solve, leg) arrays
+    (b, 4), worst over the sections, or (b,) for the plate quantities."""
+    out = _axial_quantities(forces_n, critical)
+    out.update({"max_shear_n": np.hypot(sections[..., 1], sections[..., 2]).max(-1),
+                "max_bending_nm": np.hypot(sections[..., 3], sections[..., 4]).max(-1),
+                "max_torsion_nm": np.abs(sections[..., 5]).max(-1),
+                "max_plate_deflection_m": np.linalg.norm(displacement_m, axis=-1),
+                "max_plate_tilt_rad": np.linalg.norm(rotation_rad, axis=-1)})
+    return out
+
+
 def equilibrium_quantities(eq: Equilibrium, critical: np.ndarray) -> dict[str, np.ndarray]:
     """The same quantities from a Pinocchio solve, worst over the base, actuator and plate sections."""
-    s = [[leg.sections[k] for k in SECTIONS] for leg in eq.legs]
-    worst: Callable[[Callable[..., float]], np.ndarray] = lambda f: np.array(  # noqa: E731
-        [[max(f(x) for x in leg) for leg in s]])
-    out = _axial_quantities(np.asarray(eq.actuator_forces_n, float)[None], critical)
-    out.update({"max_shear_n": worst(lambda x: np.hypot(x.V_x, x.V_y)),
-                "max_bending_nm": worst(lambda x: np.hypot(x.M_x, x.M_y)),
-                "max_torsion_nm": worst(lambda x: abs(x.T)),
-                "max_plate_deflection_m": np.array([np.linalg.norm(eq.plate_displacement_m)]),
-                "max_plate_tilt_rad": np.array([np.linalg.norm(eq.plate_rotation_rad)])})
-    return out
+    s = np.array([[list(leg.sections[k].as_dict().values()) for k in SECTIONS] for leg in eq.legs])
+    return section_quantities(np.asarray(eq.actuator_forces_n, float)[None], s[None], eq.plate_displacement_m[None],
+                              eq.plate_rotation_rad[None], critical)
 
 
 def _worst(values: np.ndarray, sense: str) -> tuple[float, int, int | None]:

@@ -46,15 +46,18 @@ from scipy import special, stats
 from pressfit import kinematics
 from pressfit.description.cases import Case, Distribution
 from pressfit.description.machine import Machine
-from pressfit.errors import PressfitError
+from pressfit.errors import PressfitError, UnstableEquilibriumError
 from pressfit.mechanics import buckling, statics
 from pressfit.mechanics.clearance import Clearance
-from pressfit.mechanics.model import MachineModel, build_model
-from pressfit.studies.limit_check import LIMITS, equilibrium_quantities
+from pressfit.mechanics.fast_statics import FastEquilibriumSolver
+from pressfit.mechanics.preload import rest_length_offsets
+from pressfit.studies.limit_check import LIMITS, equilibrium_quantities, section_quantities
 
 OUTPUTS = ("max_tension_n", "max_compression_n", "max_shear_n", "max_bending_nm", "max_torsion_nm",
            "max_actuator_force_n", "max_plate_deflection_m", "max_plate_tilt_rad", "min_buckling_safety_factor")
 EXTRA_OUTPUTS = ("internal_force_n", "residual")
+STABILITY_RECHECK_FACTOR = 2.0  # fast path: a sample with a leg above 1/2 its Euler load gets the reference solve
+_DL = 1e-5  # m, step of the central difference of the Euler load against the leg length
 CLEARANCE_STEPS = 8  # load continuation steps with cardan clearances (the dead zone needs a path)
 _AXES = "xyz"
 _SHAPES = {"actuator_length_offset_m": [f"leg{i}" for i in range(1, 5)],
@@ -78,6 +81,18 @@ class MonteCarloPlan:
     samples: int
     seed: int
     chunk_size: int
+    critical_n: np.ndarray  # (P, 4) Euler loads of the nominal legs at the poses, N
+    critical_slope_n_per_m: np.ndarray  # (P, 4) their derivative with the leg length, N/m
+
+    def critical_loads_n(self, lengths_m: np.ndarray) -> np.ndarray:
+        """Euler loads (P, 4), N, of legs of lengths (P, 4), m, near the nominal ones: first order about them
+        (relative error ~3 (dl / l)^2, below 1e-7 for joint errors under 0.1 mm at l >= 0.5 m; the exact
+        stepped-column solve costs ~10 ms per leg)."""
+        return self.critical_n + self.critical_slope_n_per_m * (lengths_m - self.nominal_lengths_m)
+
+    @property
+    def nominal_lengths_m(self) -> np.ndarray:
+        return kinematics.inverse_kinematics(self.machine, self.poses_m).lengths_m
 
     @property
     def n_chunks(self) -> int:
@@ -114,9 +129,12 @@ def plan_from_case(case: Case, samples: int | None = None, seed: int | None = No
     n = samples if samples is not None else mc.samples
     if n < 1:
         raise PressfitError(f"the number of samples must be at least 1, got {n}")
-    return MonteCarloPlan(case.name, case.machine(), case.poses.array(), case.loads.wrenches(), case.preload.a4,
+    machine, poses = case.machine(), case.poses.array()
+    lengths = kinematics.inverse_kinematics(machine, poses).lengths_m
+    crit = lambda d: np.vectorize(lambda v: buckling.leg_critical_load_n(machine, v))(lengths + d)  # noqa: E731
+    return MonteCarloPlan(case.name, machine, poses, case.loads.wrenches(), case.preload.a4,
                           case.preload.mode, inputs, n, mc.seed if seed is None else seed,
-                          chunk_size or mc.chunk_size)
+                          chunk_size or mc.chunk_size, crit(0.0), (crit(_DL) - crit(-_DL)) / (2 * _DL))
 
 
 def chunk_seeds(plan: MonteCarloPlan) -> list[np.random.SeedSequence]:
@@ -170,14 +188,14 @@ def _perturbed(machine: Machine, base: np.ndarray | None, plate: np.ndarray | No
     return machine.with_overrides({"legs": legs}, source=f"{machine.source} [montecarlo joint position errors]")
 
 
-def _solver_for(machine: Machine, clearance: Clearance | None, pose_m: np.ndarray) -> MachineModel:
-    """The one place a worker gets its solver: a Pinocchio model of the sample's machine (built at a
-    pose, retargeted by the solve to the others). Swap in a picklable solver object here once
-    :mod:`pressfit.mechanics.statics` offers one."""
-    return build_model(machine, pose_m, cardan_compliance=None if clearance is None else clearance.cardan_compliance())
+def _solver_for(machine: Machine, clearance: Clearance | None, pose_m: np.ndarray) -> statics.EquilibriumSolver:
+    """The reference solver of a sample's machine (Pinocchio model built at a pose, retargeted by the solve
+    to the others); the only path for cardan clearances and the stability re-check of the fast path."""
+    return statics.EquilibriumSolver(machine, pose_m=pose_m,
+                                     cardan_compliance=None if clearance is None else clearance.cardan_compliance())
 
 
-def _solve(mm: MachineModel, pose: np.ndarray, load: np.ndarray, offsets: np.ndarray,
+def _solve(mm: statics.EquilibriumSolver, pose: np.ndarray, load: np.ndarray, offsets: np.ndarray,
            clearance: Clearance | None) -> statics.Equilibrium:
     if clearance is None:
         return statics.solve_equilibrium(mm, pose, load, preload_offsets_m=offsets)
@@ -189,56 +207,164 @@ def _solve(mm: MachineModel, pose: np.ndarray, load: np.ndarray, offsets: np.nda
     return eq  # type: ignore[return-value]
 
 
-def evaluate_sample(plan: MonteCarloPlan, x: dict[str, np.ndarray], azimuth: float,
-                    model: MachineModel | None = None) -> dict[str, float]:
-    """Worst outputs over the case's poses and loads for one sample's inputs ``x`` (name -> values).
-    ``model``: the nominal machine's model, reused when the sample changes neither geometry nor joints."""
-    nominal = plan.machine
-    machine = _perturbed(nominal, x.get("base_point_error_m"), x.get("plate_point_error_m"))
-    g = x.get("cardan_clearance_m")
-    clearance = None if g is None else Clearance.per_joint(machine, g.tolist(), geometry="axial")
-    mm = model if machine is nominal and clearance is None and model is not None else \
-        _solver_for(machine, clearance, plan.poses_m[0])
+@dataclass(frozen=True)
+class _Nominal:
+    """Per pose of the plan, on the nominal machine: leg lengths (P, 4), m (the commanded lengths), preload
+    rest-length offsets (P, 4), m, and the preload vectors v_p (P, 4)."""
+
+    lengths_m: np.ndarray
+    preload_offsets_m: np.ndarray
+    preload_vectors: np.ndarray
+
+
+def _nominal(plan: MonteCarloPlan) -> _Nominal:
+    m, poses = plan.machine, plan.poses_m
+    lengths = kinematics.inverse_kinematics(m, poses).lengths_m
+    pre = np.array([rest_length_offsets(m, h, plan.preload_a4, plan.preload_mode) if plan.preload_a4
+                    else np.zeros(4) for h in poses])
+    return _Nominal(lengths, pre, np.array([kinematics.preload_vector(m, h) for h in poses]))
+
+
+@dataclass(frozen=True)
+class _SampleLoads:
+    """What one sample solves: its machine, wrenches (W, 6) (N, N m), actuator rest-length offsets per pose
+    (P, 4), m, its leg lengths (P, 4), m, and their Euler loads (P, 4), N."""
+
+    machine: Machine
+    wrenches: np.ndarray
+    offsets_m: np.ndarray
+    lengths_m: np.ndarray
+    critical_n: np.ndarray
+
+
+def _sample_loads(plan: MonteCarloPlan, nominal: _Nominal, x: dict[str, np.ndarray], azimuth: float) -> _SampleLoads:
+    machine = _perturbed(plan.machine, x.get("base_point_error_m"), x.get("plate_point_error_m"))
+    lengths = nominal.lengths_m if machine is plan.machine else \
+        kinematics.inverse_kinematics(machine, plan.poses_m).lengths_m
+    offsets = nominal.lengths_m - lengths + x.get("actuator_length_offset_m", np.zeros(4)) + nominal.preload_offsets_m
     wrenches = _tilted(plan.wrenches, float(x["load_tilt_rad"][0]), azimuth) if "load_tilt_rad" in x else plan.wrenches
-    worst = {k: (math.inf if LIMITS[k].sense == "min" else 0.0) for k in OUTPUTS} | {k: 0.0 for k in EXTRA_OUTPUTS}
-    for pose in plan.poses_m:
-        lengths = kinematics.inverse_kinematics(machine, pose).lengths_m
-        offsets = (kinematics.inverse_kinematics(nominal, pose).lengths_m - lengths
-                   + x.get("actuator_length_offset_m", np.zeros(4)))
-        if plan.preload_a4:
-            offsets = offsets + statics.preload_offsets(nominal, pose, plan.preload_a4, plan.preload_mode)
-        critical = np.array([buckling.leg_critical_load_n(machine, float(v)) for v in lengths])
-        vp = kinematics.preload_vector(nominal, pose)
-        for load in wrenches:
-            eq = _solve(mm, pose, load, offsets, clearance)
-            for key, v in equilibrium_quantities(eq, critical).items():
-                worst[key] = min(worst[key], float(v.min())) if LIMITS[key].sense == "min" else max(worst[key],
-                                                                                               float(v.max()))
-            worst["internal_force_n"] = max(worst["internal_force_n"], abs(float(vp @ eq.actuator_forces_n)))
-            worst["residual"] = max(worst["residual"], eq.residuals.worst())
-    return worst
+    return _SampleLoads(machine, wrenches, offsets, lengths, plan.critical_loads_n(lengths))
+
+
+def _sample_row(q: dict[str, np.ndarray], internal_n: np.ndarray, residual: np.ndarray) -> dict[str, float]:
+    """The worst of every output over one sample's m solves (arrays with m leading)."""
+    row = {k: float(q[k].min() if LIMITS[k].sense == "min" else q[k].max()) for k in OUTPUTS}
+    return row | {"internal_force_n": float(np.abs(internal_n).max()), "residual": float(residual.max())}
+
+
+def evaluate_sample(plan: MonteCarloPlan, x: dict[str, np.ndarray], azimuth: float,
+                    model: statics.EquilibriumSolver | None = None) -> dict[str, float]:
+    """Worst outputs over the case's poses and loads for one sample's inputs ``x`` (name -> values), by the
+    reference solver (stability checked with every solve). ``model``: the nominal machine's solver, reused
+    when the sample changes neither geometry nor joints."""
+    s = _sample_loads(plan, _nominal(plan), x, azimuth)
+    g = x.get("cardan_clearance_m")
+    clearance = None if g is None else Clearance.per_joint(s.machine, g.tolist(), geometry="axial")
+    solver = model if s.machine is plan.machine and clearance is None and model is not None else \
+        _solver_for(s.machine, clearance, plan.poses_m[0])
+    vp = kinematics.preload_vector
+    eqs = [(p, _solve(solver, pose, load, s.offsets_m[p], clearance)) for p, pose in enumerate(plan.poses_m)
+           for load in s.wrenches]
+    qs = [equilibrium_quantities(eq, s.critical_n[p]) for p, eq in eqs]
+    return _sample_row({k: np.stack([q[k] for q in qs]) for k in OUTPUTS},
+                       np.array([vp(plan.machine, eq.pose_m) @ eq.actuator_forces_n for _, eq in eqs]),
+                       np.array([eq.residuals.worst() for _, eq in eqs]))
+
+
+def solver_path(plan: MonteCarloPlan) -> str:
+    """Which solver the plan's samples take: the reference solver with cardan clearances (dead-zone springs,
+    which the fast solver refuses); else the batched fast solver, one model per chunk, or one model per
+    sample with joint position errors (they change the machine)."""
+    names = {n for n, _ in plan.inputs}
+    if "cardan_clearance_m" in names:
+        return "reference solver (cardan clearances), stability checked with every solve"
+    per = "sample" if names & {"base_point_error_m", "plate_point_error_m"} else "chunk"
+    return (f"fast batched solver, one model per {per}; samples with a leg above 1/{STABILITY_RECHECK_FACTOR:g} "
+            "of its Euler load re-solved by the reference solver (stability check)")
+
+
+def _fast_rows(plan: MonteCarloPlan, nominal: _Nominal, setups: list[_SampleLoads],
+               solver: FastEquilibriumSolver) -> list[dict[str, float] | PressfitError]:
+    """The samples of ``setups`` (sharing ``solver``'s machine) in one batched solve over samples x poses x
+    loads; a failing batch is split to find the failing samples. Checks the small-strain range per solve."""
+    n, p, w = len(setups), len(plan.poses_m), len(plan.wrenches)
+    per_solve = lambda a: np.stack(  # noqa: E731
+        [np.broadcast_to(a(s)[:, None], (p, w) + a(s).shape[1:]) for s in setups])
+    try:
+        be = solver.solve_batch(np.broadcast_to(plan.poses_m[None, :, None], (n, p, w, 3)).reshape(-1, 3),
+                                np.stack([np.broadcast_to(s.wrenches, (p, w, 6)) for s in setups]).reshape(-1, 6),
+                                preload_offsets_m=per_solve(lambda s: s.offsets_m).reshape(-1, 4))
+    except PressfitError as exc:
+        return [exc] if n == 1 else [r for s in setups for r in _fast_rows(plan, nominal, [s], solver)]
+    crit, lengths = per_solve(lambda s: s.critical_n).reshape(-1, 4), per_solve(lambda s: s.lengths_m).reshape(-1, 4)
+    q = section_quantities(be.actuator_forces_n, be.sections, be.plate_displacement_m, be.plate_rotation_rad, crit)
+    internal = (np.broadcast_to(nominal.preload_vectors[None, :, None], (n, p, w, 4)).reshape(-1, 4)
+                * be.actuator_forces_n).sum(1)
+    res = be.residuals.copy()
+    res[:, 4] /= be.length_scale_m
+    strain = np.abs(be.actuator_forces_n) * setups[0].machine.axial_compliance_m_per_n(lengths) / lengths
+    m = p * w
+    rows: list[dict[str, float] | PressfitError] = []
+    for j in range(n):
+        sl = slice(j * m, (j + 1) * m)
+        if strain[sl].max() > statics.MAX_AXIAL_STRAIN:
+            rows.append(UnstableEquilibriumError(f"a leg strains beyond {statics.MAX_AXIAL_STRAIN:g}"))
+            continue
+        rows.append(_sample_row({k: v[sl] for k, v in q.items()}, internal[sl], res[sl].max(1)))
+    return rows
+
+
+def _fast_solver(machine: Machine, pose_m: np.ndarray) -> FastEquilibriumSolver | PressfitError:
+    try:
+        return FastEquilibriumSolver(machine, pose_m=pose_m)
+    except PressfitError as exc:
+        return exc
+
+
+def _evaluate_fast(plan: MonteCarloPlan, x: list[dict[str, np.ndarray]], azimuths: np.ndarray
+                   ) -> list[dict[str, float] | PressfitError]:
+    """The fast path (:func:`solver_path`): batched solves, then the stability re-check of the samples that
+    come within STABILITY_RECHECK_FACTOR of a leg's Euler load by the reference solver."""
+    nominal = _nominal(plan)
+    setups = [_sample_loads(plan, nominal, xj, float(a)) for xj, a in zip(x, azimuths)]
+    if any(s.machine is not plan.machine for s in setups):  # joint position errors: a model per sample
+        solvers = [_fast_solver(s.machine, plan.poses_m[0]) for s in setups]
+        rows = [sv if isinstance(sv, PressfitError) else _fast_rows(plan, nominal, [s], sv)[0]
+                for s, sv in zip(setups, solvers)]
+    else:
+        rows = _fast_rows(plan, nominal, setups, FastEquilibriumSolver(plan.machine, pose_m=plan.poses_m[0]))
+    for j, r in enumerate(rows):
+        if isinstance(r, dict) and r["min_buckling_safety_factor"] < STABILITY_RECHECK_FACTOR:
+            try:
+                rows[j] = evaluate_sample(plan, x[j], float(azimuths[j]))
+            except PressfitError as exc:
+                rows[j] = exc
+    return rows
 
 
 def evaluate_chunk(plan: MonteCarloPlan, k: int, seed: np.random.SeedSequence) -> dict[str, np.ndarray]:
-    """Chunk k of the study (the task a worker runs): inputs, outputs and status per sample, as columns."""
+    """Chunk k of the study (the task a worker runs): inputs, outputs and status per sample, as columns.
+    The solver path is :func:`solver_path`; the columns do not depend on which worker runs the chunk."""
     x = draw_inputs(plan, k, seed)
     start, stop = plan.chunk_range(k)
-    rows: list[dict[str, float]] = []
-    status: list[str] = []
-    per_sample = {"base_point_error_m", "plate_point_error_m", "cardan_clearance_m"} & set(x)
-    model = None if per_sample else _solver_for(plan.machine, None, plan.poses_m[0])  # once per chunk
-    for j in range(stop - start):
-        try:
-            rows.append(evaluate_sample(plan, {name: v[j] for name, v in x.items()}, float(x["load_azimuth_rad"][j]),
-                                        model))
-            status.append("ok")
-        except PressfitError as exc:
-            rows.append(dict.fromkeys(OUTPUTS + EXTRA_OUTPUTS, math.nan))
-            status.append(type(exc).__name__)
+    samples = [{name: v[j] for name, v in x.items()} for j in range(stop - start)]
+    azimuths = x["load_azimuth_rad"]
+    if "cardan_clearance_m" in x:
+        rows: list[dict[str, float] | PressfitError] = []
+        for xj, a in zip(samples, azimuths):
+            try:
+                rows.append(evaluate_sample(plan, xj, float(a)))
+            except PressfitError as exc:
+                rows.append(exc)
+    else:
+        rows = _evaluate_fast(plan, samples, azimuths)
+    failed = dict.fromkeys(OUTPUTS + EXTRA_OUTPUTS, math.nan)
+    status = ["ok" if isinstance(r, dict) else type(r).__name__ for r in rows]
     cols: dict[str, np.ndarray] = {"sample": np.arange(start, stop, dtype=np.int64), "status": np.array(status)}
     names = plan.input_columns()
     cols.update(zip(names, np.concatenate([x[name] for name, _ in plan.inputs], axis=1).T))
-    cols.update({key: np.array([r[key] for r in rows]) for key in OUTPUTS + EXTRA_OUTPUTS})
+    cols.update({key: np.array([(r if isinstance(r, dict) else failed)[key] for r in rows])
+                 for key in OUTPUTS + EXTRA_OUTPUTS})
     return cols
 
 
@@ -307,7 +433,7 @@ def summarize(plan: MonteCarloPlan, columns: dict[str, np.ndarray], envelope: di
     outputs = [*OUTPUTS, *EXTRA_OUTPUTS]
     quantiles = {k: {f"q{q:g}": float(np.quantile(columns[k][ok], q, method="inverted_cdf")) for q in QUANTILES} if ok.any() else {}
                  for k in outputs}
-    exceed, notes = [], []
+    exceed, notes = [], [f"solver: {solver_path(plan)}"]
     for key, limit in envelope.items():
         if key not in OUTPUTS:
             notes.append(f"{key}: geometric limit, not sampled (check it with pressfit check)")
