@@ -14,14 +14,14 @@ import time
 os.environ.setdefault("OMP_NUM_THREADS", "1")
 os.environ.setdefault("OPENBLAS_NUM_THREADS", "1")
 
-import numpy as np  # noqa: E402
+import numpy as np
 
-from pressfit.mechanics import clearance as C  # noqa: E402
-from pressfit.mechanics import statics  # noqa: E402
-from pressfit.studies import preload_study  # noqa: E402
-from pressfit.description.machine import load_machine  # noqa: E402
-from pressfit.mechanics.model import build_model  # noqa: E402
-from pressfit.mechanics.preload import rest_length_offsets  # noqa: E402
+from pressfit.description.machine import load_machine
+from pressfit.mechanics import clearance as C
+from pressfit.mechanics import statics
+from pressfit.mechanics.model import build_model
+from pressfit.mechanics.preload import rest_length_offsets
+from pressfit.studies import preload_study
 
 POSE = np.array([0.2, 0.6, -0.2])
 UP = np.array([0.0, 1.0, 0.0])

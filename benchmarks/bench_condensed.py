@@ -13,11 +13,11 @@ import time
 os.environ.setdefault("OMP_NUM_THREADS", "1")
 os.environ.setdefault("OPENBLAS_NUM_THREADS", "1")
 
-import numpy as np  # noqa: E402
+import numpy as np
 
-from pressfit.mechanics import condensed  # noqa: E402
-from pressfit.studies import workspace_envelope  # noqa: E402
-from pressfit.description.machine import load_machine  # noqa: E402
+from pressfit.description.machine import load_machine
+from pressfit.mechanics import condensed
+from pressfit.studies import workspace_envelope
 
 
 def _median_s(fn, repeats: int = 7) -> float:

@@ -12,9 +12,9 @@ import time
 os.environ.setdefault("OMP_NUM_THREADS", "1")
 os.environ.setdefault("OPENBLAS_NUM_THREADS", "1")
 
-from pressfit.description.cases import load_case  # noqa: E402
-from pressfit.dynamics.insertion import simulate_insertion  # noqa: E402
-from pressfit.shipped import cases_dir  # noqa: E402
+from pressfit.description.cases import load_case
+from pressfit.dynamics.insertion import simulate_insertion
+from pressfit.shipped import cases_dir
 
 
 def main() -> None:

@@ -16,11 +16,11 @@ import time
 os.environ.setdefault("OMP_NUM_THREADS", "1")
 os.environ.setdefault("OPENBLAS_NUM_THREADS", "1")
 
-import numpy as np  # noqa: E402
-import pinocchio as pin  # noqa: E402
+import numpy as np
+import pinocchio as pin
 
-from pressfit import load_machine  # noqa: E402
-from pressfit.geometry import interference  # noqa: E402
+from pressfit import load_machine
+from pressfit.geometry import interference
 
 
 def main() -> None:

@@ -15,9 +15,9 @@ import time
 os.environ.setdefault("OMP_NUM_THREADS", "1")
 os.environ.setdefault("OPENBLAS_NUM_THREADS", "1")
 
-import numpy as np  # noqa: E402
+import numpy as np
 
-from pressfit import kinematics, load_machine  # noqa: E402
+from pressfit import kinematics, load_machine
 
 
 def main() -> None:

@@ -19,10 +19,10 @@ from pathlib import Path
 os.environ.setdefault("OMP_NUM_THREADS", "1")
 os.environ.setdefault("OPENBLAS_NUM_THREADS", "1")
 
-from pressfit.description.cases import load_case  # noqa: E402
-from pressfit.output.montecarlo_files import CHUNK_DIR, run_montecarlo  # noqa: E402
-from pressfit.shipped import cases_dir  # noqa: E402
-from pressfit.studies import montecarlo  # noqa: E402
+from pressfit.description.cases import load_case
+from pressfit.output.montecarlo_files import CHUNK_DIR, run_montecarlo
+from pressfit.shipped import cases_dir
+from pressfit.studies import montecarlo
 
 CASE = cases_dir() / "studies" / "montecarlo_tolerances.toml"
 

@@ -4,11 +4,12 @@ Run: ``python benchmarks/bench_statics.py [--poses 1000] [--springs 4]``. Random
 required workspace (x, z in +-0.25 m, y in [0.5, 0.75] m), a 700 N press load plus a small off-axis
 wrench; one solver is built once and reused over the poses (as a sweep would; each solve takes the
 pose-dependent values afresh), and the same loads are also solved at one fixed pose. Also times the
-convenience ``solve_equilibrium(machine, ...)``, which builds a solver per call. Prints the median time per pose and the
-throughput for the linear and the nonlinear solve, the batched fast path beside the reference with the ratio,
-the end-to-end wall times of the pressfit commands (``--no-end-to-end`` skips them), then an instrumented run that splits the time into
-Pinocchio calls, LAPACK / numpy.linalg calls and the rest (Python and small numpy operations, including
-the per-pose values and the result objects). Not a test. Goals (issue 3): linear <= 25 us, nonlinear <= 250 us.
+convenience ``solve_equilibrium(machine, ...)``, which builds a solver per call. Prints the median time per
+pose and the throughput for the linear and the nonlinear solve, the batched fast path beside the reference
+with the ratio, the end-to-end wall times of the pressfit commands (``--no-end-to-end`` skips them), then an
+instrumented run that splits the time into Pinocchio calls, LAPACK / numpy.linalg calls and the rest
+(Python and small numpy operations, including the per-pose values and the result objects). Not a test.
+Goals (issue 14): linear <= 25 us, nonlinear <= 250 us.
 
 Before/after: the script only uses the public API (the breakdown wraps whichever LAPACK entry points
 ``pressfit.statics`` imports), so ``PYTHONPATH=<older checkout>/src python benchmarks/bench_statics.py``
@@ -29,13 +30,13 @@ from pathlib import Path
 os.environ.setdefault("OMP_NUM_THREADS", "1")
 os.environ.setdefault("OPENBLAS_NUM_THREADS", "1")
 
-import numpy as np  # noqa: E402
-import pinocchio as pin  # noqa: E402
+import numpy as np
+import pinocchio as pin
 
-from pressfit import kinematics, load_machine  # noqa: E402
-from pressfit.mechanics import statics  # noqa: E402
-from pressfit.mechanics.fast_statics import FastEquilibriumSolver  # noqa: E402
-from pressfit.mechanics.model import build_model  # noqa: E402
+from pressfit import kinematics, load_machine
+from pressfit.mechanics import statics
+from pressfit.mechanics.fast_statics import FastEquilibriumSolver
+from pressfit.mechanics.model import build_model
 
 PIN_CALLS = ("computeJointJacobians", "forwardKinematics", "rnea", "integrate", "log3", "getConstraintsJacobian")
 

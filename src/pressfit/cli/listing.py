@@ -22,7 +22,14 @@ def list_cmd() -> None:
     click.echo(f"cases ({cases_dir()}):")
     for path in discover([cases_dir()]):
         c = load_case(path)
-        kinds = [k for k, v in (("reference table", c.reference), ("envelope", c.envelope.model_dump(exclude_none=True)),
-                                ("study", getattr(c, "study", None))) if v]
+        kinds = [
+            k
+            for k, v in (
+                ("reference table", c.reference),
+                ("envelope", c.envelope.model_dump(exclude_none=True)),
+                ("study", getattr(c, "study", None)),
+            )
+            if v
+        ]
         click.echo(f"  {path.relative_to(cases_dir())}  {c.name} [{', '.join(kinds) or 'loads'}]: "
                    f"{' '.join(c.description.split())[:90]}")

@@ -88,13 +88,15 @@ def _print_equilibrium(eq: Equilibrium) -> None:
     from pressfit.mechanics.statics import SECTIONS
 
     kind = "linear (small displacements)" if eq.linear else f"nonlinear, {eq.iterations} Newton iterations"
-    fmt = lambda v: "(" + ", ".join(f"{c:g}" for c in v) + ")"  # noqa: E731
+    fmt = lambda v: "(" + ", ".join(f"{c:g}" for c in v) + ")"
     click.echo(f"pose h = {fmt(eq.pose_m)} m, load F = {fmt(eq.load[:3])} N, M = {fmt(eq.load[3:])} N m; {kind}")
     click.echo("leg  section       N [N]      V_x [N]    V_y [N]    M_x [N m]  M_y [N m]  T [N m]")
     for i, leg in enumerate(eq.legs):
         for name in SECTIONS:
             s = leg.sections[name]
-            click.echo(f"{i + 1:>3}  {name:<9} " + " ".join(f"{v:+10.4f}" for v in (s.N, s.V_x, s.V_y, s.M_x, s.M_y, s.T)))
+            click.echo(
+                f"{i + 1:>3}  {name:<9} " + " ".join(f"{v:+10.4f}" for v in (s.N, s.V_x, s.V_y, s.M_x, s.M_y, s.T))
+            )
     click.echo("actuator forces [N]: " + ", ".join(f"{v:+.4f}" for v in eq.actuator_forces_n))
     click.echo("plate displacement [m]: " + ", ".join(f"{v:+.4e}" for v in eq.plate_displacement_m)
                + "; rotation [rad]: " + ", ".join(f"{v:+.4e}" for v in eq.plate_rotation_rad))
@@ -112,7 +114,9 @@ def _print_equilibrium(eq: Equilibrium) -> None:
 @click.option("--maps", is_flag=True, help="Instead: maps over the x-z required square at height Y (X, Z unused).")
 @click.option("--out", "out_dir", type=click.Path(path_type=Path), default=Path("out/stiffness"), show_default=True,
               help="Directory for the maps (PNG, CSV).")
-@click.option("--n", "n_grid", type=click.IntRange(3, 1001), default=51, show_default=True, help="Map grid points per side.")
+@click.option(
+    "--n", "n_grid", type=click.IntRange(3, 1001), default=51, show_default=True, help="Map grid points per side."
+)
 @click.option("--overwrite", is_flag=True, help="Replace existing output files.")
 @MODEL_OPTION
 @user_errors

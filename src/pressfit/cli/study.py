@@ -78,8 +78,12 @@ def study_preload_cmd(case_file: Path | None, pose: tuple[float, ...] | None, cl
 @click.option("--samples", type=click.IntRange(1), help="Number of samples (default: the case's [montecarlo]).")
 @click.option("--seed", type=click.IntRange(0), help="Seed (default: the case's).")
 @click.option("--chunk-size", type=click.IntRange(1), help="Samples per task (default: the case's).")
-@click.option("--workers", type=click.IntRange(1), help="Worker processes of the local cluster (default: one per core).")
-@click.option("--scheduler", help="Address of a running Dask scheduler, e.g. tcp://10.0.0.5:8786 (instead of --workers).")
+@click.option(
+    "--workers", type=click.IntRange(1), help="Worker processes of the local cluster (default: one per core)."
+)
+@click.option(
+    "--scheduler", help="Address of a running Dask scheduler, e.g. tcp://10.0.0.5:8786 (instead of --workers)."
+)
 @click.option("--out", "out_dir", type=click.Path(path_type=Path), default=Path("out/montecarlo"), show_default=True,
               help="Study directory: samples/*.parquet, summary.json, quantiles.csv, PNG plots; rerun to resume.")
 @click.option("--overwrite", is_flag=True, help="Discard an earlier study in --out and start afresh.")

@@ -66,7 +66,7 @@ def _deflection(machine: Machine, case: Case, sim: Simulation, pin_pose: np.ndar
     """pose -> (F -> u): the tool's deflection u (3,), m, under the contact force F (N, +y) at the rigid pose."""
     if not sim.clearance:  # C varies by 3.4% over 5 mm at the pin: 0.07% error at the 0.1 mm update distance
         compliance = PoseCache(lambda pose: condensed_plate_compliance(machine, pose)[:3, 1], COMPLIANCE_UPDATE_M)
-        return lambda pose: (lambda force, column=compliance(pose): column * force)
+        return lambda pose: (lambda force, column=compliance(pose): column * force)  # noqa: B008 (bound per pose)
     limit = max(4.0 * sim.controller.force_limit_n, sim.contact.stiffness_n_per_m * sim.interference_m)
     curve = load_deflection(machine, pin_pose, [0.0, 1.0, 0.0], np.linspace(0.0, limit, _CURVE_POINTS),
                             clearance_from_case(case, machine), case.preload.a4_n, unload=False)

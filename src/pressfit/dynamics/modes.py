@@ -118,7 +118,7 @@ def _leg_motion(mm: MachineModel, model: pin.Model, data: pin.Data, q: np.ndarra
     cardan) and their linear displacement per mode (LOCAL_WORLD_ALIGNED joint Jacobians; kinematics of
     ``closure_jacobian`` already computed at q)."""
     points, shapes = [], []
-    for i, ids in enumerate(mm.leg_joint_ids):
+    for ids in mm.leg_joint_ids:
         joints = [j for j in range(ids["base_cardan"], ids["plate_end"] + 1) if j != ids["actuator"]]
         points.append([data.oMi[j].translation.copy() for j in joints])
         shapes.append([(pin.getJointJacobian(model, data, j, pin.LOCAL_WORLD_ALIGNED)[:3] @ phi.T).T

@@ -49,8 +49,8 @@ from typing import Any, Protocol
 
 import coal
 import numpy as np
-from numpy.typing import ArrayLike
 import pinocchio as pin
+from numpy.typing import ArrayLike
 
 from pressfit import kinematics
 from pressfit.description.machine import ExtraBody, Machine
@@ -70,7 +70,8 @@ class InterferenceError(PressfitError):
 
 
 class Rig(Protocol):
-    """A Pinocchio model whose joints carry the leg parts and the plate (:class:`pressfit.mechanics.model.MachineModel` satisfies it)."""
+    """A Pinocchio model whose joints carry the leg parts and the plate
+    (:class:`pressfit.mechanics.model.MachineModel` satisfies it)."""
 
     model: pin.Model
     leg_joint_ids: list[dict[str, int]]
@@ -197,7 +198,7 @@ def machine_shapes(machine: Machine) -> tuple[list[Shape], list[str]]:
                      f"{2 * lmin:.4g} m (l_max > 2 l_min)")
     solid = coal.Capsule if c.leg_shape == "capsule" else coal.Cylinder  # both (radius, length)
     shapes = []
-    along = lambda s: pin.SE3(np.eye(3), np.array([0.0, 0.0, s]))  # noqa: E731 (leg frame: z along the leg)
+    along = lambda s: pin.SE3(np.eye(3), np.array([0.0, 0.0, s]))
     for i in range(4):
         leg = f"leg{i + 1}"
         shapes.append(Shape(f"{leg}.cylinder", f"{leg}.cylinder", solid(c.cylinder_radius_m, lc),

@@ -83,8 +83,13 @@ class BucklingResult:
         return int(np.argmax(self.leg_energy_share)) + 1
 
 
-def machine_buckling(system: Machine | MachineModel | EquilibriumSolver, pose_m: np.ndarray, plate_wrench: np.ndarray, *,
-                     preload_offsets_m: np.ndarray | None = None) -> BucklingResult:
+def machine_buckling(
+    system: Machine | MachineModel | EquilibriumSolver,
+    pose_m: np.ndarray,
+    plate_wrench: np.ndarray,
+    *,
+    preload_offsets_m: np.ndarray | None = None,
+) -> BucklingResult:
     r"""Linearised (eigenvalue) buckling of the whole machine at a pose (m) under a dead plate wrench (6,)
     (N, N m, world axes at the plate centre), with optional actuator rest-length offsets (4,) (m; a preload,
     :func:`pressfit.mechanics.preload.rest_length_offsets`), held fixed while the wrench is scaled.
@@ -122,6 +127,8 @@ def machine_buckling(system: Machine | MachineModel | EquilibriumSolver, pose_m:
     energy = np.array([phi[v] @ k_e[np.ix_(v, v)] @ phi[v] for v in pre.leg_v])
     lengths = kinematics.inverse_kinematics(solver.machine, pose).lengths_m
     n0, n1 = pre.axial_forces_n, load.axial_forces_n  # compression n0 + lambda n1 reaches P_cr at lambda:
-    euler = np.where(n1 < 0, (leg_critical_loads_n(solver.machine, lengths) + n0) / np.where(n1 < 0, -n1, 1.0), math.inf)
+    euler = np.where(
+        n1 < 0, (leg_critical_loads_n(solver.machine, lengths) + n0) / np.where(n1 < 0, -n1, 1.0), math.inf
+    )
     return BucklingResult(factor, factors, phi, phi[:6].copy(), energy / energy.sum(), euler,
                           load.axial_forces_n + pre.axial_forces_n)

@@ -358,7 +358,9 @@ class _SmallModel:
         gaps = np.array([c.effective_gaps_m(machine, pose) for c in clearances])
         trans = _Chain(core.e[:, :, 0].T, core.k_a[:, 0], gaps, cl0.contact_stiffness_n_per_m, cl0.smoothing_m)
         rg = None if cl0.rotation_gaps_rad is None else np.array([c.rotation_gaps_rad for c in clearances])
-        rot = _Chain(core.c[:, :, 0].T, core.k_r[:, 0], rg, cl0.rotation_stiffness_nm_per_rad, cl0.rotation_smoothing_rad)
+        rot = _Chain(
+            core.c[:, :, 0].T, core.k_r[:, 0], rg, cl0.rotation_stiffness_nm_per_rad, cl0.rotation_smoothing_rad
+        )
         return cls(pose, trans, rot, core.rho[:, 0], np.asarray(offsets, dtype=float))
 
     def solve(self, wrench: np.ndarray, state: tuple | None) -> tuple[dict[str, np.ndarray], tuple]:

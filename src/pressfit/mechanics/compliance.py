@@ -47,7 +47,9 @@ def vjm_plate_compliance(machine: Machine, pose_m: np.ndarray, load: np.ndarray 
     return resp if load is None else (resp[:, :6] - resp[:, 6:]) / (2 * np.diag(d))
 
 
-def pose_stiffness_report(machine: Machine, pose_m: np.ndarray, press_load_n: float = PRESS_LOAD_N) -> dict[str, object]:
+def pose_stiffness_report(
+    machine: Machine, pose_m: np.ndarray, press_load_n: float = PRESS_LOAD_N
+) -> dict[str, object]:
     """Everything ``pressfit stiffness`` reports at one reachable pose (m), JSON-ready and SI: the condensed
     model's report (:func:`pressfit.mechanics.condensed.stiffness_report`), the same compliance from the
     Pinocchio model with their largest difference relative to its largest entry (an independent

@@ -127,13 +127,23 @@ def _chain(mm: MachineModel) -> _Chain:
                                                                 "plate_a")])
     jcol = {j: c for c, j in enumerate(joints[0])}
     act = int(scols[[mm.springs[k].name == "actuator" for k in spring_idx[0][order]]][0])
-    return _Chain(np.array(["XYZ".index(k[1]) for k in kinds[0]]), np.array([k[0] == "P" for k in kinds[0]]), z,
-                  np.array([jcol[j] for j in mm.stem_joint_ids()[0]]), np.array([pl[r[0]].rotation for r in joints]),
-                  np.array([pl[r[0]].translation for r in joints]), scols, np.setdiff1d(np.arange(legv.shape[1]), scols),
-                  spring_idx[:, order], rigid, act, tuple((jcol[mm.sections[0][s][0]], mm.sections[0][s][1])
-                                                          for s in SECTIONS),
-                  np.array([a.translation for a in mm.anchor_placements]), np.array(mm.leg_frames0),
-                  np.array([k[0] == "P" for k in kinds[0]]))
+    return _Chain(
+        np.array(["XYZ".index(k[1]) for k in kinds[0]]),
+        np.array([k[0] == "P" for k in kinds[0]]),
+        z,
+        np.array([jcol[j] for j in mm.stem_joint_ids()[0]]),
+        np.array([pl[r[0]].rotation for r in joints]),
+        np.array([pl[r[0]].translation for r in joints]),
+        scols,
+        np.setdiff1d(np.arange(legv.shape[1]), scols),
+        spring_idx[:, order],
+        rigid,
+        act,
+        tuple((jcol[mm.sections[0][s][0]], mm.sections[0][s][1]) for s in SECTIONS),
+        np.array([a.translation for a in mm.anchor_placements]),
+        np.array(mm.leg_frames0),
+        np.array([k[0] == "P" for k in kinds[0]]),
+    )
 
 
 @dataclass(frozen=True)
@@ -404,7 +414,9 @@ class FastEquilibriumSolver:
         """Relative stationarity (b,) of leg rows r_leg (b, 4, m) (N or N m) and the plate."""
         l_ref = self.machine.geometry.base_half_side_m
         lf = lam[..., :3]
-        r_plate = np.concatenate([-bk.load[:, :3] - lf.sum(1), -bk.load[:, 3:] - (cross(r, lf) + lam[..., 3:]).sum(1)], 1)
+        r_plate = np.concatenate(
+            [-bk.load[:, :3] - lf.sum(1), -bk.load[:, 3:] - (cross(r, lf) + lam[..., 3:]).sum(1)], 1
+        )
         return np.maximum(np.abs(r_leg * bk.row_scale).max((1, 2)),
                           np.maximum(np.abs(r_plate[:, :3]).max(1), np.abs(r_plate[:, 3:]).max(1) / l_ref) / bk.f_ref)
 
@@ -465,7 +477,11 @@ class FastEquilibriumSolver:
                 stat, _ = self._residuals(bk, np.zeros_like(c), at, r, lam, d[:, :, ch.spring_cols] - bk.rest)
                 dq = np.zeros_like(d)
                 dq[:, :, ch.free_cols], dq[:, :, ch.spring_cols] = dqf, dqs
-                c = c + (at.swapaxes(-1, -2) @ dq[..., None])[..., 0] + (_plate_jacobian(r) @ dp[:, None, :, None])[..., 0]
+                c = (
+                    c
+                    + (at.swapaxes(-1, -2) @ dq[..., None])[..., 0]
+                    + (_plate_jacobian(r) @ dp[:, None, :, None])[..., 0]
+                )
                 return self._results(bk, kin.sec, kin.pe, c, r, lam, d, pc + dp[:, :3], _exp3(dp[:, 3:]) @ rp, stat,
                                      np.ones(nb, int), dp)
             pc, rp = pc + dp[:, :3], _exp3(dp[:, 3:]) @ rp
@@ -576,9 +592,21 @@ class FastEquilibriumSolver:
         return self._results(bk, pts, g["pe"], fit - t, r, lam, d, bk.pose + dp[:, :3], _exp3(dp[:, 3:]), stat,
                              np.ones(len(dp), int), dp)
 
-    def _results(self, bk: _Block, pts: np.ndarray, pe: np.ndarray, c: np.ndarray, r: np.ndarray, lam: np.ndarray,
-                 d: np.ndarray, pc: np.ndarray, rp: np.ndarray, stat: np.ndarray, iters: np.ndarray, dp_linear: np.ndarray | None
-                 ) -> tuple[np.ndarray, ...]:
+    def _results(
+        self,
+        bk: _Block,
+        pts: np.ndarray,
+        pe: np.ndarray,
+        c: np.ndarray,
+        r: np.ndarray,
+        lam: np.ndarray,
+        d: np.ndarray,
+        pc: np.ndarray,
+        rp: np.ndarray,
+        stat: np.ndarray,
+        iters: np.ndarray,
+        dp_linear: np.ndarray | None,
+    ) -> tuple[np.ndarray, ...]:
         """Sections, plate motion and residuals (statics._result's definitions), in BatchEquilibrium order."""
         ch, l_ref = self._chain, self.machine.geometry.base_half_side_m
         f_load, m_load = bk.load[:, :3], bk.load[:, 3:]

@@ -555,10 +555,20 @@ def _offsets(machine: Machine, pose: np.ndarray, preload: float | ActuatorPreloa
     return rest_length_offsets(machine, pose, a4, mode) if a4 else np.zeros(4)
 
 
-def solve_equilibrium(system: Machine | MachineModel | EquilibriumSolver, pose_m: np.ndarray, plate_wrench: np.ndarray,
-                      *, preload: float | ActuatorPreload | None = None, preload_mode: str | None = None,
-                      linear: bool = False, tol: float = NEWTON_TOL, max_iter: int = 25,
-                      start: Equilibrium | None = None, preload_offsets_m: np.ndarray | None = None, step_limit: StepLimit | None = None) -> Equilibrium:
+def solve_equilibrium(
+    system: Machine | MachineModel | EquilibriumSolver,
+    pose_m: np.ndarray,
+    plate_wrench: np.ndarray,
+    *,
+    preload: float | ActuatorPreload | None = None,
+    preload_mode: str | None = None,
+    linear: bool = False,
+    tol: float = NEWTON_TOL,
+    max_iter: int = 25,
+    start: Equilibrium | None = None,
+    preload_offsets_m: np.ndarray | None = None,
+    step_limit: StepLimit | None = None,
+) -> Equilibrium:
     """One equilibrium (:meth:`EquilibriumSolver.solve`, same keywords) of a machine, a built model or a
     solver. Convenience: for a machine it builds the model and a solver each call (~0.1 s; a built model:
     ~5 ms for the solver's index structure and model copy; ``benchmarks/bench_statics.py`` measures both);

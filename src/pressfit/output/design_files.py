@@ -9,13 +9,13 @@ from pathlib import Path
 import matplotlib
 
 matplotlib.use("Agg")
-import matplotlib.pyplot as plt  # noqa: E402
-import numpy as np  # noqa: E402
-import tomli_w  # noqa: E402
+import matplotlib.pyplot as plt
+import numpy as np
+import tomli_w
 
-from pressfit.description.cases import Case  # noqa: E402
-from pressfit.output import files as io  # noqa: E402
-from pressfit.studies import design  # noqa: E402
+from pressfit.description.cases import Case
+from pressfit.output import files as io
+from pressfit.studies import design
 
 
 @dataclass(frozen=True)
@@ -27,7 +27,7 @@ class DesignRun:
 def summary(result: design.DesignResult) -> dict[str, object]:
     """JSON-ready: counts, the front (parameters and metrics per trial) and the best designs written."""
     c = result.columns
-    row = lambda i: {k: (c[k][i].item() if np.isfinite(c[k][i]) else None)  # noqa: E731
+    row = lambda i: {k: (c[k][i].item() if np.isfinite(c[k][i]) else None)
                      for k in (*result.plan.parameters(), *design.METRICS)}
     return {"trials": len(c["trial"]), "failed": int((c["status"] != "ok").sum()), "feasible": int(c["feasible"].sum()),
             "objectives": list(result.plan.design.objectives), "search": result.plan.design.search,

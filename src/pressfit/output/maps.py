@@ -133,8 +133,8 @@ def write_interference_sweep(result: SweepResult, out_dir: Path | str, overwrite
 
 def plot_interference_sweep(result: SweepResult, path: Path | str, overwrite: bool = False) -> Path:
     """Filled contours of the minimum distance (mm) over x-z at up to four heights; the margin dashed."""
-
-    assert result.grid_axes_m is not None
+    if result.grid_axes_m is None:
+        raise OutputError("an interference map needs a sweep over a grid (workspace_sweep), not a list of poses")
     xs, ys, zs = result.grid_axes_m
     d = result.min_distance_m.reshape(len(ys), len(zs), len(xs)) * 1e3
     pick = sorted(set(np.linspace(0, len(ys) - 1, min(4, len(ys))).round().astype(int)))

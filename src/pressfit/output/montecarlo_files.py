@@ -16,14 +16,14 @@ from pathlib import Path
 import matplotlib
 
 matplotlib.use("Agg")
-import matplotlib.pyplot as plt  # noqa: E402
-import numpy as np  # noqa: E402
+import matplotlib.pyplot as plt
+import numpy as np
 
-from pressfit.description.cases import Case  # noqa: E402
-from pressfit.errors import OutputExistsError  # noqa: E402
-from pressfit.output import files as io  # noqa: E402
-from pressfit.studies import distributed, montecarlo  # noqa: E402
-from pressfit.studies.limit_check import LIMITS  # noqa: E402
+from pressfit.description.cases import Case
+from pressfit.errors import OutputExistsError
+from pressfit.output import files as io
+from pressfit.studies import distributed, montecarlo
+from pressfit.studies.limit_check import LIMITS
 
 CHUNK_DIR = "samples"
 

@@ -9,11 +9,11 @@ from pathlib import Path
 import matplotlib
 
 matplotlib.use("Agg")
-import matplotlib.pyplot as plt  # noqa: E402
-import numpy as np  # noqa: E402
-from matplotlib import ticker  # noqa: E402
+import matplotlib.pyplot as plt
+import numpy as np
+from matplotlib import ticker
 
-from pressfit.output import files as io  # noqa: E402
+from pressfit.output import files as io
 
 Fields = dict[str, tuple[np.ndarray, str]]  # CSV column and panel title -> (values, colour-bar label, e.g. the unit)
 

@@ -30,7 +30,7 @@ from pressfit.studies import paper_tables as tables
 
 
 def _md_table(header: list[str], rows: list[list[object]]) -> str:
-    fmt = lambda v: f"{v:.4g}" if isinstance(v, float) else str(v)  # noqa: E731
+    fmt = lambda v: f"{v:.4g}" if isinstance(v, float) else str(v)
     return "\n".join(["| " + " | ".join(header) + " |", "|" + "---|" * len(header)]
                      + ["| " + " | ".join(fmt(v) for v in r) + " |" for r in rows])
 
@@ -203,7 +203,14 @@ def _preload_section(machine: Machine, out: Path, overwrite: bool, quick: bool, 
                                         10 if quick else 50, progress=False)
         studies.append((name, study))
         paths = maps.write_preload_study(study, out / "preload" / name, overwrite)
-        md += [f"### {name.replace('_', ' ')} {list(pose)} m", "", "```", preload_study.format_answers(study), "```", ""]
+        md += [
+            f"### {name.replace('_', ' ')} {list(pose)} m",
+            "",
+            "```",
+            preload_study.format_answers(study),
+            "```",
+            "",
+        ]
         md += [f"![{p.name}](preload/{name}/{p.name})" for p in paths if p.suffix == ".png"] + [""]
     parts["studies"] = studies
     return md

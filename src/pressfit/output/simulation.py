@@ -11,8 +11,8 @@ import numpy as np
 from pressfit.description.cases import load_case
 from pressfit.dynamics.insertion import LEGS, SERIES_COLUMNS, InsertionResult, simulate_insertion
 from pressfit.output import files as io
-from pressfit.studies.insertion_study import COLUMNS, InsertionStudy, insertion_study
 from pressfit.output.plots import plt
+from pressfit.studies.insertion_study import COLUMNS, InsertionStudy, insertion_study
 
 
 def simulation_figure(result: InsertionResult, comparison: InsertionResult | None = None) -> plt.Figure:

@@ -374,7 +374,7 @@ def fit_cad_model(cases: dict[str, Case] | None = None, tables: PrintedTables | 
 def to_dict(fit: CadFit) -> dict[str, object]:
     """JSON-ready (SI; std null where a parameter is held or not determined)."""
     ident = fit.identifiability
-    finite = lambda x: x if np.isfinite(x) else None  # noqa: E731
+    finite = lambda x: x if np.isfinite(x) else None
     return {"parameters": [{**asdict(p), "std": finite(p.std)} for p in fit.parameters],
             "entries": [{**asdict(e), "table3_residual": e.table3_residual, "fit_residual": e.fit_residual}
                         for e in fit.entries],

@@ -16,8 +16,8 @@ run of its insertion scenario (:func:`evaluate_simulation`, lines keyed ``simula
 from __future__ import annotations
 
 from dataclasses import dataclass, field, replace
-from typing import Any
 from pathlib import Path
+from typing import Any
 
 import numpy as np
 from tqdm import tqdm
@@ -309,10 +309,10 @@ def _refine(machine: Machine, poses: np.ndarray, loads: np.ndarray, pairs: list[
     out: dict[tuple[int, int], Equilibrium | str] = {}
     try:
         batch = fast.solve_batch(poses[idx[:, 1]], loads[idx[:, 0]], preload=a4 or None, linear=linear)
-        solve = lambda k, j, p: fast.equilibrium(batch, k)  # noqa: E731
+        solve = lambda k, j, p: fast.equilibrium(batch, k)
     except (ConvergenceError, SingularPoseError):
         ref = EquilibriumSolver(fast.model)
-        solve = lambda k, j, p: ref.solve(poses[p], loads[j], linear=linear, preload=a4 or None)  # noqa: E731
+        solve = lambda k, j, p: ref.solve(poses[p], loads[j], linear=linear, preload=a4 or None)
     for k, (j, p) in enumerate(pairs):
         try:
             out[(j, p)] = solve(k, j, p)
@@ -347,8 +347,15 @@ def _unreachable(machine: Machine, poses: np.ndarray) -> list[dict[str, object]]
     m = kinematics.limit_margins(machine, poses)
     length = np.maximum(-m["leg_length_m"].min(-1), 0.0)
     angle = np.maximum(-np.minimum(m["alpha_rad"], m["beta_rad"]).min(-1), 0.0)
-    return [{"pose_m": h.tolist(), "reason": kinematics.unreachable_reason(machine, h),
-             "leg_length_excess_m": float(dl), "angle_excess_rad": float(da)} for h, dl, da in zip(poses, length, angle)]
+    return [
+        {
+            "pose_m": h.tolist(),
+            "reason": kinematics.unreachable_reason(machine, h),
+            "leg_length_excess_m": float(dl),
+            "angle_excess_rad": float(da),
+        }
+        for h, dl, da in zip(poses, length, angle)
+    ]
 
 
 def machine_buckling_factor(machine: Machine, pose: np.ndarray, load: np.ndarray, a4: float) -> tuple[float, int]:

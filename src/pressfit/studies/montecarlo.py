@@ -131,7 +131,7 @@ def plan_from_case(case: Case, samples: int | None = None, seed: int | None = No
         raise PressfitError(f"the number of samples must be at least 1, got {n}")
     machine, poses = case.machine(), case.poses.array()
     lengths = kinematics.inverse_kinematics(machine, poses).lengths_m
-    crit = lambda d: np.vectorize(lambda v: buckling.leg_critical_load_n(machine, v))(lengths + d)  # noqa: E731
+    crit = lambda d: np.vectorize(lambda v: buckling.leg_critical_load_n(machine, v))(lengths + d)
     return MonteCarloPlan(case.name, machine, poses, case.loads.wrenches(), case.preload.a4,
                           case.preload.mode, inputs, n, mc.seed if seed is None else seed,
                           chunk_size or mc.chunk_size, crit(0.0), (crit(_DL) - crit(-_DL)) / (2 * _DL))
@@ -288,7 +288,7 @@ def _fast_rows(plan: MonteCarloPlan, nominal: _Nominal, setups: list[_SampleLoad
     """The samples of ``setups`` (sharing ``solver``'s machine) in one batched solve over samples x poses x
     loads; a failing batch is split to find the failing samples. Checks the small-strain range per solve."""
     n, p, w = len(setups), len(plan.poses_m), len(plan.wrenches)
-    per_solve = lambda a: np.stack(  # noqa: E731
+    per_solve = lambda a: np.stack(
         [np.broadcast_to(a(s)[:, None], (p, w) + a(s).shape[1:]) for s in setups])
     try:
         be = solver.solve_batch(np.broadcast_to(plan.poses_m[None, :, None], (n, p, w, 3)).reshape(-1, 3),
@@ -404,10 +404,18 @@ class MonteCarloSummary:
 
     def to_dict(self) -> dict[str, object]:
         """JSON-ready; non-finite values (no compression: an infinite buckling factor) become None."""
-        return _finite({"samples": self.samples, "failed": self.failed, "quantiles": self.quantiles,
+        return _finite(
+            {
+                "samples": self.samples,
+                "failed": self.failed,
+                "quantiles": self.quantiles,
                 "exceedance": [e.__dict__ for e in self.exceedance],
-                "sensitivity": {k: [{"input": i, "spearman_rho": r} for i, r in v] for k, v in self.sensitivity.items()},
-                "notes": self.notes})
+                "sensitivity": {
+                    k: [{"input": i, "spearman_rho": r} for i, r in v] for k, v in self.sensitivity.items()
+                },
+                "notes": self.notes,
+            }
+        )
 
 
 def _finite(obj: Any) -> Any:
@@ -431,8 +439,12 @@ def summarize(plan: MonteCarloPlan, columns: dict[str, np.ndarray], envelope: di
     ok = columns["status"] == "ok"
     failed = {str(s): int(c) for s, c in zip(*np.unique(columns["status"][~ok], return_counts=True))}
     outputs = [*OUTPUTS, *EXTRA_OUTPUTS]
-    quantiles = {k: {f"q{q:g}": float(np.quantile(columns[k][ok], q, method="inverted_cdf")) for q in QUANTILES} if ok.any() else {}
-                 for k in outputs}
+    quantiles = {
+        k: {f"q{q:g}": float(np.quantile(columns[k][ok], q, method="inverted_cdf")) for q in QUANTILES}
+        if ok.any()
+        else {}
+        for k in outputs
+    }
     exceed, notes = [], [f"solver: {solver_path(plan)}"]
     for key, limit in envelope.items():
         if key not in OUTPUTS:

@@ -130,11 +130,15 @@ def to_markdown(entries: list[TableEntry]) -> str:
     """Tables 5 and 6 side by side with pressfit, with relative errors."""
     lines = []
     for table, title in (("Table 5", "forces (N)"), ("Table 6", "moments (N m)")):
-        lines += [f"### {table}: {title}, paper vs pressfit (actuator section, paper's axes and signs)", "",
-                  "rel. error = (pressfit linear - paper) / |paper|, signed in the paper's axes; "
-                  "'~0 both' when both are below 1e-3.", "",
-                  "| case | component | CAD leg | kin. leg | paper | pressfit linear | rel. error | pressfit nonlinear |",
-                  "|---|---|---|---|---|---|---|---|"]
+        lines += [
+            f"### {table}: {title}, paper vs pressfit (actuator section, paper's axes and signs)",
+            "",
+            "rel. error = (pressfit linear - paper) / |paper|, signed in the paper's axes; "
+            "'~0 both' when both are below 1e-3.",
+            "",
+            "| case | component | CAD leg | kin. leg | paper | pressfit linear | rel. error | pressfit nonlinear |",
+            "|---|---|---|---|---|---|---|---|",
+        ]
         for e in entries:
             if e.table == table:
                 lines.append(f"| {e.case} | {e.quantity} | {e.cad_leg} | {e.kinematic_leg} | {e.paper:.4g} | "

@@ -15,19 +15,18 @@ from pressfit import kinematics
 from pressfit.description.machine import Machine
 from pressfit.mechanics import condensed
 from pressfit.mechanics.clearance import (
-    clearance_from_case,
+    GEOMETRY_DESCRIPTIONS,
     Clearance,
     ClearanceError,
-    GEOMETRY_DESCRIPTIONS,
     LoadDeflection,
     _branch,
     _direction,
     _sweep_small,
+    clearance_from_case,
     critical_preloads,
     load_deflection,
 )
 from pressfit.mechanics.preload import rest_length_offsets
-
 
 SMALL_LOAD_FRACTION = 0.1  # the small load of the small-load secant stiffness, as a fraction of the largest load
 
