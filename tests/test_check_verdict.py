@@ -116,3 +116,17 @@ def test_output_targets_are_refused_before_any_computation(tmp_path):
         res = CliRunner().invoke(main, ["check", str(path), *map(str, args), "--no-progress"])
         assert res.exit_code == 2 and res.exception is None or isinstance(res.exception, SystemExit)
         assert "PASS" not in res.output and res.output.count("\n") == 1, res.output  # refused before the sweep
+
+
+def test_clearance_limits_and_geometry_limits_in_one_case(tmp_path):
+    """Regression: the clearance refinement used to rebind the name of the geometry-limit table, so a case with
+    [clearance], a clearance-sensitive limit and a joint-limit margin crashed. Reference for the deflection:
+    at pose A the cardans' play adds the lost motion 2 g / sin(alpha) = 44.7 um (g = 20 um, tan alpha = 2) to the
+    elastic deflection, so the worst deflection is above it; the leg-length margin is exact (closed form:
+    l = |(0, 0.72, 0.36)| = 0.805 m, 0.195 m from l_max = 1 m)."""
+    path = write_case(tmp_path / "cl.toml", {"max_plate_deflection_m": 1e-3, "min_leg_length_margin_m": 0.0},
+                      poses=[[0.0, 0.72, 0.0]], loads={"press_force_n": 700.0},
+                      clearance={"gaps_m": [20e-6] * 8})
+    (deflection, margin) = evaluate_case(load_case(path)).limits
+    assert deflection.key == "max_plate_deflection_m" and deflection.worst > 2 * 20e-6 / (2 / 5**0.5)
+    assert margin.worst == pytest.approx(1.0 - math.hypot(0.72, 0.36), rel=1e-12) and margin.passed

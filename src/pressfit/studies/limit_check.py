@@ -202,17 +202,37 @@ def evaluate_envelope(case: Case, progress: bool = False) -> CaseResult:
     unreachable = _unreachable(machine, poses_all[~ok])
     poses = poses_all[ok]
     wanted = {k: v for k, v in case.envelope.model_dump().items() if v is not None}
-    result = CaseResult(case.name, case.path, len(poses_all), len(loads), unreachable)
     if not len(poses):
-        return result
-    critical = buckling.leg_critical_loads_n(machine, kinematics.inverse_kinematics(machine, poses).lengths_m)
+        return CaseResult(case.name, case.path, len(poses_all), len(loads), unreachable)
     if case.preload.mode == "length" and case.preload.a4:
         raise PressfitError(f"{case.path}: [preload] mode = \"length\" is not supported by the envelope check "
                             "(its linear sweep superposes force-mode preload only); give a4_n with mode = \"force\"")
+    critical = buckling.leg_critical_loads_n(machine, kinematics.inverse_kinematics(machine, poses).lengths_m)
+    stacked = _linear_sweep(case, machine, poses, loads, critical, progress)
+    lines = [_geometry_line(key, limit, machine, poses, progress) for key, limit in wanted.items()
+             if not LIMITS[key].load_dependent]
+    plans = {key: _candidates(LIMITS[key].sense, stacked.get(key), stacked, len(loads), len(poses),
+                              case.solver.refine_worst) for key in wanted if LIMITS[key].load_dependent}
+    refined = _refine(machine, poses, loads, sorted({c for key, (cands, _) in plans.items()
+                                                      if key != "min_buckling_safety_factor" for c in cands}),
+                      case.solver.linear, case.preload.a4_n)
+    unstable: dict[tuple[int, int], str] = {}  # (load, pose) -> why no stable equilibrium was found
+    for key, (candidates, best) in plans.items():
+        best = _refined_best(case, machine, key, candidates, best, refined, poses, loads, critical, unstable)
+        if best is not None:  # None: shear with every refined solve unstable (the stability line reports it)
+            lines.append(_line(key, LIMITS[key], wanted[key], best[0], best[3], poses[best[2]], loads[best[1]],
+                               best[4]))
+    lines.sort(key=lambda x: list(wanted).index(x.key))
+    if unstable:
+        lines = _instability_line(lines, unstable, poses, loads, wanted.get("min_buckling_safety_factor"))
+    return CaseResult(case.name, case.path, len(poses_all), len(loads), unreachable, lines)
+
+
+def _linear_sweep(case: Case, machine: Machine, poses: np.ndarray, loads: np.ndarray, critical: np.ndarray,
+                  progress: bool) -> dict[str, np.ndarray]:
+    """Every load-dependent quantity over every (load, pose) from the condensed linear model: (L, P, ...)."""
     a4 = case.preload.a4_n
     self_stress = preload.self_stress_forces_n(machine, poses, a4) if a4 else None
-
-    # linear sweep over every pose and load
     sweep: dict[str, list[np.ndarray]] = {}
     for w in tqdm(loads, desc=f"{case.name}: linear sweep", disable=not progress, unit="load"):
         res = condensed.solve_linear(machine, poses, w)
@@ -221,62 +241,59 @@ def evaluate_envelope(case: Case, progress: bool = False) -> CaseResult:
             res = preload.with_axial_preload(res, self_stress)
         for k, v in condensed_quantities(res, critical).items():
             sweep.setdefault(k, []).append(v)
-    stacked = {k: np.stack(v) for k, v in sweep.items()}  # (L, P, ...)
+    return {k: np.stack(v) for k, v in sweep.items()}
 
-    margins = kinematics.limit_margins(machine, poses)
-    geometry = {k: v for k, v in {
-        "min_leg_length_margin_m": lambda: margins["leg_length_m"],
-        "min_angle_margin_rad": lambda: np.minimum(margins["alpha_rad"], margins["beta_rad"]),
-        "min_interference_distance_m": lambda: _interference(machine, poses, progress),
-    }.items() if k in wanted}
 
-    lines: list[LimitResult] = []
-    unstable: dict[tuple[int, int], str] = {}  # (load, pose) -> why no stable equilibrium was found
-    plans = {key: _candidates(LIMITS[key].sense, stacked.get(key), stacked, len(loads), len(poses),
-                              case.solver.refine_worst) for key in wanted if LIMITS[key].load_dependent}
-    refined = _refine(machine, poses, loads, sorted({c for key, (cands, _) in plans.items()
-                                                      if key != "min_buckling_safety_factor" for c in cands}),
-                      case.solver.linear, a4)
-    for key, limit in wanted.items():
-        spec = LIMITS[key]
-        if not spec.load_dependent:
-            worst, p, leg = _worst(geometry[key](), spec.sense)
-            lines.append(_line(key, spec, limit, worst, leg, poses[p], None, "exact at every pose"))
+def _geometry_line(key: str, limit: float, machine: Machine, poses: np.ndarray, progress: bool) -> LimitResult:
+    """A load-independent limit (joint-limit margins, interference distance), exact at every pose."""
+    if key == "min_interference_distance_m":
+        values = _interference(machine, poses, progress)
+    else:
+        margins = kinematics.limit_margins(machine, poses)
+        values = margins["leg_length_m"] if key == "min_leg_length_margin_m" else \
+            np.minimum(margins["alpha_rad"], margins["beta_rad"])
+    spec = LIMITS[key]
+    worst, p, leg = _worst(values, spec.sense)
+    return _line(key, spec, limit, worst, leg, poses[p], None, "exact at every pose")
+
+
+Best = tuple[float, int, int, int | None, str]  # worst value, load index, pose index, leg (1..4), method
+
+
+def _refined_best(case: Case, machine: Machine, key: str, candidates: list[tuple[int, int]], best: Best | None,
+                  refined: dict[tuple[int, int], Equilibrium | str], poses: np.ndarray, loads: np.ndarray,
+                  critical: np.ndarray,
+                  unstable: dict[tuple[int, int], str]) -> Best | None:
+    """The worse of the sweep's worst and the refined solves at ``candidates`` (with the case's clearances for
+    the clearance-sensitive quantities); a refined pair without a stable equilibrium goes to ``unstable``."""
+    sense, a4, n = LIMITS[key].sense, case.preload.a4_n, len(candidates)
+    for j, p in candidates:
+        if key == "min_buckling_safety_factor":  # refined: the whole machine's linearised buckling factor
+            w, leg = machine_buckling_factor(machine, poses[p], loads[j], a4)
+            if worse(w, best, sense):
+                best = (w, int(j), int(p), leg, f"whole-machine linearised buckling at the {n} worst poses "
+                        "(per-leg Euler in the sweep)")
             continue
-        candidates, best = plans[key]
-        for j, p in candidates:
-            if key == "min_buckling_safety_factor":  # refined: the whole machine's linearised buckling factor
-                w, leg = machine_buckling_factor(machine, poses[p], loads[j], a4)
-                if worse(w, best, spec.sense):
-                    best = (w, int(j), int(p), leg, f"whole-machine linearised buckling at the {len(candidates)} "
-                            "worst poses (per-leg Euler in the sweep)")
-                continue
-            eq = refined[(j, p)]
-            if isinstance(eq, str):
-                unstable.setdefault((int(j), int(p)), eq)
-                continue
-            w, _, leg = _worst(equilibrium_quantities(eq, critical[p:p + 1])[key], spec.sense)
-            if worse(w, best, spec.sense):
-                how = "linear" if case.solver.linear else "nonlinear"
-                best = (w, int(j), int(p), leg, f"{how} solve at the {len(candidates)} worst poses")
-            if case.clearance is not None and key in CLEARANCE_SENSITIVE:
-                try:
-                    w, leg = _with_clearance(case, machine, poses[p], loads[j], a4, critical[p:p + 1], key,
-                                             spec.sense)
-                except UnstableEquilibriumError as exc:
-                    unstable.setdefault((int(j), int(p)), str(exc))
-                    continue
-                if worse(w, best, spec.sense):
-                    geometry = clearance_from_case(case, machine).description
-                    best = (w, int(j), int(p), leg, f"with the case's cardan clearances ({geometry}; "
-                            "small-displacement clearance solver, 20 load steps) at the "
-                            f"{len(candidates)} worst poses")
-        if best is None:  # shear with every refined solve unstable: the stability line below reports it
+        eq = refined[(j, p)]
+        if isinstance(eq, str):
+            unstable.setdefault((int(j), int(p)), eq)
             continue
-        lines.append(_line(key, spec, limit, best[0], best[3], poses[best[2]], loads[best[1]], best[4]))
-    if unstable:
-        lines = _instability_line(lines, unstable, poses, loads, wanted.get("min_buckling_safety_factor"))
-    return CaseResult(case.name, case.path, len(poses_all), len(loads), unreachable, lines)
+        w, _, leg = _worst(equilibrium_quantities(eq, critical[p:p + 1])[key], sense)
+        if worse(w, best, sense):
+            best = (w, int(j), int(p), leg, f"{'linear' if case.solver.linear else 'nonlinear'} solve at the {n} "
+                    "worst poses")
+        if case.clearance is None or key not in CLEARANCE_SENSITIVE:
+            continue
+        try:
+            w, leg = _with_clearance(case, machine, poses[p], loads[j], a4, critical[p:p + 1], key, sense)
+        except UnstableEquilibriumError as exc:
+            unstable.setdefault((int(j), int(p)), str(exc))
+            continue
+        if worse(w, best, sense):
+            best = (w, int(j), int(p), leg, f"with the case's cardan clearances "
+                    f"({clearance_from_case(case, machine).description}; small-displacement clearance solver, "
+                    f"20 load steps) at the {n} worst poses")
+    return best
 
 
 def _candidates(sense: str, lin: np.ndarray | None, stacked: dict[str, np.ndarray], n_loads: int, n_poses: int,
