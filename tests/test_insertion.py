@@ -136,8 +136,8 @@ def test_limiter_keeps_the_contact_force_under_the_limit(runs):
 def test_without_limiter_the_steady_force_is_the_series_stiffness_times_interference(runs):
     """The PID drives the length-based estimate, i.e. the rigid plate, to the reference 2 mm below the board;
     the structure (vertical compliance C_yy of the condensed model) is in series with the contact, so the
-    steady force is k i / (1 + k C_yy) (closed form, within 1%: the integrator's residual error after the dwell, 0.08% here)
-    and equals the contact law at the depth reached (the solver's consistency, 1e-6)."""
+    steady force is k i / (1 + k C_yy) (closed form, within 1%: the integrator's residual error after the dwell,
+    0.08% here) and equals the contact law at the depth reached (the solver's consistency, 1e-6)."""
     case, _, free = runs
     sim, s = case.simulation, free.summary
     c_yy = condensed_plate_compliance(case.machine(), PIN)[1, 1]
