@@ -1,7 +1,9 @@
 """Speed of the insertion simulation (pressfit.dynamics.insertion) on the shipped scenario, one core.
 
 Run: ``python benchmarks/bench_insertion.py``. Prints simulated seconds per wall-clock second with and
-without the limiter (issue 11's goal: at least 1, ideally 10). Not a test: timings depend on the machine.
+without the limiter (issue 11's goal: at least 1, ideally 10), and the bare closed-loop rigid-leg step
+(:meth:`pressfit.dynamics.multibody.RigidLegModel.step`, passive, no controller or contact) in steps per
+second. Not a test: timings depend on the machine.
 """
 
 from __future__ import annotations
@@ -9,11 +11,15 @@ from __future__ import annotations
 import os
 import time
 
+import numpy as np
+
 os.environ.setdefault("OMP_NUM_THREADS", "1")
 os.environ.setdefault("OPENBLAS_NUM_THREADS", "1")
 
 from pressfit.description.cases import load_case
+from pressfit.description.machine import load_machine
 from pressfit.dynamics.insertion import simulate_insertion
+from pressfit.dynamics.multibody import rigid_leg_model
 from pressfit.shipped import cases_dir
 
 
@@ -26,6 +32,17 @@ def main() -> None:
         simulated = result.summary["simulated_time_s"]
         print(f"limiter {'on ' if limiter else 'off'}: {simulated:g} s simulated in {wall:.2f} s wall, "
               f"{simulated / wall:.2f} simulated s per s, {len(result.series) / wall:.0f} steps/s")
+    rigid = rigid_leg_model(load_machine(), np.array([0.05, 0.65, -0.05]))
+    q, tau = rigid.reference_q.copy(), np.zeros(rigid.model.nv)
+    v = rigid.admissible_velocity(q, [0.2, 0.1, -0.2])
+    times = []
+    for _ in range(5):
+        t0 = time.perf_counter()
+        for _ in range(2000):
+            q, v = rigid.step(q, v, tau, 1e-4)
+        times.append((time.perf_counter() - t0) / 2000)
+    step = float(np.median(times))
+    print(f"passive rigid-leg step: {step * 1e6:.0f} us/step, {1 / step:.0f} steps/s")
 
 
 if __name__ == "__main__":

@@ -9,8 +9,9 @@ from __future__ import annotations
 
 import numpy as np
 import pytest
+from readme import assert_printed, readme_fragment
 
-from pressfit.kinematics import concurrency_point, inverse_kinematics, preload_vector
+from pressfit.kinematics import concurrency_point, inverse_kinematics, leg_vectors, preload_vector
 from pressfit.mechanics.statics import solve_equilibrium
 from pressfit.studies import cad_fit as cf
 from pressfit.studies.paper_tables import paper_components
@@ -126,3 +127,28 @@ def test_case_c_split_verdict(paper_fit):
     assert abs(sp.self_stress_n) > 10 * sp.self_stress_std_n
     assert abs(sp.self_stress_n - sp.min_norm_self_stress_n) > 10 * sp.self_stress_std_n
     assert sp.verdict.startswith("an artefact")
+
+
+def test_readme_numbers_of_the_cad_fit(cases, paper_fit):
+    """Every number of the README's "What the CAD model was" paragraph (tests/readme.py), from the fit above. The
+    lean of case C's leg 1 is measured on the fitted geometry: the horizontal offset of its plate cardan from its
+    base cardan, pointing away from the base centre (outward, past vertical; the legs lean inward elsewhere)."""
+    readme_fragment("a weighted least-squares fit of all 36 printed F_z, M_z and bending magnitudes (sigma = half a "
+                    "unit of the last printed digit, floor 1e-3)")
+    assert len(paper_fit.entries) == 36 and cf.FLOOR == 1e-3
+    readme_fragment("It reproduces every entry within 0.6 N / N m (Table 3's model: up to 211 N) with r = 0.111 +- "
+                    "0.0005 m (Table 3: 0.082); case C's leg 1 leans 14 mm past vertical.")
+    assert_printed(max(abs(e.fit_residual) for e in paper_fit.entries), "0.6")
+    assert_printed(max(abs(e.table3_residual) for e in paper_fit.entries), "211")
+    (r,) = [p for p in paper_fit.parameters if p.name == "plate_half_side_m"]
+    assert_printed(r.value, "0.111")
+    assert_printed(r.std, "0.0005")
+    assert cases["A"].machine().geometry.plate_half_side_m == 0.082
+    machine, pose, *_ = cf.configure(cases, np.array([p.value for p in paper_fit.parameters]))[2]
+    base = machine.base_points_m[0]
+    offset = leg_vectors(machine, pose)[0] * [1.0, 0.0, 1.0]  # base cardan -> plate cardan, horizontal part
+    assert offset @ base > 0.0  # outward
+    assert_printed(np.linalg.norm(offset) * 1e3, "14")
+    readme_fragment("Case C's split is pressfit's elastic split plus a = 335 N along v_p (minimum norm would be 14 N)")
+    assert_printed(paper_fit.split.self_stress_n, "335")
+    assert_printed(paper_fit.split.min_norm_self_stress_n, "14")

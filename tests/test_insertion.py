@@ -7,9 +7,11 @@ import tomllib
 from pathlib import Path
 
 import numpy as np
+import pinocchio as pin
 import pytest
 import tomli_w
 from click.testing import CliRunner
+from readme import assert_printed, readme_fragment
 
 from pressfit import kinematics
 from pressfit.cli import main
@@ -17,12 +19,14 @@ from pressfit.description.cases import Contact, load_case
 from pressfit.dynamics.actuators import ForceActuators, distribute
 from pressfit.dynamics.contact import contact_force_n, solve_contact
 from pressfit.dynamics.control import estimate_pose
-from pressfit.dynamics.insertion import simulate_insertion
+from pressfit.dynamics.insertion import SETTLING_BAND, simulate_insertion
+from pressfit.dynamics.multibody import rigid_leg_model
 from pressfit.errors import ModelFileError
-from pressfit.mechanics.condensed import condensed_plate_compliance
+from pressfit.mechanics.condensed import condensed_plate_compliance, solve_linear
 
 ROOT = Path(__file__).resolve().parents[1]
 SHIPPED = ROOT / "cases/paper/insertion.toml"
+PIN = np.array([0.10, 0.60, -0.05])  # the shipped scenario's pin on the board face, m
 RNG_POSES = np.random.default_rng(7).uniform([-0.2, 0.5, -0.2], [0.2, 0.72, 0.2], (20, 3))
 
 
@@ -110,8 +114,10 @@ def short_case(tmp_path, **simulation):
 
 
 @pytest.fixture(scope="module")
-def runs(tmp_path_factory):
-    case = load_case(short_case(tmp_path_factory.mktemp("insertion")))
+def runs():
+    """The SHIPPED scenario (6.5 s at dt = 1 ms) with and without the limiter: the runs the README reports
+    (about 7 s for both on one loaded core)."""
+    case = load_case(SHIPPED)
     return case, simulate_insertion(case, limiter=True), simulate_insertion(case, limiter=False)
 
 
@@ -130,21 +136,20 @@ def test_limiter_keeps_the_contact_force_under_the_limit(runs):
 def test_without_limiter_the_steady_force_is_the_series_stiffness_times_interference(runs):
     """The PID drives the length-based estimate, i.e. the rigid plate, to the reference 2 mm below the board;
     the structure (vertical compliance C_yy of the condensed model) is in series with the contact, so the
-    steady force is k i / (1 + k C_yy) (closed form, within 1%: the integrator's residual error after the dwell, 0.5% here)
-    and equals the contact law at the depth reached (the solver's consistency, 1e-6)."""
+    steady force is k i / (1 + k C_yy) (closed form, within 1%: the integrator's residual error after the dwell,
+    0.08% here) and equals the contact law at the depth reached (the solver's consistency, 1e-6)."""
     case, _, free = runs
     sim, s = case.simulation, free.summary
-    c_yy = condensed_plate_compliance(case.machine(), np.array([0.10, 0.60, -0.05]))[1, 1]
+    c_yy = condensed_plate_compliance(case.machine(), PIN)[1, 1]
     k = sim.contact.stiffness_n_per_m
     assert s["steady_insertion_force_n"] == pytest.approx(k * sim.interference_m / (1 + k * c_yy), rel=0.01)
     assert s["steady_insertion_force_n"] == pytest.approx(s["contact_law_at_steady_depth_n"], rel=1e-6)
 
 
 def test_scenario_tracks_and_keeps_the_loops_closed(runs):
-    """The tool ends within 0.1 mm of end_m (PID with an exact gravity feed-forward; achieved 5 um), the loop
-    closures drift less than 3e-5 m (Baumgarte stabilisation at dt = 1e-3 s; achieved 1.1e-5 m in this faster
-    copy, 2.4e-6 m in the shipped scenario) and no actuator saturates (peak tensions ~210 N against the
-    1000 N limit)."""
+    """The tool ends within 0.1 mm of end_m (PID with an exact gravity feed-forward; achieved 1.7 um), the loop
+    closures drift less than 3e-5 m (Baumgarte stabilisation at dt = 1e-3 s; achieved 2.4e-6 m, 1.1e-5 m in a
+    copy with faster moves) and no actuator saturates (peak tensions ~150 N against the 1000 N limit)."""
     for result in runs[1:]:
         s = result.summary
         assert s["tool_final_error_m"] < 1e-4
@@ -153,7 +158,7 @@ def test_scenario_tracks_and_keeps_the_loops_closed(runs):
 
 
 def test_simulate_cli_json_files_and_bad_input(tmp_path):
-    path = short_case(tmp_path, dwell_s=0.3)
+    path = short_case(tmp_path, move_time_s=0.3, descent_time_s=0.3, dwell_s=0.2, settle_s=0.0)
     args = ["simulate", str(path), "--json", "--no-progress", "--out", str(tmp_path / "o")]
     res = CliRunner().invoke(main, args)
     assert res.exit_code == 0, res.output
@@ -192,3 +197,90 @@ def test_contact_damping_in_series_is_the_backward_difference_closed_form():
                                          lambda f: np.array([0.0, c * f, 0.0]), previous, dt).force_n
     leaving = solve_contact(contact, np.array([0.0, 0.6 - 0.1e-3, 0.0]), lambda f: np.zeros(3), 0.5e-3, dt)
     assert leaving.force_n == 0.0 and leaving.depth_m > 0.0
+
+
+def test_readme_inputs_of_the_shipped_scenario(runs):
+    """The README's description of the shipped scenario's inputs (tests/readme.py: the README says it, the case
+    file and the machine file hold it)."""
+    case, limited, _ = runs
+    sim, actuator = case.simulation, case.machine().actuator
+    readme_fragment("from a known pose to 5 mm above the pin, down to a reference 2 mm below the board face")
+    assert (sim.approach_height_m, sim.interference_m) == (0.005, 0.002)
+    readme_fragment("semi-implicit Euler at 1 ms")
+    readme_fragment("The shipped scenario (dt = 1 ms, 6.5 s simulated)")
+    assert sim.time_step_s == 1e-3 and limited.summary["simulated_time_s"] == pytest.approx(6.5, abs=1e-9)
+    readme_fragment("`[actuator] force_bandwidth_hz` (40 Hz, the paper's) and saturation at `force_limit_n` (1000 N")
+    assert (actuator.force_bandwidth_hz, actuator.force_limit_n) == (40.0, 1000.0)
+    readme_fragment("the contact stiffness 5e4 N/m is an estimate")
+    assert sim.contact.stiffness_n_per_m == 5e4
+
+
+def test_readme_results_of_the_shipped_scenario(runs):
+    """Every result the README states for the shipped scenario rounds to its printed digits (tests/readme.py).
+    These are the model's outputs; what makes them right is checked by the physics tests above (the limit
+    and its overshoot, the series closed form, the closures, the internal force equal to the preload)."""
+    case, limited, free = runs
+    sim, s, f = case.simulation, limited.summary, free.summary
+    readme_fragment("with the limiter the contact force peaks at 30.5 N (0.5 N over the 30 N limit), settles "
+                    "within 2% of its final 30.0 N in 0.15 s after first contact (the settling time) at 0.60 mm "
+                    "interference; without it the force reaches 99.6 N at 1.99 mm (the structure in series: the "
+                    "closed form k i / (1 + k C_yy) gives 99.7 N")
+    assert sim.controller.force_limit_n == 30.0 and SETTLING_BAND == 0.02
+    assert_printed(s["peak_contact_force_n"], "30.5")
+    assert_printed(s["overshoot_n"], "0.5")
+    assert_printed(s["steady_insertion_force_n"], "30.0")
+    assert_printed(s["settling_time_s"], "0.15")
+    assert_printed(s["steady_insertion_depth_m"] * 1e3, "0.60")
+    assert_printed(f["peak_contact_force_n"], "99.6")
+    assert_printed(f["max_insertion_depth_m"] * 1e3, "1.99")
+    k, c_yy = sim.contact.stiffness_n_per_m, condensed_plate_compliance(case.machine(), PIN)[1, 1]
+    assert_printed(k * sim.interference_m / (1 + k * c_yy), "99.7")
+    readme_fragment("Tool errors with the limiter: 10 um lateral at the pin (the plate compliance under the contact "
+                    "force), 2 um at the final pose; loop-closure drift 2.4e-6 m; actuator tensions up to 152 N, "
+                    "no saturation; internal force v_p . N = 100.0 N (the commanded preload)")
+    assert_printed(s["tool_lateral_error_at_insertion_m"] * 1e6, "10")
+    assert_printed(s["tool_final_error_m"] * 1e6, "2")
+    assert case.preload.a4_n == 100.0
+    readme_fragment("peak |N| 67-128 N, torsion 7-14 N m, bending 1-3 N m")
+    for run in (s, f):  # the two runs agree on these
+        assert_printed(run["max_closure_drift_m"], "2.4e-6")
+        assert_printed(max(run["peak_actuator_tension_n"]), "152")
+        assert run["actuator_saturation_time_s"] == 0.0
+        for internal in run["internal_force_range_n"]:
+            assert_printed(internal, "100.0")
+        for key, low, high in (("peak_leg_axial_force_n", "67", "128"), ("peak_leg_torsion_nm", "7", "14"),
+                               ("peak_leg_bending_nm", "1", "3")):
+            assert_printed(min(run[key]), low)
+            assert_printed(max(run[key]), high)
+
+
+def test_readme_force_limit_against_the_design_envelope():
+    """README: the drives' 1000 N is 1.9 times the worst leg force of the 700 N design envelope, 533 N. Reference:
+    the exact condensed linear model (pressfit.mechanics.condensed, equal to the Pinocchio solve to 1e-9) over
+    the envelope case's reachable poses and its nine load directions (the 5 degree cone)."""
+    readme_fragment("(1000 N, an estimate: 1.9 times the worst leg force of the 700 N design envelope "
+                    "`cases/envelope/press_workspace.toml`, 533 N with its 5 degree load cone)")
+    case = load_case(ROOT / "cases/envelope/press_workspace.toml")
+    machine = case.machine()
+    poses = case.poses.array()
+    poses = poses[kinematics.is_reachable(machine, poses)]
+    assert case.loads.press_force_n == 700.0 and case.loads.cone_half_angle_rad == pytest.approx(np.radians(5), 1e-3)
+    worst = max(np.abs(solve_linear(machine, poses, w).actuator_forces_n).max() for w in case.loads.wrenches())
+    assert_printed(worst, "533")
+    assert_printed(machine.actuator.force_limit_n / worst, "1.9")
+
+
+def test_readme_position_loop_frequency():
+    """README: the position loop's sqrt(k_p / m) / (2 pi) = 5.6 Hz with m = 16.0 kg, the plate's apparent vertical
+    mass at the pin: a unit vertical force on the plate of the rigid-leg model (Pinocchio's constraint dynamics,
+    gravity off, at rest) gives the vertical acceleration 1 / m (definition of the apparent mass)."""
+    readme_fragment("above the position loop (sqrt(k_p / m) / (2 pi) = 5.6 Hz, m = 16.0 kg the plate's apparent "
+                    "vertical mass at the pin)")
+    case = load_case(SHIPPED)
+    rigid = rigid_leg_model(case.machine(), PIN)
+    rigid.model.gravity = pin.Motion.Zero()
+    tau = np.zeros(rigid.model.nv)
+    tau[1] = 1.0  # N along the plate's y, which is world y for the unrotated plate
+    mass = 1.0 / rigid.accelerations(rigid.reference_q, np.zeros(rigid.model.nv), tau)[1]
+    assert_printed(mass, "16.0")
+    assert_printed(math.sqrt(case.simulation.controller.kp_n_per_m / mass) / (2 * math.pi), "5.6")

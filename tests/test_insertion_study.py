@@ -9,6 +9,7 @@ import numpy as np
 import pytest
 import tomli_w
 from click.testing import CliRunner
+from readme import assert_printed, readme_fragment
 
 from pressfit.cli import main
 from pressfit.description.cases import load_case
@@ -48,7 +49,7 @@ def test_play_shows_as_hidden_tool_error_without_preload(machine, study):
 def test_preload_above_critical_removes_the_play(study):
     """With a4 = 60 N above the critical preload (every cardan closed up to the peak contact force, ~23 N
     here) the tool error is the elastic one of g = 0: the play's share is below 1e-8 m (the dead zone's
-    smoothing width is 1e-9 m; achieved 3e-13 m), against ~46 um without preload."""
+    smoothing width is 1e-9 m; achieved 1e-11 m), against ~46 um without preload."""
     critical = study.column("critical_preload_n")[1]
     assert 0.0 < critical < 60.0
     assert study.column("play_error_m")[1] < 1e-8
@@ -66,3 +67,19 @@ def test_study_cli_files_and_json(tmp_path):
     assert {p.name for p in out.iterdir()} == {"insertion_study.csv", "insertion_study.json", "insertion_study.png"}
     again = CliRunner().invoke(main, args)
     assert again.exit_code == 2 and "error:" in again.output
+
+
+def test_readme_numbers_of_the_preload_against_play(machine, study):
+    """The README's "Preload against play" numbers (tests/readme.py), from this module's study: the shipped
+    scenario with shorter moves and dwell, i.e. the same insertion pose, contact, gains and 30 N limit (the lost
+    motion depends on the pose and the gap only, the critical preload on the peak contact force, 30.4 N here)."""
+    readme_fragment("At g = 20 um and no preload the play hides 46 um of tool error (the clearance model's lost "
+                    "motion at the insertion pose); any preload above the critical one (23 N at the 30 N limit) "
+                    "removes it (below 1e-10 m).")
+    assert GAP == 20e-6 and study.column("preload_n").tolist() == [0.0, 60.0]
+    assert_printed(study.column("play_error_m")[0] * 1e6, "46")
+    ld = load_deflection(machine, study.pose_m, [0.0, 1.0, 0.0], np.linspace(0.0, 30.0, 31),
+                         Clearance.uniform(machine, GAP), 0.0, unload=False)
+    assert_printed(ld.lost_motion_m * 1e6, "46")
+    assert_printed(study.column("critical_preload_n")[1], "23")
+    assert study.column("play_error_m")[1] < 1e-10

@@ -6,6 +6,7 @@ import numpy as np
 import pinocchio as pin
 import pytest
 from click.testing import CliRunner
+from readme import assert_printed, readme_fragment
 from scipy.linalg import eigh
 
 from pressfit import kinematics
@@ -83,7 +84,9 @@ def test_vertical_mode_at_pose_A_is_a_single_spring_mass(machine):
 def test_plate_modes_match_the_condensed_rigid_body_problem(machine, pose):
     """Legs massless: the six modes are those of a rigid plate (mass 6.2 kg, uniform box inertia about its
     centre) on the condensed 6x6 stiffness (pressfit.mechanics.condensed, an independent closed-form
-    condensation of the legs). Achieved 3e-6; tolerance 2e-5."""
+    condensation of the legs). Achieved 3e-6; tolerance 2e-5, the README's."""
+    readme_fragment("With massless legs the six plate modes equal those of a rigid plate on the condensed 6x6 "
+                    "stiffness (tested to 2e-5).")
     light = machine.with_overrides(LIGHT_LEGS)
     modes = natural_modes(light, pose, count=6, plate_wrench=np.zeros(6))
     ms, side, t = light.mass, 2 * light.geometry.plate_half_side_m, light.collision.plate_thickness_m
@@ -126,3 +129,36 @@ def test_modes_cli(tmp_path):
     assert again.exit_code == 2 and "--overwrite" in again.output
     bad = CliRunner().invoke(main, ["modes", "0", "0.3", "0"])
     assert bad.exit_code == 2 and "not reachable" in bad.output
+
+
+def test_readme_numbers_of_the_modes(machine):
+    """Every number of the README's modes paragraph and the insertion section's first mode (tests/readme.py),
+    with the shipped mass estimates under the plate's weight. The mode kinds are checked on the shapes: the
+    rocking pair (equal by the fourfold symmetry at pose A) moves the plate sideways and tilts it about a
+    horizontal axis; the twist turns it about y alone; from the fourth mode on the plate moves less than 5% of the
+    largest leg-point displacement (the legs' own bending; the rocking pair and the twist move it 45-110%)."""
+    readme_fragment("held by the legs' bending and torsion) at 18.3 Hz at pose A (0, 0.72, 0); it is stiffer low in "
+                    "the workspace and softer high and off-centre: 46.0 Hz at (0, 0.49, 0), 28.7 Hz at (0, 0.6, 0), "
+                    "14.5 Hz at the corner (0.25, 0.72, 0.25), 13.5 Hz at (0.25, 0.75, 0.25); so it lies below the "
+                    "paper's 40 Hz actuator bandwidth except near the bottom of the workspace. At pose A the plate "
+                    "twist is at 83 Hz and the legs' own bending starts at 98 Hz.")
+    readme_fragment("structural mode (`pressfit modes`: 27.5 Hz at the pin, 18.3 Hz at pose A)")
+    modes = natural_modes(machine, POSE_A, count=8)
+    f, plate = modes.frequencies_hz, modes.plate_shapes
+    legs = np.abs(modes.leg_point_shapes).max(axis=(1, 2, 3))
+    plate_motion = np.maximum(np.linalg.norm(plate[:, :3], axis=1),
+                              machine.geometry.plate_half_side_m * np.linalg.norm(plate[:, 3:], axis=1))
+    for k in (0, 1):
+        assert_printed(f[k], "18.3")
+        assert abs(plate[k, 1]) + abs(plate[k, 4]) < 1e-6 * np.linalg.norm(plate[k])  # no heave, no twist
+        assert min(np.linalg.norm(plate[k, [0, 2]]), np.linalg.norm(plate[k, [3, 5]])) > 0.1 * np.linalg.norm(plate[k])
+    assert_printed(f[2], "83")
+    assert np.linalg.norm(plate[2, [0, 1, 2, 3, 5]]) < 1e-6 * abs(plate[2, 4])
+    assert_printed(f[3], "98")
+    assert np.all(plate_motion[3:] < 0.05 * legs[3:]) and np.all(plate_motion[:3] > 0.3 * legs[:3])
+    assert machine.actuator.force_bandwidth_hz == 40.0
+    poses = ((0.0, 0.49, 0.0), (0.0, 0.6, 0.0), (0.25, 0.72, 0.25), (0.25, 0.75, 0.25), (0.1, 0.6, -0.05))  # last: pin
+    lowest = {pose: natural_modes(machine, np.array(pose), count=1).frequencies_hz[0] for pose in poses}
+    for pose, printed in zip(lowest, ("46.0", "28.7", "14.5", "13.5", "27.5"), strict=True):
+        assert_printed(lowest[pose], printed)
+    assert lowest[0.0, 0.6, 0.0] < 40.0 < lowest[0.0, 0.49, 0.0]
