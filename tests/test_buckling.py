@@ -32,7 +32,9 @@ def test_order_of_segments_does_not_matter():
 
 def test_vectorised_table_matches_direct_root(machine):
     for length in (0.5, 0.73, 1.0):
-        assert leg_critical_loads_n(machine, [length])[0] == pytest.approx(leg_critical_load_n(machine, length), rel=1e-6)
+        assert leg_critical_loads_n(machine, [length])[0] == pytest.approx(
+            leg_critical_load_n(machine, length), rel=1e-6
+        )
 
 
 # --- whole-machine linearised buckling --------------------------------------------------------------------

@@ -10,8 +10,8 @@ import pytest
 import tomli_w
 from click.testing import CliRunner
 
-from pressfit.description.cases import discover, load_case
 from pressfit.cli import main
+from pressfit.description.cases import discover, load_case
 from pressfit.errors import ModelFileError
 
 ROOT = Path(__file__).resolve().parents[1]

@@ -10,15 +10,15 @@ import numpy as np
 import pytest
 from click.testing import CliRunner
 
-from pressfit.mechanics import clearance as C
 from pressfit import kinematics
-from pressfit.mechanics import statics
-from pressfit.description.cases import load_case
 from pressfit.cli import main
-from pressfit.output import maps
-from pressfit.studies import preload_study
+from pressfit.description.cases import load_case
+from pressfit.mechanics import clearance as C
+from pressfit.mechanics import statics
 from pressfit.mechanics.model import build_model
 from pressfit.mechanics.preload import PreloadError, rest_length_offsets
+from pressfit.output import maps
+from pressfit.studies import preload_study
 
 POSE_A = np.array([0.0, 0.72, 0.0])
 OFF = np.array([0.2, 0.6, -0.2])

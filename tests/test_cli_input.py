@@ -131,7 +131,6 @@ def test_a_value_just_beyond_a_limit_does_not_print_like_the_limit(machine):
     """alpha_2 = pi/2 at x = 0.36 m, y = 0.6 m (tan(alpha_2) = 0.6 / (D - x) with D = 0.36 m): 1e-9 m further
     the message must show the limit with enough digits and the excess, not '1.5708 breaks maximum 1.5708'."""
     from pressfit import kinematics
-
     from pressfit.errors import format_violation
 
     ((leg, what, value, limit),) = kinematics.violations(machine, [0.36 + 1e-9, 0.6, 0.0])

@@ -5,9 +5,8 @@ import math
 import numpy as np
 import pytest
 
-from pressfit.mechanics import condensed
-
 from pressfit import kinematics
+from pressfit.mechanics import condensed
 from pressfit.mechanics.compliance import vjm_plate_compliance
 
 

@@ -14,14 +14,13 @@ import numpy as np
 import pytest
 from scipy.spatial.transform import Rotation
 
+from pressfit import kinematics
+from pressfit.errors import OutputExistsError, PressfitError
 from pressfit.kinematics.workspace import workspace_square
 from pressfit.mechanics import condensed
 from pressfit.mechanics.preload import with_axial_preload
 from pressfit.output import maps as map_files
 from pressfit.studies import workspace_envelope
-
-from pressfit import kinematics
-from pressfit.errors import OutputExistsError, PressfitError
 
 P, R = 0.442, 0.082  # Table 3
 E, G = 210e9, 81e9

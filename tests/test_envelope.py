@@ -9,7 +9,6 @@ test_condensed.py and test_interference.py).
 
 import math
 import xml.etree.ElementTree as ET
-
 from pathlib import Path
 
 import pytest
@@ -17,8 +16,8 @@ import tomli_w
 from click.testing import CliRunner
 
 from pressfit import kinematics
-from pressfit.description.cases import load_case
 from pressfit.cli import main
+from pressfit.description.cases import load_case
 from pressfit.studies.limit_check import LIMITS, evaluate_case
 
 ROOT = Path(__file__).resolve().parents[1]
@@ -71,7 +70,9 @@ def test_pose_A_closed_forms(tmp_path, machine):
     res = evaluate_case(load_case(case_file(tmp_path, env, poses={"points_m": [[0.0, 0.72, 0.0]]})))
     worst = {r.key: r.worst for r in res.limits}
     alpha = math.atan(2.0)
-    k_a = 1.0 / float(machine.axial_compliance_m_per_n(kinematics.inverse_kinematics(machine, [0, 0.72, 0]).lengths_m[0]))
+    k_a = 1.0 / float(
+        machine.axial_compliance_m_per_n(kinematics.inverse_kinematics(machine, [0, 0.72, 0]).lengths_m[0])
+    )
     assert worst["max_tension_n"] == pytest.approx(700 / (4 * math.sin(alpha)), rel=1e-9)
     assert worst["max_actuator_force_n"] == pytest.approx(700 / (4 * math.sin(alpha)), rel=1e-9)
     # small-displacement deflection; the nonlinear refinement differs by O(strain) ~ 1e-5
@@ -93,7 +94,9 @@ def test_cli_exit_codes_junit_and_json(tmp_path):
     ok = runner.invoke(main, ["check", str(good), "--no-progress"])
     assert ok.exit_code == 0, ok.output
     junit, js = tmp_path / "r.xml", tmp_path / "r.json"
-    fail = runner.invoke(main, ["check", str(good), str(bad), "--junit", str(junit), "--json", str(js), "--no-progress"])
+    fail = runner.invoke(
+        main, ["check", str(good), str(bad), "--junit", str(junit), "--json", str(js), "--no-progress"]
+    )
     assert fail.exit_code == 1 and "FAIL plate tilt" in fail.output and "EXCEEDS limit" in fail.output
     root = ET.parse(junit).getroot()  # well-formed XML
     suites = {s.get("name"): s for s in root.iter("testsuite")}

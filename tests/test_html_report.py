@@ -161,7 +161,7 @@ def test_3d_geometry_follows_the_kinematics_and_the_solve(machine):
     names = [t["name"] for t in fig["data"]]
     for m in (0.0, 1.0, 100.0):
         xyz = steps[MAGNIFICATIONS.index(m)]["args"][0]
-        at = lambda name: np.c_[[xyz[a][names.index(name)] for a in "xyz"]].T  # noqa: E731
+        at = lambda name, xyz=xyz: np.c_[[xyz[a][names.index(name)] for a in "xyz"]].T
         cardans = pose + m * eq.plate_displacement_m + machine.plate_offsets_m @ pin.exp3(m * eq.plate_rotation_rad).T
         np.testing.assert_allclose(at("cardans"), np.vstack([machine.base_points_m, cardans]), atol=1e-6)
         for i in range(4):

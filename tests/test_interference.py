@@ -10,9 +10,9 @@ import pytest
 import trimesh
 from click.testing import CliRunner
 
-from pressfit.geometry import interference as I
 from pressfit import kinematics
 from pressfit.cli import main
+from pressfit.geometry import interference as I
 
 
 def segment_distance(p0, p1, q0, q1):
@@ -177,7 +177,7 @@ def test_excluded_pairs_are_not_evaluated(machine):
     assert set(im.excluded) == by_design and not by_design & set(im.pairs)
     assert len(im.pairs) == 24 + 4 + 4
     for a, b in names_of_geometry_pairs(im):
-        body = lambda n: n if n in ("plate", "base") else ".".join(n.split(".")[:2])  # noqa: E731
+        body = lambda n: n if n in ("plate", "base") else ".".join(n.split(".")[:2])
         assert f"{body(a)}|{body(b)}" in im.pairs
         assert not (a.split(".")[0] == b.split(".")[0] and a.startswith("leg"))  # no shape pair within a leg
     pc = I.clearance_at(im, [0, 0.6, 0])
@@ -202,10 +202,12 @@ def test_mesh_body_matches_box_primitive(machine, tmp_path):
     trimesh.creation.box(extents=np.array(size) * 1e3).export(tmp_path / "fixture.stl")
     pose = {"translation_m": [0.05, -0.25, 0.02], "rotation_rpy_rad": [0.1, 0.4, -0.2]}
     wpose = {"translation_m": [0.3, 0.25, -0.25], "rotation_rpy_rad": [0.0, 0.3, 0.0]}
-    extras = [{"name": "mesh", "frame": "plate", "mesh_path": str(tmp_path / "fixture.stl"), "mesh_scale": 1e-3, **pose},
-              {"name": "box", "frame": "plate", "box_size_m": size, **pose},
-              {"name": "wmesh", "mesh_path": "fixture.stl", "mesh_scale": 1e-3, **wpose},
-              {"name": "wbox", "box_size_m": size, **wpose}]
+    extras = [
+        {"name": "mesh", "frame": "plate", "mesh_path": str(tmp_path / "fixture.stl"), "mesh_scale": 1e-3, **pose},
+        {"name": "box", "frame": "plate", "box_size_m": size, **pose},
+        {"name": "wmesh", "mesh_path": "fixture.stl", "mesh_scale": 1e-3, **wpose},
+        {"name": "wbox", "box_size_m": size, **wpose},
+    ]
     m = machine.with_overrides({"collision": {"extra_bodies": extras}}, source=str(tmp_path / "machine.toml"))
     (tmp_path / "machine.toml").write_text("")  # relative mesh paths resolve from the machine file's directory
     im = I.build_interference(m)

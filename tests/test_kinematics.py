@@ -4,8 +4,8 @@ import numpy as np
 import pytest
 
 from pressfit import kinematics
-from pressfit.kinematics import closed_form
 from pressfit.errors import SingularPoseError, UnreachablePoseError
+from pressfit.kinematics import closed_form
 
 D = 0.442 - 0.082  # p - r from Table 3, m: horizontal distance base cardan -> plate cardan at x = z = 0
 

@@ -3,8 +3,8 @@
 import numpy as np
 import pytest
 
-from pressfit.errors import ModelFileError
 from pressfit.description.machine import DEFAULT_MODEL, load_machine
+from pressfit.errors import ModelFileError
 
 
 def test_default_model(machine):

@@ -53,7 +53,7 @@ def test_assembly_from_a_perturbed_guess_recovers_the_closed_form(mm):
     q_ref = mm.configuration_at(pose)
     guess = q_ref.copy()
     rng = np.random.default_rng(1)
-    for key, idx in mm._rigid_idx.items():
+    for idx in mm._rigid_idx.values():
         guess[idx] += rng.uniform(-0.05, 0.05, idx.shape)
     q = mm.assemble(pose, guess)
     assert np.max(np.abs(q - q_ref)) < 1e-9
@@ -92,7 +92,9 @@ def test_segment_springs_add_up_to_the_beam_compliances(machine):
         stem_z = sum(1 / s.law.k for s in leg0 if s.name.startswith("stem") and s.name.endswith(".z"))
         lc = machine.cylinder.length_m
         ls = kinematics.inverse_kinematics(machine, [0.0, 0.7, 0.0]).lengths_m[0] - lc
-        assert cyl_x == pytest.approx(lc / (machine.material.youngs_modulus_pa * machine.cylinder_section.second_moment_m4))
+        assert cyl_x == pytest.approx(
+            lc / (machine.material.youngs_modulus_pa * machine.cylinder_section.second_moment_m4)
+        )
         assert stem_z == pytest.approx(ls / (machine.material.shear_modulus_pa * machine.stem_section.polar_moment_m4))
         act = [s for s in leg0 if s.name == "actuator"][0]
         assert 1 / act.law.k == pytest.approx(float(machine.axial_compliance_m_per_n(ls + lc)))

@@ -90,8 +90,10 @@ def test_tables_case_c(tables, machine):
     printed(100 * abs(a[1] @ paper / 700.0 - 1), "0.12")
     says("the paper has (471, 300, -368, 300) N with leg 1 flipped, ours is (589, 136, -157, 136) N")
     assert np.round(paper).tolist() == [471, 300, -368, 300] and np.round(ours).tolist() == [589, 136, -157, 136]
-    says("The difference is mostly (99.4% of its squared norm) a self-stress a4 = 333 N along v_p, and the rest leaves 15 N unbalanced "
-         "along z")
+    says(
+        "The difference is mostly (99.4% of its squared norm) a self-stress a4 = 333 N along v_p, and the rest "
+        "leaves 15 N unbalanced along z"
+    )
     d, vp = paper - ours, kinematics.preload_vector(case.machine(), h)
     printed(100 * (d @ vp) ** 2 / (d @ d), "99.4")
     printed(d @ vp, "333")

@@ -14,9 +14,8 @@ import pinocchio as pin
 import pytest
 
 from pressfit import kinematics
-
-from pressfit.mechanics import statics
 from pressfit.errors import ConvergenceError, SingularPoseError, UnreachablePoseError
+from pressfit.mechanics import statics
 from pressfit.mechanics.model import CardanCompliance, LinearSpring, build_model
 from pressfit.mechanics.statics import solve_equilibrium
 
@@ -73,7 +72,7 @@ def test_linear_solve_equals_exact_condensation(machine, pose, wrench):
     for i, leg in enumerate(eq.legs):
         for name in statics.SECTIONS:
             force, moment = world_vectors(leg, name)
-            assert leg.sections[name].N == pytest.approx(n[i], abs=1e-9 * fs)
+            assert pytest.approx(n[i], abs=1e-9 * fs) == leg.sections[name].N
             assert abs(leg.sections[name].V_x) < 1e-9 * fs and abs(leg.sections[name].V_y) < 1e-9 * fs  # no shear
             assert np.allclose(moment, couples[i], rtol=0, atol=1e-9 * fs * 0.442)
     assert np.allclose(eq.plate_displacement_m, disp, rtol=0, atol=1e-9 * np.abs(disp).max())
@@ -88,7 +87,7 @@ def test_pose_A_every_leg_carries_700_over_4_sin_alpha(machine):
     for eq, tol in ((lin, 1e-12), (non, 1e-5)):  # nonlinear: the legs shorten by ~5 um of 0.8 m (~1e-5)
         for leg in eq.legs:
             for s in leg.sections.values():
-                assert s.N == pytest.approx(closed, rel=tol)
+                assert pytest.approx(closed, rel=tol) == s.N
                 assert max(abs(s.V_x), abs(s.V_y), abs(s.M_x), abs(s.M_y), abs(s.T)) < 1e-9
     assert closed == pytest.approx(195.66, abs=5e-3)
 
@@ -124,7 +123,7 @@ def test_nonlinear_solution_is_energy_stationary_on_the_constraint_manifold(mach
     rng = np.random.default_rng(3)
     worst, scale = 0.0, 0.0
     for d in (tangent @ rng.normal(size=(tangent.shape[1], 8))).T:
-        def plate(t):
+        def plate(t, d=d):
             qq = pin.integrate(mm.model, q, t * d)
             pin.forwardKinematics(mm.model, data, qq)
             return qq, data.oMi[mm.plate_joint_id].copy()
@@ -222,7 +221,7 @@ def test_preload_alone_acts_along_v_p_without_bending(machine, linear):
     assert np.allclose(eq.actuator_forces_n, a4 * vp, rtol=0, atol=1e-9 * a4)
     for i, leg in enumerate(eq.legs):
         for s in leg.sections.values():
-            assert s.N == pytest.approx(a4 * vp[i], abs=1e-9 * a4)
+            assert pytest.approx(a4 * vp[i], abs=1e-9 * a4) == s.N
             assert max(abs(s.V_x), abs(s.V_y), abs(s.M_x), abs(s.M_y), abs(s.T)) < 1e-9 * a4
     assert np.abs(eq.plate_displacement_m).max() < 1e-15 and eq.is_valid(1e-9)
 
@@ -270,15 +269,25 @@ def test_analytic_tangent_matches_finite_differences_of_the_gradient(machine):
     for i, v in enumerate(mm.leg_v):
         h[np.ix_(v, v)] = h_leg[i]
     eps = 1e-7
-    fd = np.array([(residual(pin.integrate(mm.model, q, eps * d), eps * d)
-                    - residual(pin.integrate(mm.model, q, -eps * d), -eps * d)) / (2 * eps) for d in np.eye(mm.model.nv)]).T
+    fd = np.array(
+        [
+            (
+                residual(pin.integrate(mm.model, q, eps * d), eps * d)
+                - residual(pin.integrate(mm.model, q, -eps * d), -eps * d)
+            )
+            / (2 * eps)
+            for d in np.eye(mm.model.nv)
+        ]
+    ).T
     geo = h  # the whole tangent: springs + geometric stiffness
     assert np.abs(fd - geo).max() < 1e-6 * np.abs(geo).max()
     # the geometric part alone (without springs) is also matched to 1e-5 of its own size
     springs = np.zeros(mm.model.nv)
     for s in mm.springs:
         springs[s.idx_v] = s.law.k
-    assert np.abs((fd - np.diag(springs)) - (geo - np.diag(springs))).max() < 1e-5 * np.abs(geo - np.diag(springs)).max()
+    assert (
+        np.abs((fd - np.diag(springs)) - (geo - np.diag(springs))).max() < 1e-5 * np.abs(geo - np.diag(springs)).max()
+    )
 
 
 def test_constraint_jacobian_equals_pinocchios_frame_anchor_jacobian(machine):
@@ -349,7 +358,9 @@ def test_non_convergence_reports_the_residual(machine):
 
 def test_leg_mechanism_is_reported_as_singular(machine):
     # a cardan whose translations have no stiffness lets the leg move with the plate held: no equilibrium
-    mm = build_model(machine, POSE, springs_per_segment=1, cardan_compliance=CardanCompliance(translation=LinearSpring(0.0)))
+    mm = build_model(
+        machine, POSE, springs_per_segment=1, cardan_compliance=CardanCompliance(translation=LinearSpring(0.0))
+    )
     with pytest.raises(SingularPoseError):
         solve_equilibrium(mm, POSE, WRENCH)
 

@@ -7,11 +7,10 @@ import pytest
 from click.testing import CliRunner
 
 from pressfit import kinematics
-
-from pressfit.kinematics import workspace
 from pressfit.cli import main
-from pressfit.output import maps
 from pressfit.errors import OutputExistsError
+from pressfit.kinematics import workspace
+from pressfit.output import maps
 
 
 def test_square_points(machine):

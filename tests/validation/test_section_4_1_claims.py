@@ -14,7 +14,6 @@ import numpy as np
 import pytest
 
 from pressfit import kinematics
-
 from pressfit.kinematics import workspace
 
 Y_FIGURES = 0.6  # m, the height of Figures 7-11

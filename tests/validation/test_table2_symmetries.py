@@ -13,8 +13,8 @@ Tolerance 1e-12 throughout: identical closed forms written differently, round-of
 
 import numpy as np
 import pytest
-
 from paper_equations import equation_1
+
 from pressfit import kinematics
 
 TOL = 1e-12
