@@ -4,7 +4,6 @@ reference solver's assembled start, the solvers that refuse it, and the Monte Ca
 from pathlib import Path
 
 import numpy as np
-import pinocchio as pin
 import pytest
 
 from pressfit import kinematics

@@ -69,7 +69,8 @@ _SHAPES = {"actuator_length_offset_m": [f"leg{i}" for i in range(1, 5)],
            "base_point_error_m": [f"leg{i}.{a}" for i in range(1, 5) for a in _AXES],
            "plate_point_error_m": [f"leg{i}.{a}" for i in range(1, 5) for a in _AXES],
            "load_tilt_rad": [""], "cardan_clearance_m": [f"leg{i}.{e}" for i in range(1, 5) for e in ("base", "plate")],
-           "cardan_misalignment_rad": [f"leg{i}.{e}.{a}" for i in range(1, 5) for e in ("base", "plate") for a in _AXES]}
+           "cardan_misalignment_rad": [f"leg{i}.{e}.{a}" for i in range(1, 5) for e in ("base", "plate")
+                                       for a in _AXES]}
 _REFERENCE_ONLY = {"cardan_clearance_m": "cardan clearances",  # inputs the fast solver does not model
                    "cardan_misalignment_rad": "cardan misalignments"}
 
