@@ -10,6 +10,7 @@ from pressfit import kinematics
 from pressfit.description.cases import load_case
 from pressfit.description.machine import Machine
 from pressfit.errors import ModelFileError, PressfitError
+from pressfit.mechanics import condensed
 from pressfit.mechanics.fast_statics import FastEquilibriumSolver
 from pressfit.mechanics.model import build_model
 from pressfit.mechanics.statics import EquilibriumSolver
@@ -123,6 +124,8 @@ def test_solvers_that_need_parallel_axes_refuse_a_tilted_machine(machine):
         FastEquilibriumSolver(m, pose_m=POSE_A)
     with pytest.raises(PressfitError, match="misaligned cardans"):
         EquilibriumSolver(m, pose_m=POSE_A).solve(POSE_A, PRESS_N, linear=True)
+    with pytest.raises(condensed.CondensedModelError, match="misaligned cardans"):
+        condensed.solve_linear(m, POSE_A[None], PRESS_N)
 
 
 def test_a_tilt_beyond_the_limit_is_a_named_error(machine):
