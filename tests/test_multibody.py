@@ -107,3 +107,16 @@ def test_holding_a_pose_under_a_constant_load_gives_the_static_actuator_forces(m
     q = rigid.reference_q.copy()
     tau[rigid.actuator_v] = -distribute(machine, POSE, -w + gravity_feedforward_n(rigid, POSE), a4)
     assert np.abs(rigid.accelerations(q, np.zeros(rigid.model.nv), tau)).max() < 1e-8 * np.abs(w).max() / mass
+
+
+def test_a_machine_with_cardan_tilts_is_refused(machine):
+    """Rigid legs close the loops only with parallel cardan axes (Tsai's condition): a tilted machine is refused
+    with a named error, not simulated with its tilts silently dropped."""
+    from pressfit.dynamics.multibody import rigid_leg_model
+    from pressfit.errors import PressfitError
+
+    legs = [leg.model_dump() for leg in machine.legs]
+    legs[1]["base_cardan_tilt_rad"] = [0.0, 0.01, 0.0]
+    tilted = machine.with_overrides({"legs": legs})
+    with pytest.raises(PressfitError, match="cardan tilts"):
+        rigid_leg_model(tilted, [0.0, 0.72, 0.0])

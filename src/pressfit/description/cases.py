@@ -16,6 +16,7 @@ from pydantic import BaseModel, ConfigDict, Field, ValidationError, model_valida
 
 from pressfit.description.machine import (
     DEFAULT_MODEL,
+    MAX_CARDAN_TILT_RAD,
     Machine,
     load_machine,
     read_toml,
@@ -244,6 +245,8 @@ class MonteCarloInputs(_Strict):
     plate_point_error_m: Distribution | None = None  # per leg and world axis: plate cardan centre error
     load_tilt_rad: Distribution | None = None  # angle of the load force off its nominal direction (azimuth uniform)
     cardan_clearance_m: Distribution | None = None  # per cardan (8): axial play, m (values must stay in [0, 1e-2])
+    # per cardan (8) and axis of its leg reference frame (x = +-a_i, y down, z inward): misalignment rotation, rad
+    cardan_misalignment_rad: Distribution | None = None
 
     @model_validator(mode="after")
     def _some(self) -> MonteCarloInputs:
@@ -252,6 +255,10 @@ class MonteCarloInputs(_Strict):
         c = self.cardan_clearance_m
         if c is not None and (c.distribution == "normal" or c.low < 0 or c.high > 1e-2):  # type: ignore[operator]
             raise ValueError("cardan_clearance_m must be uniform or truncnormal within [0, 0.01] m")
+        t, bound = self.cardan_misalignment_rad, MAX_CARDAN_TILT_RAD / math.sqrt(3.0)
+        if t is not None and (t.distribution == "normal" or t.low < -bound or t.high > bound):  # type: ignore[operator]
+            raise ValueError(f"cardan_misalignment_rad must be uniform or truncnormal within [-{bound:.6g}, "
+                             f"{bound:.6g}] rad per axis (a cardan's tilt is at most {MAX_CARDAN_TILT_RAD} rad)")
         return self
 
 

@@ -47,16 +47,34 @@ class Geometry(_Strict):
         return self
 
 
+MAX_CARDAN_TILT_RAD = 0.05  # largest accepted cardan misalignment (a manufacturing error, not a redesign)
+
+
 class LegLayout(_Strict):
     """One leg's direction and cardan axes; ``base_point_error_m`` and ``plate_point_error_m`` (m, world
     axes, default 0) move its base cardan centre B_i and its plate cardan centre d_i off the nominal
-    square (manufacturing errors; the leg lines then no longer meet at one point)."""
+    square (manufacturing errors; the leg lines then no longer meet at one point).
+
+    ``base_cardan_tilt_rad`` and ``plate_cardan_tilt_rad`` (rad, default 0, norm at most
+    MAX_CARDAN_TILT_RAD): misalignments of the base and plate cardans' axes, each a small rotation vector
+    in the leg reference frame (X = +-a_i, Y = down, Z = inward w_i) turning that cardan's frame
+    (R0_i -> R0_i Exp(theta)). Nonzero tilts break Tsai's condition (the plate cardan's axes no longer
+    parallel to the base cardan's): the machine is then no longer a pure translator."""
 
     radial_direction: Vector3
     cardan_axis: Vector3
     beta_axis: Vector3
     base_point_error_m: Vector3 = [0.0, 0.0, 0.0]
     plate_point_error_m: Vector3 = [0.0, 0.0, 0.0]
+    base_cardan_tilt_rad: Vector3 = [0.0, 0.0, 0.0]
+    plate_cardan_tilt_rad: Vector3 = [0.0, 0.0, 0.0]
+
+    @field_validator("base_cardan_tilt_rad", "plate_cardan_tilt_rad")
+    @classmethod
+    def _small_tilt(cls, v: list[float]) -> list[float]:
+        if math.sqrt(sum(c * c for c in v)) > MAX_CARDAN_TILT_RAD:
+            raise ValueError(f"a cardan misalignment must have an angle of at most {MAX_CARDAN_TILT_RAD} rad")
+        return v
 
     @field_validator("radial_direction", "cardan_axis", "beta_axis")
     @classmethod
@@ -283,6 +301,16 @@ class Machine(_Strict):
         d = self.plate_offsets_m - [0.0, g.plate_joint_height_m, 0.0]
         b = self.base_points_m - [0.0, g.base_joint_height_m, 0.0]
         return bool(np.all(np.abs(p * d - r * b) <= 1e-12 * p))
+
+    @cached_property
+    def cardan_tilts_rad(self) -> np.ndarray:
+        """(4, 2, 3) cardan misalignment rotation vectors per leg, (base, plate), in the leg reference frame, rad."""
+        return np.array([[leg.base_cardan_tilt_rad, leg.plate_cardan_tilt_rad] for leg in self.legs], dtype=float)
+
+    @cached_property
+    def has_cardan_tilts(self) -> bool:
+        """True when any cardan is misaligned (Tsai's condition broken: not a pure translator)."""
+        return bool(np.any(self.cardan_tilts_rad != 0.0))
 
     @cached_property
     def cardan_axes(self) -> np.ndarray:

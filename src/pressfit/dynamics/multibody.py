@@ -162,6 +162,9 @@ def rigid_leg_model(machine: Machine, pose_m: np.ndarray, baumgarte_rad_per_s: f
     """The rigid-leg model with the machine's masses at a reachable pose (m); Baumgarte rate omega_b (rad/s)."""
     if not (np.isfinite(baumgarte_rad_per_s) and baumgarte_rad_per_s > 0):
         raise PressfitError(f"baumgarte_rad_per_s must be positive, got {baumgarte_rad_per_s!r}")
+    if machine.has_cardan_tilts:
+        raise PressfitError("the rigid-leg dynamics needs parallel cardan axes (Tsai's condition): this machine has "
+                            "cardan tilts (legs.*_cardan_tilt_rad), with which rigid legs cannot close the loops")
     mm = build_model(machine, pose_m)
     full = inertial_model(mm)
     full_data = full.createData()

@@ -138,6 +138,9 @@ def _core(machine: Machine, h: np.ndarray) -> _Core:
         raise CondensedModelError(f"{machine.name}: the leg lines do not all meet at one point (joint position "
                                   "errors d_i != (r/p) B_i); the condensed model assumes they do: use "
                                   "pressfit.mechanics.statics")
+    if machine.has_cardan_tilts:
+        raise CondensedModelError(f"{machine.name}: misaligned cardans (base/plate_cardan_tilt_rad) break the "
+                                  "parallel cardan axes the condensed model assumes: use pressfit.mechanics.statics")
     u = np.ascontiguousarray(np.moveaxis(leg_vectors(machine, h), (0, 1, 2), (2, 1, 0)))
     length = np.sqrt(u[0] * u[0] + u[1] * u[1] + u[2] * u[2])
     e = u / length

@@ -319,6 +319,10 @@ class FastEquilibriumSolver:
             pose = reference_pose_m(machine_or_model) if pose_m is None else pose_m
             self.model = build_model(machine_or_model, pose, springs_per_segment=springs_per_segment,
                                      cardan_compliance=cardan_compliance)
+        if self.model.machine.has_cardan_tilts:
+            raise PressfitError(f"{self.machine.source or self.machine.name}: the fast solver assumes parallel "
+                                "cardan axes (its reference is the closed form); misaligned cardans "
+                                "(base/plate_cardan_tilt_rad) need the reference solver (statics.EquilibriumSolver)")
         self._chain = _chain(self.model)
         self._reference = EquilibriumSolver(self.model)  # stability reports (Pinocchio Data made on first use)
         self._straight = _straight(self._chain)

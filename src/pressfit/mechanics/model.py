@@ -118,7 +118,7 @@ class ModelPose:
     model); the stem spring and actuator stiffnesses depend on it too."""
 
     pose_m: np.ndarray  # (3,) plate-centre pose h, m
-    q0: np.ndarray  # (nq,) rigid closed-form configuration (springs 0, equation 1)
+    q0: np.ndarray  # (nq,) rigid reference (springs 0): closed form (equation 1), least-squares assembly if tilted
     stem_lengths_m: np.ndarray  # (4,) L_s per leg, m
     spring_k: np.ndarray  # per spring: linear stiffness (N/m or N m/rad), NaN for a nonlinear law
     spring_rest: np.ndarray  # per spring: rest value of its coordinate (m or rad)
@@ -217,18 +217,21 @@ class MachineModel:
         return em, er
 
     def assemble(self, pose_m: np.ndarray, q_init: np.ndarray | None = None, tol: float = 1e-12,
-                 max_iter: int = 50) -> np.ndarray:
+                 max_iter: int = 50, least_squares: bool = False) -> np.ndarray:
         """Close the loops numerically at a pose (m): Gauss-Newton on Pinocchio's constraint Jacobian
         over the cardan, prismatic and plate-rotation coordinates, springs held at 0.
 
         Starts from ``q_init`` (default: the rigid closed form, which is already closed); returns q.
+        ``least_squares``: stop at the configuration that minimises the closure error (the Gauss-Newton step
+        below ``tol``) instead of requiring it to vanish: with misaligned cardans the rigid redundant machine
+        generally cannot close (four legs each fix one plate rotation; there are three), and what is left
+        is closed elastically by the equilibrium solve (a self-stress).
         """
         h = kinematics.require_reachable(self.machine, pose_m)
         q = self.configuration_at(h) if q_init is None else np.array(q_init, dtype=float)
         q[0:3] = h
         r = self._rigid_idx
-        free = np.concatenate([[3, 4, 5]] + [r[k] - 1 for k in ("base_a", "base_b", "prismatic", "plate_b",
-                                                                    "plate_a")])
+        free = np.concatenate([[3, 4, 5]] + [r[k] - 1 for k in _RIGID])
         data, cds = self.model.createData(), self.constraint_datas()
         for _ in range(max_iter):
             pin.computeJointJacobians(self.model, data, q)
@@ -244,6 +247,8 @@ class MachineModel:
             dv = np.zeros(self.model.nv)
             dv[free] = -np.linalg.lstsq(jac, e, rcond=None)[0]  # jac = d log6(c1^-1 c2) / dv at closure
             q = pin.integrate(self.model, q, dv)
+            if least_squares and np.max(np.abs(dv)) < tol:
+                return q
         raise ConvergenceError("loop-closure assembly", float(np.max(np.abs(e))), tol, max_iter)
 
     # --- pose-dependent values -------------------------------------------------------------------
@@ -251,14 +256,22 @@ class MachineModel:
         """The model's pose-dependent values at a reachable pose (m), computed afresh: stem lengths,
         actuator stiffness (actuator in series with the leg's axial compliance, N/m), stem bending
         n E I_s / L_s and torsion n G J_s / L_s (N m/rad), rest values and q0. Raises
-        :class:`UnreachablePoseError` outside the joint limits."""
+        :class:`UnreachablePoseError` outside the joint limits.
+
+        q0 is the rigid closed form (equation 1); with misaligned cardans (``machine.has_cardan_tilts``)
+        it is the least-squares rigid assembly started from it (:meth:`assemble`, springs at 0, the plate
+        free to rotate), which the elastic solve then closes. The rest values are the closed form's
+        (springs relaxed, actuators at the commanded lengths l_i) either way."""
         m = self.machine
         h = np.asarray(pose_m, dtype=float).reshape(3)
         ik = kinematics.inverse_kinematics(m, h)
         h = kinematics.require_reachable(m, h, ik)
         q0 = self._configuration(h, ik)
         k = self.spring_stiffness(ik.lengths_m)
-        return ModelPose(h, q0, ik.lengths_m - m.cylinder.length_m, k, q0[[s.idx_q for s in self.springs]])
+        rest = q0[[s.idx_q for s in self.springs]]
+        if m.has_cardan_tilts:
+            q0 = self.assemble(h, q0, tol=1e-13, least_squares=True)
+        return ModelPose(h, q0, ik.lengths_m - m.cylinder.length_m, k, rest)
 
     def place_stem(self, model: pin.Model, stem_lengths_m: np.ndarray) -> None:
         """Write the stem joint placements for stem lengths (4,) (m) into ``model``: this model's
@@ -361,7 +374,7 @@ class _ChainBuilder:
     def add_leg(self, i: int) -> None:
         m = self.machine
         self.leg, self.parent = i, 0
-        self.pending = pin.SE3(_leg_frame0(m, i), m.base_points_m[i].copy())
+        self.pending = pin.SE3(_leg_frame0(m, i) @ pin.exp3(m.cardan_tilts_rad[i, 0]), m.base_points_m[i].copy())
         jid: dict[str, int] = {}
         self.virtual("base", "translation")
         jid["base_cardan"] = self.add("RX", "base_cardan.a", self.card)
@@ -430,7 +443,8 @@ def build_model(machine: Machine, pose_m: np.ndarray, *, springs_per_segment: in
         b.add_leg(i)
     model, springs = b.model, b.springs
     frames0 = np.array([_leg_frame0(machine, i) for i in range(4)])
-    anchors = [pin.SE3(frames0[i], machine.plate_offsets_m[i].copy()) for i in range(4)]
+    anchors = [pin.SE3(frames0[i] @ pin.exp3(machine.cardan_tilts_rad[i, 1]), machine.plate_offsets_m[i].copy())
+               for i in range(4)]
     constraints = [pin.ConstraintModel(pin.FrameAnchorConstraintModel(model, b.ids[i]["plate_end"], pin.SE3.Identity(),
                                                                       b.plate, anchors[i])) for i in range(4)]
     var = [(k, 0 if sp.name == "actuator" else 2 if sp.name.endswith(".z") else 1, sp.leg)

@@ -194,7 +194,7 @@ class _Static:
     is_force: np.ndarray  # (4, m) translation coordinate (stationarity row in N)
     plate_end: list[int]
     anchors: np.ndarray  # (3, 4) anchor points in the plate frame
-    frames0: np.ndarray  # (4, 3, 3)
+    frames0: np.ndarray  # (4, 3, 3) anchor orientations in the plate frame (R0_i, turned by a plate cardan tilt)
     cds: list[pin.ConstraintData]  # constraint datas (one set per thread)
     spring_at: tuple[np.ndarray, np.ndarray]  # (legs, columns) of mm.springs
     sec_joints: list[int]  # 12 joints carrying the section points, leg-major
@@ -221,7 +221,8 @@ def _static(mm: MachineModel) -> _Static:
     lin_mask = np.zeros(legv.shape, bool)
     lin_mask[at[0, lin], at[1, lin]] = True
     return _Static(legv, at[1, act], act, _force_rows(mm), [mm.leg_joint_ids[i]["plate_end"] for i in range(4)],
-                   np.array([a.translation for a in mm.anchor_placements]).T, np.array(mm.leg_frames0),
+                   np.array([a.translation for a in mm.anchor_placements]).T,
+                   np.array([a.rotation for a in mm.anchor_placements]),
                    mm.constraint_datas(), (at[0], at[1]), [j for j, _ in sec],
                    [(n // 3, n % 3, z) for n, (_, z) in enumerate(sec) if z], np.tril(np.ones((m, m)), -1), lin,
                    lin_mask, [(int(at[0, k]), int(at[1, k]), mm.springs[k].law) for k in np.flatnonzero(~lin)])
@@ -627,6 +628,10 @@ def _force_rows(mm: MachineModel) -> np.ndarray:
 
 def _solve_linear(pb: _Problem, data: pin.Data) -> Equilibrium:
     mm = pb.mm
+    if mm.machine.has_cardan_tilts:
+        raise PressfitError(f"{mm.machine.source or mm.machine.name}: the linear solve needs a stress-free closed "
+                            "reference, which misaligned cardans (base/plate_cardan_tilt_rad) do not have; use the "
+                            "nonlinear solve")
     st = _evaluate(pb, mm.q0, data)
     k = st.ktan
     r_leg, r_plate = -st.g_leg, -st.g_plate

@@ -16,6 +16,11 @@ equilibrium (:func:`pressfit.mechanics.statics.solve_equilibrium`) at every pose
   whatever the machine's ``cardan_clearance_geometry``: one model serves every pose, and a box's effective
   gap changes with the pose; :mod:`pressfit.mechanics.clearance`, dead-zone springs in the Pinocchio model,
   the load applied in ``CLEARANCE_STEPS`` continuation steps).
+* ``cardan_misalignment_rad``: per cardan (8) and axis (x = +-a_i, y down, z inward, the leg reference
+  frame), the components of the cardan's misalignment rotation vector (``LegLayout.base_cardan_tilt_rad``,
+  ``plate_cardan_tilt_rad``). The rigid redundant machine then generally cannot assemble (Tsai's condition
+  broken): the reference solver starts from the least-squares rigid assembly and closes the rest
+  elastically, a self-stress (mostly leg torsion); the fast solver refuses such machines.
 
 Per sample the worst value over poses, loads, legs and sections of every ``[envelope]`` load quantity
 (:data:`pressfit.studies.limit_check.LIMITS`, same names and definitions), the internal force
@@ -63,7 +68,11 @@ _AXES = "xyz"
 _SHAPES = {"actuator_length_offset_m": [f"leg{i}" for i in range(1, 5)],
            "base_point_error_m": [f"leg{i}.{a}" for i in range(1, 5) for a in _AXES],
            "plate_point_error_m": [f"leg{i}.{a}" for i in range(1, 5) for a in _AXES],
-           "load_tilt_rad": [""], "cardan_clearance_m": [f"leg{i}.{e}" for i in range(1, 5) for e in ("base", "plate")]}
+           "load_tilt_rad": [""], "cardan_clearance_m": [f"leg{i}.{e}" for i in range(1, 5) for e in ("base", "plate")],
+           "cardan_misalignment_rad": [f"leg{i}.{e}.{a}" for i in range(1, 5) for e in ("base", "plate")
+                                       for a in _AXES]}
+_REFERENCE_ONLY = {"cardan_clearance_m": "cardan clearances",  # inputs the fast solver does not model
+                   "cardan_misalignment_rad": "cardan misalignments"}
 
 
 @dataclass(frozen=True)
@@ -176,8 +185,10 @@ def _tilted(wrenches: np.ndarray, tilt: float, azimuth: float) -> np.ndarray:
     return out
 
 
-def _perturbed(machine: Machine, base: np.ndarray | None, plate: np.ndarray | None) -> Machine:
-    if base is None and plate is None:
+def _perturbed(machine: Machine, x: dict[str, np.ndarray]) -> Machine:
+    """The sample's machine: joint position errors (m) and cardan misalignments (rad) of ``x`` applied."""
+    base, plate, tilt = (x.get(k) for k in ("base_point_error_m", "plate_point_error_m", "cardan_misalignment_rad"))
+    if base is None and plate is None and tilt is None:
         return machine
     legs = [leg.model_dump() for leg in machine.legs]
     for i, leg in enumerate(legs):
@@ -185,7 +196,9 @@ def _perturbed(machine: Machine, base: np.ndarray | None, plate: np.ndarray | No
             leg["base_point_error_m"] = base[3 * i:3 * i + 3].tolist()
         if plate is not None:
             leg["plate_point_error_m"] = plate[3 * i:3 * i + 3].tolist()
-    return machine.with_overrides({"legs": legs}, source=f"{machine.source} [montecarlo joint position errors]")
+        if tilt is not None:
+            leg["base_cardan_tilt_rad"], leg["plate_cardan_tilt_rad"] = tilt[6 * i:6 * i + 6].reshape(2, 3).tolist()
+    return machine.with_overrides({"legs": legs}, source=f"{machine.source} [montecarlo joint errors]")
 
 
 def _solver_for(machine: Machine, clearance: Clearance | None, pose_m: np.ndarray) -> statics.EquilibriumSolver:
@@ -238,7 +251,7 @@ class _SampleLoads:
 
 
 def _sample_loads(plan: MonteCarloPlan, nominal: _Nominal, x: dict[str, np.ndarray], azimuth: float) -> _SampleLoads:
-    machine = _perturbed(plan.machine, x.get("base_point_error_m"), x.get("plate_point_error_m"))
+    machine = _perturbed(plan.machine, x)
     lengths = nominal.lengths_m if machine is plan.machine else \
         kinematics.inverse_kinematics(machine, plan.poses_m).lengths_m
     offsets = nominal.lengths_m - lengths + x.get("actuator_length_offset_m", np.zeros(4)) + nominal.preload_offsets_m
@@ -273,11 +286,14 @@ def evaluate_sample(plan: MonteCarloPlan, x: dict[str, np.ndarray], azimuth: flo
 
 def solver_path(plan: MonteCarloPlan) -> str:
     """Which solver the plan's samples take: the reference solver with cardan clearances (dead-zone springs,
-    which the fast solver refuses); else the batched fast solver, one model per chunk, or one model per
-    sample with joint position errors (they change the machine)."""
+    which the fast solver refuses) or cardan misalignments (a model per sample, the solve started from the
+    least-squares rigid assembly: the fast solver's closed-form reference needs parallel cardan axes); else
+    the batched fast solver, one model per chunk, or one model per sample with joint position errors (they
+    change the machine)."""
     names = {n for n, _ in plan.inputs}
-    if "cardan_clearance_m" in names:
-        return "reference solver (cardan clearances), stability checked with every solve"
+    if names & _REFERENCE_ONLY.keys():
+        why = " and ".join(label for n, label in _REFERENCE_ONLY.items() if n in names)
+        return f"reference solver ({why}), one model per sample, stability checked with every solve"
     per = "sample" if names & {"base_point_error_m", "plate_point_error_m"} else "chunk"
     return (f"fast batched solver, one model per {per}; samples with a leg above 1/{STABILITY_RECHECK_FACTOR:g} "
             "of its Euler load re-solved by the reference solver (stability check)")
@@ -349,7 +365,7 @@ def evaluate_chunk(plan: MonteCarloPlan, k: int, seed: np.random.SeedSequence) -
     start, stop = plan.chunk_range(k)
     samples = [{name: v[j] for name, v in x.items()} for j in range(stop - start)]
     azimuths = x["load_azimuth_rad"]
-    if "cardan_clearance_m" in x:
+    if any(name in x for name in _REFERENCE_ONLY):
         rows: list[dict[str, float] | PressfitError] = []
         for xj, a in zip(samples, azimuths):
             try:
