@@ -47,7 +47,8 @@ def tables_cmd(as_json: bool, out_dir: Path | None, overwrite: bool, cad: bool) 
 @click.option("--out", "out_dir", type=click.Path(path_type=Path), default=Path("report"), show_default=True,
               help="Output directory.")
 @click.option("--overwrite", is_flag=True, help="Replace existing output files.")
-@click.option("--quick", is_flag=True, help="Coarse grids (a preview in seconds).")
+@click.option("--quick", is_flag=True,
+              help="A preview: coarse grids, no static PNG maps (report.html has them, interactive).")
 @MODEL_OPTION
 @user_errors
 def report_cmd(out_dir: Path, overwrite: bool, quick: bool, model_path: Path) -> None:

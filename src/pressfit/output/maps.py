@@ -35,29 +35,30 @@ from pressfit.studies.workspace_envelope import (
 )
 
 
-def write_load_envelope(env: LoadEnvelope, out_dir: Path | str, overwrite: bool = False) -> list[Path]:
+def write_load_envelope(env: LoadEnvelope, out_dir: Path | str, overwrite: bool = False,
+                        figures: bool = True) -> list[Path]:
     """``load_envelope.csv`` and ``.json`` (the table), ``load_envelope.png`` (per-leg bars) and x-z maps of the worst
-    values (``load_envelope_maps*``) into out_dir; returns the paths."""
-
+    values (``load_envelope_maps*``) into out_dir; returns the paths. ``figures=False``: no PNG."""
     header, rows = envelope_rows(env)
     out = Path(out_dir)
     paths = [io.write_csv(out / "load_envelope.csv", header, rows, overwrite),
              io.write_json(out / "load_envelope.json", [dict(zip(header, r)) for r in rows], overwrite)]
     legs = {k: (env.entries[k].value, f"[{u}]") for k, (u, _) in LEG_QUANTITIES.items()}
-    paths.append(write_leg_bars(out / "load_envelope.png", legs, "workspace load envelope (condensed linear model)",
-                                overwrite))
+    if figures:
+        paths.append(write_leg_bars(out / "load_envelope.png", legs,
+                                    "workspace load envelope (condensed linear model)", overwrite))
     units = {**LEG_QUANTITIES, **PLATE_QUANTITIES}
     fields = {f"worst_{k}": (m, units[k][0]) for k, m in env.maps.items()}  # over y, loads and legs
     title = f"y in [{env.y_m.min():g}, {env.y_m.max():g}] m, {len(env.loads)} load(s)"
-    return paths + write_xz_maps(out, "load_envelope_maps", env.x_m, env.z_m, fields, title, overwrite)
+    return paths + write_xz_maps(out, "load_envelope_maps", env.x_m, env.z_m, fields, title, overwrite, figures)
 
 
-def write_stiffness_maps(maps: StiffnessMaps, out_dir: Path | str, overwrite: bool = False) -> list[Path]:
-    """PNG per map and one CSV (``stiffness_maps_y<mm>.csv``) into out_dir; returns the paths."""
-
+def write_stiffness_maps(maps: StiffnessMaps, out_dir: Path | str, overwrite: bool = False,
+                         figures: bool = True) -> list[Path]:
+    """PNG per map (not with ``figures=False``) and one CSV (``stiffness_maps_y<mm>.csv``) into out_dir."""
     stem = f"stiffness_maps_y{round(maps.y_m * 1000):d}mm"
     return write_xz_maps(out_dir, stem, maps.x_m, maps.z_m, maps.fields(),
-                         f"condensed linear model, y = {maps.y_m:g} m", overwrite)
+                         f"condensed linear model, y = {maps.y_m:g} m", overwrite, figures)
 
 
 def kinematic_fields(pm: PlaneMap) -> plots.Fields:
@@ -70,7 +71,7 @@ def kinematic_fields(pm: PlaneMap) -> plots.Fields:
 
 
 def write_kinematic_maps(machine: Machine, out_dir: Path | str, heights_m: Iterable[float] = DEFAULT_HEIGHTS_M,
-                  overwrite: bool = False, progress: bool = False
+                  overwrite: bool = False, progress: bool = False, figures: bool = True
                   ) -> tuple[dict[str, object], list[Path], list[PlaneMap]]:
     """Write per height ``maps_y<y>.csv`` (every field, every leg) and ``maps_y<y>.png`` (panels, the
     required square dashed magenta, also at 45 deg on the F panels), then ``summary.json``; returns the
@@ -96,6 +97,9 @@ def write_kinematic_maps(machine: Machine, out_dir: Path | str, heights_m: Itera
             plane_maps.append(pm)
             written.append(io.write_csv(out / f"maps_y{y:.3f}.csv", *map_rows(pm), overwrite=overwrite))
             fields = kinematic_fields(pm)
+            if not figures:
+                bar.update()
+                continue
             fig = plots.xz_map_figure(pm.x_m, pm.z_m, fields, f"4-UPU maps at y_h = {y:g} m "
                                       "(magenta: required square, also at 45 deg)")
             try:
@@ -113,7 +117,8 @@ def write_kinematic_maps(machine: Machine, out_dir: Path | str, heights_m: Itera
 
 
 # --- output ---------------------------------------------------------------------------------------
-def write_interference_sweep(result: SweepResult, out_dir: Path | str, overwrite: bool = False) -> list[Path]:
+def write_interference_sweep(result: SweepResult, out_dir: Path | str, overwrite: bool = False,
+                             figures: bool = True) -> list[Path]:
     """``interference_poses.csv`` (per pose), ``interference_pairs.csv`` (per pair) and, for a grid,
     ``interference_map.png`` (minimum distance over x-z at up to four heights)."""
 
@@ -126,7 +131,7 @@ def write_interference_sweep(result: SweepResult, out_dir: Path | str, overwrite
             zip(result.pairs, result.kinds, result.pair_min_m, result.pair_argmin)]
     paths.append(write_csv(out / "interference_pairs.csv", ["pair", "kind", "min_distance_m", "x_m", "y_m", "z_m"],
                            prow, overwrite))
-    if result.grid_axes_m is not None:
+    if figures and result.grid_axes_m is not None:
         paths.append(plot_interference_sweep(result, out / "interference_map.png", overwrite))
     return paths
 
@@ -152,13 +157,16 @@ def plot_interference_sweep(result: SweepResult, path: Path | str, overwrite: bo
         plt.close(fig)
 
 
-def write_preload_study(study: PreloadStudy, out_dir: Path | str, overwrite: bool = False) -> list[Path]:
-    """preload_study.csv, preload_study.json and two PNGs (stiffness vs preload, curves) in out_dir."""
-
+def write_preload_study(study: PreloadStudy, out_dir: Path | str, overwrite: bool = False,
+                        figures: bool = True) -> list[Path]:
+    """preload_study.csv, preload_study.json and two PNGs (stiffness vs preload, curves; not with
+    ``figures=False``) in out_dir."""
     out = Path(out_dir)
     header, rows = study.rows()
     paths = [io.write_csv(out / "preload_study.csv", header, rows, overwrite),
              io.write_json(out / "preload_study.json", study.to_dict(), overwrite)]
+    if not figures:
+        return paths
     unit = "N" if study.preload_mode == "force" else "m"
     fig, axes = plt.subplots(1, 2, figsize=(11, 4.2), layout="constrained")
     try:

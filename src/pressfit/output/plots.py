@@ -49,13 +49,16 @@ def xz_map_figure(x_m: np.ndarray, z_m: np.ndarray, fields: Fields, title: str) 
 
 
 def write_xz_maps(out_dir: Path | str, stem: str, x_m: np.ndarray, z_m: np.ndarray, fields: Fields,
-                  title: str, overwrite: bool = False) -> list[Path]:
-    """``<stem>.png`` (one panel per field) and ``<stem>.csv`` (columns x_m, z_m, one per field)."""
+                  title: str, overwrite: bool = False, figures: bool = True) -> list[Path]:
+    """``<stem>.png`` (one panel per field; not with ``figures=False``) and ``<stem>.csv`` (columns x_m, z_m,
+    one per field)."""
     out = Path(out_dir)
     zz, xx = np.meshgrid(z_m, x_m, indexing="ij")
     cols = [np.asarray(v, dtype=float).ravel() for v, _ in fields.values()]
     rows = zip(xx.ravel(), zz.ravel(), *cols, strict=True)
     paths = [io.write_csv(out / f"{stem}.csv", ["x_m", "z_m", *fields], rows, overwrite)]
+    if not figures:
+        return paths
     fig = xz_map_figure(x_m, z_m, fields, title)
     try:
         paths.append(io.save_figure(fig, out / f"{stem}.png", overwrite))

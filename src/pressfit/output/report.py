@@ -40,7 +40,8 @@ def write_report(machine: Machine, out_dir: Path | str, overwrite: bool = False,
     """Compute every section and write ``report.md`` with its figures, CSV and JSON into ``out_dir``, and
     the interactive ``report.html`` (:mod:`pressfit.output.html_report`) beside it; returns report.md's path.
 
-    ``quick`` uses coarser grids (for tests and previews); the default grids are the design ones.
+    ``quick`` (a preview, and the tests) uses coarser grids and writes no static PNG maps (report.html shows
+    the same maps interactively); the default grids are the design ones.
     """
     out = Path(out_dir)
     steps = tqdm(total=8, desc="report", disable=not progress, unit="section")
@@ -87,7 +88,8 @@ def _tables_section(machine: Machine, out: Path, overwrite: bool, quick: bool, p
 
 def _kinematics_section(machine: Machine, out: Path, overwrite: bool, quick: bool, parts: Parts) -> list[str]:
     heights = [0.6] if quick else list(workspace.DEFAULT_HEIGHTS_M)
-    summ, _, parts["plane_maps"] = maps.write_kinematic_maps(machine, out / "kinematics", heights, overwrite=overwrite)
+    summ, _, parts["plane_maps"] = maps.write_kinematic_maps(machine, out / "kinematics", heights, overwrite=overwrite,
+                                                                 figures=not quick)
     parts["summary"] = summ
     rng = summ["height_range"][0]
     return ["## 2. Kinematics and workspace (paper section 4.1)", "",
@@ -97,7 +99,7 @@ def _kinematics_section(machine: Machine, out: Path, overwrite: bool, quick: boo
             _md_table(["y_h [m]", "square rotation [deg]", "n min", "n max", "n variation", "F_y max"],
                       [[s["y_m"], s["angle_deg"], s["dexterity_min"], s["dexterity_max"],
                         s["dexterity_variation"], s["force_index_max"][1]] for s in summ["squares"]]), ""
-            ] + [f"![maps y={y:.3f}](kinematics/maps_y{y:.3f}.png)" for y in heights] + [""]
+            ] + [f"![maps y={y:.3f}](kinematics/maps_y{y:.3f}.png)" for y in heights if not quick] + [""]
 
 
 def _envelope_section(machine: Machine, out: Path, overwrite: bool, quick: bool, parts: Parts) -> list[str]:
@@ -105,7 +107,7 @@ def _envelope_section(machine: Machine, out: Path, overwrite: bool, quick: bool,
     parts["envelope"] = env = workspace_envelope.load_envelope(
         machine, ys, n_xz=11 if quick else 41, loads_n=workspace_envelope.press_loads(700.0, np.radians(5.0)),
         progress=False)
-    maps.write_load_envelope(env, out / "envelope", overwrite)
+    maps.write_load_envelope(env, out / "envelope", overwrite, figures=not quick)
     header, rows = workspace_envelope.envelope_rows(env)
     parts["envelope_table"] = [dict(zip(header, r)) for r in rows]
     return ["## 3. Workspace load envelope (design loads)", "",
@@ -120,7 +122,7 @@ def _stiffness_section(machine: Machine, out: Path, overwrite: bool, quick: bool
     heights = (0.72,) if quick else (0.6, 0.72)
     parts["stiffness"] = stiffness = [condensed.stiffness_maps(machine, y, n=21 if quick else 51) for y in heights]
     for smaps in stiffness:
-        paths = maps.write_stiffness_maps(smaps, out / "stiffness", overwrite)
+        paths = maps.write_stiffness_maps(smaps, out / "stiffness", overwrite, figures=not quick)
         md += [f"![{p.name}](stiffness/{p.name})" for p in paths if p.suffix == ".png"]
     return md + [""]
 
@@ -129,7 +131,7 @@ def _interference_section(machine: Machine, out: Path, overwrite: bool, quick: b
     im = interference.build_interference(machine)
     parts["interference"] = sweep = interference.workspace_sweep(im, points=11 if quick else 41,
                                                                  heights=3 if quick else 9)
-    maps.write_interference_sweep(sweep, out / "interference", overwrite)
+    maps.write_interference_sweep(sweep, out / "interference", overwrite, figures=not quick)
     return ["## 6. Leg interference (Coal)", "",
             f"Minimum signed distance per pair kind over the required workspace (capsule legs; margin "
             f"{sweep.margin_m * 1000:g} mm: {'PASS' if sweep.passed else 'FAIL'}).", "",
@@ -206,7 +208,7 @@ def _preload_section(machine: Machine, out: Path, overwrite: bool, quick: bool, 
         study = preload_study.preload_study(machine, pose, [0.0, 10e-6, 20e-6, 40e-6], preloads, 700.0,
                                         10 if quick else 50, progress=False)
         studies.append((name, study))
-        paths = maps.write_preload_study(study, out / "preload" / name, overwrite)
+        paths = maps.write_preload_study(study, out / "preload" / name, overwrite, figures=not quick)
         md += [
             f"### {name.replace('_', ' ')} {list(pose)} m",
             "",
