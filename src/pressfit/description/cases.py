@@ -12,12 +12,17 @@ from pathlib import Path
 from typing import Annotated, Any, Literal
 
 import numpy as np
-from pydantic import BaseModel, ConfigDict, Field, ValidationError, model_validator
+from pydantic import Field, ValidationError, model_validator
 
 from pressfit.description.machine import (
     DEFAULT_MODEL,
     MAX_CARDAN_TILT_RAD,
+    Finite,
     Machine,
+    NonNegative,
+    Positive,
+    StrictModel,
+    Vector3,
     load_machine,
     read_toml,
     validation_error,
@@ -25,19 +30,11 @@ from pressfit.description.machine import (
 from pressfit.errors import ModelFileError
 from pressfit.spatial import cone_directions
 
-Finite = Annotated[float, Field(allow_inf_nan=False)]
-Positive = Annotated[float, Field(gt=0, allow_inf_nan=False)]
-NonNegative = Annotated[float, Field(ge=0, allow_inf_nan=False)]
-Vec3 = Annotated[list[Finite], Field(min_length=3, max_length=3)]
 MAX_FORCE_N = 1e7  # a press-fit machine load above 10 MN is a typo, not a load case
 MAX_POSES = 2_000_000
 
 
-class _Strict(BaseModel):
-    model_config = ConfigDict(extra="forbid", frozen=True, strict=True)
-
-
-class Axis(_Strict):
+class Axis(StrictModel):
     """A range of one coordinate: ``count`` points from ``min_m`` to ``max_m`` (m)."""
 
     min_m: Finite
@@ -54,10 +51,10 @@ class Axis(_Strict):
         return np.linspace(self.min_m, self.max_m, self.count)
 
 
-class Poses(_Strict):
+class Poses(StrictModel):
     """Plate-centre poses (m): an explicit list and/or a grid ``x`` x ``y`` x ``z``."""
 
-    points_m: list[Vec3] = []
+    points_m: list[Vector3] = []
     x: Axis | None = None
     y: Axis | None = None
     z: Axis | None = None
@@ -82,7 +79,7 @@ class Poses(_Strict):
         return np.concatenate(pts)
 
 
-class Loads(_Strict):
+class Loads(StrictModel):
     """Dead wrenches at the plate centre, world axes.
 
     ``force_n``/``moment_nm`` give one wrench. A press load is ``press_force_n`` (N, magnitude; or
@@ -90,10 +87,10 @@ class Loads(_Strict):
     optionally spread over a cone of half-angle ``cone_half_angle_rad`` sampled by ``cone_directions``.
     """
 
-    force_n: Vec3 | None = None
-    moment_nm: Vec3 = [0.0, 0.0, 0.0]
+    force_n: Vector3 | None = None
+    moment_nm: Vector3 = [0.0, 0.0, 0.0]
     press_force_n: Annotated[float, Field(ge=0, le=MAX_FORCE_N, allow_inf_nan=False)] | None = None
-    direction: Vec3 = [0.0, 1.0, 0.0]
+    direction: Vector3 = [0.0, 1.0, 0.0]
     cone_half_angle_rad: Annotated[float, Field(ge=0, le=math.pi / 2, allow_inf_nan=False)] = 0.0
     cone_directions: Annotated[int, Field(ge=1, le=360)] = 8
 
@@ -116,7 +113,7 @@ class Loads(_Strict):
         return np.array([np.concatenate([self.press_force_n * u, m]) for u in dirs])
 
 
-class Preload(_Strict):
+class Preload(StrictModel):
     """Actuator preload a_4 along v_p, applied before the load.
 
     ``mode = "force"`` (force-controlled drives): ``a4_n`` (N), the actuator forces at no load are a4 v_p.
@@ -141,12 +138,12 @@ class Preload(_Strict):
         return self.a4_m if self.mode == "length" else self.a4_n  # type: ignore[return-value]
 
 
-class Solver(_Strict):
+class Solver(StrictModel):
     linear: bool = False
     refine_worst: Annotated[int, Field(ge=0, le=100)] = 3
 
 
-class Envelope(_Strict):
+class Envelope(StrictModel):
     """Limits a case asserts (all optional; SI). Each becomes one line of the check report."""
 
     max_tension_n: NonNegative | None = None
@@ -163,7 +160,7 @@ class Envelope(_Strict):
     min_buckling_safety_factor: Positive | None = None
 
 
-class Reference(_Strict):
+class Reference(StrictModel):
     """A published table to compare with: values as printed, in the publication's leg order."""
 
     source: str
@@ -173,7 +170,7 @@ class Reference(_Strict):
     note: str = ""
 
 
-class ClearanceSpec(_Strict):
+class ClearanceSpec(StrictModel):
     """Axial plays of the eight cardans (:mod:`pressfit.clearance`): ``gaps_m`` (8 values: leg 1 base, leg 1
     plate, leg 2 base, ...) or ``random_m`` = [low, high] with ``seed``; default: the machine's uniform
     clearance. ``geometry`` ("axial": +-g along the leg; "box": +-g on the joint's three translations in the
@@ -198,7 +195,7 @@ class ClearanceSpec(_Strict):
         return self
 
 
-class Study(_Strict):
+class Study(StrictModel):
     """A preload study (``pressfit study preload CASE.toml``): the first pose of [poses], the load
     ``[loads] press_force_n`` (N, the largest load) along ``[loads] direction``, ``[preload] mode``.
     ``clearances_m``: uniform plays to compare (default: the one of [clearance] or the machine)."""
@@ -210,7 +207,7 @@ class Study(_Strict):
     steps: Annotated[int, Field(ge=2, le=10000)] = 50
 
 
-class Distribution(_Strict):
+class Distribution(StrictModel):
     """One random input (SI, the unit of the input it drives): ``normal`` (``mean``, ``std``), ``uniform``
     (``low``, ``high``) or ``truncnormal`` (a normal ``mean``, ``std`` cut to [``low``, ``high``])."""
 
@@ -236,7 +233,7 @@ class Distribution(_Strict):
         return self
 
 
-class MonteCarloInputs(_Strict):
+class MonteCarloInputs(StrictModel):
     """The random inputs of a Monte Carlo study; each is drawn independently for every leg (and joint, and
     axis) it applies to. Lengths m, angles rad."""
 
@@ -262,7 +259,7 @@ class MonteCarloInputs(_Strict):
         return self
 
 
-class MonteCarlo(_Strict):
+class MonteCarlo(StrictModel):
     """``pressfit study montecarlo``: ``samples`` draws of ``inputs``, seeded by ``seed``, run in chunks of
     ``chunk_size`` samples; every sample solves every pose and load of the case."""
 
@@ -281,7 +278,7 @@ DESIGN_OBJECTIVES = ("peak_torsion_nm", "peak_bending_nm", "peak_axial_force_n",
                      "max_vertical_compliance_m_per_n")  # all minimised
 
 
-class DesignParameters(_Strict):
+class DesignParameters(StrictModel):
     """Design variables, each a range [min, max] in the unit of its name (DESIGN_PARAMETERS: the machine key)."""
 
     base_half_side_m: Range | None = None
@@ -305,7 +302,7 @@ class DesignParameters(_Strict):
         return {k: tuple(v) for k in DESIGN_PARAMETERS if (v := getattr(self, k)) is not None}  # type: ignore[misc]
 
 
-class DesignConstraints(_Strict):
+class DesignConstraints(StrictModel):
     """Limits every accepted design meets (SI), over the workspace of the design study."""
 
     max_peak_torsion_nm: Positive | None = None
@@ -315,7 +312,7 @@ class DesignConstraints(_Strict):
     min_vertical_stiffness_n_per_m: Positive | None = None  # 1 / vertical compliance at every workspace pose
 
 
-class Design(_Strict):
+class Design(StrictModel):
     """``pressfit study design``: search the ``parameters`` ranges for designs that minimise ``objectives``
     (DESIGN_OBJECTIVES) under ``constraints`` and the ``[loads]``, over the required square at
     ``height_levels`` heights spanning ``heights_m`` (m), which every design must reach entirely (the
@@ -346,7 +343,7 @@ class Design(_Strict):
         return self
 
 
-class Contact(_Strict):
+class Contact(StrictModel):
     """Tool-board contact of the insertion simulation (:mod:`pressfit.dynamics.contact`). The board's top
     face is the plane y = ``board_height_m``; the pin to insert sits on it at (x, z) = ``pin_position_m``.
     ``law = "elastic"``: F = k d + b d_dot for an interference d > 0 (paper section 4.2: force proportional
@@ -365,7 +362,7 @@ class Contact(_Strict):
     fit_depth_m: Positive = 1e-3
 
 
-class Controller(_Strict):
+class Controller(StrictModel):
     """Figure 12's force-limited position control (:mod:`pressfit.dynamics.control`). PID gains of the
     Cartesian position loop on the plate position estimated from the actuator lengths (N/m, N s/m, N/(m s));
     the insertion force limit (N, paper: 30 N) and the limiter's reference back-off rate per newton over the
@@ -381,7 +378,7 @@ class Controller(_Strict):
     estimator_iterations: Annotated[int, Field(ge=1, le=20)] = 2
 
 
-class SimulationLimits(_Strict):
+class SimulationLimits(StrictModel):
     """Limits ``pressfit check`` asserts on the simulated insertion (all optional; SI), one report line each:
     peak contact force and its overshoot over the insertion limit (N), tool positioning error (the larger of
     the lateral error at the pin and the final 3D error, m), settling time of the contact force (s), peak
@@ -399,7 +396,7 @@ class SimulationLimits(_Strict):
     max_bending_nm: NonNegative | None = None
 
 
-class Simulation(_Strict):
+class Simulation(StrictModel):
     """The insertion scenario of Figures 13-14 (``pressfit simulate``; :mod:`pressfit.dynamics.insertion`).
 
     The tool tip is the plate centre. The reference moves (minimum-jerk segments) from ``start_m`` to
@@ -410,8 +407,8 @@ class Simulation(_Strict):
     tool. Time step (s) and the loop closures' Baumgarte rate (rad/s) of the multibody model. ``limits``:
     what ``pressfit check`` asserts on the run (:class:`SimulationLimits`)."""
 
-    start_m: Vec3
-    end_m: Vec3
+    start_m: Vector3
+    end_m: Vector3
     approach_height_m: Positive = 0.005
     interference_m: Positive = 0.002
     move_time_s: Positive = 1.0
@@ -426,7 +423,7 @@ class Simulation(_Strict):
     limits: SimulationLimits = SimulationLimits()
 
 
-class Case(_Strict):
+class Case(StrictModel):
     """A validated case file."""
 
     name: str

@@ -27,11 +27,13 @@ Finite = Annotated[float, Field(allow_inf_nan=False)]
 Vector3 = Annotated[list[Finite], Field(min_length=3, max_length=3)]
 
 
-class _Strict(BaseModel):
+class StrictModel(BaseModel):
+    """Base of every schema: unknown keys, type coercion and mutation are refused."""
+
     model_config = ConfigDict(extra="forbid", frozen=True, strict=True)
 
 
-class Geometry(_Strict):
+class Geometry(StrictModel):
     """Joint layout: p, r (Table 3) and optional heights of the cardan centres above the base plane (base)
     and above the plate centre (plate), the same for all four legs; m."""
 
@@ -50,7 +52,7 @@ class Geometry(_Strict):
 MAX_CARDAN_TILT_RAD = 0.05  # largest accepted cardan misalignment (a manufacturing error, not a redesign)
 
 
-class LegLayout(_Strict):
+class LegLayout(StrictModel):
     """One leg's direction and cardan axes; ``base_point_error_m`` and ``plate_point_error_m`` (m, world
     axes, default 0) move its base cardan centre B_i and its plate cardan centre d_i off the nominal
     square (manufacturing errors; the leg lines then no longer meet at one point).
@@ -92,7 +94,7 @@ class LegLayout(_Strict):
         return self
 
 
-class Limits(_Strict):
+class Limits(StrictModel):
     leg_length_min_m: Positive
     leg_length_max_m: Positive
     alpha_min_rad: Finite
@@ -109,18 +111,18 @@ class Limits(_Strict):
         return self
 
 
-class Workspace(_Strict):
+class Workspace(StrictModel):
     x_half_width_m: Positive
     z_half_width_m: Positive
     height_min_m: Positive
 
 
-class Material(_Strict):
+class Material(StrictModel):
     youngs_modulus_pa: Positive
     shear_modulus_pa: Positive
 
 
-class Cylinder(_Strict):
+class Cylinder(StrictModel):
     length_m: Positive
     outer_diameter_m: Positive
     wall_thickness_m: Positive
@@ -132,11 +134,11 @@ class Cylinder(_Strict):
         return self
 
 
-class Stem(_Strict):
+class Stem(StrictModel):
     diameter_m: Positive
 
 
-class Actuator(_Strict):
+class Actuator(StrictModel):
     """The linear actuators: axial stiffness (N/m) and, for the insertion simulation, the force-controlled
     drive's first-order force bandwidth (Hz; paper section 4.2: 40 Hz, feasible for servo-hydraulics) and its
     force saturation (N, magnitude; an estimate, see the machine file)."""
@@ -146,7 +148,7 @@ class Actuator(_Strict):
     force_limit_n: Positive = 1000.0
 
 
-class Joints(_Strict):
+class Joints(StrictModel):
     """Cardan compliance. ``cardan_axial_clearance_m``: the play g of each cardan, m, in the shape
     ``cardan_clearance_geometry`` gives it: "axial" (default) +-g along the leg axis; "box" +-g on each of
     the joint's three translations in the cardan's axes (a, b, c = a x b); "sphere" a ball of radius g.
@@ -167,7 +169,7 @@ class Joints(_Strict):
         return data
 
 
-class Mass(_Strict):
+class Mass(StrictModel):
     """Inertial data (kg, kg/m^3) for modes and dynamics; the defaults are estimates (see the machine file).
 
     The leg tubes' masses follow from ``density_kg_per_m3`` and the cylinder and stem sections and lengths
@@ -185,11 +187,11 @@ class Mass(_Strict):
     cardan_spider_mass_kg: NonNegative = 0.3
 
 
-class ModelOptions(_Strict):
+class ModelOptions(StrictModel):
     springs_per_segment: Annotated[int, Field(ge=1, le=64)] = 4
 
 
-class ExtraBody(_Strict):
+class ExtraBody(StrictModel):
     """A body for interference checks: a mesh file (STL/OBJ/..., convex hull used) or a box.
 
     ``frame`` 'world' places it in the world frame, 'plate' relative to the plate centre h (it moves
@@ -213,7 +215,7 @@ class ExtraBody(_Strict):
         return self
 
 
-class Collision(_Strict):
+class Collision(StrictModel):
     """Interference shapes (capsules for the legs, boxes for plate and base) and pair overrides.
 
     Pairs are named 'body_a|body_b' with bodies leg1.cylinder ... leg4.stem, plate, base and the
@@ -250,7 +252,7 @@ class Section(BaseModel):
     polar_moment_m4: float  # torsion constant (circular section: 2 I)
 
 
-class Machine(_Strict):
+class Machine(StrictModel):
     """A validated 4-UPU machine description. Lengths m, angles rad, forces N, stiffness SI."""
 
     name: str
