@@ -5,7 +5,7 @@ from __future__ import annotations
 import functools
 import math
 import sys
-from collections.abc import Callable
+from collections.abc import Callable, Iterable
 from pathlib import Path
 from typing import Any
 
@@ -98,3 +98,21 @@ def parse_numbers(values: tuple[str, ...], what: str) -> list[float]:
         return [FORCE.convert(v, None, None) for v in values]
     except click.BadParameter as exc:
         raise click.UsageError(f"{what}: {exc.format_message()}") from None
+
+
+PROGRESS_OPTION = click.option("--progress/--no-progress", default=True, help="Show a progress bar.")
+OVERWRITE_OPTION = click.option("--overwrite", is_flag=True, help="Replace existing output files.")
+
+
+def cluster_options(func: Callable[..., Any]) -> Callable[..., Any]:
+    """``--workers N`` (a local Dask cluster of N processes; default one per core) or ``--scheduler ADDRESS``."""
+    func = click.option("--scheduler", help="Address of a running Dask scheduler, e.g. tcp://10.0.0.5:8786 "
+                        "(instead of --workers).")(func)
+    return click.option("--workers", type=click.IntRange(1),
+                        help="Worker processes of the local cluster (default: one per core).")(func)
+
+
+def echo_written(paths: Iterable[Path]) -> None:
+    """One 'wrote PATH' line per output file."""
+    for p in paths:
+        click.echo(f"wrote {p}")

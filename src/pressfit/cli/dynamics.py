@@ -6,7 +6,7 @@ from pathlib import Path
 
 import click
 
-from pressfit.cli.common import MODEL_OPTION, FiniteFloat, user_errors
+from pressfit.cli.common import MODEL_OPTION, OVERWRITE_OPTION, FiniteFloat, echo_written, user_errors
 from pressfit.description.machine import load_machine
 from pressfit.output.files import to_json
 
@@ -18,7 +18,7 @@ from pressfit.output.files import to_json
 @click.option("--count", type=click.IntRange(1, 60), default=6, show_default=True, help="Number of modes.")
 @click.option("--out", "out_dir", type=click.Path(path_type=Path), default=None,
               help="Directory for modes.json, modes.csv and modes.png (nothing written without it).")
-@click.option("--overwrite", is_flag=True, help="Replace existing output files.")
+@OVERWRITE_OPTION
 @click.option("--json", "as_json", is_flag=True, help="Print the summary as JSON.")
 @MODEL_OPTION
 @user_errors
@@ -37,8 +37,7 @@ def modes_cmd(x: float, y: float, z: float, count: int, out_dir: Path | None, ov
     for k, (f, u) in enumerate(zip(modes.frequencies_hz, modes.plate_shapes, strict=True)):
         click.echo(f"{k + 1:>4}  {f:<10.4g}  " + " ".join(f"{c:+.3e}" for c in u[:3]) + "  "
                    + " ".join(f"{c:+.3e}" for c in u[3:]))
-    for p in paths:
-        click.echo(f"wrote {p}")
+    echo_written(paths)
 
 
 @click.command("simulate")
@@ -46,7 +45,7 @@ def modes_cmd(x: float, y: float, z: float, count: int, out_dir: Path | None, ov
 @click.option("--out", "out_dir", type=click.Path(path_type=Path), default=None,
               help="Directory for simulation.csv, simulation.json and simulation.png (nothing written without it).")
 @click.option("--no-limiter", "no_limiter", is_flag=True, help="Run without the insertion force limiter.")
-@click.option("--overwrite", is_flag=True, help="Replace existing output files.")
+@OVERWRITE_OPTION
 @click.option("--json", "as_json", is_flag=True, help="Print the summary as JSON.")
 @click.option("--progress/--no-progress", default=True, help="Show a progress bar over simulated time.")
 @user_errors
@@ -79,8 +78,7 @@ def simulate_cmd(case_path: Path, out_dir: Path | None, no_limiter: bool, overwr
         c = s["comparison"]
         click.echo(f"without the limiter: peak {c['peak_contact_force_n']:.2f} N, steady "
                    f"{c['steady_insertion_force_n']:.2f} N")
-    for p in paths:
-        click.echo(f"wrote {p}")
+    echo_written(paths)
 
 
 @click.command("export-mjcf", context_settings={"ignore_unknown_options": True})  # negative coordinates

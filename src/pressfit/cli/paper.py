@@ -6,7 +6,7 @@ from pathlib import Path
 
 import click
 
-from pressfit.cli.common import MODEL_OPTION, user_errors
+from pressfit.cli.common import MODEL_OPTION, OVERWRITE_OPTION, user_errors
 from pressfit.description.machine import load_machine
 from pressfit.output.files import to_json
 
@@ -14,7 +14,7 @@ from pressfit.output.files import to_json
 @click.command("tables")
 @click.option("--json", "as_json", is_flag=True, help="Print the entries as JSON.")
 @click.option("--out", "out_dir", type=click.Path(path_type=Path), help="Write tables.md and tables.csv here.")
-@click.option("--overwrite", is_flag=True, help="Replace existing output files.")
+@OVERWRITE_OPTION
 @click.option("--cad-fit", "cad", is_flag=True,
               help="Instead: identify the paper's CAD model from the tables (least squares; a hypothesis).")
 @user_errors
@@ -46,7 +46,7 @@ def tables_cmd(as_json: bool, out_dir: Path | None, overwrite: bool, cad: bool) 
 @click.command("report")
 @click.option("--out", "out_dir", type=click.Path(path_type=Path), default=Path("report"), show_default=True,
               help="Output directory.")
-@click.option("--overwrite", is_flag=True, help="Replace existing output files.")
+@OVERWRITE_OPTION
 @click.option("--quick", is_flag=True,
               help="A preview: coarse grids, no static PNG maps (report.html has them, interactive).")
 @MODEL_OPTION

@@ -12,7 +12,10 @@ from pressfit.cli.common import (
     COORDINATE,
     FORCE,
     MODEL_OPTION,
+    OVERWRITE_OPTION,
+    PROGRESS_OPTION,
     FiniteFloat,
+    echo_written,
     increasing_pair,
     parse_numbers,
     user_errors,
@@ -117,7 +120,7 @@ def _print_equilibrium(eq: Equilibrium) -> None:
 @click.option(
     "--n", "n_grid", type=click.IntRange(3, 1001), default=51, show_default=True, help="Map grid points per side."
 )
-@click.option("--overwrite", is_flag=True, help="Replace existing output files.")
+@OVERWRITE_OPTION
 @MODEL_OPTION
 @user_errors
 def stiffness_cmd(x: float, y: float, z: float, as_json: bool, maps: bool, out_dir: Path, n_grid: int,
@@ -172,8 +175,8 @@ def stiffness_cmd(x: float, y: float, z: float, as_json: bool, maps: bool, out_d
               help="Pinocchio model that places the shapes.")
 @click.option("--json", "as_json", is_flag=True, help="Print JSON (SI units; keys name their units).")
 @click.option("--out", "out_dir", type=click.Path(path_type=Path), help="Write CSV and a PNG map here (--workspace).")
-@click.option("--overwrite", is_flag=True, help="Replace existing output files.")
-@click.option("--progress/--no-progress", default=True, help="Show a progress bar.")
+@OVERWRITE_OPTION
+@PROGRESS_OPTION
 @MODEL_OPTION
 @user_errors
 def interference_cmd(pose: tuple[float, ...], over_workspace: bool, margin_m: float | None, points: int, heights: int,
@@ -219,6 +222,5 @@ def interference_cmd(pose: tuple[float, ...], over_workspace: bool, margin_m: fl
                        + "(" + ", ".join(f"{c:.4f}" for c in v["pose_m"]) + ") m")
         w = summary["worst"]
         click.echo(f"{'PASS' if res.passed else 'FAIL'}: worst {w['pair']} {w['distance_m'] * 1e3:+.2f} mm")
-        for p in written:
-            click.echo(f"wrote {p}")
+        echo_written(written)
     sys.exit(0 if res.passed else 1)

@@ -6,7 +6,18 @@ from pathlib import Path
 
 import click
 
-from pressfit.cli.common import COORDINATE, FORCE, MODEL_OPTION, FiniteFloat, FloatList, user_errors
+from pressfit.cli.common import (
+    COORDINATE,
+    FORCE,
+    MODEL_OPTION,
+    OVERWRITE_OPTION,
+    PROGRESS_OPTION,
+    FiniteFloat,
+    FloatList,
+    cluster_options,
+    echo_written,
+    user_errors,
+)
 from pressfit.description.cases import MAX_FORCE_N
 from pressfit.description.machine import load_machine
 from pressfit.errors import PressfitError
@@ -35,9 +46,9 @@ def study_group() -> None:
 @click.option("--direction", nargs=3, type=FORCE, default=(0.0, 1.0, 0.0), show_default=True, help="Load direction.")
 @click.option("--out", "out_dir", type=click.Path(path_type=Path), default=Path("out/study_preload"), show_default=True,
               help="Directory for preload_study.csv/.json and the PNG plots.")
-@click.option("--overwrite", is_flag=True, help="Replace existing output files.")
+@OVERWRITE_OPTION
 @click.option("--json", "as_json", is_flag=True, help="Print the study as JSON.")
-@click.option("--progress/--no-progress", default=True, help="Show a progress bar.")
+@PROGRESS_OPTION
 @MODEL_OPTION
 @user_errors
 def study_preload_cmd(case_file: Path | None, pose: tuple[float, ...] | None, clearances: list[float] | None,
@@ -69,8 +80,7 @@ def study_preload_cmd(case_file: Path | None, pose: tuple[float, ...] | None, cl
         click.echo(to_json(study.to_dict() | {"outputs": [str(p) for p in written]}))
         return
     click.echo(preload_study.format_answers(study))
-    for p in written:
-        click.echo(f"wrote {p}")
+    echo_written(written)
 
 
 @study_group.command("montecarlo")
@@ -78,12 +88,7 @@ def study_preload_cmd(case_file: Path | None, pose: tuple[float, ...] | None, cl
 @click.option("--samples", type=click.IntRange(1), help="Number of samples (default: the case's [montecarlo]).")
 @click.option("--seed", type=click.IntRange(0), help="Seed (default: the case's).")
 @click.option("--chunk-size", type=click.IntRange(1), help="Samples per task (default: the case's).")
-@click.option(
-    "--workers", type=click.IntRange(1), help="Worker processes of the local cluster (default: one per core)."
-)
-@click.option(
-    "--scheduler", help="Address of a running Dask scheduler, e.g. tcp://10.0.0.5:8786 (instead of --workers)."
-)
+@cluster_options
 @click.option("--out", "out_dir", type=click.Path(path_type=Path), default=Path("out/montecarlo"), show_default=True,
               help="Study directory: samples/*.parquet, summary.json, quantiles.csv, PNG plots; rerun to resume.")
 @click.option("--overwrite", is_flag=True, help="Discard an earlier study in --out and start afresh.")
@@ -111,8 +116,7 @@ def study_montecarlo_cmd(case_file: Path, samples: int | None, seed: int | None,
                    f"{e.ci95[1]:.4g}; {e.count}/{e.samples})")
     for note in s.notes:
         click.echo(note)
-    for p in run.written:
-        click.echo(f"wrote {p}")
+    echo_written(run.written)
 
 
 @study_group.command("insertion")
@@ -123,7 +127,7 @@ def study_montecarlo_cmd(case_file: Path, samples: int | None, seed: int | None,
               help="Cardan axial clearances g, m, comma-separated (default: 1e-5,5e-5).")
 @click.option("--out", "out_dir", type=click.Path(path_type=Path), default=Path("out/study_insertion"),
               show_default=True, help="Directory for insertion_study.csv/.json/.png.")
-@click.option("--overwrite", is_flag=True, help="Replace existing output files.")
+@OVERWRITE_OPTION
 @click.option("--json", "as_json", is_flag=True, help="Print the table as JSON.")
 @click.option("--progress/--no-progress", default=True, help="Show a progress bar over the runs.")
 @user_errors
@@ -141,18 +145,16 @@ def study_insertion_cmd(case_file: Path, preloads: list[float] | None, clearance
     for r in study.rows:
         click.echo(f"{r[0]:>11.4g}  {r[1] * 1e6:>14.4g}  {r[2]:>12.4g}  {r[4] * 1e6:>15.3f}  {r[5] * 1e6:>12.3f}  "
                    f"{r[6]:>8.3f}  {r[7]:>13.3f}")
-    for p in written:
-        click.echo(f"wrote {p}")
+    echo_written(written)
 
 
 @study_group.command("design")
 @click.argument("case_file", type=click.Path(path_type=Path))
 @click.option("--trials", type=click.IntRange(1), help="Designs to evaluate (NSGA-II; default: the case's [design]).")
-@click.option("--workers", type=click.IntRange(1), help="Local cluster worker processes (default: one per core).")
-@click.option("--scheduler", help="Address of a running Dask scheduler, e.g. tcp://10.0.0.5:8786 (not with --workers).")
+@cluster_options
 @click.option("--out", "out_dir", type=click.Path(path_type=Path), default=Path("out/design"), show_default=True,
               help="Directory for trials.parquet, pareto.parquet, summary.json, pareto.png, designs/*.toml.")
-@click.option("--overwrite", is_flag=True, help="Replace existing output files.")
+@OVERWRITE_OPTION
 @click.option("--json", "as_json", is_flag=True, help="Print the summary as JSON.")
 @click.option("--progress/--no-progress", default=True, help="Show a progress bar over designs.")
 @user_errors
@@ -171,5 +173,4 @@ def study_design_cmd(case_file: Path, trials: int | None, workers: int | None, s
         return
     click.echo(f"{s['trials']} designs ({s['feasible']} feasible, {s['failed']} failed); Pareto front of "
                f"{', '.join(s['objectives'])}: {len(s['pareto'])} designs")  # type: ignore[arg-type]
-    for p in run.written:
-        click.echo(f"wrote {p}")
+    echo_written(run.written)

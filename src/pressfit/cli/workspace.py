@@ -6,7 +6,7 @@ from pathlib import Path
 
 import click
 
-from pressfit.cli.common import COORDINATE, MODEL_OPTION, user_errors
+from pressfit.cli.common import COORDINATE, MODEL_OPTION, OVERWRITE_OPTION, PROGRESS_OPTION, user_errors
 from pressfit.description.machine import load_machine
 from pressfit.errors import PressfitError
 from pressfit.output.files import check_directory, to_json, write_directory
@@ -17,9 +17,9 @@ from pressfit.output.files import check_directory, to_json, write_directory
               "default 0.6, the paper's Figures 7-11).")
 @click.option("--out", "out_dir", type=click.Path(path_type=Path), default=Path("out/workspace"),
               show_default=True, help="Directory for the maps (CSV, PNG) and summary.json.")
-@click.option("--overwrite", is_flag=True, help="Replace existing output files.")
+@OVERWRITE_OPTION
 @click.option("--json", "as_json", is_flag=True, help="Print the summary as JSON.")
-@click.option("--progress/--no-progress", default=True, help="Show a progress bar.")
+@PROGRESS_OPTION
 @MODEL_OPTION
 @user_errors
 def workspace_cmd(heights: tuple[float, ...], out_dir: Path, overwrite: bool, as_json: bool, progress: bool,
