@@ -55,14 +55,19 @@ def test_mass_matrices_agree_at_the_reference_configuration(rigid, exported):
     """MuJoCo's joint-space mass matrix (its CRB) equals Pinocchio's CRBA at the closed reference configuration
     (plate unrotated, so both free-joint velocity conventions coincide): the kinematic tree, joint axes, body
     placements and inertias are exported consistently. Round-off 1e-15 of entries up to ~1 (tolerance 1e-13)."""
+    mass, reference = _mass_matrices(rigid, exported)
+    np.testing.assert_allclose(mass, reference, atol=1e-13)
+
+
+def _mass_matrices(rigid, exported):
+    """MuJoCo's and Pinocchio's joint-space mass matrices at the keyframe (the closed reference configuration)."""
     model, data = exported
     mujoco.mj_resetDataKeyframe(model, data, 0)
     mujoco.mj_forward(model, data)
     mass = np.zeros((model.nv, model.nv))
     mujoco.mj_fullM(model, data, mass)
     reference = pin.crba(rigid.model, rigid.model.createData(), rigid.reference_q)
-    reference = np.triu(reference) + np.triu(reference, 1).T
-    np.testing.assert_allclose(mass, reference, atol=1e-13)
+    return mass, np.triu(reference) + np.triu(reference, 1).T
 
 
 def test_state_map_keeps_the_plate_pose_and_twist(rigid, exported):
@@ -167,13 +172,9 @@ def test_readme_numbers_of_the_second_engine(rigid, exported, runs):
     readme_fragment("(`pressfit export-mjcf`; MuJoCo 4.0.0)")
     assert mujoco.__version__ == "4.0.0"
     readme_fragment("(the joint-space mass matrices agree to round-off, within 2e-15)")
-    model, data = exported
-    mujoco.mj_resetDataKeyframe(model, data, 0)
-    mujoco.mj_forward(model, data)
-    mass = np.zeros((model.nv, model.nv))
-    mujoco.mj_fullM(model, data, mass)
-    reference = pin.crba(rigid.model, rigid.model.createData(), rigid.reference_q)
-    assert np.abs(mass - (np.triu(reference) + np.triu(reference, 1).T)).max() < 2e-15
+    mass, reference = _mass_matrices(rigid, exported)
+    assert np.abs(mass - reference).max() < 2e-15
+    model = exported[0]
     readme_fragment("impedance 0.9999, time constant twice the time step, critically damped, which leaves a closure "
                     "violation falling as h^2 (5.6e-7 m at h = 0.1 ms)")
     np.testing.assert_array_equal(model.eq_solimp[:, :2], 0.9999)
