@@ -267,9 +267,11 @@ def _refined_best(case: Case, machine: Machine, key: str, candidates: list[tuple
     """The worse of the sweep's worst and the refined solves at ``candidates`` (with the case's clearances for
     the clearance-sensitive quantities); a refined pair without a stable equilibrium goes to ``unstable``."""
     sense, a4, n = LIMITS[key].sense, case.preload.a4_n, len(candidates)
+    solver = EquilibriumSolver(machine, pose_m=poses[candidates[0][1]]) \
+        if key == "min_buckling_safety_factor" and candidates else None
     for j, p in candidates:
-        if key == "min_buckling_safety_factor":  # refined: the whole machine's linearised buckling factor
-            w, leg = machine_buckling_factor(machine, poses[p], loads[j], a4)
+        if solver is not None:  # refined: the whole machine's linearised buckling factor
+            w, leg = machine_buckling_factor(solver, poses[p], loads[j], a4)
             if worse(w, best, sense):
                 best = (w, int(j), int(p), leg, f"whole-machine linearised buckling at the {n} worst poses "
                         "(per-leg Euler in the sweep)")
@@ -375,11 +377,13 @@ def _unreachable(machine: Machine, poses: np.ndarray) -> list[dict[str, object]]
     ]
 
 
-def machine_buckling_factor(machine: Machine, pose: np.ndarray, load: np.ndarray, a4: float) -> tuple[float, int]:
+def machine_buckling_factor(solver: EquilibriumSolver, pose: np.ndarray, load: np.ndarray,
+                            a4: float) -> tuple[float, int]:
     """The machine's linearised buckling load factor on ``load`` (force-mode preload a4 in N held fixed) and
-    the leg (1..4) holding most of the mode's energy (:func:`pressfit.mechanics.buckling.machine_buckling`)."""
-    offsets = preload.rest_length_offsets(machine, pose, a4, "force") if a4 else None
-    res = buckling.machine_buckling(machine, pose, load, preload_offsets_m=offsets)
+    the leg (1..4) holding most of the mode's energy (:func:`pressfit.mechanics.buckling.machine_buckling`),
+    on a solver reused over the refined poses (building its model costs more than the eigenproblem)."""
+    offsets = preload.rest_length_offsets(solver.machine, pose, a4, "force") if a4 else None
+    res = buckling.machine_buckling(solver, pose, load, preload_offsets_m=offsets)
     return res.load_factor, res.dominant_leg
 
 
