@@ -9,6 +9,7 @@ import json
 import numpy as np
 import pytest
 from click.testing import CliRunner
+from readme import assert_printed, readme_fragment
 from scipy.integrate import solve_ivp
 from scipy.linalg import eigh
 
@@ -85,6 +86,11 @@ def test_off_centre_vertical_step_rings_at_the_rocking_mode(machine):
     period = 2 * np.median(np.diff(crossings[2:]))
     assert 1 / period == pytest.approx(r.dominant_frequency_hz * np.sqrt(1 - 0.02**2), rel=5e-3)
     assert any(abs(p / r.dominant_frequency_hz - 1) < 5e-3 for p in s["receptance_peak_hz"])
+    readme_fragment("A 100 N downward step at (0, 0.6, 0.2) deflects the tool 60.7 um sideways and 21.0 um down "
+                    "statically, but the plate rocks: the lateral peak is 116.4 um, ringing at 26.2 Hz")
+    for value, printed in ((s["static_lateral_m"] * 1e6, "60.7"), (-s["static_vertical_m"] * 1e6, "21.0"),
+                           (s["peak_lateral_m"] * 1e6, "116.4"), (r.dominant_frequency_hz, "26.2")):
+        assert_printed(value, printed)
 
 
 def test_mirror_image_pose_and_force_give_the_mirror_image_response(machine):
