@@ -1,4 +1,5 @@
-"""Commands about the machine in motion: ``pressfit modes``, ``pressfit simulate``, ``pressfit export-mjcf``."""
+"""Commands about the machine in motion: ``pressfit modes``, ``pressfit simulate``, ``pressfit export-mjcf``,
+``pressfit response``."""
 
 from __future__ import annotations
 
@@ -6,7 +7,15 @@ from pathlib import Path
 
 import click
 
-from pressfit.cli.common import MODEL_OPTION, OVERWRITE_OPTION, FiniteFloat, echo_written, user_errors
+from pressfit.cli.common import (
+    COORDINATE,
+    FORCE,
+    MODEL_OPTION,
+    OVERWRITE_OPTION,
+    FiniteFloat,
+    echo_written,
+    user_errors,
+)
 from pressfit.description.machine import load_machine
 from pressfit.output.files import to_json
 
@@ -100,3 +109,42 @@ def export_mjcf_cmd(x: float, y: float, z: float, timestep_s: float, out: Path |
 
     text, path = export_mjcf(load_machine(model_path), [x, y, z], timestep_s, out, overwrite)
     click.echo(f"wrote {path}" if path is not None else text)
+
+
+@click.command("response", context_settings={"ignore_unknown_options": True})  # negative coordinates
+@click.argument("x", type=COORDINATE)
+@click.argument("y", type=COORDINATE)
+@click.argument("z", type=COORDINATE)
+@click.option("--force", "force_n", type=FORCE, nargs=3, required=True,
+              help="FX FY FZ: the force step at the tool (N, world axes).")
+@click.option("--duration", "duration_s", type=FiniteFloat(0.0, 60.0, open_low=True), default=0.5,
+              show_default=True, help="Simulated time after the step (s).")
+@click.option("--damping-ratio", type=FiniteFloat(0.0, 1.0, open_low=True), default=0.02, show_default=True,
+              help="Modal damping ratio of every mode (an estimate; 1-5% is typical of bolted steel frames).")
+@click.option("--out", "out_dir", type=click.Path(path_type=Path), default=None,
+              help="Directory for response.json, response.csv, receptance.csv and response.png.")
+@OVERWRITE_OPTION
+@click.option("--json", "as_json", is_flag=True, help="Print the summary as JSON.")
+@MODEL_OPTION
+@user_errors
+def response_cmd(x: float, y: float, z: float, force_n: tuple[float, float, float], duration_s: float,
+                 damping_ratio: float, out_dir: Path | None, overwrite: bool, as_json: bool, model_path: Path) -> None:
+    """Tool-point response at the plate pose X Y Z (m), drives holding their lengths: a force step at the tool
+    (displacement history) and the receptance (frequency response) with its peaks at the modes."""
+    from pressfit.output.response import run_response
+
+    r, paths = run_response(load_machine(model_path), [x, y, z], list(force_n), duration_s, damping_ratio, out_dir,
+                            overwrite)
+    s = r.summary()
+    if as_json:
+        click.echo(to_json(s))
+        return
+    click.echo(f"pose h = ({x:g}, {y:g}, {z:g}) m, step F = ({', '.join(f'{f:g}' for f in force_n)}) N at the tool, "
+               f"modal damping {damping_ratio:g}")
+    click.echo(f"static: lateral {s['static_lateral_m'] * 1e6:.3f} um, "
+               f"vertical {s['static_vertical_m'] * 1e6:+.3f} um; "
+               f"peak: lateral {s['peak_lateral_m'] * 1e6:.3f} um, vertical {s['peak_vertical_m'] * 1e6:+.3f} um")
+    click.echo(f"dominant mode {s['dominant_frequency_hz']:.4g} Hz; lowest modes "
+               + ", ".join(f"{f:.4g}" for f in s["lowest_modes_hz"]) + " Hz; receptance peaks "
+               + ", ".join(f"{f:.4g}" for f in s["receptance_peak_hz"]) + " Hz")
+    echo_written(paths)

@@ -80,12 +80,31 @@ def mass_matrix(model: pin.Model, data: pin.Data, q: np.ndarray) -> np.ndarray:
     return np.triu(m) + np.triu(m, 1).T
 
 
-def natural_modes(machine: Machine, pose_m: np.ndarray, count: int = 6, plate_wrench: np.ndarray | None = None,
-                  mass_scale: float = 1.0) -> Modes:
-    """The ``count`` lowest modes at the reachable pose ``pose_m`` (m), loaded by ``plate_wrench`` (6,) (N, N m,
-    world axes at the plate centre; default the weight of plate and tool), masses times ``mass_scale``."""
-    if not (isinstance(count, int) and 1 <= count <= 60):
-        raise PressfitError(f"count of modes must be an integer in [1, 60], got {count!r}")
+@dataclass(frozen=True)
+class ReducedSystem:
+    """Small vibrations about the static equilibrium at a pose, restricted to the linearised loop closures
+    (module docstring): ``mass_kg`` M_r and ``stiffness`` K_r (r, r) on the orthonormal closure null-space
+    ``basis`` (nv, r), so that M_r z'' + K_r z = basis^T tau. ``plate_map`` (6, r) maps z to the plate
+    centre's translation (m) and rotation (rad), world axes: a world force F (N) and moment C (N m) at the
+    plate centre are the reduced force ``plate_map.T @ [F, C]`` (the same map, by virtual work)."""
+
+    mm: MachineModel
+    model: pin.Model  # with the machine's masses (``inertial_model``)
+    data: pin.Data
+    q: np.ndarray  # (nq,) the static equilibrium configuration q*
+    basis: np.ndarray  # (nv, r)
+    stiffness: np.ndarray  # (r, r) K_r, SI (N/m, N m/rad in the joint coordinates)
+    mass_kg: np.ndarray  # (r, r) M_r, SI (kg, kg m^2)
+    plate_map: np.ndarray  # (6, r)
+    plate_wrench: np.ndarray  # (6,) the static plate wrench (N, N m)
+    equilibrium_residual: float
+
+
+def reduced_system(machine: Machine, pose_m: np.ndarray, plate_wrench: np.ndarray | None = None,
+                   mass_scale: float = 1.0) -> ReducedSystem:
+    """:class:`ReducedSystem` at the reachable pose ``pose_m`` (m), loaded by ``plate_wrench`` (6,) (N, N m,
+    world axes at the plate centre; default the weight of plate and tool), masses times ``mass_scale``; the
+    actuator springs keep the rest lengths of the static solve (the drives hold their lengths)."""
     if not (math.isfinite(mass_scale) and mass_scale > 0):
         raise PressfitError(f"mass_scale must be a positive number, got {mass_scale!r}")
     mm = build_model(machine, pose_m)
@@ -97,19 +116,31 @@ def natural_modes(machine: Machine, pose_m: np.ndarray, count: int = 6, plate_wr
     data = model.createData()
     q = eq.q
     basis = null_space(closure_jacobian(mm, model, data, q))
-    k_r = basis.T @ elastic_stiffness(mm, q) @ basis
-    m_r = basis.T @ mass_matrix(model, data, q) @ basis
-    omega2, x = eigh(k_r, m_r, subset_by_index=[0, count - 1])
-    if omega2[0] <= 0:
-        raise PressfitError(f"the restricted stiffness is not positive definite at pose {tuple(mm.pose_m)} m "
-                            f"(lowest eigenvalue {omega2[0]:.3g} s^-2): a mechanism, not a structure")
-    phi = (basis @ x).T
-    closure = float(np.max(np.abs(closure_jacobian(mm, model, data, q) @ phi.T)))
-    points, shapes = _leg_motion(mm, model, data, q, phi)
     rot = pin.Quaternion(q[3:7]).matrix()  # free-flyer velocity is in the plate frame
-    plate = np.concatenate([phi[:, 0:3] @ rot.T, phi[:, 3:6] @ rot.T], axis=1)
-    return Modes(mm.pose_m.copy(), np.asarray(plate_wrench, dtype=float).reshape(6), np.sqrt(omega2) / (2 * np.pi),
-                 phi, plate, points, shapes, closure, total_mass_kg(model), eq.residuals.worst())
+    plate_map = np.vstack([rot @ basis[0:3], rot @ basis[3:6]])
+    return ReducedSystem(mm=mm, model=model, data=data, q=q, basis=basis,
+                         stiffness=basis.T @ elastic_stiffness(mm, q) @ basis,
+                         mass_kg=basis.T @ mass_matrix(model, data, q) @ basis, plate_map=plate_map,
+                         plate_wrench=np.asarray(plate_wrench, dtype=float).reshape(6),
+                         equilibrium_residual=eq.residuals.worst())
+
+
+def natural_modes(machine: Machine, pose_m: np.ndarray, count: int = 6, plate_wrench: np.ndarray | None = None,
+                  mass_scale: float = 1.0) -> Modes:
+    """The ``count`` lowest modes at the reachable pose ``pose_m`` (m), loaded by ``plate_wrench`` (6,) (N, N m,
+    world axes at the plate centre; default the weight of plate and tool), masses times ``mass_scale``."""
+    if not (isinstance(count, int) and 1 <= count <= 60):
+        raise PressfitError(f"count of modes must be an integer in [1, 60], got {count!r}")
+    rs = reduced_system(machine, pose_m, plate_wrench, mass_scale)
+    omega2, x = eigh(rs.stiffness, rs.mass_kg, subset_by_index=[0, count - 1])
+    if omega2[0] <= 0:
+        raise PressfitError(f"the restricted stiffness is not positive definite at pose {tuple(rs.mm.pose_m)} m "
+                            f"(lowest eigenvalue {omega2[0]:.3g} s^-2): a mechanism, not a structure")
+    phi = (rs.basis @ x).T
+    closure = float(np.max(np.abs(closure_jacobian(rs.mm, rs.model, rs.data, rs.q) @ phi.T)))
+    points, shapes = _leg_motion(rs.mm, rs.model, rs.data, rs.q, phi)
+    return Modes(rs.mm.pose_m.copy(), rs.plate_wrench, np.sqrt(omega2) / (2 * np.pi), phi, (rs.plate_map @ x).T,
+                 points, shapes, closure, total_mass_kg(rs.model), rs.equilibrium_residual)
 
 
 def _leg_motion(mm: MachineModel, model: pin.Model, data: pin.Data, q: np.ndarray,
