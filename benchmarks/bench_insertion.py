@@ -3,7 +3,8 @@
 Run: ``python benchmarks/bench_insertion.py``. Prints simulated seconds per wall-clock second with and
 without the limiter (issue 11's goal: at least 1, ideally 10), and the bare closed-loop rigid-leg step
 (:meth:`pressfit.dynamics.multibody.RigidLegModel.step`, passive, no controller or contact) in steps per
-second. Not a test: timings depend on the machine.
+second, and the wall time of ``pressfit response`` (:func:`pressfit.dynamics.response.tool_response`, median of
+three). Not a test: timings depend on the machine.
 """
 
 from __future__ import annotations
@@ -20,6 +21,7 @@ from pressfit.description.cases import load_case
 from pressfit.description.machine import load_machine
 from pressfit.dynamics.insertion import simulate_insertion
 from pressfit.dynamics.multibody import rigid_leg_model
+from pressfit.dynamics.response import tool_response
 from pressfit.shipped import cases_dir
 
 
@@ -43,6 +45,12 @@ def main() -> None:
         times.append((time.perf_counter() - t0) / 2000)
     step = float(np.median(times))
     print(f"passive rigid-leg step: {step * 1e6:.0f} us/step, {1 / step:.0f} steps/s")
+    times = []
+    for _ in range(3):
+        t0 = time.perf_counter()
+        tool_response(load_machine(), np.array([0.0, 0.6, 0.2]), np.array([0.0, -100.0, 0.0]))
+        times.append(time.perf_counter() - t0)
+    print(f"response (0, 0.6, 0.2), 100 N step, 0.5 s: {np.median(times):.2f} s wall")
 
 
 if __name__ == "__main__":
