@@ -146,6 +146,7 @@ class FlexibleMachine:
         self.nonlinear = [(k, s.law) for k, s in enumerate(sp) if type(s.law) is not LinearSpring]
         self.act = np.array([k for k, s in enumerate(sp) if s.name == "actuator"])  # spring index per leg
         self.act_q, self.act_v = self.sq[self.act], self.sv[self.act]
+        self.rigid = np.setdiff1d(np.arange(self.nv), self.sv)  # plate and cardan coordinates
         ids = mm.leg_joint_ids
         self.plate_end = [d["plate_end"] for d in ids]
         self.leg_v = [np.asarray(v) for v in mm.leg_v]
@@ -167,6 +168,7 @@ class FlexibleMachine:
         self.modes = self._modes(self.q0, count)
         self.first_period_s = 1.0 / float(self.modes.frequencies_hz[0])
         self.damping = damping if isinstance(damping, Rayleigh) else self._fit(damping)
+        self.refreshes = 0  # iteration-matrix factorisations so far (a diagnostic)
         self._factor: tuple | None = None
         self._factor_key: tuple | None = None
 
@@ -359,6 +361,9 @@ class FlexibleMachine:
             acc += scale * dx[:nv]
             lam += dx[nv:]
             it += 1
+            if not math.isfinite(size):
+                raise ConvergenceError(f"flexible step at t = {state.time_s + h:.6g} s (Newton diverged)", size,
+                                       NEWTON_TOL, it)
             if size <= NEWTON_TOL:
                 break
             if size > REFRESH_RATIO * last and not fresh:
@@ -389,10 +394,10 @@ class FlexibleMachine:
     def _rigid_velocity(self, q: np.ndarray, rates: np.ndarray) -> np.ndarray:
         """Velocity (nv,) of the rigid machine (springs frozen) at q with actuator rates (4,) (m/s)."""
         b, _ = self._jacobian(q)
-        rigid = np.setdiff1d(np.arange(self.nv), self.sv)
+        br = b[:, self.rigid]  # full column rank: with fixed lengths the rigid machine has no mechanism
         v = np.zeros(self.nv)
         v[self.act_v] = rates
-        v[rigid] = -np.linalg.lstsq(b[:, rigid], b[:, self.act_v] @ rates, rcond=None)[0]
+        v[self.rigid] = -np.linalg.solve(br.T @ br, br.T @ (b[:, self.act_v] @ rates))
         return v
 
     def _refresh(self, q: np.ndarray, k: np.ndarray, drive: DriveInput, rest: np.ndarray, h: float,
@@ -409,6 +414,7 @@ class FlexibleMachine:
             s[:nv, :nv] += g / (b * h) * self.damping.alpha_per_s * me
         s[:nv, nv:], s[nv:, :nv] = bj.T, bj
         self._factor = lu_factor(s, check_finite=False)
+        self.refreshes += 1
         self._factor_key = (h, drive.kind, self._placed.tobytes())
 
     # --- what a designer reads -------------------------------------------------------------------------
