@@ -356,7 +356,7 @@ class FlexibleMachine:
             f, kt = self._springs(q, rest, k, drive_input)
             r[self.sv] += f
             r += self._damping_terms(v, v_r, kt, me)
-            dx = lu_solve(self._factor, -np.concatenate([r, phi]))
+            dx = lu_solve(self._factor, -np.concatenate([r, phi]), check_finite=False)
             size = float(np.max(np.abs(dx[:nv])))
             acc += scale * dx[:nv]
             lam += dx[nv:]
