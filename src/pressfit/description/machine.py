@@ -187,6 +187,42 @@ class Mass(StrictModel):
     cardan_spider_mass_kg: NonNegative = 0.3
 
 
+class Damping(StrictModel):
+    """Structural damping of the flexible dynamics (:mod:`pressfit.dynamics.machine.flexible`): Rayleigh damping
+    C = alpha M_e + beta K on the elastic coordinates, given as ``alpha_per_s`` (1/s) and ``beta_s`` (s) with
+    ``kind = "rayleigh"``, or fitted to modal damping ratios ``ratios`` at two ``modes`` (numbered from 1 by
+    increasing frequency, the modes of ``pressfit modes``) with ``kind = "modal"``. The default, 2% at modes 1
+    and 3 (the rocking mode and the plate twist; modes 1 and 2 are a near-degenerate pair that cannot fix two
+    coefficients), is an ESTIMATE: bolted steel frames show 1-5%."""
+
+    kind: Literal["modal", "rayleigh"] = "modal"
+    modes: Annotated[list[Annotated[int, Field(ge=1, le=60)]], Field(min_length=2, max_length=2)] | None = None
+    ratios: Annotated[list[Annotated[float, Field(ge=0, lt=1, allow_inf_nan=False)]],
+                      Field(min_length=2, max_length=2)] | None = None
+    alpha_per_s: NonNegative | None = None
+    beta_s: NonNegative | None = None
+
+    @model_validator(mode="after")
+    def _one_kind(self) -> Damping:
+        modal, rayleigh = (self.modes, self.ratios), (self.alpha_per_s, self.beta_s)
+        if self.kind == "modal":
+            if any(v is not None for v in rayleigh):
+                raise ValueError('alpha_per_s and beta_s belong to kind = "rayleigh", not "modal"')
+            if self.modes is not None and self.modes[0] >= self.modes[1]:
+                raise ValueError("modes must be two increasing mode numbers")
+        elif any(v is not None for v in modal) or any(v is None for v in rayleigh):
+            raise ValueError('kind = "rayleigh" takes alpha_per_s and beta_s (and not modes, ratios)')
+        return self
+
+    @property
+    def fit_modes(self) -> list[int]:
+        return self.modes or [1, 3]
+
+    @property
+    def fit_ratios(self) -> list[float]:
+        return self.ratios or [0.02, 0.02]
+
+
 class ModelOptions(StrictModel):
     springs_per_segment: Annotated[int, Field(ge=1, le=64)] = 4
 
@@ -267,6 +303,7 @@ class Machine(StrictModel):
     actuator: Actuator
     joints: Joints = Joints()
     mass: Mass = Mass()
+    damping: Damping = Damping()
     model: ModelOptions = ModelOptions()
     collision: Collision
     source: str = ""

@@ -1,0 +1,506 @@
+r"""The flexible machine: the elastic VJM legs of the statics in the closed-loop equations of motion.
+
+Model. The Pinocchio model of :mod:`pressfit.mechanics.model` (plate free flyer; per leg the base cardan, the
+cylinder and stem rotational springs, springs_per_segment from the machine file, the actuator joint, the plate
+cardan; four 6D frame-anchor loop closures) with the ``[mass]`` table's masses and inertias
+(:mod:`pressfit.dynamics.inertia`; gravity -9.81 m/s^2 along y, optional). Equations of motion (index 3):
+
+    M(q) vdot + h(q, v) + f_s(q) + C (v_e - r_dot) - tau_d - J_p^T W + B(q)^T lambda = 0,    Phi(q) = 0,
+
+with M vdot + h = ``pin.rnea(q, v, vdot)`` (Coriolis, centrifugal and gravity terms included), f_s the virtual
+springs' forces (each spring law's ``force`` of its deflection q - rest), B the (24, nv) Jacobian of the
+closures Phi (Pinocchio's ``constraint_position_error``, log6 of the closure placement), lambda their forces,
+W the plate wrench (world, at the plate centre; J_p^T W = (R^T f, R^T m) on the free flyer) and tau_d the
+drives: a force drive puts -F_i (F_i > 0 tension) on actuator joint i, which then carries no spring; a position
+drive sets the rest length r_i of the actuator spring (the actuator stiffness in series with the segments'
+axial compliance, ``MachineModel.spring_stiffness``). The stem springs' placements and stiffnesses follow the
+leg length (re-placed when a stem changed by STEM_UPDATE_M: the stiffness n E I_s / L_s then moves by at most
+2e-4 relative at the shortest 50 mm stem); the stem's mass is that at the build pose (as in the rigid model).
+Cardan play: ``cardan_compliance`` (:class:`pressfit.mechanics.model.CardanCompliance`, e.g. the dead zones
+of :meth:`pressfit.mechanics.clearance.Clearance.cardan_compliance`) adds its virtual joints and laws.
+
+Damping: Rayleigh, f_d = alpha M (v - v_r) + beta K (v - v_r), acting on the elastic motion only: v_r is the
+velocity of the rigid machine (springs frozen) at the commanded leg rates (a position drive's rest-length
+rate, a force drive's actual actuator rate at the start of the step), from the closure Jacobian's rigid
+columns (least squares; the rigid closures are redundant, rank 23 of 24), so a commanded motion of the
+machine is not damped; M at the start of the step, K the springs' tangents (zero on the cardans and the
+plate, and on the actuators of force drives). With the drives holding (v_r = 0) this is classical Rayleigh
+damping, zeta_k = alpha / (2 omega_k) + beta omega_k / 2, which ``kind = "modal"`` solves for (alpha, beta)
+at the two named modes (the drives holding their lengths, at the build pose).
+
+Integrator: generalised-alpha (Chung & Hulbert 1993) for index-3 constrained systems (Arnold & Bruls 2007,
+"Convergence of the generalized-alpha scheme for constrained mechanical systems"), on the Lie group of the
+configuration (q_{n+1} = q_n (+) dq, ``pin.integrate``). Why: the VJM springs put modes in the kHz range
+(axial leg modes), far above what an explicit scheme can hold at the scenario's 1 ms step, while the modes
+that matter (13-100 Hz) need second-order accuracy; generalised-alpha is unconditionally stable, second
+order, and damps the unresolved high modes by a stated spectral radius ``rho_inf`` (1: trapezoidal, no
+numerical damping, energy conserving for a linear system; 0.8 default: modes with omega h >> 1 lose 20%
+amplitude per step, those at omega h = 0.17, the rocking mode at 1 ms, about 1e-5 per period). Parameters
+alpha_m = (2 rho - 1) / (rho + 1), alpha_f = rho / (rho + 1), gamma = 1/2 + alpha_f - alpha_m,
+beta = (gamma + 1/2)^2 / 4. A reduced modal basis was not chosen: over large motion the basis would have
+to follow the pose, and the closures are nonlinear in the plate rotation.
+
+Newton: the unknowns are vdot_{n+1} and lambda; the iteration matrix, in position increments dx,
+
+    S = [ M / (beta' h^2) + gamma / (beta h) C + K,  B^T ;  B,  0 ],   beta' = beta (1 - alpha_f) / (1 - alpha_m),
+
+is factored at a configuration and kept (modified Newton; the geometric and inertial tangents are left out:
+with spring stiffnesses of 1e4-1e7 they slow convergence by a factor of about 1e-3 per iteration); it is
+refactored when an iteration contracts by less than REFRESH_RATIO, and a step whose freshly factored Newton
+does not reach NEWTON_TOL (m and rad, the largest position correction) in MAX_ITERATIONS is refused
+(ConvergenceError). A step longer than MAX_STEP_FRACTION of the first mode's period (at the build pose, the
+drives holding) is refused too: the rocking mode then has fewer than 20 steps per period, its period
+error (omega h)^2 / 12 passes 0.8%. No finite differences: M (``crba``), the spring tangents and B
+(``getConstraintsJacobian``) are Pinocchio's or analytic.
+
+Section resultants (objective, mirror-exact): ``pin.rnea`` with the closure forces as external forces on the
+legs' last bodies gives the wrench each joint transmits to its subtree; the section's wrench (plate side on
+base side) is its opposite, carried to the section point and written in the deformed leg frame
+(:mod:`.base`). The closure force of leg i is the world wrench W_i whose generalised forces S_k . W_i on the
+leg's joints equal -(B^T lambda) there (6 unknowns, one per leg, least squares over its twists S_k).
+
+Initial state: :meth:`FlexibleMachine.rest_state` is the static equilibrium under gravity and a plate
+wrench with the drives holding their rest lengths (Newton on [K B^T; B 0]); a state with a velocity gets
+the consistent acceleration of [M B^T; B 0] with the term dB/dt v left out (exact at rest, O(|v|^2) else).
+"""
+
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass
+
+import numpy as np
+import pinocchio as pin
+from scipy.linalg import eigh, lu_factor, lu_solve, null_space
+
+from pressfit.description.machine import Damping, Machine
+from pressfit.dynamics.inertia import inertial_model
+from pressfit.dynamics.machine.base import SECTIONS, DriveInput, Energy, MachineState, SectionLoads
+from pressfit.errors import ConvergenceError, PressfitError
+from pressfit.mechanics.model import CardanComplianceSpec, LinearSpring, build_model
+
+NEWTON_TOL = 1e-12  # m or rad: largest position correction of the last Newton iteration
+MAX_ITERATIONS = 12  # with a freshly factored iteration matrix
+REFRESH_RATIO = 0.1  # refactor when one iteration shrinks the correction by less than 10x
+MAX_STEP_FRACTION = 0.05  # dt at most 1/20 of the first mode's period
+STEM_UPDATE_M = 1e-5  # stem placements and stiffnesses follow the leg length to this, m
+RHO_INF = 0.8  # default spectral radius at infinite frequency (numerical damping)
+
+
+@dataclass(frozen=True)
+class Rayleigh:
+    """Rayleigh coefficients of C = alpha M_e + beta K (module doc): alpha 1/s, beta s."""
+
+    alpha_per_s: float
+    beta_s: float
+
+
+@dataclass(frozen=True)
+class FlexibleState(MachineState):
+    """A state of :class:`FlexibleMachine`: besides (q, v), the true and the generalised-alpha accelerations
+    (nv,), the closure forces lambda (24,) (Pinocchio's constraint frames, N and N m), the drive input of the
+    last step, the stem lengths (4,) (m) the model was placed at, and the Newton iterations of the last step."""
+
+    acceleration: np.ndarray
+    pseudo_acceleration: np.ndarray
+    multipliers: np.ndarray
+    drive: DriveInput
+    stem_lengths_m: np.ndarray
+    iterations: int = 0
+
+
+@dataclass(frozen=True)
+class _Modes:
+    frequencies_hz: np.ndarray
+    shapes: np.ndarray  # (k, nv) mass-normalised
+
+
+class FlexibleMachine:
+    """The elastic machine's dynamics (module doc), built at a reachable start pose (m).
+
+    ``damping``: the machine file's ``[damping]`` (default) or explicit :class:`Rayleigh` coefficients;
+    ``rho_inf`` in [0, 1] the integrator's numerical damping; ``gravity`` on by default. Owns its Pinocchio
+    model (stems placed per state) and data: one instance per thread.
+    """
+
+    def __init__(self, machine: Machine, pose_m: np.ndarray, *, springs_per_segment: int | None = None,
+                 cardan_compliance: CardanComplianceSpec = None, damping: Damping | Rayleigh | None = None,
+                 rho_inf: float = RHO_INF, gravity: bool = True) -> None:
+        if not (isinstance(rho_inf, int | float) and 0.0 <= rho_inf <= 1.0):
+            raise PressfitError(f"rho_inf must be a number in [0, 1], got {rho_inf!r}")
+        self.machine = machine
+        self.mm = mm = build_model(machine, pose_m, springs_per_segment=springs_per_segment,
+                                   cardan_compliance=cardan_compliance)
+        self.model = inertial_model(mm)
+        if not gravity:
+            self.model.gravity = pin.Motion.Zero()
+        self.data = self.model.createData()
+        self.cms = mm.constraint_models
+        self.cds = mm.constraint_datas()
+        self.nv = self.model.nv
+        sp = mm.springs
+        self.sq = np.array([s.idx_q for s in sp])
+        self.sv = np.array([s.idx_v for s in sp])
+        self.rest0 = mm.spring_rest.copy()
+        self.linear = np.array([type(s.law) is LinearSpring for s in sp])
+        self.nonlinear = [(k, s.law) for k, s in enumerate(sp) if type(s.law) is not LinearSpring]
+        self.act = np.array([k for k, s in enumerate(sp) if s.name == "actuator"])  # spring index per leg
+        self.act_q, self.act_v = self.sq[self.act], self.sv[self.act]
+        self.rigid = np.setdiff1d(np.arange(self.nv), self.sv)  # plate and cardan coordinates
+        ids = mm.leg_joint_ids
+        self.plate_end = [d["plate_end"] for d in ids]
+        self.leg_v = [np.asarray(v) for v in mm.leg_v]
+        # (joint whose subtree is the plate side, joint carrying the point, z offset) per leg and section
+        self.sec = [[(j if z == 0.0 else j + 1, j, z) for j, z in (mm.sections[i][s] for s in SECTIONS)]
+                    for i in range(4)]
+        self.alpha_m = (2 * rho_inf - 1) / (rho_inf + 1)
+        self.alpha_f = rho_inf / (rho_inf + 1)
+        self.gamma = 0.5 + self.alpha_f - self.alpha_m
+        self.beta = 0.25 * (self.gamma + 0.5) ** 2
+        self.rho_inf = float(rho_inf)
+        self._placed = np.full(4, np.nan)
+        self._k = np.zeros(len(sp))
+        stem0 = mm.pose_values(mm.pose_m).stem_lengths_m
+        self._place(stem0)
+        self.q0 = mm.q0.copy()
+        damping = machine.damping if damping is None else damping
+        count = max(damping.fit_modes) if isinstance(damping, Damping) else 1
+        self.modes = self._modes(self.q0, count)
+        self.first_period_s = 1.0 / float(self.modes.frequencies_hz[0])
+        self.damping = damping if isinstance(damping, Rayleigh) else self._fit(damping)
+        self.refreshes = 0  # iteration-matrix factorisations so far (a diagnostic)
+        self._factor: tuple | None = None
+        self._factor_key: tuple | None = None
+
+    # --- model -----------------------------------------------------------------------------------
+    def _place(self, stem_lengths_m: np.ndarray) -> None:
+        """Stem placements and the pose-dependent stiffnesses (actuator, stem) for stem lengths (4,), m."""
+        if np.array_equal(stem_lengths_m, self._placed):
+            return
+        self.mm.place_stem(self.model, stem_lengths_m)
+        self._k = self.mm.spring_stiffness(stem_lengths_m + self.machine.cylinder.length_m)
+        self._placed = np.array(stem_lengths_m, dtype=float)
+
+    def _rest(self, drive: DriveInput) -> tuple[np.ndarray, np.ndarray]:
+        """Rest values of the springs and their stiffness (0 on the actuators of force drives)."""
+        rest, k = self.rest0.copy(), self._k.copy()
+        if drive.kind == "position":
+            rest[self.act] = drive.values
+        else:
+            k[self.act] = 0.0
+        return rest, k
+
+    def _springs(self, q: np.ndarray, rest: np.ndarray, k: np.ndarray,
+                 drive: DriveInput) -> tuple[np.ndarray, np.ndarray]:
+        """Spring forces and tangents (n_springs,) at q."""
+        x = q[self.sq] - rest
+        f, kt = k * x, k.copy()
+        for j, law in self.nonlinear:
+            f[j], kt[j] = float(law.force(x[j])), float(law.tangent(x[j]))
+        if drive.kind == "force":
+            f[self.act], kt[self.act] = 0.0, 0.0
+        return f, kt
+
+    def _jacobian(self, q: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+        """Closure Jacobian B (24, nv) and error Phi (24,) at q (placements left in ``self.data``)."""
+        pin.computeJointJacobians(self.model, self.data, q)
+        for cm, cd in zip(self.cms, self.cds):
+            cm.calc(self.model, self.data, cd)
+        b = np.array(pin.getConstraintsJacobian(self.model, self.data, self.cms, self.cds))
+        phi = np.concatenate([np.asarray(cd.extract().constraint_position_error) for cd in self.cds])
+        return b, phi
+
+    def _mass(self, q: np.ndarray) -> np.ndarray:
+        m = np.array(pin.crba(self.model, self.data, q))
+        return np.triu(m) + np.triu(m, 1).T
+
+    def _modes(self, q: np.ndarray, count: int) -> _Modes:
+        """The lowest modes at q with the drives holding their lengths (the model's actuator springs)."""
+        b, _ = self._jacobian(q)
+        basis = null_space(b)
+        kd = np.zeros(self.nv)
+        np.add.at(kd, self.sv, self._springs(q, self.rest0, self._k, DriveInput.positions(q[self.act_q]))[1])
+        mass = self._mass(q)
+        w2, x = eigh(basis.T @ (kd[:, None] * basis), basis.T @ mass @ basis, subset_by_index=[0, count - 1])
+        if w2[0] <= 0:
+            raise PressfitError(f"the flexible machine has a mechanism at pose {tuple(self.mm.pose_m.tolist())} m "
+                                f"(lowest eigenvalue {w2[0]:.3g} s^-2)")
+        return _Modes(np.sqrt(w2) / (2 * np.pi), (basis @ x).T)
+
+    def _fit(self, damping: Damping) -> Rayleigh:
+        """Rayleigh coefficients for modal ratios at two modes (module doc); refused if one comes out negative."""
+        if damping.kind == "rayleigh":
+            return Rayleigh(float(damping.alpha_per_s), float(damping.beta_s))
+        k = [m - 1 for m in damping.fit_modes]
+        w = 2 * np.pi * self.modes.frequencies_hz[k]
+        a = np.column_stack([1 / (2 * w), w / 2])
+        alpha, beta = np.linalg.solve(a, np.asarray(damping.fit_ratios, dtype=float))
+        if alpha < 0 or beta < 0 or not (math.isfinite(alpha) and math.isfinite(beta)):
+            raise PressfitError(f"damping ratios {damping.fit_ratios} at modes {damping.fit_modes} "
+                                f"({w[0] / 2 / np.pi:.4g} and {w[1] / 2 / np.pi:.4g} Hz) need a negative Rayleigh "
+                                f"coefficient (alpha {alpha:.3g} 1/s, beta {beta:.3g} s): choose other modes or ratios")
+        return Rayleigh(float(alpha), float(beta))
+
+    def modal_damping_ratios(self) -> np.ndarray:
+        """The Rayleigh damping's ratio at each computed mode (module doc), dimensionless."""
+        w = 2 * np.pi * self.modes.frequencies_hz
+        return self.damping.alpha_per_s / (2 * w) + self.damping.beta_s * w / 2
+
+    # --- states ------------------------------------------------------------------------------------
+    def rest_state(self, plate_wrench: np.ndarray | None = None, drive: DriveInput | None = None,
+                   tol: float = NEWTON_TOL, max_iter: int = 30) -> FlexibleState:
+        """Static equilibrium at the build pose under gravity and a plate wrench (6,) (N, N m; default none)
+        with position drives at ``drive`` (default: the rigid leg lengths of the pose); v = 0."""
+        drive = DriveInput.positions(self.q0[self.act_q]) if drive is None else drive
+        if drive.kind != "position":
+            raise PressfitError("a rest state needs position drives: force drives hold no pose")
+        wrench = _wrench(plate_wrench)
+        rest, k = self._rest(drive)
+        q, lam, nv = self.q0.copy(), np.zeros(24), self.nv
+        zero = np.zeros(nv)
+        for it in range(1, max_iter + 1):  # noqa: B007 (the count is reported)
+            b, phi = self._jacobian(q)
+            f, kt = self._springs(q, rest, k, drive)
+            r = np.array(pin.rnea(self.model, self.data, q, zero, zero)) + b.T @ lam - self._external(q, wrench, drive)
+            r[self.sv] += f
+            kkt = np.zeros((nv + 24, nv + 24))
+            kkt[self.sv, self.sv] = kt
+            kkt[:nv, nv:], kkt[nv:, :nv] = b.T, b
+            dx = np.linalg.solve(kkt, -np.concatenate([r, phi]))
+            q = pin.integrate(self.model, q, dx[:nv])
+            lam = lam + dx[nv:]
+            if np.max(np.abs(dx[:nv])) <= tol:
+                break
+        else:
+            raise ConvergenceError("flexible rest state (Newton)", float(np.max(np.abs(dx[:nv]))), tol, max_iter)
+        return self._consistent(FlexibleState(0.0, q, zero.copy(), zero.copy(), zero.copy(), lam, drive,
+                                              self._placed.copy(), it), wrench)
+
+    def with_velocity(self, state: FlexibleState, v: np.ndarray, plate_wrench: np.ndarray | None = None
+                      ) -> FlexibleState:
+        """``state`` with velocity v (nv,) and the consistent acceleration (module doc)."""
+        v = np.asarray(v, dtype=float)
+        if v.shape != (self.nv,) or not np.all(np.isfinite(v)):
+            raise PressfitError(f"velocity must be {self.nv} finite numbers")
+        s = FlexibleState(state.time_s, state.q, v, state.acceleration, state.pseudo_acceleration, state.multipliers,
+                          state.drive, state.stem_lengths_m, state.iterations)
+        return self._consistent(s, _wrench(plate_wrench))
+
+    def _consistent(self, s: FlexibleState, wrench: np.ndarray) -> FlexibleState:
+        self._place(s.stem_lengths_m)
+        rest, k = self._rest(s.drive)
+        b, _ = self._jacobian(s.q)
+        f, kt = self._springs(s.q, rest, k, s.drive)
+        nv, mass = self.nv, self._mass(s.q)
+        rhs = self._external(s.q, wrench, s.drive) - np.array(pin.nonLinearEffects(self.model, self.data, s.q, s.v))
+        rhs[self.sv] -= f
+        rhs -= self._damping_terms(s.v, np.zeros(nv), kt, mass if self.damping.alpha_per_s else None)
+        kkt = np.zeros((nv + 24, nv + 24))
+        kkt[:nv, :nv], kkt[:nv, nv:], kkt[nv:, :nv] = mass, b.T, b
+        sol = np.linalg.lstsq(kkt, np.concatenate([rhs, np.zeros(24)]), rcond=None)[0]
+        acc = sol[:nv]
+        return FlexibleState(s.time_s, s.q, s.v, acc, acc.copy(), sol[nv:], s.drive, s.stem_lengths_m, s.iterations)
+
+    def _external(self, q: np.ndarray, wrench: np.ndarray, drive: DriveInput) -> np.ndarray:
+        """Generalised forces (nv,) of the plate wrench and of force drives."""
+        tau = np.zeros(self.nv)
+        rot = pin.Quaternion(q[3:7]).matrix()
+        tau[0:3], tau[3:6] = rot.T @ wrench[:3], rot.T @ wrench[3:]
+        if drive.kind == "force":
+            tau[self.act_v] -= drive.values
+        return tau
+
+    # --- the step ------------------------------------------------------------------------------------
+    def step(self, state: FlexibleState, drive_input: DriveInput, plate_wrench: np.ndarray,
+             dt_s: float) -> FlexibleState:
+        """One generalised-alpha step of ``dt_s`` (s) (module doc); the drive input and the plate wrench
+        (6,) (N, N m, world, plate centre) are held over the step. Refuses (PressfitError) a step longer than
+        MAX_STEP_FRACTION of the first mode's period or one whose Newton does not converge."""
+        h = float(dt_s)
+        if not (math.isfinite(h) and 0.0 < h <= MAX_STEP_FRACTION * self.first_period_s):
+            bound = MAX_STEP_FRACTION * self.first_period_s
+            raise PressfitError(f"time step {dt_s!r} s is outside (0, {bound:.4g}] s: at most {MAX_STEP_FRACTION:g} "
+                                f"of the first mode's period ({1e3 * self.first_period_s:.4g} ms, "
+                                f"{self.modes.frequencies_hz[0]:.4g} Hz)")
+        wrench = _wrench(plate_wrench)
+        lengths = state.q[self.act_q]
+        stem = state.stem_lengths_m
+        if np.max(np.abs(lengths - self.machine.cylinder.length_m - stem)) > STEM_UPDATE_M:
+            stem = lengths - self.machine.cylinder.length_m
+        self._place(stem)
+        rest, k = self._rest(drive_input)
+        rest_prev, _ = self._rest(state.drive) if state.drive.kind == drive_input.kind else (rest, k)
+        rates = (rest - rest_prev)[self.act] / h if drive_input.kind == "position" else state.v[self.act_v]
+        am, af, g, b = self.alpha_m, self.alpha_f, self.gamma, self.beta
+        ca = (1 - af) / (1 - am)
+        q_n, v_n, acc_n, a_n = state.q, state.v, state.acceleration, state.pseudo_acceleration
+        base_dq = h * v_n + h * h * (0.5 - b) * a_n
+        base_v = v_n + h * (1 - g) * a_n
+        me = self._mass(q_n) if self.damping.alpha_per_s else None
+        v_r = self._rigid_velocity(q_n, rates) if np.any(rates) else np.zeros(self.nv)
+        key = (h, drive_input.kind, self._placed.tobytes())
+        fresh = False
+        if self._factor is None or self._factor_key[:2] != key[:2]:
+            self._refresh(q_n, k, drive_input, rest, h, me)
+            fresh = True
+        tau_ext = self._external(q_n, wrench, drive_input)
+        acc, lam = acc_n.copy(), state.multipliers.copy()
+        nv, last, it = self.nv, np.inf, 0
+        scale = 1.0 / (h * h * b * ca)
+        while True:
+            a_ps = ((1 - af) * acc + af * acc_n - am * a_n) / (1 - am)
+            q = pin.integrate(self.model, q_n, base_dq + h * h * b * a_ps)
+            v = base_v + h * g * a_ps
+            bj, phi = self._jacobian(q)
+            r = np.array(pin.rnea(self.model, self.data, q, v, acc)) + bj.T @ lam - tau_ext
+            f, kt = self._springs(q, rest, k, drive_input)
+            r[self.sv] += f
+            r += self._damping_terms(v, v_r, kt, me)
+            dx = lu_solve(self._factor, -np.concatenate([r, phi]), check_finite=False)
+            size = float(np.max(np.abs(dx[:nv])))
+            acc += scale * dx[:nv]
+            lam += dx[nv:]
+            it += 1
+            if not math.isfinite(size):
+                raise ConvergenceError(f"flexible step at t = {state.time_s + h:.6g} s (Newton diverged)", size,
+                                       NEWTON_TOL, it)
+            if size <= NEWTON_TOL:
+                break
+            if size > REFRESH_RATIO * last and not fresh:
+                self._refresh(q, k, drive_input, rest, h, me)
+                fresh, last = True, np.inf
+                continue
+            if it >= MAX_ITERATIONS and fresh:
+                raise ConvergenceError(f"flexible step at t = {state.time_s + h:.6g} s (Newton, position correction "
+                                       "in m or rad)", size, NEWTON_TOL, it)
+            if it >= 3 * MAX_ITERATIONS:
+                raise ConvergenceError(f"flexible step at t = {state.time_s + h:.6g} s", size, NEWTON_TOL, it)
+            last = size
+        a_ps = ((1 - af) * acc + af * acc_n - am * a_n) / (1 - am)
+        q = pin.integrate(self.model, q_n, base_dq + h * h * b * a_ps)
+        v = base_v + h * g * a_ps
+        return FlexibleState(state.time_s + h, q, v, acc, a_ps, lam, drive_input, self._placed.copy(), it)
+
+    def _damping_terms(self, v: np.ndarray, v_r: np.ndarray, kt: np.ndarray, mass: np.ndarray | None
+                       ) -> np.ndarray:
+        """Rayleigh forces (nv,) on the elastic motion v - v_r (module doc); ``mass`` None when alpha = 0."""
+        d, rel = self.damping, v - v_r
+        out = np.zeros(self.nv)
+        out[self.sv] = d.beta_s * kt * rel[self.sv]
+        if mass is not None:
+            out += d.alpha_per_s * (mass @ rel)
+        return out
+
+    def _rigid_velocity(self, q: np.ndarray, rates: np.ndarray) -> np.ndarray:
+        """Velocity (nv,) of the rigid machine (springs frozen) at q with actuator rates (4,) (m/s)."""
+        b, _ = self._jacobian(q)
+        br = b[:, self.rigid]  # full column rank: with fixed lengths the rigid machine has no mechanism
+        v = np.zeros(self.nv)
+        v[self.act_v] = rates
+        v[self.rigid] = -np.linalg.solve(br.T @ br, br.T @ (b[:, self.act_v] @ rates))
+        return v
+
+    def _refresh(self, q: np.ndarray, k: np.ndarray, drive: DriveInput, rest: np.ndarray, h: float,
+                 me: np.ndarray | None) -> None:
+        """Factor the iteration matrix (module doc) at q."""
+        nv, b, g = self.nv, self.beta, self.gamma
+        ca = (1 - self.alpha_f) / (1 - self.alpha_m)
+        bj, _ = self._jacobian(q)
+        _, kt = self._springs(q, rest, k, drive)
+        s = np.zeros((nv + 24, nv + 24))
+        s[:nv, :nv] = self._mass(q) / (b * ca * h * h)
+        s[self.sv, self.sv] += (1 + g / (b * h) * self.damping.beta_s) * kt
+        if me is not None:
+            s[:nv, :nv] += g / (b * h) * self.damping.alpha_per_s * me
+        s[:nv, nv:], s[nv:, :nv] = bj.T, bj
+        self._factor = lu_factor(s, check_finite=False)
+        self.refreshes += 1
+        self._factor_key = (h, drive.kind, self._placed.tobytes())
+
+    # --- what a designer reads -------------------------------------------------------------------------
+    def plate_pose(self, state: MachineState) -> tuple[np.ndarray, np.ndarray]:
+        return state.q[0:3].copy(), pin.Quaternion(state.q[3:7]).matrix()
+
+    def tool_point_m(self, state: MachineState) -> np.ndarray:
+        """The tool tip: the plate centre (the ``[mass]`` table lumps the tool there), m."""
+        return state.q[0:3].copy()
+
+    def leg_lengths_m(self, state: MachineState) -> np.ndarray:
+        return state.q[self.act_q].copy()
+
+    def leg_rates_m_per_s(self, state: MachineState) -> np.ndarray:
+        return state.v[self.act_v].copy()
+
+    def closure_error(self, state: MachineState) -> tuple[float, float]:
+        self._place(getattr(state, "stem_lengths_m", self._placed))
+        _, phi = self._jacobian(state.q)
+        e = phi.reshape(4, 2, 3)
+        n = np.sqrt((e * e).sum(2)).max(0)
+        return float(n[0]), float(n[1])
+
+    def energy(self, state: FlexibleState) -> Energy:
+        self._place(state.stem_lengths_m)
+        rest, k = self._rest(state.drive)
+        x = state.q[self.sq] - rest
+        e = 0.5 * k * x * x
+        for j, law in self.nonlinear:
+            e[j] = float(law.energy(x[j]))
+        if state.drive.kind == "force":
+            e[self.act] = 0.0
+        kin = float(pin.computeKineticEnergy(self.model, self.data, state.q, state.v))
+        pot = float(pin.computePotentialEnergy(self.model, self.data, state.q))
+        return Energy(kin, float(e.sum()), pot)
+
+    def closure_wrenches(self, state: FlexibleState) -> np.ndarray:
+        """(4, 6) the world wrench (force N, moment about the world origin N m) the plate exerts on each leg's
+        last body through its closure (module doc)."""
+        self._place(state.stem_lengths_m)
+        b, _ = self._jacobian(state.q)
+        gen = -(b.T @ state.multipliers)
+        jac = self.data.J
+        out = np.empty((4, 6))
+        for i, lv in enumerate(self.leg_v):
+            s = np.asarray(jac)[:, lv]
+            out[i] = np.linalg.lstsq(s.T, gen[lv], rcond=None)[0]
+        return out
+
+    def section_loads(self, state: FlexibleState) -> SectionLoads:
+        """Leg section resultants at the three sections (module doc, :mod:`.base`)."""
+        w = self.closure_wrenches(state)
+        fext = pin.StdVec_Force()
+        for _ in range(self.model.njoints):
+            fext.append(pin.Force.Zero())
+        for i, j in enumerate(self.plate_end):
+            fext[j] = self.data.oMi[j].actInv(pin.Force(w[i, :3], w[i, 3:]))
+        pin.rnea(self.model, self.data, state.q, state.v, state.acceleration, fext)
+        out, frames = np.empty((4, 3, 6)), np.empty((4, 3, 3))
+        axes = self.machine.cardan_axes
+        for i in range(4):
+            pts, wr = [], []
+            for sub, j, z in self.sec[i]:
+                o = self.data.oMi[j]
+                pts.append(o.translation + o.rotation[:, 2] * z)
+                f = self.data.oMi[sub].act(self.data.f[sub])
+                wr.append((-np.asarray(f.linear), -np.asarray(f.angular)))
+            ez = pts[2] - pts[0]
+            ez /= np.linalg.norm(ez)
+            ex = axes[i] - (axes[i] @ ez) * ez
+            ex /= np.linalg.norm(ex)
+            fr = np.column_stack([ex, np.cross(ez, ex), ez])
+            frames[i] = fr
+            for s, (p, (f, m)) in enumerate(zip(pts, wr)):
+                mp = m - np.cross(p, f)  # moment about the section point
+                fl, ml = fr.T @ f, fr.T @ mp
+                out[i, s] = [fl[2], fl[0], fl[1], ml[0], ml[1], ml[2]]
+        return SectionLoads(out, frames)
+
+
+def _wrench(plate_wrench: np.ndarray | None) -> np.ndarray:
+    if plate_wrench is None:
+        return np.zeros(6)
+    w = np.asarray(plate_wrench, dtype=float).reshape(-1)
+    if w.shape == (3,):
+        w = np.concatenate([w, np.zeros(3)])
+    if w.shape != (6,) or not np.all(np.isfinite(w)):
+        raise PressfitError(f"plate_wrench must be 3 or 6 finite numbers (F in N, then M in N m), got {plate_wrench!r}")
+    return w
