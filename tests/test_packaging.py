@@ -66,3 +66,15 @@ def test_commands_run_from_an_unrelated_directory(installed, tmp_path):
     check = _run(site, tmp_path, "check", str(case), "--no-progress")
     assert check.returncode == 0, check.stdout + check.stderr
     assert "1 passed, 0 failed" in check.stdout
+
+
+def test_every_source_package_is_listed_for_the_wheel():
+    """pyproject.toml lists the packages explicitly (the shipped data is mapped beside them): a subpackage
+    missing from the list would be absent from a wheel while the editable install still finds it."""
+    import tomllib
+
+    root = Path(__file__).resolve().parents[1]
+    listed = set(tomllib.loads((root / "pyproject.toml").read_text())["tool"]["setuptools"]["packages"])
+    src = root / "src"
+    found = {".".join(p.parent.relative_to(src).parts) for p in src.rglob("__init__.py")}
+    assert found <= listed, f"packages missing from pyproject.toml: {sorted(found - listed)}"
