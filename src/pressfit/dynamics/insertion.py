@@ -355,8 +355,9 @@ def summarise(result: InsertionResult, case: Case, drives: ForceActuators) -> di
     dwell (``release_time_s``: from the end of the dwell until the contact force is zero, None if it never is;
     ``retract_tool_error_m``: the tool's 3D distance from the reference at the end of the retract, where the
     reference comes to rest above the pin), closure drift, actuator saturation time and fraction of the run,
-    peak tensions, the peak |axial force| of each leg, the internal force v_p . N. Every peak carries its time and plate pose (``<stem>_time_s``,
-    ``<stem>_pose_m``; per leg for per-leg peaks). ``warnings``: saturation, an insertion that did not complete."""
+    peak tensions, the peak |axial force| of each leg, the internal force v_p . N. Every peak carries its time
+    and plate pose (``<stem>_time_s``, ``<stem>_pose_m``; per leg for per-leg peaks). ``warnings``: saturation,
+    an insertion that did not complete, a tool never released."""
     sim = case.simulation
     force, depth, t = result.column("contact_force_n"), result.column("depth_m"), result.column("time_s")
     dwell = np.flatnonzero(result.phases == result.phase_names.index("dwell"))
