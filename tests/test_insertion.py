@@ -158,7 +158,8 @@ def test_scenario_tracks_and_keeps_the_loops_closed(runs):
 
 
 def test_simulate_cli_json_files_and_bad_input(tmp_path):
-    path = short_case(tmp_path, move_time_s=0.3, descent_time_s=0.3, dwell_s=0.2, settle_s=0.0)
+    path = short_case(tmp_path, move_time_s=0.3, descent_time_s=0.3, dwell_s=0.2, settle_s=0.0,
+                      baumgarte_rad_per_s=400.0)  # fast moves: 1.7e-5 m of closure drift at 400 rad/s
     args = ["simulate", str(path), "--json", "--no-progress", "--out", str(tmp_path / "o")]
     res = CliRunner().invoke(main, args)
     assert res.exit_code == 0, res.output
