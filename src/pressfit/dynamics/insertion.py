@@ -406,7 +406,7 @@ def summarise(result: InsertionResult, case: Case, drives: ForceActuators) -> di
         "insertion_completed": bool(completed), "insertion_target_force_n": target,
         "insertion_note": why if not completed else "",
         "release_time_s": float(t[release] - t[last]) if release is not None else None,
-        "retract_tool_error_m": float(np.linalg.norm(tool[retract[-1]] - ref[retract[-1]])),
+        "retract_tool_error_m": float(np.linalg.norm(tool[retract[-1]] - ref[retract[-1]])) if retract.size else None,
         "tool_lateral_error_at_insertion_m": lateral, "tool_final_error_m": final,
         "positioning_error_m": max(lateral, final), **where("positioning_error", positioning_row),
         "max_closure_drift_m": float(result.column("closure_drift_m").max()),
