@@ -158,11 +158,12 @@ def test_scenario_tracks_and_keeps_the_loops_closed(runs):
 
 
 def test_simulate_cli_json_files_and_bad_input(tmp_path):
-    path = short_case(tmp_path, move_time_s=0.3, descent_time_s=0.3, dwell_s=0.2, settle_s=0.0)
+    path = short_case(tmp_path, move_time_s=0.3, descent_time_s=0.3, dwell_s=0.2, settle_s=0.0,
+                      baumgarte_rad_per_s=400.0)  # fast moves: 1.7e-5 m of closure drift at 400 rad/s
     args = ["simulate", str(path), "--json", "--no-progress", "--out", str(tmp_path / "o")]
     res = CliRunner().invoke(main, args)
     assert res.exit_code == 0, res.output
-    out = json.loads(res.output)
+    out = json.loads(res.stdout)  # warnings, if any, go to stderr
     assert {"peak_contact_force_n", "overshoot_n", "max_insertion_depth_m", "tool_final_error_m",
             "tool_lateral_error_at_insertion_m", "max_closure_drift_m", "actuator_saturation_time_s",
             "steady_insertion_force_n", "limiter"} <= set(out)
@@ -241,15 +242,17 @@ def test_readme_results_of_the_shipped_scenario(runs):
     assert_printed(s["tool_lateral_error_at_insertion_m"] * 1e6, "10")
     assert_printed(s["tool_final_error_m"] * 1e6, "2")
     assert case.preload.a4_n == 100.0
-    readme_fragment("peak |N| 67-128 N, torsion 7-14 N m, bending 1-3 N m")
+    readme_fragment("peak |N| 67-128 N. Leg\ntorsion and bending are not reported")
+    readme_fragment("the contact releases 0.445 s into the retract and the tool ends the retract 20 um from the")
+    assert_printed(s["release_time_s"], "0.445")
+    assert_printed(s["retract_tool_error_m"] * 1e6, "20")
     for run in (s, f):  # the two runs agree on these
         assert_printed(run["max_closure_drift_m"], "2.4e-6")
         assert_printed(max(run["peak_actuator_tension_n"]), "152")
         assert run["actuator_saturation_time_s"] == 0.0
         for internal in run["internal_force_range_n"]:
             assert_printed(internal, "100.0")
-        for key, low, high in (("peak_leg_axial_force_n", "67", "128"), ("peak_leg_torsion_nm", "7", "14"),
-                               ("peak_leg_bending_nm", "1", "3")):
+        for key, low, high in (("peak_leg_axial_force_n", "67", "128"),):
             assert_printed(min(run[key]), low)
             assert_printed(max(run[key]), high)
 

@@ -64,25 +64,30 @@ def simulate_cmd(case_path: Path, out_dir: Path | None, no_limiter: bool, overwr
     from pressfit.output.simulation import run_simulation
 
     summary, paths = run_simulation(case_path, out_dir, not no_limiter, overwrite, progress)
+    s = summary
+    for warning in dict.fromkeys([*s["warnings"], *s.get("comparison", {}).get("warnings", [])]):
+        click.echo(f"warning: {warning}", err=True)
     if as_json:
         click.echo(to_json(summary))
         return
-    click.echo(f"{summary['case']}: {summary['simulated_time_s']:g} s simulated, limiter "
-               f"{'on' if summary['limiter'] else 'off'} ({summary['force_limit_n']:g} N)")
-    s = summary
-    click.echo(f"peak contact force {s['peak_contact_force_n']:.2f} N (overshoot {s['overshoot_n']:.2f} N), "
-               f"steady {s['steady_insertion_force_n']:.2f} N at {s['steady_insertion_depth_m'] * 1e3:.3f} mm")
+    click.echo(f"{s['case']}: {s['simulated_time_s']:g} s simulated, limiter "
+               f"{'on' if s['limiter'] else 'off'} ({s['force_limit_n']:g} N)")
+    click.echo(f"peak contact force {s['peak_contact_force_n']:.2f} N at t = {s['peak_contact_force_time_s']:.3f} s "
+               f"(overshoot {s['overshoot_n']:.2f} N), steady {s['steady_insertion_force_n']:.2f} N at "
+               f"{s['steady_insertion_depth_m'] * 1e3:.3f} mm; insertion "
+               + ("completed" if s["insertion_completed"] else f"NOT completed ({s['insertion_note']})"))
     click.echo(f"tool error: lateral at insertion {s['tool_lateral_error_at_insertion_m'] * 1e6:.1f} um, "
-               f"final {s['tool_final_error_m'] * 1e6:.1f} um; closure drift {s['max_closure_drift_m']:.1e} m; "
-               f"actuator saturation {s['actuator_saturation_time_s']:g} s")
-    settle = s["settling_time_s"]
+               f"final {s['tool_final_error_m'] * 1e6:.1f} um; closure drift {s['max_closure_drift_m']:.1e} m "
+               f"(tolerance {s['closure_drift_tolerance_m']:g} m); actuator saturation "
+               f"{s['actuator_saturation_time_s']:g} s ({100 * s['actuator_saturation_fraction']:.3g}% of the run)")
+    settle, release = s["settling_time_s"], s["release_time_s"]
     click.echo(f"settling (contact force within {100 * s['settling_band']:g}% of steady): "
-               + ("no contact" if settle is None else f"{settle:.3f} s")
-               + f"; internal force along v_p {s['internal_force_range_n'][0]:.1f} .. "
-               f"{s['internal_force_range_n'][1]:.1f} N (commanded {s['commanded_preload_n']:g} N)")
-    click.echo("peak per leg: axial " + " ".join(f"{x:.1f}" for x in s["peak_leg_axial_force_n"]) + " N, torsion "
-               + " ".join(f"{x:.2f}" for x in s["peak_leg_torsion_nm"]) + " N m, bending "
-               + " ".join(f"{x:.2f}" for x in s["peak_leg_bending_nm"]) + " N m")
+               + ("did not settle" if settle is None else f"{settle:.3f} s")
+               + "; release after the dwell " + ("never" if release is None else f"{release:.3f} s")
+               + f", tool error at the end of the retract {s['retract_tool_error_m'] * 1e6:.1f} um")
+    click.echo(f"internal force along v_p {s['internal_force_range_n'][0]:.1f} .. {s['internal_force_range_n'][1]:.1f}"
+               f" N (commanded {s['commanded_preload_n']:g} N); peak leg axial force "
+               + " ".join(f"{x:.1f}" for x in s["peak_leg_axial_force_n"]) + " N")
     if "comparison" in s:
         c = s["comparison"]
         click.echo(f"without the limiter: peak {c['peak_contact_force_n']:.2f} N, steady "

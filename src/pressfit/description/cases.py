@@ -378,12 +378,17 @@ class Controller(StrictModel):
     estimator_iterations: Annotated[int, Field(ge=1, le=20)] = 2
 
 
+NOT_OBJECTIVE_LIMITS = ("max_torsion_nm", "max_bending_nm")  # refused in [simulation.limits] (SimulationLimits)
+
+
 class SimulationLimits(StrictModel):
     """Limits ``pressfit check`` asserts on the simulated insertion (all optional; SI), one report line each:
     peak contact force and its overshoot over the insertion limit (N), tool positioning error (the larger of
-    the lateral error at the pin and the final 3D error, m), settling time of the contact force (s), peak
-    actuator tension |N| (N), peak per-leg axial force |N|, torsion |T| and bending |M_b| at the plate cardans
-    (N, N m). ``limiter``: whether the checked run uses the insertion force limiter."""
+    the lateral error at the pin and the final 3D error, m), settling time of the contact force (s; a force
+    that does not settle fails), peak actuator tension |N| (N), peak per-leg axial force |N| at the plate
+    cardans (N). ``limiter``: whether the checked run uses the insertion force limiter. Leg torsion and
+    bending are not offered: the rigid-leg model's couples are statically indeterminate (split by minimum
+    norm, which depends on the frames' handedness); the elastic model is to provide objective ones."""
 
     limiter: bool = True
     max_contact_force_n: NonNegative | None = None
@@ -392,8 +397,17 @@ class SimulationLimits(StrictModel):
     max_settling_time_s: NonNegative | None = None
     max_actuator_force_n: NonNegative | None = None
     max_axial_force_n: NonNegative | None = None
-    max_torsion_nm: NonNegative | None = None
-    max_bending_nm: NonNegative | None = None
+
+    @model_validator(mode="before")
+    @classmethod
+    def _not_objective(cls, data: Any) -> Any:
+        bad = [k for k in NOT_OBJECTIVE_LIMITS if isinstance(data, dict) and k in data]
+        if bad:
+            raise ValueError(f"{bad[0]} is not offered for the simulation: the rigid-leg model's leg couples are "
+                             "statically indeterminate (a minimum-norm split that is not mirror-objective); "
+                             "leg torsion and bending limits await the elastic model (check them statically "
+                             "in [envelope])")
+        return data
 
 
 class Simulation(StrictModel):
@@ -416,7 +430,11 @@ class Simulation(StrictModel):
     dwell_s: Positive = 1.0
     settle_s: NonNegative = 0.5
     time_step_s: Annotated[float, Field(gt=0, le=2e-3, allow_inf_nan=False)] = 5e-4
-    baumgarte_rad_per_s: Positive = 200.0
+    # Baumgarte rate omega_b of the loop closures: at least 10 rad/s (a drift correction time 1/omega_b of at
+    # most 0.1 s, the scale of the scenario's motions; slower lets the closures open, 0.48 mm at 1e-9 rad/s),
+    # at most 1e4 rad/s (the explicit corrector needs omega_b dt < 0.83, checked against time_step_s before a
+    # run: dt <= 45 us at the cap). The run also refuses a closure drift over its tolerance (dynamics.insertion).
+    baumgarte_rad_per_s: Annotated[float, Field(ge=10.0, le=1e4, allow_inf_nan=False)] = 200.0
     clearance: bool = False
     contact: Contact
     controller: Controller = Controller()

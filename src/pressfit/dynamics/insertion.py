@@ -9,10 +9,21 @@ measure the actuator lengths and rates and the contact force of the last step ->
 W -> tensions N_cmd = -A^+ W + a4 v_p -> first-order saturated drives -> joint forces (-N_i on the prismatic
 joints, the contact force on the plate) -> one semi-implicit Euler step -> contact at the new position.
 The contact force acts on the plate centre (the tool tip), +y.
+
+Before a run (:func:`plan_scenario`) the case is refused (one line naming the key) when: a segment spans fewer
+than ``MIN_SEGMENT_STEPS`` steps; the run would take more than ``MAX_STEPS`` steps; start, end, the approach
+waypoint above the pin or the bottom of the descent is unreachable, or any point of the planned path (sampled
+every ``PATH_SAMPLE_M``; the minimum-jerk reference moves on straight segments) breaks a joint limit (closed-form
+inverse kinematics); start or end is not above the board face (the contact is the infinite plane y = h_b);
+the preload alone saturates a drive (|a4| max |v_p| over the path > the drives' limit); the explicit step is
+unstable for the position loop or the closures' Baumgarte corrector (:func:`step_stability`). During the run it
+stops with one line naming the time and the likely keys when the state is not finite, the plate leaves the
+reachable set, or the loop-closure drift exceeds ``MAX_CLOSURE_DRIFT_M``.
 """
 
 from __future__ import annotations
 
+import math
 from collections.abc import Callable
 from dataclasses import dataclass, field
 from typing import Any
@@ -21,13 +32,14 @@ import numpy as np
 import pinocchio as pin
 from tqdm import tqdm
 
+from pressfit import kinematics
 from pressfit.description.cases import Case, Simulation
 from pressfit.description.machine import Machine
 from pressfit.dynamics.actuators import ForceActuators
 from pressfit.dynamics.contact import ContactState, contact_force_n, solve_contact
 from pressfit.dynamics.control import ForceLimitedController, PoseCache, Trajectory
-from pressfit.dynamics.multibody import rigid_leg_model
-from pressfit.errors import PressfitError
+from pressfit.dynamics.multibody import RigidLegModel, rigid_leg_model
+from pressfit.errors import ModelFileError, PressfitError, UnreachablePoseError, format_violation
 from pressfit.mechanics.clearance import clearance_from_case, load_deflection
 from pressfit.mechanics.condensed import condensed_plate_compliance
 
@@ -35,9 +47,18 @@ LEGS = ("1", "2", "3", "4")
 SERIES_COLUMNS = ("time_s", "ref_x_m", "ref_y_m", "ref_z_m", "est_x_m", "est_y_m", "est_z_m", "plate_x_m",
                   "plate_y_m", "plate_z_m", "tool_x_m", "tool_y_m", "tool_z_m", "contact_force_n", "depth_m",
                   *(f"cmd_n{i}" for i in LEGS), *(f"act_n{i}" for i in LEGS), "reference_lift_m", "closure_drift_m",
-                  *(f"axial_n{i}" for i in LEGS), *(f"torsion_nm{i}" for i in LEGS), *(f"bending_nm{i}" for i in LEGS),
-                  "internal_force_n")
+                  *(f"axial_n{i}" for i in LEGS), "internal_force_n")
 SETTLING_BAND = 0.02  # settling: the contact force within 2% of its value at the end of the dwell
+SETTLING_HOLD = 0.25  # ... and inside that band over at least the last quarter of the dwell, else "did not settle"
+COMPLETION_FRACTION = 0.9  # pressed: the settled force reaches 90% of the target force (summarise)
+MAX_STEPS = 1_000_000  # refused above: ~15 min per run at ~0.8 ms per step, a 250 MB series
+WARN_STEPS = 100_000  # warned above: more than a minute or two per run
+MIN_SEGMENT_STEPS = 10  # every segment of the reference spans at least this many steps
+PATH_SAMPLE_M = 5e-4  # spacing of the planned-path samples checked against the joint limits, m
+MAX_CLOSURE_DRIFT_M = 2e-5  # the run stops when the loop closures open more than this (m; module docstring)
+STABILITY_FRACTION = 0.5  # the explicit step is refused beyond this fraction of the stability limit
+_CHUNK_ROWS = 4096  # the series grows by this many rows at a time
+_REACH_CHECK_STEPS = 10  # the plate's joint limits are checked every this many steps (and at the last)
 COMPLIANCE_UPDATE_M = 1e-4  # the plate compliance is recomputed when the rigid pose moved more than this, m
 _CURVE_POINTS = 41  # load steps of the clearance load-deflection curve
 
@@ -47,9 +68,9 @@ class InsertionResult:
     """A simulated insertion (SI). ``series`` (n, len(SERIES_COLUMNS)) holds one row per time step:
     reference, estimated and rigid plate positions, tool tip (rigid + series deflection), contact force
     (+y on the tool) and interference, commanded and delivered actuator tensions, reference lift, closure
-    drift, the legs' axial force, torsion and bending at the plate cardan
-    (:meth:`pressfit.dynamics.multibody.RigidLegModel.leg_loads`) and the internal force along v_p,
-    v_p . N (N) of the delivered tensions. ``summary`` is the JSON-ready digest (:func:`summarise`)."""
+    drift, the legs' axial force at the plate cardan (:meth:`pressfit.dynamics.multibody.RigidLegModel.leg_loads`;
+    its torsion and bending are left out: the rigid model's couples are not objective) and the internal force
+    along v_p, v_p . N (N) of the delivered tensions. ``summary`` is the JSON-ready digest (:func:`summarise`)."""
 
     limiter: bool
     series: np.ndarray
@@ -74,98 +95,328 @@ def _deflection(machine: Machine, case: Case, sim: Simulation, pin_pose: np.ndar
     return lambda pose: lambda force: np.array([np.interp(force, loads, disp[:, k]) for k in range(3)])
 
 
-def simulate_insertion(case: Case, limiter: bool = True, progress: bool = False) -> InsertionResult:
-    """Run the case's ``[simulation]`` scenario, with or without the force limiter (module docstring)."""
+@dataclass(frozen=True)
+class ScenarioPlan:
+    """A validated scenario (:func:`plan_scenario`): its reference, the number of steps, the planned path
+    samples (n, 3), m, and the warnings to show before the run."""
+
+    trajectory: Trajectory
+    steps: int
+    path_m: np.ndarray
+    warnings: tuple[str, ...]
+    rigid: RigidLegModel
+
+
+def _refuse(case: Case, key: str, expected: str) -> ModelFileError:
+    return ModelFileError(case.path, key, expected)
+
+
+def _path(trajectory: Trajectory) -> tuple[np.ndarray, np.ndarray]:
+    """Points of the planned path every ``PATH_SAMPLE_M`` along each straight segment (n, 3), m, and the index of
+    the segment of each point (the minimum-jerk reference moves on the segment between its waypoints)."""
+    points, segments = [], []
+    for k in range(len(trajectory.durations_s)):
+        a, b = trajectory.waypoints_m[k], trajectory.waypoints_m[k + 1]
+        n = max(2, int(np.ceil(np.linalg.norm(b - a) / PATH_SAMPLE_M)) + 1)
+        points.append(a + np.linspace(0.0, 1.0, n)[:, None] * (b - a))
+        segments.append(np.full(n, k))
+    return np.concatenate(points), np.concatenate(segments)
+
+
+# the key that places each segment of the planned path (Trajectory.insertion's phases)
+_SEGMENT_KEYS = ("[simulation] start_m", "[simulation] interference_m", "[simulation] interference_m",
+                 "[simulation] interference_m", "[simulation] end_m", "[simulation] end_m")
+
+
+def apparent_mass_kg(rigid: RigidLegModel, pose_m: np.ndarray) -> float:
+    """The plate's smallest apparent translational mass (kg) at a pose: 1 / the largest eigenvalue of the
+    acceleration per unit plate force (constraint dynamics at rest, three unit forces, gravity's share removed)."""
+    q, v = rigid.configuration_at(pose_m), np.zeros(rigid.model.nv)
+    tau = np.zeros(rigid.model.nv)
+    saved = rigid.data, rigid.constraint_datas  # scratch datas: the run's solver state stays untouched
+    rigid.data, rigid.constraint_datas = rigid.model.createData(), pin.StdVec_RigidConstraintData()
+    for cm in rigid.constraint_models:
+        rigid.constraint_datas.append(cm.createData())
+    pin.initConstraintDynamics(rigid.model, rigid.data, rigid.constraint_models, rigid.constraint_datas)
+    try:
+        rest = rigid.accelerations(q, v, tau)[:3]
+        inverse = np.empty((3, 3))
+        for j in range(3):
+            tau[:] = 0.0
+            tau[j] = 1.0  # N on the unrotated plate: world axes
+            inverse[:, j] = rigid.accelerations(q, v, tau)[:3] - rest
+    finally:
+        rigid.data, rigid.constraint_datas = saved
+    return float(1.0 / np.linalg.eigvalsh(0.5 * (inverse + inverse.T)).max())
+
+
+def step_stability(mass_kg: float, stiffness_n_per_m: float, damping_n_s_per_m: float, dt_s: float) -> float:
+    r"""Stability index of the semi-implicit Euler step for m x'' = -k x - c x' (derived: with a = k dt^2 / m,
+    b = c dt / m the step's characteristic polynomial is z^2 - (2 - a - b) z + (1 - b), whose roots lie in the
+    unit circle iff a > 0, 0 < b < 2 and a + 2 b < 4): returns (a + 2 b) / 4, stable below 1."""
+    return (stiffness_n_per_m * dt_s**2 / mass_kg + 2.0 * damping_n_s_per_m * dt_s / mass_kg) / 4.0
+
+
+def plan_scenario(case: Case, machine: Machine | None = None, preload_key: str = "[preload] a4_n") -> ScenarioPlan:
+    """Validate the case's ``[simulation]`` before a run (module docstring; ModelFileError naming the key, the
+    file and the limit) and return its plan. ``preload_key`` names where the preload came from."""
     sim = case.simulation
     if sim is None:
         raise PressfitError(f"{case.path}: the case has no [simulation] table")
     if case.preload.mode != "force":
         raise PressfitError(f"{case.path}: [preload] mode must be \"force\" (a4_n, N) for the force-controlled "
                             f"drives of the simulation, got \"{case.preload.mode}\"")
-    machine = case.machine()
+    machine = machine or case.machine()
+    dt, board = sim.time_step_s, sim.contact.board_height_m
+    for key in ("move_time_s", "descent_time_s", "dwell_s", "settle_s"):
+        value = getattr(sim, key)
+        if (value > 0 or key != "settle_s") and value < MIN_SEGMENT_STEPS * dt * (1 - 1e-9):
+            raise _refuse(case, f"[simulation] {key}", f"at least {MIN_SEGMENT_STEPS} time steps "
+                          f"({MIN_SEGMENT_STEPS * dt:g} s at time_step_s = {dt:g} s){' or 0' * (key == 'settle_s')}, "
+                          f"got {value:g} s")
     trajectory = Trajectory.insertion(sim)
+    steps = int(np.ceil(trajectory.duration_s / dt))
+    if steps > MAX_STEPS:
+        raise _refuse(case, "[simulation] time_step_s", f"a run of at most {MAX_STEPS} steps: time_step_s = {dt:g} s "
+                      f"over the {trajectory.duration_s:g} s of move_time_s, descent_time_s, dwell_s and settle_s "
+                      f"makes {steps} steps (use a larger time step or shorter segments)")
+    for key, pose in (("start_m", sim.start_m), ("end_m", sim.end_m)):
+        if not pose[1] > board:
+            raise _refuse(case, f"[simulation] {key}", f"a pose above the board face (the contact is the plane y = "
+                          f"[simulation.contact] board_height_m = {board:g} m), got y = {pose[1]:g} m")
+    names = {1: ("[simulation] approach_height_m", "the approach waypoint above the pin"),
+             2: ("[simulation] interference_m", "the bottom of the descent")}
+    for k, pose in enumerate(trajectory.waypoints_m[:3]):
+        key, what = names.get(k, ("[simulation] start_m", "the start pose"))
+        _require_reachable(case, machine, pose, key, what)
+    _require_reachable(case, machine, np.asarray(sim.end_m, float), "[simulation] end_m", "the end pose")
+    path, segment = _path(trajectory)
+    ok = kinematics.is_reachable(machine, path)
+    if not ok.all():
+        first = int(np.flatnonzero(~ok)[0])
+        _require_reachable(case, machine, path[first], _SEGMENT_KEYS[segment[first]],
+                           f"the planned path ({trajectory.phases[segment[first]]} segment)")
+    free = np.isin(segment, [0, 4, 5])  # approach, move, settle: out of contact by design
+    if np.any(path[free, 1] <= board):
+        raise _refuse(case, "[simulation] start_m", "a planned approach and move above the board face")
+    warnings = []
+    drives = ForceActuators.of(machine)
+    a4 = case.preload.a4_n
+    vp = float(np.abs(kinematics.preload_vector(machine, path)).max())
+    if abs(a4) * vp > drives.force_limit_n:
+        raise _refuse(case, preload_key, f"|a4| max|v_p| at most the drives' [actuator] force_limit_n = "
+                      f"{drives.force_limit_n:g} N: a4 = {a4:g} N with max|v_p| = {vp:.4g} over the planned path "
+                      f"commands {abs(a4) * vp:.4g} N from the preload alone")
     rigid = rigid_leg_model(machine, np.asarray(sim.start_m, float), sim.baumgarte_rad_per_s)
+    _check_steps(case, rigid, trajectory)
+    if steps > WARN_STEPS:
+        warnings.append(f"{steps} time steps (time_step_s = {dt:g} s over {trajectory.duration_s:g} s): expect about "
+                        f"{steps * 8e-4 / 60:.0f} min per run")
+    return ScenarioPlan(trajectory, steps, path, tuple(warnings), rigid)
+
+
+def _require_reachable(case: Case, machine: Machine, pose: np.ndarray, key: str, what: str) -> None:
+    try:
+        kinematics.require_reachable(machine, pose)
+    except UnreachablePoseError as exc:
+        reasons = "; ".join(format_violation(*v) for v in exc.violations)
+        raise _refuse(case, key, f"{what} within the joint limits: pose ({', '.join(f'{c:.6g}' for c in pose)}) m "
+                      f"breaks {reasons}") from None
+
+
+def _check_steps(case: Case, rigid: RigidLegModel, trajectory: Trajectory) -> None:
+    """The explicit step against the position loop (PD gains plus the contact's stiffness and damping on the
+    plate's lightest apparent mass at the waypoints) and the Baumgarte corrector (m = 1, k = omega_b^2,
+    c = 2 omega_b): refused beyond ``STABILITY_FRACTION`` of the stability limit (:func:`step_stability`),
+    the margin left for the drives' lag and the sampled estimator the index does not see."""
+    sim = case.simulation
+    dt, g, c = sim.time_step_s, sim.controller, sim.contact
+    omega = sim.baumgarte_rad_per_s
+    if step_stability(1.0, omega**2, 2.0 * omega, dt) > STABILITY_FRACTION:
+        bound = math.sqrt(4 + 4 * STABILITY_FRACTION) - 2  # (omega dt)^2 + 4 omega dt = 4 STABILITY_FRACTION
+        raise _refuse(case, "[simulation] baumgarte_rad_per_s", f"omega_b dt at most {bound:.3g} (the explicit "
+                      f"corrector is stable below 2 sqrt(2) - 2 = 0.83), got {omega:g} rad/s x time_step_s "
+                      f"{dt:g} s = {omega * dt:.3g}")
+    mass = min(apparent_mass_kg(rigid, p) for p in trajectory.waypoints_m[[0, 1, 5]])
+    fit = (c.fit_stiffness_n_per_m if c.fit == "linear" else c.fit_force_n / c.fit_depth_m) if c.law == "press_fit" \
+        else 0.0
+    stiffness, damping = g.kp_n_per_m + c.stiffness_n_per_m + fit, g.kd_n_s_per_m + c.damping_n_s_per_m
+    index = step_stability(mass, stiffness, damping, dt)
+    if index > STABILITY_FRACTION:
+        raise _refuse(case, "[simulation] time_step_s", f"a step the position loop is stable with: (k dt^2 / m + "
+                      f"2 c dt / m) / 4 = {index:.3g} > {STABILITY_FRACTION:g} (semi-implicit Euler is stable below 1) "
+                      f"with k = kp_n_per_m + the contact stiffness = {stiffness:.4g} N/m, c = kd_n_s_per_m + the "
+                      f"contact damping = {damping:.4g} N s/m, m = {mass:.4g} kg the plate's lightest apparent mass, "
+                      f"dt = {dt:g} s: reduce time_step_s or the [simulation.controller] gains")
+
+
+def _diverged(case: Case, t: float, what: str) -> PressfitError:
+    return PressfitError(f"{case.path}: the simulation diverged at t = {t:.4g} s ({what}); the planned path is "
+                         "reachable, so the likely keys are [simulation] time_step_s, the [simulation.controller] "
+                         "gains (kp_n_per_m, kd_n_s_per_m, ki_n_per_m_s, backoff_m_per_s_n) or [simulation] "
+                         "baumgarte_rad_per_s")
+
+
+def simulate_insertion(case: Case, limiter: bool = True, progress: bool = False) -> InsertionResult:
+    """Run the case's ``[simulation]`` scenario, with or without the force limiter (module docstring)."""
+    machine = case.machine()
+    plan = plan_scenario(case, machine)
+    sim, trajectory, steps, rigid = case.simulation, plan.trajectory, plan.steps, plan.rigid
     deflection = _deflection(machine, case, sim, trajectory.waypoints_m[2])
     drives = ForceActuators.of(machine)
     ctrl = ForceLimitedController(machine, rigid, sim.controller, limiter, np.asarray(sim.start_m, float).copy())
     q, v, dt, a4 = rigid.reference_q.copy(), np.zeros(rigid.model.nv), sim.time_step_s, case.preload.a4_n
-    steps = int(np.ceil(trajectory.duration_s / dt))
     force = ctrl.command(q[rigid.actuator_q], v[rigid.actuator_v], trajectory.at(0.0), 0.0, 0.0)
     tension = -ctrl.pinv @ force + a4 * ctrl.null
     contact = ContactState(0.0, sim.contact.board_height_m - q[1], np.zeros(3))
-    rows, phases = np.empty((steps, len(SERIES_COLUMNS))), np.empty(steps, dtype=int)
+    chunks, phases = [np.empty((min(steps, _CHUNK_ROWS), len(SERIES_COLUMNS)))], np.empty(steps, dtype=int)
     tau = np.zeros(rigid.model.nv)
     for k in tqdm(range(steps), desc="simulate", unit="step", disable=not progress, mininterval=0.5):
         t = (k + 1) * dt
         reference = trajectory.at(t)
-        force = ctrl.command(q[rigid.actuator_q], v[rigid.actuator_v], reference, contact.force_n, dt)
-        command = -ctrl.pinv @ force + a4 * ctrl.null  # equation 5 at the estimate, plus the preload
-        tension = drives.step(tension, command, dt)
-        tau[rigid.actuator_v] = -tension
-        tau[0:3] = pin.Quaternion(q[3:7]).matrix().T @ np.array([0.0, contact.force_n, 0.0])  # local frame
-        q, v = rigid.step(q, v, tau, dt)
-        loads = rigid.leg_loads()  # at the start of the step, where the accelerations were computed
-        pose = q[0:3].copy()
-        depth = sim.contact.board_height_m - pose[1]
-        contact = (solve_contact(sim.contact, pose, deflection(pose), contact.depth_m, dt) if depth > 0.0
-                   else ContactState(0.0, depth, np.zeros(3)))
-        rows[k] = (t, *reference[0] + [0.0, ctrl.lift_m, 0.0], *ctrl.estimate_m, *pose,
-                   *(pose + contact.deflection_m), contact.force_n, contact.depth_m, *command, *tension, ctrl.lift_m,
-                   rigid.closure_error_m(), *loads.T.ravel(), ctrl.null @ tension)
+        try:
+            force = ctrl.command(q[rigid.actuator_q], v[rigid.actuator_v], reference, contact.force_n, dt)
+            command = -ctrl.pinv @ force + a4 * ctrl.null  # equation 5 at the estimate, plus the preload
+            tension = drives.step(tension, command, dt)
+            tau[rigid.actuator_v] = -tension
+            tau[0:3] = pin.Quaternion(q[3:7]).matrix().T @ np.array([0.0, contact.force_n, 0.0])  # local frame
+            q, v = rigid.step(q, v, tau, dt)
+            if not (np.all(np.isfinite(q)) and np.all(np.isfinite(v))):
+                raise _diverged(case, t, "the state is not finite")
+            drift = rigid.closure_error_m()
+            if drift > MAX_CLOSURE_DRIFT_M:
+                raise PressfitError(f"{case.path}: the loop closures drifted open by {drift:.3g} m at t = {t:.4g} s, "
+                                    f"over the tolerance of {MAX_CLOSURE_DRIFT_M:g} m (the tool position is only as "
+                                    f"good as the closures): raise [simulation] baumgarte_rad_per_s (now "
+                                    f"{sim.baumgarte_rad_per_s:g} rad/s) or reduce time_step_s; if the motion itself "
+                                    "diverged, the [simulation.controller] gains")
+            axial = rigid.axial_forces_n()  # at the start of the step, where the accelerations were computed
+            pose = q[0:3].copy()
+            bad = [] if k % _REACH_CHECK_STEPS and k != steps - 1 else kinematics.violations(machine, pose) \
+                if pose[1] > 0 else [(0, "y_h [m]", pose[1], "minimum 0")]
+            if bad:
+                raise _diverged(case, t, f"the plate left the reachable set at ({', '.join(f'{c:.4g}' for c in pose)})"
+                                f" m: {format_violation(*bad[0])}")
+            depth = sim.contact.board_height_m - pose[1]
+            contact = (solve_contact(sim.contact, pose, deflection(pose), contact.depth_m, dt) if depth > 0.0
+                       else ContactState(0.0, depth, np.zeros(3)))
+        except UnreachablePoseError as exc:  # the estimate (feed-forward, compliance) left the workspace
+            raise _diverged(case, t, f"the pose estimate left the reachable set: {exc}") from None
+        if k // _CHUNK_ROWS == len(chunks):
+            chunks.append(np.empty((min(steps - k, _CHUNK_ROWS), len(SERIES_COLUMNS))))
+        chunks[-1][k % _CHUNK_ROWS] = (t, *reference[0] + [0.0, ctrl.lift_m, 0.0], *ctrl.estimate_m, *pose,
+                                       *(pose + contact.deflection_m), contact.force_n, contact.depth_m, *command,
+                                       *tension, ctrl.lift_m, drift, *axial, ctrl.null @ tension)
         phases[k] = trajectory.segment(t - 1e-12)
-        if not np.all(np.isfinite(q)):
-            raise PressfitError(f"{case.path}: the simulation diverged at t = {t:.4g} s (reduce time_step_s)")
+    rows = np.concatenate(chunks)
     result = InsertionResult(limiter, rows, phases, trajectory.phases)
-    return InsertionResult(limiter, rows, phases, trajectory.phases, summarise(result, case, drives))
+    summary = summarise(result, case, drives)
+    summary["warnings"] = [*plan.warnings, *summary["warnings"]]
+    return InsertionResult(limiter, rows, phases, trajectory.phases, summary)
 
 
-def settling_time_s(time_s: np.ndarray, force_n: np.ndarray, end: int) -> float | None:
-    """Time (s) from the first contact (force > 0) until the contact force enters, and stays in until sample
-    ``end`` (the end of the dwell), the band of +-``SETTLING_BAND`` around its value there; None if the tool
-    never touches the board before ``end``."""
+def settling_time_s(time_s: np.ndarray, force_n: np.ndarray, dwell: np.ndarray) -> tuple[float | None, int | None, str]:
+    """The contact force's settling over the dwell (rows ``dwell``): the time (s) from the first contact
+    (force > 0) until it enters, and stays in up to the end of the dwell, the band of +-``SETTLING_BAND`` around
+    its value there; the row where it entered; and "" -- or (None, None, the reason) if it did not settle: no
+    contact at the end of the dwell, or the force outside the band within the last ``SETTLING_HOLD`` of the dwell
+    (a limit cycle, a contact lost and regained)."""
+    end = int(dwell[-1])
+    final = float(force_n[end])
+    if not final > 0.0:
+        return None, None, "no contact at the end of the dwell"
     touching = np.flatnonzero(force_n[:end + 1] > 0.0)
-    if not touching.size:
-        return None
-    outside = np.flatnonzero(np.abs(force_n[:end + 1] - force_n[end]) > SETTLING_BAND * abs(force_n[end]))
-    settled = outside[-1] + 1 if outside.size else touching[0]
-    return float(time_s[max(settled, touching[0])] - time_s[touching[0]])
+    outside = np.flatnonzero(np.abs(force_n[:end + 1] - final) > SETTLING_BAND * final)
+    settled = max(int(outside[-1]) + 1 if outside.size else 0, int(touching[0]))
+    hold = int(dwell[0]) + int(np.floor((1.0 - SETTLING_HOLD) * (dwell.size - 1)))
+    if settled > hold:
+        window = force_n[hold:end + 1]
+        return None, None, (f"the contact force did not settle: {window.min():.4g} .. {window.max():.4g} N over the "
+                            f"last {100 * SETTLING_HOLD:g}% of the dwell, outside +-{100 * SETTLING_BAND:g}% of "
+                            f"{final:.4g} N")
+    return float(time_s[settled] - time_s[touching[0]]), settled, ""
 
 
 def _columns(result: InsertionResult, prefix: str) -> np.ndarray:
     return result.series[:, [SERIES_COLUMNS.index(f"{prefix}{i}") for i in LEGS]]
 
 
+def _xyz(result: InsertionResult, prefix: str) -> np.ndarray:
+    return result.series[:, [SERIES_COLUMNS.index(f"{prefix}_{a}_m") for a in "xyz"]]
+
+
 def summarise(result: InsertionResult, case: Case, drives: ForceActuators) -> dict[str, Any]:
     """Peak contact force and overshoot over the limit, insertion depth, the steady insertion force at the
-    end of the dwell against the contact law at the depth reached, its settling time (:func:`settling_time_s`),
-    tool positioning errors (lateral against the pin at the end of the dwell, 3D against ``end_m`` at the end;
-    ``positioning_error_m`` is the larger), closure drift, actuator saturation time and peak tensions, the
-    peak |axial force|, |torsion| and bending of each leg over the run, the internal force v_p . N."""
+    end of the dwell against the contact law at the depth reached, its settling time (:func:`settling_time_s`;
+    None if it did not settle), whether the insertion completed (the force settled in contact at the end of the
+    dwell at ``COMPLETION_FRACTION`` of the target force or more: the contact law at the commanded interference,
+    or the force limit if lower with the limiter), tool positioning errors (lateral against the pin at the end of
+    the dwell, 3D against ``end_m`` at the end; ``positioning_error_m`` is the larger), what happens after the
+    dwell (``release_time_s``: from the end of the dwell until the contact force is zero, None if it never is;
+    ``retract_tool_error_m``: the tool's 3D distance from the reference at the end of the retract, where the
+    reference comes to rest above the pin), closure drift, actuator saturation time and fraction of the run,
+    peak tensions, the peak |axial force| of each leg, the internal force v_p . N. Every peak carries its time
+    and plate pose (``<stem>_time_s``, ``<stem>_pose_m``; per leg for per-leg peaks). ``warnings``: saturation,
+    an insertion that did not complete, a tool never released."""
     sim = case.simulation
     force, depth, t = result.column("contact_force_n"), result.column("depth_m"), result.column("time_s")
-    last = np.flatnonzero(result.phases == result.phase_names.index("dwell"))[-1]
-    tool = result.series[:, [SERIES_COLUMNS.index(c) for c in ("tool_x_m", "tool_y_m", "tool_z_m")]]
+    dwell = np.flatnonzero(result.phases == result.phase_names.index("dwell"))
+    last = int(dwell[-1])
+    tool, plate, ref = _xyz(result, "tool"), _xyz(result, "plate"), _xyz(result, "ref")
     lateral = float(np.linalg.norm(tool[last, [0, 2]] - np.array(sim.contact.pin_position_m)))
     final = float(np.linalg.norm(tool[-1] - sim.end_m))
     internal, limit = result.column("internal_force_n"), sim.controller.force_limit_n
+    settling, settled_row, why = settling_time_s(t, force, dwell)
+    target = contact_force_n(sim.contact, sim.interference_m)
+    target = min(target, limit) if result.limiter else target
+    completed = settling is not None and force[last] >= COMPLETION_FRACTION * target
+    if settling is not None and not completed:
+        why = (f"the steady contact force {force[last]:.4g} N is below {100 * COMPLETION_FRACTION:g}% of the target "
+               f"{target:.4g} N")
+    released = np.flatnonzero(force[last + 1:] <= 0.0)
+    release = int(released[0]) + last + 1 if released.size else None
+    retract = np.flatnonzero(result.phases == result.phase_names.index("retract"))
+    saturated = drives.saturated(_columns(result, "cmd_n")).any(axis=1)
+    peak = int(np.argmax(force))
+    tensions, axial = np.abs(_columns(result, "act_n")), np.abs(_columns(result, "axial_n"))
+    warnings = []
+    if saturated.any():
+        warnings.append(f"the drives saturated (a command beyond [actuator] force_limit_n = {drives.force_limit_n:g} N)"
+                        f" for {saturated.sum() * sim.time_step_s:g} s, {100 * saturated.mean():.3g}% of the run")
+    if not completed:
+        warnings.append(f"the insertion did not complete (the pin is not pressed): {why}")
+    if release is None:
+        warnings.append("the contact force never returned to zero after the dwell (the tool was not released)")
+
+    def where(stem: str, rows: Any) -> dict[str, Any]:
+        return {f"{stem}_time_s": t[rows], f"{stem}_pose_m": plate[rows]}
+
+    positioning_row = last if lateral >= final else len(t) - 1
     return {
         "case": case.name, "limiter": result.limiter, "force_limit_n": limit,
         "simulated_time_s": float(t[-1]), "time_step_s": sim.time_step_s,
-        "peak_contact_force_n": float(force.max()), "overshoot_n": float(max(force.max() - limit, 0.0)),
+        "peak_contact_force_n": float(force.max()), **where("peak_contact_force", peak),
+        "overshoot_n": float(max(force.max() - limit, 0.0)), **where("overshoot", peak),
         "max_insertion_depth_m": float(depth.max()), "steady_insertion_force_n": float(force[last]),
         "steady_insertion_depth_m": float(depth[last]),
         "contact_law_at_steady_depth_n": contact_force_n(sim.contact, float(depth[last])),
-        "settling_time_s": settling_time_s(t, force, last), "settling_band": SETTLING_BAND,
+        "settling_time_s": settling, "settling_band": SETTLING_BAND,
+        **(where("settled", settled_row) if settled_row is not None else {"settled_time_s": None,
+                                                                          "settled_pose_m": None}),
+        "insertion_completed": bool(completed), "insertion_target_force_n": target,
+        "insertion_note": why if not completed else "",
+        "release_time_s": float(t[release] - t[last]) if release is not None else None,
+        "retract_tool_error_m": float(np.linalg.norm(tool[retract[-1]] - ref[retract[-1]])) if retract.size else None,
         "tool_lateral_error_at_insertion_m": lateral, "tool_final_error_m": final,
-        "positioning_error_m": max(lateral, final),
+        "positioning_error_m": max(lateral, final), **where("positioning_error", positioning_row),
         "max_closure_drift_m": float(result.column("closure_drift_m").max()),
-        "actuator_saturation_time_s": float(drives.saturated(_columns(result, "cmd_n")).any(axis=1).sum()
-                                            * sim.time_step_s),
-        "peak_actuator_tension_n": np.abs(_columns(result, "act_n")).max(axis=0),
+        "closure_drift_tolerance_m": MAX_CLOSURE_DRIFT_M,
+        "actuator_saturation_time_s": float(saturated.sum() * sim.time_step_s),
+        "actuator_saturation_fraction": float(saturated.mean()),
+        "peak_actuator_tension_n": tensions.max(axis=0), **where("peak_actuator_tension", tensions.argmax(axis=0)),
         "actuator_force_limit_n": drives.force_limit_n, "actuator_bandwidth_hz": drives.bandwidth_hz,
-        "peak_leg_axial_force_n": np.abs(_columns(result, "axial_n")).max(axis=0),
-        "peak_leg_torsion_nm": np.abs(_columns(result, "torsion_nm")).max(axis=0),
-        "peak_leg_bending_nm": _columns(result, "bending_nm").max(axis=0),
+        "peak_leg_axial_force_n": axial.max(axis=0), **where("peak_leg_axial_force", axial.argmax(axis=0)),
         "commanded_preload_n": case.preload.a4_n,
         "internal_force_range_n": [float(internal.min()), float(internal.max())],
+        "warnings": warnings,
     }

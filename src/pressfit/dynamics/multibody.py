@@ -129,6 +129,16 @@ class RigidLegModel:
         bent = world[:, 1] - axial[:, 1:] * axes
         return np.column_stack([axial, np.sqrt(np.einsum("li,li->l", bent, bent))])
 
+    def axial_forces_n(self) -> np.ndarray:
+        """(4,): the axial force N (N, > 0 tension) of each leg at its plate cardan from the closure forces of the
+        last :meth:`accelerations` call (the first column of :meth:`leg_loads`, without the couples' split: the
+        self-stress is made of couples and leaves the forces alone)."""
+        lam = np.asarray(self.data.lambda_c).reshape(4, 2, 3)[:, 0]
+        placements = [self.data.oMi[j] for j in self.end_joints]
+        world = np.einsum("lij,lj->li", np.array([m.rotation for m in placements]), lam)
+        axes = np.array([m.translation for m in placements]) - self.machine.base_points_m
+        return np.einsum("li,li->l", world, axes) / np.sqrt(np.einsum("li,li->l", axes, axes))
+
     def energy_j(self, q: np.ndarray, v: np.ndarray) -> tuple[float, float]:
         """Kinetic and gravitational potential energy (J) at (q, v)."""
         return (float(pin.computeKineticEnergy(self.model, self.data, q, v)),

@@ -16,12 +16,11 @@ from pressfit.studies.insertion_study import COLUMNS, InsertionStudy, insertion_
 
 
 def simulation_figure(result: InsertionResult, comparison: InsertionResult | None = None) -> plt.Figure:
-    """Five panels against time: plate positions (reference dashed, tool solid), the contact force with the
+    """Four panels against time: plate positions (reference dashed, tool solid), the contact force with the
     limit (and ``comparison``'s, the run with the limiter the other way, on the same axes), actuator
-    tensions (commanded dashed, delivered solid), leg axial forces, leg torsion (solid) and bending (dashed)
-    at the plate cardans."""
+    tensions (commanded dashed, delivered solid), leg axial forces at the plate cardans."""
     t = result.column("time_s")
-    fig, axes = plt.subplots(5, 1, figsize=(10, 15), sharex=True, layout="constrained")
+    fig, axes = plt.subplots(4, 1, figsize=(10, 12), sharex=True, layout="constrained")
     for axis, colour in zip("xyz", ("tab:blue", "tab:orange", "tab:green"), strict=True):
         axes[0].plot(t, result.column(f"ref_{axis}_m"), "--", color=colour, lw=1, label=f"{axis} reference")
         axes[0].plot(t, result.column(f"tool_{axis}_m"), color=colour, lw=1.5, label=f"{axis} tool")
@@ -36,13 +35,10 @@ def simulation_figure(result: InsertionResult, comparison: InsertionResult | Non
         line, = axes[2].plot(t, result.column(f"act_n{i}"), lw=1.5, label=f"leg {i}")
         axes[2].plot(t, result.column(f"cmd_n{i}"), "--", lw=0.8, color=line.get_color())
         axes[3].plot(t, result.column(f"axial_n{i}"), lw=1.5, color=line.get_color(), label=f"leg {i}")
-        axes[4].plot(t, result.column(f"torsion_nm{i}"), lw=1.5, color=line.get_color(), label=f"leg {i} torsion")
-        axes[4].plot(t, result.column(f"bending_nm{i}"), "--", lw=1, color=line.get_color())
     limiter = "on" if result.limiter else "off"
     axes[2].set(ylabel="tension [N]", title=f"actuator forces, limiter {limiter} (dashed: commanded)")
-    axes[3].set(ylabel="axial force [N]", title=f"leg axial force at the plate cardan (> 0 tension), limiter {limiter}")
-    axes[4].set(xlabel="time [s]", ylabel="moment [N m]",
-                title=f"leg torsion (solid) and bending |M_b| (dashed) at the plate cardan, limiter {limiter}")
+    axes[3].set(xlabel="time [s]", ylabel="axial force [N]",
+                title=f"leg axial force at the plate cardan (> 0 tension), limiter {limiter}")
     for ax in axes:
         ax.grid(alpha=0.3)
         ax.legend(fontsize=8, ncols=3)
@@ -69,7 +65,7 @@ def _summary(result: InsertionResult, comparison: InsertionResult | None) -> dic
     if comparison is None:
         return result.summary
     keys = ("limiter", "peak_contact_force_n", "overshoot_n", "steady_insertion_force_n", "steady_insertion_depth_m",
-            "positioning_error_m", "settling_time_s")
+            "positioning_error_m", "settling_time_s", "insertion_completed", "release_time_s", "warnings")
     return {**result.summary, "comparison": {k: comparison.summary[k] for k in keys}}
 
 

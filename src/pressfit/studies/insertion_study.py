@@ -26,7 +26,7 @@ import numpy as np
 from tqdm import tqdm
 
 from pressfit.description.cases import Case, ClearanceSpec, Preload
-from pressfit.dynamics.insertion import SERIES_COLUMNS, InsertionResult, simulate_insertion
+from pressfit.dynamics.insertion import SERIES_COLUMNS, InsertionResult, plan_scenario, simulate_insertion
 from pressfit.errors import PressfitError
 from pressfit.mechanics.clearance import clearance_from_case, critical_preload
 
@@ -75,6 +75,8 @@ def insertion_study(case: Case, preloads_n: list[float], clearances_m: list[floa
     pose = np.array([*case.simulation.contact.pin_position_m[:1], case.simulation.contact.board_height_m
                      - case.simulation.interference_m, case.simulation.contact.pin_position_m[1]])
     grid = [(p, g) for g in [0.0, *clearances_m] for p in preloads_n]
+    for p in preloads_n:  # refused up front (a preload that saturates the drives, ...), not as a failed run
+        plan_scenario(_variant(case, p, 0.0), machine, preload_key=f"the study's preload {p:g} N ([preload] a4_n)")
     results = {}
     for p, g in tqdm(grid, desc="insertion study", unit="run", disable=not progress):
         variant = _variant(case, p, g)

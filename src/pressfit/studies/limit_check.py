@@ -431,16 +431,17 @@ def _interference(machine: object, poses: np.ndarray, progress: bool) -> np.ndar
 
 
 # --- simulation limits ---------------------------------------------------------------------------------------
-SIMULATION_LIMITS: dict[str, tuple[Limit, str]] = {  # [simulation.limits] key -> (line, summary key)
-    "max_contact_force_n": (Limit("peak contact force", "N", "max"), "peak_contact_force_n"),
-    "max_overshoot_n": (Limit("contact force overshoot over the insertion limit", "N", "max"), "overshoot_n"),
-    "max_positioning_error_m": (Limit("tool positioning error", "m", "max"), "positioning_error_m"),
-    "max_settling_time_s": (Limit("settling time of the contact force", "s", "max"), "settling_time_s"),
-    "max_actuator_force_n": (Limit("peak actuator tension |N|", "N", "max"), "peak_actuator_tension_n"),
+SIMULATION_LIMITS: dict[str, tuple[Limit, str, str]] = {  # [simulation.limits] key -> (line, summary key, where)
+    "max_contact_force_n": (Limit("peak contact force", "N", "max"), "peak_contact_force_n", "peak_contact_force"),
+    "max_overshoot_n": (Limit("contact force overshoot over the insertion limit", "N", "max"), "overshoot_n",
+                        "overshoot"),
+    "max_positioning_error_m": (Limit("tool positioning error", "m", "max"), "positioning_error_m",
+                                "positioning_error"),
+    "max_settling_time_s": (Limit("settling time of the contact force", "s", "max"), "settling_time_s", "settled"),
+    "max_actuator_force_n": (Limit("peak actuator tension |N|", "N", "max"), "peak_actuator_tension_n",
+                             "peak_actuator_tension"),
     "max_axial_force_n": (Limit("peak leg axial force |N| at the plate cardan", "N", "max"),
-                          "peak_leg_axial_force_n"),
-    "max_torsion_nm": (Limit("peak leg torsion |T| at the plate cardan", "N m", "max"), "peak_leg_torsion_nm"),
-    "max_bending_nm": (Limit("peak leg bending |M_b| at the plate cardan", "N m", "max"), "peak_leg_bending_nm"),
+                          "peak_leg_axial_force_n", "peak_leg_axial_force"),
 }
 
 
@@ -465,18 +466,25 @@ def evaluate_simulation(case: Case, progress: bool = False) -> list[LimitResult]
 def simulation_lines(wanted: dict[str, float], summary: dict[str, Any], pin_xz_m: list[float],
                      board_height_m: float) -> list[LimitResult]:
     """One line per simulation limit from a run's summary (:func:`pressfit.dynamics.insertion.summarise`):
-    per-leg peaks report their worst leg; a settling time of a run that never touches the board fails
-    (reported as infinite). The pose of every line is the pin on the board face."""
+    per-leg peaks report their worst leg; each line's pose is the plate pose at the time of its peak (the
+    summary's ``<where>_pose_m``; the method names the time), the pin on the board face where the summary has
+    none; a settling time of a force that did not settle fails (reported as infinite, with the reason)."""
     pin_pose = np.array([pin_xz_m[0], board_height_m, pin_xz_m[1]])
     how = "insertion simulation, limiter " + ("on" if summary["limiter"] else "off")
     lines = []
     for key, limit in wanted.items():
-        spec, name = SIMULATION_LIMITS[key]
+        spec, name, where = SIMULATION_LIMITS[key]
         value, leg, method = summary[name], None, how
+        time, pose = summary.get(f"{where}_time_s"), summary.get(f"{where}_pose_m")
         if value is None:
-            value, method = float("inf"), how + ": the tool never touched the board"
+            value, time, pose = float("inf"), None, None
+            method = how + ": " + (summary.get("insertion_note") or "the contact force did not settle")
         elif np.ndim(value):
             leg = int(np.argmax(value)) + 1
             value = float(np.max(value))
-        lines.append(_line(f"simulation.{key}", spec, limit, value, leg, pin_pose, None, method))
+            time, pose = np.asarray(time)[leg - 1], np.asarray(pose)[leg - 1]
+        if time is not None:
+            method += f", at t = {float(time):.4g} s"
+        lines.append(_line(f"simulation.{key}", spec, limit, value, leg, pin_pose if pose is None else
+                           np.asarray(pose, float), None, method))
     return lines
