@@ -296,8 +296,8 @@ def _insertion_section(page: _Page, c: ReportContent) -> None:
     page.figure(fig)
     keys = ("peak_contact_force_n", "overshoot_n", "steady_insertion_force_n", "steady_insertion_depth_m",
             "positioning_error_m", "settling_time_s")
-    records = [{"quantity": k, "with_limiter": c.insertion[0].summary[k], "without_limiter": c.insertion[1].summary[k]}
-               for k in keys]
+    shown = [{k: "did not settle" if run.summary[k] is None else run.summary[k] for k in keys} for run in c.insertion]
+    records = [{"quantity": k, "with_limiter": shown[0][k], "without_limiter": shown[1][k]} for k in keys]
     page.add(_table("insertion", [("quantity", "quantity (SI)"), ("with_limiter", "with the limiter"),
                                   ("without_limiter", "without")], records))
     page.add(_links("insertion/simulation.json", "insertion/simulation.csv"))

@@ -156,7 +156,8 @@ def _insertion_section(machine: Machine, out: Path, overwrite: bool, quick: bool
             "compliance in series with an elastic pin-board contact; with and without the force limiter "
             "(`pressfit simulate`).", "",
             _md_table(["quantity", "with the limiter", "without"],
-                      [[k, runs[0].summary[k], runs[1].summary[k]] for k in keys]), "",
+                      [[k, *("did not settle" if r.summary[k] is None else r.summary[k] for r in runs)]
+                       for k in keys]), "",
             "![insertion](insertion/simulation.png)", ""]
 
 
