@@ -164,7 +164,7 @@ class ElectricDrive(StrictModel):
     speed_limit_rad_per_s: Positive
     current_loop_bandwidth_hz: Positive | None = None
     current_loop_kp_v_per_a: Positive | None = None
-    current_loop_ki_v_per_a_s: NonNegative | None = None
+    current_loop_ki_v_per_a_s: Positive | None = None
     winding_inductance_h: Positive | None = None
     winding_resistance_ohm: Positive | None = None
 
