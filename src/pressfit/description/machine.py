@@ -283,7 +283,7 @@ class Actuator(StrictModel):
         elif kind in ("electric", "hydraulic"):
             given = sorted(set(_FORCE_KEYS) & set(data))
             if given:
-                raise ValueError(f"{given[0]} belongs to kind = \"force\"; a {kind} drive's stiffness, bandwidth "
+                raise ValueError(f"{given[0]} belongs to kind = \"force\"; the {kind} drive's stiffness, bandwidth "
                                  f"and force limit follow from [actuator.{kind}]")
             if kind not in data:
                 raise ValueError(f"kind = \"{kind}\" needs the table [actuator.{kind}]")
