@@ -11,6 +11,7 @@ import numpy as np
 import pinocchio as pin
 import pytest
 from click.testing import CliRunner
+from readme import assert_printed, readme_fragment
 
 from pressfit.cli import main
 from pressfit.description.cases import load_case
@@ -434,3 +435,15 @@ def test_shipped_insertion_cases_load_and_check(kind):
 def test_modes_command_on_a_drive_machine(path):
     result = CliRunner().invoke(main, ["modes", "0", "0.72", "0", "--model", str(path), "--json"])
     assert result.exit_code == 0, result.output
+
+
+def test_readme_drive_numbers(electric, hydraulic):
+    """The README's drive paragraph, computed (closed forms above; the bandwidths from the drives' loops)."""
+    readme_fragment("(15.5 kg reflected per leg, 1000 N, a 1 kHz current loop)")
+    assert_printed(electric.drive_reflected_mass_kg, "15.5")
+    assert_printed(electric.actuator.drive_force_limit_n, "1000")
+    assert_printed(drives.of(electric).bandwidth_hz / 1e3, "1")
+    readme_fragment("(3.45e6 N/m at mid-stroke, 1188 N, a 53 Hz force loop)")
+    assert_printed(float(hydraulic.drive_stiffness_n_per_m(0.75)), "3.45e6")
+    assert_printed(hydraulic.actuator.drive_force_limit_n, "1188")
+    assert_printed(_closed_form_crossing(_pressure_loop_magnitude(hydraulic, 0.75)), "53")
