@@ -232,7 +232,7 @@ def test_electric_force_loop_minus_3db(electric, ki_factor):
         assert expected == pytest.approx(el.current_loop_kp_v_per_a / (2 * math.pi * el.winding_inductance_h),
                                          rel=1e-3)
     measured, _ = _crossing(lambda f: _sine_gain(drive, f, 100.0, 0.75), 0.7 * expected, 1.4 * expected)
-    assert measured == pytest.approx(expected, rel=2e-3)  # the 9-point interpolation: ~5e-4 achieved
+    assert measured == pytest.approx(expected, rel=1e-4)  # 1.4e-5 achieved (the 9-point interpolation)
     assert drive.bandwidth_hz == pytest.approx(expected, rel=1e-9)
 
 
@@ -301,7 +301,7 @@ def test_oil_column_natural_frequency_against_free_oscillation(hydraulic):
     flips = np.flatnonzero(signs[1:] != signs[:-1])
     t = np.array(times)[flips]
     measured = (len(t) - 1) / (2 * (t[-1] - t[0]))
-    assert measured == pytest.approx(expected, rel=1e-3)  # ~3e-4 achieved: the crossing quantised at dt
+    assert measured == pytest.approx(expected, rel=5e-4)  # 1.3e-4 achieved: crossings quantised at dt, 10 periods
     assert expected == pytest.approx(190.0, abs=0.1)  # Hz: 4.27e6 N/m at l = 0.62 m against 3 kg
 
 
@@ -327,7 +327,7 @@ def test_hydraulic_force_loop_minus_3db(hydraulic):
     drive = drives.of(hydraulic)
     measured, _ = _crossing(lambda f: _sine_gain(drive, f, 2.0, 0.75, periods=10, per_period=40),
                             0.7 * expected, 1.4 * expected)
-    assert measured == pytest.approx(expected, rel=5e-3)
+    assert measured == pytest.approx(expected, rel=5e-3)  # 1.2e-3 achieved: the 2 N sine is not quite linear
     assert drive.bandwidth_hz == pytest.approx(expected, rel=1e-9)
 
 
@@ -358,7 +358,8 @@ def test_hydraulic_refuses_leaving_the_stroke(hydraulic):
 
 
 def test_hydraulic_step_converges_at_one_millisecond(hydraulic):
-    """The 1 ms caller step (10 implicit substeps) against the same run at 1 us: force within 1% of its swing."""
+    """The 1 ms caller step (10 implicit substeps) against the same run at 10 us (one substep each), 30 ms of a
+    command step while the leg extends at 50 mm/s."""
     drive = drives.of(hydraulic)
     command, lengths, rates = np.full(1, 600.0), np.full(1, 0.7), np.full(1, 0.05)
     coarse = drive.initial_state(np.zeros(1), lengths)
@@ -367,7 +368,7 @@ def test_hydraulic_step_converges_at_one_millisecond(hydraulic):
         coarse, f_coarse = drive.step(coarse, command, lengths + rates * k * 1e-3, rates, 1e-3)
     for k in range(30 * 100):
         fine, f_fine = drive.step(fine, command, lengths + rates * k * 1e-5, rates, 1e-5)
-    assert abs(f_coarse[0] - f_fine[0]) < 0.01 * 600.0
+    assert abs(f_coarse[0] - f_fine[0]) < 2e-5 * 600.0  # 4.3e-6 achieved
 
 
 # --- schema ----------------------------------------------------------------------------------------------------
