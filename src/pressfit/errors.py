@@ -66,3 +66,12 @@ class OutputError(PressfitError):
 
 class UnstableEquilibriumError(PressfitError):
     """The solution found is not a physical, stable state (a leg beyond buckling, a huge displacement)."""
+
+
+class DriveStepError(PressfitError):
+    """A drive cannot integrate a step (:mod:`pressfit.dynamics.drives`); carries the drive kind, the leg
+    (1-4), the quantity, its value and the limit it breaks (SI)."""
+
+    def __init__(self, kind: str, leg: int, quantity: str, value: float, limit: str) -> None:
+        self.kind, self.leg, self.quantity, self.value, self.limit = kind, leg, quantity, value, limit
+        super().__init__(f"{kind} drive of leg {leg}: {quantity} = {value:.6g} breaks {limit}")

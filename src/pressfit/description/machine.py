@@ -16,6 +16,7 @@ from typing import Annotated, Any, Literal
 import numpy as np
 from pydantic import BaseModel, ConfigDict, Field, ValidationError, field_validator, model_validator
 
+from pressfit.description import drive_stiffness
 from pressfit.errors import ModelFileError
 from pressfit.shipped import default_model
 
@@ -138,14 +139,168 @@ class Stem(StrictModel):
     diameter_m: Positive
 
 
-class Actuator(StrictModel):
-    """The linear actuators: axial stiffness (N/m) and, for the insertion simulation, the force-controlled
-    drive's first-order force bandwidth (Hz; paper section 4.2: 40 Hz, feasible for servo-hydraulics) and its
-    force saturation (N, magnitude; an estimate, see the machine file)."""
+class ElectricDrive(StrictModel):
+    """``[actuator.electric]``: servo motor + ball screw (docs/drives.md). The screw's root diameter gives its
+    section (stiffness E A / L_free, and its inertia when ``screw_length_m`` is given instead of
+    ``screw_inertia_kg_m2``); the free length between the fixed bearing and the nut is either constant
+    (``screw_free_length_m``) or ``screw_free_length_at_min_leg_m`` at ``limits.leg_length_min_m``, growing one
+    for one with the leg length. The current loop is given by its closed-loop bandwidth
+    (``current_loop_bandwidth_hz``: a first-order loop) or by its PI gains on the winding
+    (``current_loop_kp_v_per_a``, ``current_loop_ki_v_per_a_s``, ``winding_inductance_h``,
+    ``winding_resistance_ohm``)."""
 
-    axial_stiffness_n_per_m: Positive
-    force_bandwidth_hz: Positive = 40.0
-    force_limit_n: Positive = 1000.0
+    lead_m: Positive
+    screw_diameter_m: Positive
+    screw_free_length_m: Positive | None = None
+    screw_free_length_at_min_leg_m: Positive | None = None
+    nut_stiffness_n_per_m: Positive
+    bearing_stiffness_n_per_m: Positive
+    rotor_inertia_kg_m2: Positive
+    screw_inertia_kg_m2: Positive | None = None
+    screw_length_m: Positive | None = None
+    screw_efficiency: Annotated[float, Field(gt=0, le=1, allow_inf_nan=False)] = 0.9
+    torque_constant_nm_per_a: Positive
+    current_limit_a: Positive
+    speed_limit_rad_per_s: Positive
+    current_loop_bandwidth_hz: Positive | None = None
+    current_loop_kp_v_per_a: Positive | None = None
+    current_loop_ki_v_per_a_s: Positive | None = None
+    winding_inductance_h: Positive | None = None
+    winding_resistance_ohm: Positive | None = None
+
+    @model_validator(mode="after")
+    def _one_of_each(self) -> ElectricDrive:
+        _exactly_one(self, "screw_free_length_m", "screw_free_length_at_min_leg_m")
+        _exactly_one(self, "screw_inertia_kg_m2", "screw_length_m")
+        gains = ("current_loop_kp_v_per_a", "current_loop_ki_v_per_a_s", "winding_inductance_h",
+                 "winding_resistance_ohm")
+        given = [getattr(self, k) is not None for k in gains]
+        if self.current_loop_bandwidth_hz is not None and any(given[:3]):
+            raise ValueError("give the current loop either as current_loop_bandwidth_hz or as its gains "
+                             f"({', '.join(gains)}), not both")
+        if self.current_loop_bandwidth_hz is None and not all(given):
+            raise ValueError("give current_loop_bandwidth_hz or all of " + ", ".join(gains))
+        return self
+
+    @property
+    def force_per_current_n_per_a(self) -> float:
+        """Axial force per motor current, 2 pi eta K_t / lead, N/A."""
+        return 2.0 * math.pi * self.screw_efficiency * self.torque_constant_nm_per_a / self.lead_m
+
+    @property
+    def force_limit_n(self) -> float:
+        """Largest axial force, 2 pi eta K_t i_max / lead, N."""
+        return self.force_per_current_n_per_a * self.current_limit_a
+
+
+class HydraulicDrive(StrictModel):
+    """``[actuator.hydraulic]``: symmetric double-acting cylinder with a servo valve (docs/drives.md). The
+    annulus area is ``piston_area_m2`` or follows from ``bore_diameter_m`` and ``rod_diameter_m`` (a rod on
+    both sides). The working leg travel sits centred in the stroke: piston position
+    x = l - l_min + (s - (l_max - l_min)) / 2 from the base-side end. Chamber a's pressure pulls the leg
+    shorter (tension), chamber b's pushes it longer. Valve: Q = K_v x_v sqrt(dp), spool x_v in [-1, 1]
+    with a first-order response; pressure loop x_v,cmd = g (dp_cmd - dp), dp = p_a - p_b."""
+
+    piston_area_m2: Positive | None = None
+    bore_diameter_m: Positive | None = None
+    rod_diameter_m: Positive | None = None
+    stroke_m: Positive
+    dead_volume_a_m3: Positive
+    dead_volume_b_m3: Positive
+    bulk_modulus_pa: Positive
+    supply_pressure_pa: Positive
+    tank_pressure_pa: NonNegative = 0.0
+    valve_flow_gain_m3_per_s_sqrt_pa: Positive
+    valve_bandwidth_hz: Positive
+    leakage_m3_per_s_pa: NonNegative = 0.0
+    pressure_loop_gain_per_pa: Positive
+
+    @model_validator(mode="after")
+    def _area(self) -> HydraulicDrive:
+        if self.piston_area_m2 is not None and (self.bore_diameter_m, self.rod_diameter_m) != (None, None):
+            raise ValueError("give piston_area_m2 or bore_diameter_m and rod_diameter_m, not both")
+        if self.piston_area_m2 is None:
+            if self.bore_diameter_m is None or self.rod_diameter_m is None:
+                raise ValueError("give piston_area_m2 or both bore_diameter_m and rod_diameter_m")
+            if self.rod_diameter_m >= self.bore_diameter_m:
+                raise ValueError("rod_diameter_m must be smaller than bore_diameter_m")
+        if self.tank_pressure_pa >= self.supply_pressure_pa:
+            raise ValueError("tank_pressure_pa must be below supply_pressure_pa")
+        return self
+
+    @property
+    def area_m2(self) -> float:
+        """Effective piston area A (annulus pi (D^2 - d^2) / 4 for a symmetric cylinder), m^2."""
+        if self.piston_area_m2 is not None:
+            return self.piston_area_m2
+        return math.pi / 4.0 * (self.bore_diameter_m**2 - self.rod_diameter_m**2)
+
+    @property
+    def force_limit_n(self) -> float:
+        """Largest axial force A (p_s - p_t), N (one chamber at supply, the other at tank)."""
+        return self.area_m2 * (self.supply_pressure_pa - self.tank_pressure_pa)
+
+
+def _exactly_one(table: BaseModel, a: str, b: str) -> None:
+    if (getattr(table, a) is None) == (getattr(table, b) is None):
+        raise ValueError(f"give exactly one of {a} and {b}")
+
+
+_FORCE_KEYS = {"axial_stiffness_n_per_m": None, "force_bandwidth_hz": 40.0, "force_limit_n": 1000.0}
+
+
+class Actuator(StrictModel):
+    """The linear actuators. ``kind`` (default "force") selects the drive model (docs/drives.md):
+
+    * "force": an ideal first-order force source: axial stiffness (N/m, required), the force bandwidth (Hz;
+      paper section 4.2: 40 Hz, feasible for servo-hydraulics) and its force saturation (N, magnitude; an
+      estimate, see the machine file);
+    * "electric": servo motor + ball screw, the table ``[actuator.electric]`` (:class:`ElectricDrive`);
+    * "hydraulic": servo valve + symmetric cylinder, the table ``[actuator.hydraulic]`` (:class:`HydraulicDrive`).
+
+    An electric or hydraulic drive's stiffness, bandwidth and force limit follow from its table, so the force
+    kind's three keys are refused with it (one key means one thing)."""
+
+    kind: Literal["force", "electric", "hydraulic"] = "force"
+    axial_stiffness_n_per_m: Positive | None = None
+    force_bandwidth_hz: Positive | None = None
+    force_limit_n: Positive | None = None
+    electric: ElectricDrive | None = None
+    hydraulic: HydraulicDrive | None = None
+
+    @model_validator(mode="before")
+    @classmethod
+    def _kind_keys(cls, data: Any) -> Any:
+        if not isinstance(data, dict):
+            return data
+        data = {k: v for k, v in data.items() if v is not None}  # a dumped model lists absent keys as None
+        kind = data.get("kind", "force")
+        if kind == "force":
+            for key, default in _FORCE_KEYS.items():
+                if default is None and key not in data:
+                    raise ValueError(f"{key} is required for kind = \"force\"")
+                data.setdefault(key, default)
+        elif kind in ("electric", "hydraulic"):
+            given = sorted(set(_FORCE_KEYS) & set(data))
+            if given:
+                raise ValueError(f"{given[0]} belongs to kind = \"force\"; the {kind} drive's stiffness, bandwidth "
+                                 f"and force limit follow from [actuator.{kind}]")
+            if kind not in data:
+                raise ValueError(f"kind = \"{kind}\" needs the table [actuator.{kind}]")
+        for table in ("electric", "hydraulic"):
+            if table in data and table != kind:
+                raise ValueError(f"[actuator.{table}] is given but kind = \"{kind}\"")
+        return data
+
+    @property
+    def drive_force_limit_n(self) -> float:
+        """The largest axial force the drive delivers (magnitude), N: ``force_limit_n`` for the force kind,
+        2 pi eta K_t i_max / lead for the electric, A (p_s - p_t) for the hydraulic drive."""
+        if self.kind == "electric":
+            return self.electric.force_limit_n
+        if self.kind == "hydraulic":
+            return self.hydraulic.force_limit_n
+        return self.force_limit_n
 
 
 class Joints(StrictModel):
@@ -312,6 +467,10 @@ class Machine(StrictModel):
     def _cylinder_shorter_than_legs(self) -> Machine:
         if self.cylinder.length_m >= self.limits.leg_length_min_m:
             raise ValueError("cylinder.length_m must be shorter than limits.leg_length_min_m")
+        travel = self.limits.leg_length_max_m - self.limits.leg_length_min_m
+        if self.actuator.kind == "hydraulic" and self.actuator.hydraulic.stroke_m < travel:
+            raise ValueError(f"actuator.hydraulic.stroke_m must be at least the leg travel leg_length_max_m - "
+                             f"leg_length_min_m = {travel:g} m (got {self.actuator.hydraulic.stroke_m!r})")
         return self
 
     # --- derived geometry (arrays, SI) -------------------------------------------------------
@@ -380,11 +539,59 @@ class Machine(StrictModel):
         return Section(area_m2=math.pi / 4 * d**2, second_moment_m4=i, polar_moment_m4=2 * i)
 
     def axial_compliance_m_per_n(self, leg_length_m: np.ndarray | float) -> np.ndarray:
-        """Series axial compliance of a leg of length l: actuator + cylinder + stem, m/N."""
+        """Series axial compliance of a leg of length l: actuator (:meth:`drive_stiffness_n_per_m`) + cylinder
+        + stem, m/N."""
         e = self.material.youngs_modulus_pa
         lc = self.cylinder.length_m
-        return (1.0 / self.actuator.axial_stiffness_n_per_m + lc / (e * self.cylinder_section.area_m2)
+        drive = (1.0 / self.actuator.axial_stiffness_n_per_m if self.actuator.kind == "force"
+                 else 1.0 / self.drive_stiffness_n_per_m(leg_length_m))
+        return (drive + lc / (e * self.cylinder_section.area_m2)
                 + (np.asarray(leg_length_m) - lc) / (e * self.stem_section.area_m2))
+
+    def drive_stiffness_n_per_m(self, leg_length_m: np.ndarray | float) -> np.ndarray:
+        """The drive's own axial stiffness at leg length l (m), N/m (:mod:`pressfit.description.drive_stiffness`):
+        ``axial_stiffness_n_per_m`` (force kind), the ball screw E A / L_free(l) in series with nut and bearing
+        (electric), the oil column beta A^2 (1/V_a + 1/V_b) at the piston position of l (hydraulic)."""
+        a, length = self.actuator, np.asarray(leg_length_m, dtype=float)
+        if a.kind == "electric":
+            el = a.electric
+            free = (np.full_like(length, el.screw_free_length_m) if el.screw_free_length_m is not None
+                    else el.screw_free_length_at_min_leg_m + (length - self.limits.leg_length_min_m))
+            return drive_stiffness.screw_axial_stiffness_n_per_m(
+                self.material.youngs_modulus_pa, el.screw_diameter_m, free, el.nut_stiffness_n_per_m,
+                el.bearing_stiffness_n_per_m)
+        if a.kind == "hydraulic":
+            hy = a.hydraulic
+            v_a, v_b = drive_stiffness.chamber_volumes_m3(hy.area_m2, hy.stroke_m, self.piston_position_m(length),
+                                                          hy.dead_volume_a_m3, hy.dead_volume_b_m3)
+            return drive_stiffness.oil_column_stiffness_n_per_m(hy.bulk_modulus_pa, hy.area_m2, v_a, v_b)
+        return np.full_like(length, a.axial_stiffness_n_per_m)
+
+    def piston_position_m(self, leg_length_m: np.ndarray | float) -> np.ndarray:
+        """Hydraulic piston position x (m from the base-side end of the stroke) at leg length l: the leg travel
+        centred in the stroke, x = l - l_min + (s - (l_max - l_min)) / 2."""
+        lim, stroke = self.limits, self.actuator.hydraulic.stroke_m
+        margin = (stroke - (lim.leg_length_max_m - lim.leg_length_min_m)) / 2.0
+        return np.asarray(leg_length_m, dtype=float) - lim.leg_length_min_m + margin
+
+    @cached_property
+    def screw_inertia_kg_m2(self) -> float:
+        """The ball screw's inertia about its axis, kg m^2: ``screw_inertia_kg_m2`` or a solid steel bar of the
+        root diameter d and ``screw_length_m`` L, rho pi d^4 L / 32 (rho = ``mass.density_kg_per_m3``)."""
+        el = self.actuator.electric
+        if el.screw_inertia_kg_m2 is not None:
+            return el.screw_inertia_kg_m2
+        return self.mass.density_kg_per_m3 * math.pi * el.screw_diameter_m**4 * el.screw_length_m / 32.0
+
+    @cached_property
+    def drive_reflected_mass_kg(self) -> float:
+        """Rotating inertia reflected along the leg, kg: (J_rotor + J_screw) (2 pi / lead)^2 for an electric
+        drive (its kinetic energy J omega^2 / 2 with omega = 2 pi l_dot / lead), 0 otherwise (a hydraulic
+        drive's piston and rod are translating masses: ``mass.actuator_moving_mass_kg``)."""
+        if self.actuator.kind != "electric":
+            return 0.0
+        el = self.actuator.electric
+        return (el.rotor_inertia_kg_m2 + self.screw_inertia_kg_m2) * (2.0 * math.pi / el.lead_m) ** 2
 
     @cached_property
     def cylinder_tube_mass_kg(self) -> float:

@@ -63,7 +63,11 @@ class ForceActuators:
 
     @classmethod
     def of(cls, machine: Machine) -> ForceActuators:
-        """The machine's drives (``[actuator] force_bandwidth_hz``, ``force_limit_n``)."""
+        """The machine's drives (``[actuator] force_bandwidth_hz``, ``force_limit_n``); an electric or hydraulic
+        drive is refused here (its model is :mod:`pressfit.dynamics.drives`, ``drives.of(machine)``)."""
+        if machine.actuator.kind != "force":
+            raise PressfitError(f"{machine.source or machine.name}: key 'actuator.kind': the first-order force drive "
+                                f"needs kind = \"force\", got \"{machine.actuator.kind}\" (see drives.of)")
         return cls(machine.actuator.force_bandwidth_hz, machine.actuator.force_limit_n)
 
     @property

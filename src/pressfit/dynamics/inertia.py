@@ -13,7 +13,13 @@ body of the VJM chain carries the piece of tube it spans between the virtual spr
   two revolutes) and half on the body after the cardan (every body then has rotational inertia about its
   joint axes, which keeps the mass matrix of the rigid-leg model positive definite);
 * the plate (a uniform box 2 r x t x 2 r, t = ``collision.plate_thickness_m``) plus the tool as a point mass
-  at the plate centre, on the plate joint.
+  at the plate centre, on the plate joint;
+* an electric drive's rotor and screw, J (2 pi / lead)^2 along the leg
+  (:attr:`pressfit.description.machine.Machine.drive_reflected_mass_kg`), as the armature of the prismatic
+  joint (``model.armature`` at its velocity index: ``crba`` and the constraint dynamics add it to the
+  diagonal of the mass matrix), scaled like the other masses. It is the rotor's kinetic energy
+  J omega^2 / 2 with omega = 2 pi l_dot / lead relative to the housing; the housing's own rotation about the
+  leg axis adds a gyroscopic coupling of order J omega Omega that is left out.
 
 A piece of length L and mass m is a thick-walled tube about its own centre: axial inertia m (r_o^2 + r_i^2) / 2,
 transverse m ((r_o^2 + r_i^2) / 4 + L^2 / 12) (kg m^2). Inertias are body-fixed, so they are computed once
@@ -91,6 +97,8 @@ def inertial_model(mm: MachineModel, mass_scale: float = 1.0) -> pin.Model:
     box = m_plate / 12 * np.diag([side**2 + t**2, 2 * side**2, side**2 + t**2])
     _add(model, data.oMi[plate], plate, m_plate, mm.pose_m, box)
     _add(model, data.oMi[plate], plate, mass_scale * mass.tool_mass_kg, mm.pose_m, np.zeros((3, 3)))
+    for ids in mm.leg_joint_ids:
+        model.armature[model.joints[ids["actuator"]].idx_v] += mass_scale * machine.drive_reflected_mass_kg
     return model
 
 

@@ -1,0 +1,76 @@
+r"""The drive interface: what the insertion loop (or any simulation) asks of an actuator drive.
+
+A drive turns a commanded leg tension N_cmd (N, > 0 tension, the project's convention: leg i pulls the plate
+with -N_i e_i) into a delivered tension, given the leg's length l (m) and rate l_dot (m/s) from the multibody
+model, both held over the step. All arrays have the legs' shape (normally (4,), any shape broadcasts). A drive
+object holds only constants (and per-step-size caches); its state is a separate frozen value, so one drive
+serves several runs.
+
+* ``initial_state(force_n, lengths_m)``: a state at rest delivering ``force_n``;
+* ``step(state, command_n, lengths_m, rates_m_per_s, dt_s) -> (state, force_n)``: advance by dt, return the
+  new state and the tension delivered at its end (what goes on the prismatic joints, -N);
+* ``force_limit_n``: the largest tension magnitude it can deliver; ``saturated(command_n)``: where a command
+  exceeds it;
+* ``measures``: the quantities its own sensors give (names of the state's fields and of the leg length);
+* ``axial_stiffness_n_per_m(lengths_m)``: its axial stiffness in the statics (the same function as
+  :meth:`pressfit.description.machine.Machine.drive_stiffness_n_per_m`);
+* ``reflected_mass_kg``: rotating inertia reflected along the leg, which the multibody model carries as the
+  prismatic joint's armature (:mod:`pressfit.dynamics.inertia`); the delivered force is therefore the drive's
+  force before that inertia, never minus it (no double count);
+* ``bandwidth_hz``: the -3 dB frequency of its force loop (small signal, blocked leg).
+"""
+
+from __future__ import annotations
+
+import math
+from collections.abc import Callable
+from typing import Any, Protocol
+
+import numpy as np
+from scipy.optimize import brentq
+
+from pressfit.errors import PressfitError
+
+
+class Drive(Protocol):
+    """An actuator drive (module docstring)."""
+
+    kind: str
+    measures: tuple[str, ...]
+
+    @property
+    def force_limit_n(self) -> float: ...
+
+    @property
+    def bandwidth_hz(self) -> float: ...
+
+    @property
+    def reflected_mass_kg(self) -> float: ...
+
+    def initial_state(self, force_n: np.ndarray, lengths_m: np.ndarray) -> Any: ...
+
+    def step(self, state: Any, command_n: np.ndarray, lengths_m: np.ndarray, rates_m_per_s: np.ndarray,
+             dt_s: float) -> tuple[Any, np.ndarray]: ...
+
+    def saturated(self, command_n: np.ndarray) -> np.ndarray: ...
+
+    def axial_stiffness_n_per_m(self, lengths_m: np.ndarray) -> np.ndarray: ...
+
+
+def require_step(dt_s: float) -> float:
+    """A time step must be a positive finite number of seconds."""
+    if not (np.isfinite(dt_s) and dt_s > 0):
+        raise PressfitError(f"a drive time step must be a positive number of seconds, got {dt_s!r}")
+    return float(dt_s)
+
+
+def minus_3db_hz(response: Callable[[np.ndarray], np.ndarray]) -> float:
+    """The highest frequency (Hz) where |response(f)| falls through 1/sqrt(2) (scanned on 1 mHz-1 MHz)."""
+    grid = np.logspace(-3, 6, 1801)
+    gain = np.abs(response(grid)) - math.sqrt(0.5)
+    above = np.flatnonzero(gain >= 0.0)
+    if not above.size or above[-1] == grid.size - 1:
+        return math.nan
+    k = above[-1]
+    return float(brentq(lambda f: abs(response(np.array([f]))[0]) - math.sqrt(0.5), grid[k], grid[k + 1],
+                        xtol=1e-12, rtol=1e-12))

@@ -1,0 +1,146 @@
+r"""Servo motor + ball screw (``[actuator] kind = "electric"``, docs/drives.md).
+
+Force from current: the screw turns the motor torque T = K_t i into the axial force F = 2 pi eta T / lead
+(eta the screw efficiency), so the delivered tension is N = k_f i, k_f = 2 pi eta K_t / lead (N/A): a
+positive current pulls the leg shorter. The force command is a current reference
+i_ref = sat(N_cmd / k_f), saturated at +-i_max; the drive's force limit is k_f i_max.
+
+Current loop, per leg, with the motor speed omega = -2 pi l_dot / lead (rad/s, > 0 while the leg shortens):
+
+* by its gains (PI on the winding, inductance L, resistance R, back-EMF K_e omega with K_e = K_t in SI):
+  L di/dt = k_p (i_ref - i) + k_i z - R i - K_t omega, dz/dt = i_ref - i; the closed loop
+  i / i_ref = (k_p s + k_i) / (L s^2 + (R + k_p) s + k_i) (= k_p / (L s + k_p) when k_i / k_p = R / L);
+* by its bandwidth f_c: di/dt = 2 pi f_c (i_ref - i) (an ideal first-order loop; back-EMF rejected).
+
+Both are linear in (i, z) under inputs held over a step, so the step is their exact zero-order-hold
+discretisation (matrix exponential, cached per step size): exact for any dt, however fast the loop.
+The inverter limits the current to +-i_max. Speed limit: while |omega| exceeds ``speed_limit_rad_per_s``,
+a current reference that would accelerate the motor further is set to zero (the drive coasts back).
+
+Reflected inertia: the rotor and the screw, m = J (2 pi / lead)^2 along the leg, are in the multibody model
+as the prismatic joint's armature (:mod:`pressfit.dynamics.inertia`); the delivered tension k_f i is applied
+to that joint, so the rotor's inertial force comes from the mass matrix, not from this module. The drive
+measures the leg length (motor encoder through the lead) and its motor current (the force estimate k_f i).
+"""
+
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass
+
+import numpy as np
+from scipy.linalg import expm
+
+from pressfit.description.machine import ElectricDrive as ElectricTable
+from pressfit.description.machine import Machine
+from pressfit.dynamics.drives.base import minus_3db_hz, require_step
+
+
+@dataclass(frozen=True)
+class ElectricState:
+    current_a: np.ndarray  # motor current i, A
+    integral_a_s: np.ndarray  # PI integrator z = integral of (i_ref - i), A s (0 for the bandwidth form)
+
+
+class ElectricDrive:
+    """Servo motor + ball screw drive (module docstring)."""
+
+    kind = "electric"
+    measures = ("leg_length_m", "current_a")
+
+    def __init__(self, machine: Machine) -> None:
+        self.machine = machine
+        self.table: ElectricTable = machine.actuator.electric
+        t = self.table
+        self.force_per_current_n_per_a = t.force_per_current_n_per_a
+        if t.current_loop_bandwidth_hz is not None:
+            w = 2.0 * math.pi * t.current_loop_bandwidth_hz
+            self._a = np.array([[-w, 0.0], [0.0, 0.0]])
+            self._b = np.array([[w, 0.0], [0.0, 0.0]])  # inputs (i_ref, back-EMF V)
+        else:
+            inv_l = 1.0 / t.winding_inductance_h
+            kp, ki, r = t.current_loop_kp_v_per_a, t.current_loop_ki_v_per_a_s, t.winding_resistance_ohm
+            self._a = np.array([[-(kp + r) * inv_l, ki * inv_l], [-1.0, 0.0]])
+            self._b = np.array([[kp * inv_l, -inv_l], [1.0, 0.0]])
+        self._zoh: dict[float, tuple[np.ndarray, np.ndarray]] = {}
+
+    @classmethod
+    def of(cls, machine: Machine) -> ElectricDrive:
+        return cls(machine)
+
+    @property
+    def force_limit_n(self) -> float:
+        """k_f i_max = 2 pi eta K_t i_max / lead, N."""
+        return self.table.force_limit_n
+
+    @property
+    def reflected_mass_kg(self) -> float:
+        return self.machine.drive_reflected_mass_kg
+
+    def closed_loop(self, frequency_hz: np.ndarray) -> np.ndarray:
+        """The current (= force) loop i / i_ref at frequencies (Hz), complex (blocked motor)."""
+        s = 2j * math.pi * np.asarray(frequency_hz, dtype=float)
+        t = self.table
+        if t.current_loop_bandwidth_hz is not None:
+            w = 2.0 * math.pi * t.current_loop_bandwidth_hz
+            return w / (s + w)
+        kp, ki = t.current_loop_kp_v_per_a, t.current_loop_ki_v_per_a_s
+        return (kp * s + ki) / (t.winding_inductance_h * s**2 + (t.winding_resistance_ohm + kp) * s + ki)
+
+    @property
+    def bandwidth_hz(self) -> float:
+        """The -3 dB frequency of :meth:`closed_loop` (its last crossing of 1/sqrt 2), Hz."""
+        return minus_3db_hz(self.closed_loop)
+
+    def _discrete(self, dt_s: float) -> tuple[np.ndarray, np.ndarray]:
+        if dt_s not in self._zoh:
+            aug = np.zeros((4, 4))
+            aug[:2, :2], aug[:2, 2:] = self._a * dt_s, self._b * dt_s
+            e = expm(aug)
+            self._zoh[dt_s] = (e[:2, :2], e[:2, 2:])
+        return self._zoh[dt_s]
+
+    def initial_state(self, force_n: np.ndarray, lengths_m: np.ndarray) -> ElectricState:
+        """At rest delivering ``force_n`` (clipped at the force limit): i = N / k_f, z = R i / k_i (steady)."""
+        i = np.clip(np.asarray(force_n, dtype=float) / self.force_per_current_n_per_a, -self.table.current_limit_a,
+                    self.table.current_limit_a)
+        t = self.table
+        z = i * t.winding_resistance_ohm / t.current_loop_ki_v_per_a_s if t.current_loop_bandwidth_hz is None else 0 * i
+        return ElectricState(i, z)
+
+    def current_reference_a(self, command_n: np.ndarray, rates_m_per_s: np.ndarray) -> np.ndarray:
+        """sat(N_cmd / k_f) with the speed limit applied (module docstring), A."""
+        t = self.table
+        i_ref = np.clip(np.asarray(command_n, dtype=float) / self.force_per_current_n_per_a, -t.current_limit_a,
+                        t.current_limit_a)
+        omega = self.motor_speed_rad_per_s(rates_m_per_s)
+        i_ref = np.where(omega > t.speed_limit_rad_per_s, np.minimum(i_ref, 0.0), i_ref)
+        return np.where(omega < -t.speed_limit_rad_per_s, np.maximum(i_ref, 0.0), i_ref)
+
+    def motor_speed_rad_per_s(self, rates_m_per_s: np.ndarray) -> np.ndarray:
+        """omega = -2 pi l_dot / lead, rad/s (> 0 while the leg shortens, the direction a positive current drives)."""
+        return -2.0 * math.pi * np.asarray(rates_m_per_s, dtype=float) / self.table.lead_m
+
+    def step(self, state: ElectricState, command_n: np.ndarray, lengths_m: np.ndarray, rates_m_per_s: np.ndarray,
+             dt_s: float) -> tuple[ElectricState, np.ndarray]:
+        phi, gamma = self._discrete(require_step(dt_s))
+        i_ref = self.current_reference_a(command_n, rates_m_per_s)
+        emf = self.table.torque_constant_nm_per_a * self.motor_speed_rad_per_s(rates_m_per_s)
+        i, z = state.current_a, state.integral_a_s
+        i_new = phi[0, 0] * i + phi[0, 1] * z + gamma[0, 0] * i_ref + gamma[0, 1] * emf
+        z_new = phi[1, 0] * i + phi[1, 1] * z + gamma[1, 0] * i_ref + gamma[1, 1] * emf
+        limit = self.table.current_limit_a
+        i_new = np.clip(i_new, -limit, limit)
+        return ElectricState(i_new, z_new), self.force_per_current_n_per_a * i_new
+
+    def saturated(self, command_n: np.ndarray) -> np.ndarray:
+        return np.abs(command_n) > self.force_limit_n
+
+    def axial_stiffness_n_per_m(self, lengths_m: np.ndarray) -> np.ndarray:
+        return self.machine.drive_stiffness_n_per_m(lengths_m)
+
+    def copper_loss_w(self, state: ElectricState) -> np.ndarray:
+        """R i^2 per motor, W (0 without ``winding_resistance_ohm``)."""
+        r = self.table.winding_resistance_ohm or 0.0
+        return r * state.current_a**2
+

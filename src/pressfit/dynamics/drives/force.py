@@ -1,0 +1,66 @@
+r"""The ideal force drive (``[actuator] kind = "force"``): today's first-order force source.
+
+tau dN/dt = sat(N_cmd) - N, tau = 1 / (2 pi f_bw), the command saturated at +-``force_limit_n``; the step is
+the exact zero-order-hold update N' = s + (N - s) exp(-dt / tau) of the saturated command s, the very
+arithmetic of :class:`pressfit.dynamics.actuators.ForceActuators` (bit-identical results, tested). It
+measures its delivered force (a load cell) and the leg length; its axial stiffness is
+``axial_stiffness_n_per_m``; it has no reflected inertia.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+
+import numpy as np
+
+from pressfit.description.machine import Machine
+from pressfit.dynamics.actuators import ForceActuators
+
+
+@dataclass(frozen=True)
+class ForceState:
+    force_n: np.ndarray  # delivered tension, N
+
+
+class ForceDrive:
+    """The first-order force source (module docstring)."""
+
+    kind = "force"
+    measures = ("leg_length_m", "force_n")
+    reflected_mass_kg = 0.0
+
+    def __init__(self, bandwidth_hz: float, force_limit_n: float, axial_stiffness_n_per_m: float) -> None:
+        self._first_order = ForceActuators(bandwidth_hz, force_limit_n)  # validates both numbers
+        self._stiffness = float(axial_stiffness_n_per_m)
+
+    @classmethod
+    def of(cls, machine: Machine) -> ForceDrive:
+        a = machine.actuator
+        return cls(a.force_bandwidth_hz, a.force_limit_n, a.axial_stiffness_n_per_m)
+
+    @property
+    def bandwidth_hz(self) -> float:
+        return self._first_order.bandwidth_hz
+
+    @property
+    def force_limit_n(self) -> float:
+        return self._first_order.force_limit_n
+
+    @property
+    def time_constant_s(self) -> float:
+        """tau = 1 / (2 pi f_bw), s."""
+        return self._first_order.time_constant_s
+
+    def initial_state(self, force_n: np.ndarray, lengths_m: np.ndarray) -> ForceState:
+        return ForceState(np.array(force_n, dtype=float))
+
+    def step(self, state: ForceState, command_n: np.ndarray, lengths_m: np.ndarray, rates_m_per_s: np.ndarray,
+             dt_s: float) -> tuple[ForceState, np.ndarray]:
+        force = self._first_order.step(state.force_n, command_n, dt_s)
+        return ForceState(force), force
+
+    def saturated(self, command_n: np.ndarray) -> np.ndarray:
+        return self._first_order.saturated(command_n)
+
+    def axial_stiffness_n_per_m(self, lengths_m: np.ndarray) -> np.ndarray:
+        return np.full_like(np.asarray(lengths_m, dtype=float), self._stiffness)

@@ -1,0 +1,197 @@
+r"""Servo valve + symmetric double-acting cylinder (``[actuator] kind = "hydraulic"``, docs/drives.md).
+
+Chambers: a (its pressure pulls the leg shorter) and b; piston area A on both sides (a rod through both
+ends), piston position x = l - l_min + margin (:meth:`pressfit.description.machine.Machine.piston_position_m`),
+volumes V_a = V_0a + A (s - x), V_b = V_0b + A x. The delivered tension is N = A (p_a - p_b). Flow continuity
+with the bulk modulus beta and the leakage across the piston Q_L = C_L (p_a - p_b):
+
+    dp_a/dt = beta / V_a (Q_a + A x_dot - Q_L),   dp_b/dt = beta / V_b (Q_b - A x_dot + Q_L).
+
+Valve (critically lapped, spool x_v in [-1, 1]): x_v > 0 connects supply to a and b to tank, x_v < 0 the
+reverse, each land an orifice Q = K_v x_v sqrt(dp) (signed, so that the flow reverses with the drop);
+below dp_lam = ``LAMINAR_FRACTION`` (p_s - p_t) the orifice is laminar, Q = K_v x_v dp / sqrt(dp_lam) (the
+usual regularisation: it keeps dQ/dp finite at a closed land; 0.1% of the supply drop). The spool follows
+its command with a first-order lag of ``valve_bandwidth_hz``. Pressure (force) loop, analog in the valve
+amplifier: x_v,cmd = sat(g (dp_cmd - (p_a - p_b))), dp_cmd = sat(N_cmd) / A, with N_cmd saturated at the
+drive's force limit A (p_s - p_t). Linearised about the null (p_a = p_b = (p_s + p_t) / 2, blocked piston),
+with K_q = K_v sqrt((p_s - p_t) / 2) and c = beta (1/V_a + 1/V_b):
+
+    dp / dp_cmd = g c K_q w_v / ((s + c C_L)(s + w_v) + g c K_q w_v),   w_v = 2 pi f_v,
+
+a loop of bandwidth about c (g K_q + C_L) (rad/s) behind the valve.
+
+Integration (the chambers are stiff: dQ/dp of an open land and beta / V make rates of 1e4-1e5 1/s):
+each step of the caller is split into n = ceil(dt / ``SUBSTEP_S``) substeps; in each, the spool is updated
+exactly (exponential of its lag under the held command), then the pressures by one linearly implicit
+(Rosenbrock-Euler) step p' = p + h (I - h J)^-1 f(p) with the analytic 2x2 Jacobian J of each leg: stable for
+any h (the linearised chamber dynamics have negative real eigenvalues), first-order accurate, so the substep
+is set by accuracy only (0.1 ms against the loop's ~4 ms time scale and the valve's 1.6 ms). The leg length
+moves at its held rate within the step. A step is refused (:class:`pressfit.errors.DriveStepError`) when
+the piston would leave the stroke, a pressure leaves [-0.1 p_s, 10 p_s] (a load the cylinder cannot hold: a
+relief valve or cavitation, which this model does not have) or is not finite, or when dt needs more than
+``MAX_SUBSTEPS``. The oil column's stiffness against the moving mass (sqrt(k_h / m) / 2 pi, hundreds of Hz)
+is the caller's to resolve: the multibody step must be short against it
+(:meth:`HydraulicDrive.axial_stiffness_n_per_m`).
+
+Measures: the leg length (a position transducer) and both chamber pressures (the force A (p_a - p_b)).
+No reflected inertia: the piston and rod translate with the stem (``mass.actuator_moving_mass_kg``).
+"""
+
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass
+
+import numpy as np
+
+from pressfit.description.machine import HydraulicDrive as HydraulicTable
+from pressfit.description.machine import Machine
+from pressfit.dynamics.drives.base import minus_3db_hz, require_step
+from pressfit.errors import DriveStepError
+
+SUBSTEP_S = 1e-4  # largest pressure substep, s (accuracy, not stability: module docstring)
+MAX_SUBSTEPS = 100_000  # a step that needs more is refused (dt above 10 s)
+LAMINAR_FRACTION = 1e-3  # laminar orifice below this fraction of the supply drop p_s - p_t
+
+
+@dataclass(frozen=True)
+class HydraulicState:
+    pressure_a_pa: np.ndarray  # chamber a (pulls the leg shorter), Pa
+    pressure_b_pa: np.ndarray  # chamber b, Pa
+    spool: np.ndarray  # valve opening x_v in [-1, 1]
+
+
+class HydraulicDrive:
+    """Servo-hydraulic drive (module docstring)."""
+
+    kind = "hydraulic"
+    measures = ("leg_length_m", "pressure_a_pa", "pressure_b_pa")
+    reflected_mass_kg = 0.0
+
+    def __init__(self, machine: Machine) -> None:
+        self.machine = machine
+        self.table: HydraulicTable = machine.actuator.hydraulic
+        t = self.table
+        self.area_m2 = t.area_m2
+        self.laminar_pa = LAMINAR_FRACTION * (t.supply_pressure_pa - t.tank_pressure_pa)
+        self.valve_time_constant_s = 1.0 / (2.0 * math.pi * t.valve_bandwidth_hz)
+
+    @classmethod
+    def of(cls, machine: Machine) -> HydraulicDrive:
+        return cls(machine)
+
+    @property
+    def force_limit_n(self) -> float:
+        """A (p_s - p_t), N."""
+        return self.table.force_limit_n
+
+    @property
+    def null_pressure_pa(self) -> float:
+        """(p_s + p_t) / 2: both chambers at the null of a symmetric valve, Pa."""
+        return 0.5 * (self.table.supply_pressure_pa + self.table.tank_pressure_pa)
+
+    def volumes_m3(self, lengths_m: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+        t = self.table
+        x = self.machine.piston_position_m(lengths_m)
+        return t.dead_volume_a_m3 + self.area_m2 * (t.stroke_m - x), t.dead_volume_b_m3 + self.area_m2 * x
+
+    def closed_loop(self, frequency_hz: np.ndarray, length_m: float | None = None) -> np.ndarray:
+        """The linearised pressure loop dp / dp_cmd (module docstring) at a leg length (default mid-travel), complex."""
+        t, lim = self.table, self.machine.limits
+        length = 0.5 * (lim.leg_length_min_m + lim.leg_length_max_m) if length_m is None else length_m
+        v_a, v_b = self.volumes_m3(np.array(length))
+        c = t.bulk_modulus_pa * (1.0 / v_a + 1.0 / v_b)
+        kq = t.valve_flow_gain_m3_per_s_sqrt_pa * math.sqrt(0.5 * (t.supply_pressure_pa - t.tank_pressure_pa))
+        wv = 1.0 / self.valve_time_constant_s
+        s = 2j * math.pi * np.asarray(frequency_hz, dtype=float)
+        loop = t.pressure_loop_gain_per_pa * c * kq * wv
+        return loop / ((s + c * t.leakage_m3_per_s_pa) * (s + wv) + loop)
+
+    @property
+    def bandwidth_hz(self) -> float:
+        """-3 dB frequency of :meth:`closed_loop` at mid-travel, Hz."""
+        return minus_3db_hz(self.closed_loop)
+
+    def initial_state(self, force_n: np.ndarray, lengths_m: np.ndarray) -> HydraulicState:
+        """Pressures delivering ``force_n`` (clipped at the limit) symmetric about the null, spool centred (with
+        leakage the pressure loop then takes a few milliseconds to find its steady opening)."""
+        dp = np.clip(np.asarray(force_n, dtype=float), -self.force_limit_n, self.force_limit_n) / self.area_m2
+        p0 = self.null_pressure_pa
+        return HydraulicState(p0 + dp / 2, p0 - dp / 2, 0 * dp)
+
+    def _orifice(self, opening: np.ndarray, drop: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+        """Q = K_v x sqrt(dp) (laminar below dp_lam) and dQ/d(dp), m^3/s and m^3/(s Pa)."""
+        kv, lam = self.table.valve_flow_gain_m3_per_s_sqrt_pa, self.laminar_pa
+        mag = np.abs(drop)
+        turbulent = mag >= lam
+        root = np.sqrt(np.maximum(mag, lam))
+        q = kv * opening * np.where(turbulent, np.sign(drop) * root, drop / math.sqrt(lam))
+        dq = kv * opening * np.where(turbulent, 0.5 / root, 1.0 / math.sqrt(lam))
+        return q, dq
+
+    def _rates(self, pa: np.ndarray, pb: np.ndarray, xv: np.ndarray, v_a: np.ndarray, v_b: np.ndarray,
+               rate: np.ndarray) -> tuple[np.ndarray, ...]:
+        """dp_a/dt, dp_b/dt and the Jacobian entries (J_aa, J_ab, J_ba, J_bb)."""
+        t = self.table
+        ps, pt, cl, beta, area = (t.supply_pressure_pa, t.tank_pressure_pa, t.leakage_m3_per_s_pa,
+                                  t.bulk_modulus_pa, self.area_m2)
+        up, down = np.maximum(xv, 0.0), np.minimum(xv, 0.0)
+        qa1, da1 = self._orifice(up, ps - pa)
+        qa2, da2 = self._orifice(down, pa - pt)
+        qb1, db1 = self._orifice(up, pb - pt)
+        qb2, db2 = self._orifice(down, ps - pb)
+        leak = cl * (pa - pb)
+        ga, gb = beta / v_a, beta / v_b
+        fa = ga * (qa1 + qa2 + area * rate - leak)
+        fb = gb * (-qb1 - qb2 - area * rate + leak)
+        return fa, fb, ga * (-da1 + da2 - cl), ga * cl, gb * cl, gb * (-db1 + db2 - cl)
+
+    def step(self, state: HydraulicState, command_n: np.ndarray, lengths_m: np.ndarray, rates_m_per_s: np.ndarray,
+             dt_s: float) -> tuple[HydraulicState, np.ndarray]:
+        dt_s = require_step(dt_s)
+        t = self.table
+        n = math.ceil(dt_s / SUBSTEP_S - 1e-9)
+        if n > MAX_SUBSTEPS:
+            raise DriveStepError(self.kind, 1, "time step dt_s", dt_s, f"at most {MAX_SUBSTEPS * SUBSTEP_S:g} s "
+                                 f"({MAX_SUBSTEPS} pressure substeps of {SUBSTEP_S:g} s)")
+        h = dt_s / n
+        length, rate = np.asarray(lengths_m, dtype=float), np.asarray(rates_m_per_s, dtype=float)
+        self._check_stroke(length, rate, dt_s)
+        dp_cmd = np.clip(np.asarray(command_n, dtype=float), -self.force_limit_n, self.force_limit_n) / self.area_m2
+        decay = math.exp(-h / self.valve_time_constant_s)
+        pa, pb, xv = state.pressure_a_pa, state.pressure_b_pa, state.spool
+        for k in range(n):
+            x_cmd = np.clip(t.pressure_loop_gain_per_pa * (dp_cmd - (pa - pb)), -1.0, 1.0)
+            xv = x_cmd + (xv - x_cmd) * decay
+            v_a, v_b = self.volumes_m3(length + rate * (k + 0.5) * h)
+            fa, fb, jaa, jab, jba, jbb = self._rates(pa, pb, xv, v_a, v_b, rate)
+            m00, m01, m10, m11 = 1.0 - h * jaa, -h * jab, -h * jba, 1.0 - h * jbb
+            det = m00 * m11 - m01 * m10
+            pa, pb = pa + h * (m11 * fa - m01 * fb) / det, pb + h * (m00 * fb - m10 * fa) / det
+        self._check_pressures(pa, pb)
+        return HydraulicState(pa, pb, xv), self.area_m2 * (pa - pb)
+
+    def _check_stroke(self, length: np.ndarray, rate: np.ndarray, dt_s: float) -> None:
+        stroke = self.table.stroke_m
+        for x in (self.machine.piston_position_m(length), self.machine.piston_position_m(length + rate * dt_s)):
+            bad = np.flatnonzero(~((x >= 0.0) & (x <= stroke)))
+            if bad.size:
+                leg = int(bad[0])
+                raise DriveStepError(self.kind, leg + 1, "piston position x_m", float(np.ravel(x)[leg]),
+                                     f"the stroke [0, {stroke:g}] m")
+
+    def _check_pressures(self, pa: np.ndarray, pb: np.ndarray) -> None:
+        ps = self.table.supply_pressure_pa
+        for name, p in (("pressure_a_pa", pa), ("pressure_b_pa", pb)):
+            bad = np.flatnonzero(~((p >= -0.1 * ps) & (p <= 10.0 * ps)))
+            if bad.size:
+                leg = int(bad[0])
+                raise DriveStepError(self.kind, leg + 1, name, float(np.ravel(p)[leg]),
+                                     f"[{-0.1 * ps:g}, {10.0 * ps:g}] Pa (no relief valve or cavitation modelled)")
+
+    def saturated(self, command_n: np.ndarray) -> np.ndarray:
+        return np.abs(command_n) > self.force_limit_n
+
+    def axial_stiffness_n_per_m(self, lengths_m: np.ndarray) -> np.ndarray:
+        """The oil column with the valve closed, beta A^2 (1/V_a + 1/V_b), N/m."""
+        return self.machine.drive_stiffness_n_per_m(lengths_m)
