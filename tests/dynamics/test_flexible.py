@@ -138,7 +138,9 @@ def test_holding_a_pose_under_a_wrench_reproduces_the_static_solver(machine):
     scale = np.abs(ref).max()
     np.testing.assert_allclose(loads.values, ref, rtol=0, atol=1e-9 * scale)
     np.testing.assert_allclose(fm.tool_point_m(s) - OFF_CENTRE, eq.plate_displacement_m, rtol=0, atol=1e-12)
-    np.testing.assert_allclose(loads.axial_n("plate"), eq.actuator_forces_n, rtol=0, atol=1e-9 * scale)
+    # the plate-section N (deformed leg frame) is not exactly the actuator spring's force: in the nonlinear state
+    # the stem's small shear projects on the leg axis (measured up to 1.3e-7 N here, 1e-9 of the largest)
+    np.testing.assert_allclose(loads.axial_n("plate"), eq.actuator_forces_n, rtol=0, atol=1e-8 * scale)
     static = fm.section_loads(fm.rest_state(wrench)).values  # the model's own static Newton: same answer
     np.testing.assert_allclose(static, ref, rtol=0, atol=1e-9 * scale)
 
