@@ -17,7 +17,6 @@ import click
 from pressfit.cli import check, dynamics, listing, paper, pose, study, workspace
 from pressfit.cli.common import close_progress_bars
 
-
 INTERNAL_ERROR_EXIT = 70  # EX_SOFTWARE of sysexits.h: never 1, which CI reads as "a limit is exceeded"
 TRACEBACK_VARIABLE = "PRESSFIT_TRACEBACK"
 
