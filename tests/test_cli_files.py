@@ -251,3 +251,16 @@ def test_a_stem_as_wide_as_the_cylinder_bore_is_refused(tmp_path):
     assert err.value.key == "stem" and "stem.diameter_m" in str(err.value) and "bore" in str(err.value)
     load_machine(write_machine(tmp_path, bore * (1 - 1e-9)))  # just narrower: accepted
     one_error_line(run("modes", "0", "0.72", "0", "--model", write_machine(tmp_path, 1.2 * bore)), "stem.diameter_m")
+
+
+def test_a_directory_output_never_replaces_an_input_file(tmp_path):
+    """modes --out D --overwrite with the machine file read from D/modes.json: refused before any file is
+    moved in (D keeps exactly its input)."""
+    out = tmp_path / "d"
+    out.mkdir()
+    machine = out / "modes.json"
+    machine.write_text(Path(DEFAULT_MODEL).read_text())
+    before = machine.read_text()
+    one_error_line(run("modes", "0", "0.72", "0", "--model", machine, "--out", out, "--overwrite"), "input file",
+                   "modes.json")
+    assert tree(tmp_path) == ["d", "d/modes.json"] and machine.read_text() == before

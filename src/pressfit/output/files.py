@@ -97,7 +97,8 @@ def check_directory(out_dir: Path | str, overwrite: bool) -> Path:
 LOCK_NAME = ".pressfit-writing"  # made in an output directory while a run moves its files in
 
 
-def write_directory(out_dir: Path | str, overwrite: bool, write: Callable[[Path], Iterable[Path]]) -> list[Path]:
+def write_directory(out_dir: Path | str, overwrite: bool, write: Callable[[Path], Iterable[Path]],
+                    inputs: Iterable[Path | str] = ()) -> list[Path]:
     """Run ``write(tmp)`` into a temporary directory beside ``out_dir``, then move it in (so an error or a
     signal leaves no partial output); returns the final paths.
 
@@ -105,8 +106,11 @@ def write_directory(out_dir: Path | str, overwrite: bool, write: Callable[[Path]
     one wins and the other raises OutputExistsError (its files discarded): a directory this run creates is
     replaced by the temporary one in one rename, which fails once it holds anything; an existing one is
     claimed by creating ``LOCK_NAME`` in it (atomic; a second run finds it), re-checked to be empty unless
-    ``overwrite`` (then files of the same names are replaced), filled file by file and released."""
+    ``overwrite`` (then files of the same names are replaced), filled file by file and released. An output
+    that would replace one of ``inputs`` (the files the command read) raises OutputConflictError before any
+    file is moved."""
     out = check_directory(out_dir, overwrite)
+    inputs = [Path(f) for f in inputs]
     real = Path(os.path.realpath(out))
     try:
         real.parent.mkdir(parents=True, exist_ok=True)
@@ -116,6 +120,8 @@ def write_directory(out_dir: Path | str, overwrite: bool, write: Callable[[Path]
     try:
         written = [Path(p) for p in write(tmp)]
         files = sorted(q.relative_to(tmp) for q in tmp.rglob("*") if q.is_file())
+        for f in (f for f in files if (real / f).exists()):  # only an existing file can be an input
+            check_distinct({"--out": out / f}, inputs)
         _move_in(tmp, real, out, overwrite)
         return [out / p.relative_to(tmp) for p in written] if written else [out / p for p in files]
     except OSError as exc:

@@ -62,5 +62,5 @@ def run_modes(machine: Machine, pose_m: np.ndarray, count: int, out_dir: Path | 
     if out_dir is not None:
         io.check_directory(out_dir, overwrite)
     modes = natural_modes(machine, pose_m, count)
-    return modes, ([] if out_dir is None else io.write_directory(out_dir, overwrite,
-                                                                  lambda tmp: write_modes(modes, tmp)))
+    return modes, ([] if out_dir is None else io.write_directory(
+        out_dir, overwrite, lambda tmp: write_modes(modes, tmp), inputs=[machine.source] if machine.source else []))

@@ -85,7 +85,8 @@ def run_simulation(case_path: Path | str, out_dir: Path | None, limiter: bool = 
     result = simulate_insertion(case, limiter, progress)
     comparison = simulate_insertion(case, False, progress) if limiter else None
     paths = [] if out_dir is None else io.write_directory(
-        out_dir, overwrite, lambda tmp: write_simulation(result, tmp, comparison=comparison))
+        out_dir, overwrite, lambda tmp: write_simulation(result, tmp, comparison=comparison),
+        inputs=[Path(case_path), *([case.machine().source] if case.machine().source else [])])
     return _summary(result, comparison), paths
 
 
