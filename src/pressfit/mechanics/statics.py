@@ -31,7 +31,8 @@ are the round-off of positions of ~1 m and, left in, a 5e7 N/m actuator turns th
 self-stress that swamps tiny loads. Every solve reports its stability (:mod:`pressfit.mechanics.stability`):
 at convergence for the nonlinear solve, and for the linear solve the tangent at the reference with the
 geometric stiffness of its own multipliers (stable exactly when the machine's linearised buckling factor
-exceeds 1). Unstable solutions raise UnstableEquilibriumError.
+exceeds 1). Unstable solutions raise UnstableEquilibriumError; a solution whose relative residuals (below)
+exceed RESIDUAL_TOL raises ResidualError naming the residual (the fast path is held to the same).
 
 Linear solve (``linear=True``): one KKT solve at the assembled pose with the elastic stiffness only
 (small displacements; equilibrium written on the undeformed geometry), about a stress-free reference:
@@ -511,7 +512,8 @@ class EquilibriumSolver:
         :class:`ActuatorPreload`; ``preload_mode`` overrides its mode. Preload first, then load.
         Geometrically nonlinear Newton by default (``tol``: relative stationarity and closure, module doc);
         ``linear=True``: small-displacement solve at the assembled pose. Raises UnreachablePoseError,
-        SingularPoseError, ConvergenceError, UnstableEquilibriumError.
+        SingularPoseError, ConvergenceError, UnstableEquilibriumError, and ResidualError when a relative
+        residual exceeds :func:`residual_tolerance` (``tol``).
 
         Continuation hooks (nonlinear solve; used by :mod:`pressfit.mechanics.clearance`): ``start``, a
         previous solution at the same pose, to start Newton from (its q and multipliers);
@@ -639,10 +641,9 @@ def enforce_residuals(relative: np.ndarray, tolerance: float, what: str, where: 
     bad = ~(relative <= tolerance)
     if not bad.any():
         return
-    i, k = np.argwhere(bad)[0]
-    row = np.where(np.isnan(relative[i]), np.inf, relative[i])
-    k = int(np.argmax(row))
-    raise ResidualError(what, RESIDUAL_NAMES[k], float(relative[i, k]), tolerance, where(int(i)))
+    i = int(np.argmax(bad.any(1)))
+    k = int(np.argmax(np.where(np.isnan(relative[i]), np.inf, relative[i])))
+    raise ResidualError(what, RESIDUAL_NAMES[k], float(relative[i, k]), tolerance, where(i))
 
 
 def _where(eq: Equilibrium) -> str:

@@ -18,6 +18,8 @@ from pressfit.errors import OutputConflictError, OutputError, OutputExistsError
 if TYPE_CHECKING:
     from matplotlib.figure import Figure
 
+LOCK_NAME = ".pressfit-writing"  # made in an output directory while a run moves its files in (write_directory)
+
 
 def _umask() -> int:
     mask = os.umask(0o022)
@@ -92,9 +94,6 @@ def check_directory(out_dir: Path | str, overwrite: bool) -> Path:
         raise OutputExistsError(f"{out} exists and is not empty; pass --overwrite to replace its files")
     _check_parent(out, out if out.is_dir() else out.parent)
     return out
-
-
-LOCK_NAME = ".pressfit-writing"  # made in an output directory while a run moves its files in
 
 
 def write_directory(out_dir: Path | str, overwrite: bool, write: Callable[[Path], Iterable[Path]],
