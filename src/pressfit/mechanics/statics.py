@@ -525,9 +525,9 @@ class EquilibriumSolver:
         offsets = _offsets(self.machine, pv.pose_m, preload, preload_mode, preload_offsets_m)
         pb, data = self._problem(pv, load, offsets)
         eq = _solve_linear(pb, data) if linear else _solve_nonlinear(pb, data, tol, max_iter, start, step_limit)
+        _check_physical(self.machine, eq)  # first: a branch beyond buckling is named as such
         enforce_residuals(eq.residuals.relative()[None], residual_tolerance(tol),
                           f"{'linear' if linear else 'nonlinear'} equilibrium", lambda i: _where(eq))
-        _check_physical(self.machine, eq)
         return eq
 
     def stability_at(self, pose_m: np.ndarray, plate_wrench: np.ndarray, q: np.ndarray, multipliers: np.ndarray,
