@@ -46,6 +46,9 @@ SLOTS = [
     (["study", "preload", "--pose", "0", "0.72", "0", "--preload", "100", "--clearance", "{}"], "--clearance"),
     (["study", "preload", "--pose", "0", "0.72", "0", "--preload", "100", "--load-max", "{}"], "--load-max"),
     (["study", "preload", "--pose", "{}", "0.72", "0", "--preload", "100"], "--pose"),
+    (["modes", "0", "{}", "0"], "'Y'"),
+    (["export-mjcf", "{}", "0.72", "0"], "'X'"),
+    (["export-mjcf", "0", "0.72", "0", "--timestep", "{}"], "--timestep"),
 ]
 BAD = ["nan", "inf", "-inf", "1e300", "1e400", "abc", "", "1,,2", ","]
 

@@ -64,6 +64,25 @@ class OutputError(PressfitError):
     """An output file cannot be written (its directory is a file, or not writable)."""
 
 
+class OutputConflictError(OutputError):
+    """Two output options name one file, or an output is one of the command's input files: ``option`` and
+    ``path`` the output, ``other`` the other option or the input (refused before any computation)."""
+
+    def __init__(self, option: str, path: object, other: str, message: str) -> None:
+        self.option, self.path, self.other = option, str(path), other
+        super().__init__(message)
+
+
+class ResidualError(PressfitError):
+    """A solver returned a solution whose residual exceeds the stated tolerance (the answer is not trusted):
+    ``residual`` names it, ``value`` and ``tolerance`` are relative (the solver's definitions)."""
+
+    def __init__(self, what: str, residual: str, value: float, tolerance: float, where: str = "") -> None:
+        self.what, self.residual, self.value, self.tolerance, self.where = what, residual, value, tolerance, where
+        super().__init__(f"{what}{' ' + where if where else ''}: residual {residual} = {value:.3e} exceeds its "
+                         f"tolerance {tolerance:.1e}; the solution is refused")
+
+
 class UnstableEquilibriumError(PressfitError):
     """The solution found is not a physical, stable state (a leg beyond buckling, a huge displacement)."""
 

@@ -19,11 +19,15 @@ from pressfit.cli.common import (
 from pressfit.description.machine import load_machine
 from pressfit.output.files import to_json
 
+# s: the 60th mode at pose A is 4.4 kHz (pressfit modes --count 60), a period of 230 us that 1 us resolves
+# 200 times over; a smaller step only multiplies the steps (a simulated second would take more than a million)
+MIN_MJCF_TIMESTEP_S = 1e-6
+
 
 @click.command("modes", context_settings={"ignore_unknown_options": True})  # negative coordinates
-@click.argument("x", type=float)
-@click.argument("y", type=float)
-@click.argument("z", type=float)
+@click.argument("x", type=COORDINATE)
+@click.argument("y", type=COORDINATE)
+@click.argument("z", type=COORDINATE)
 @click.option("--count", type=click.IntRange(1, 60), default=6, show_default=True, help="Number of modes.")
 @click.option("--out", "out_dir", type=click.Path(path_type=Path), default=None,
               help="Directory for modes.json, modes.csv and modes.png (nothing written without it).")
@@ -96,11 +100,12 @@ def simulate_cmd(case_path: Path, out_dir: Path | None, no_limiter: bool, overwr
 
 
 @click.command("export-mjcf", context_settings={"ignore_unknown_options": True})  # negative coordinates
-@click.argument("x", type=float)
-@click.argument("y", type=float)
-@click.argument("z", type=float)
-@click.option("--timestep", "timestep_s", type=FiniteFloat(0.0, 0.01, open_low=True), default=1e-4,
-              show_default=True, help="MuJoCo time step (s); the welds' time constant is twice it.")
+@click.argument("x", type=COORDINATE)
+@click.argument("y", type=COORDINATE)
+@click.argument("z", type=COORDINATE)
+@click.option("--timestep", "timestep_s", type=FiniteFloat(MIN_MJCF_TIMESTEP_S, 0.01), default=1e-4,
+              show_default=True, help="MuJoCo time step (s), in [1e-6, 0.01]; the welds' time constant is twice "
+              "it.")
 @click.option("--out", type=click.Path(path_type=Path), default=None,
               help="MJCF file to write (printed to standard output without it).")
 @click.option("--overwrite", is_flag=True, help="Replace an existing output file.")

@@ -14,7 +14,7 @@ from pathlib import Path
 from typing import Annotated, Any, Literal
 
 import numpy as np
-from pydantic import BaseModel, ConfigDict, Field, ValidationError, field_validator, model_validator
+from pydantic import BaseModel, ConfigDict, Field, ValidationError, ValidationInfo, field_validator, model_validator
 
 from pressfit.description import drive_stiffness
 from pressfit.errors import ModelFileError
@@ -462,6 +462,17 @@ class Machine(StrictModel):
     model: ModelOptions = ModelOptions()
     collision: Collision
     source: str = ""
+
+    @field_validator("stem")
+    @classmethod
+    def _stem_inside_bore(cls, stem: Stem, info: ValidationInfo) -> Stem:
+        cyl = info.data.get("cylinder")
+        if cyl is not None and stem.diameter_m >= cyl.outer_diameter_m - 2 * cyl.wall_thickness_m:
+            bore = cyl.outer_diameter_m - 2 * cyl.wall_thickness_m
+            raise ValueError(f"stem.diameter_m = {stem.diameter_m:g} m must be smaller than the cylinder bore "
+                             f"{bore:g} m (cylinder.outer_diameter_m - 2 cylinder.wall_thickness_m): the stem "
+                             "slides inside the cylinder")
+        return stem
 
     @model_validator(mode="after")
     def _cylinder_shorter_than_legs(self) -> Machine:

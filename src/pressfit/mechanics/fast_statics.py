@@ -64,6 +64,8 @@ from pressfit.mechanics.statics import (
     SectionWrench,
     _check_physical,
     _wrench,
+    enforce_residuals,
+    residual_tolerance,
 )
 from pressfit.spatial import cross, skew
 
@@ -358,7 +360,8 @@ class FastEquilibriumSolver:
         the plate centre), after an actuator preload a4 along v_p (N in force mode, m in length mode;
         :mod:`pressfit.mechanics.preload`) or explicit rest-length offsets (b, 4) (m). Geometrically
         nonlinear by default (``tol``: the reference's relative stationarity and closure); ``linear=True``:
-        the small-displacement solve. Raises UnreachablePoseError, SingularPoseError, ConvergenceError."""
+        the small-displacement solve. Raises UnreachablePoseError, SingularPoseError, ConvergenceError, and
+        ResidualError when a solution's relative residuals exceed statics.residual_tolerance(tol)."""
         h = np.asarray(poses_m, dtype=float).reshape(-1, 3)
         w = np.asarray(plate_wrenches, dtype=float)
         w = np.broadcast_to(_wrench(w) if w.ndim == 1 else w, (len(h), 6))
@@ -372,8 +375,14 @@ class FastEquilibriumSolver:
             offsets = np.zeros((len(h), 4))
         parts = [self._solve_block(self._block(h[i:i + _CHUNK], w[i:i + _CHUNK], offsets[i:i + _CHUNK]), linear,
                                    tol, max_iter) for i in range(0, len(h), _CHUNK)]
-        return BatchEquilibrium(*[np.concatenate([p[k] for p in parts]) for k in range(12)],
-                                self.machine.geometry.base_half_side_m, np.array(offsets, dtype=float), linear)
+        batch = BatchEquilibrium(*[np.concatenate([p[k] for p in parts]) for k in range(12)],
+                                 self.machine.geometry.base_half_side_m, np.array(offsets, dtype=float), linear)
+        relative = batch.residuals.copy()
+        relative[:, 4] /= batch.length_scale_m  # closure in m -> relative, as Residuals.relative
+        enforce_residuals(relative, residual_tolerance(tol), f"{'linear' if linear else 'nonlinear'} equilibrium "
+                          "(fast solver)", lambda i: f"at pose {tuple(batch.pose_m[i].tolist())} m under the load "
+                          f"{tuple(batch.load[i].tolist())} (N, N m)")
+        return batch
 
     def _block(self, h: np.ndarray, w: np.ndarray, offsets: np.ndarray) -> _Block:
         mm, ch = self.model, self._chain

@@ -2,6 +2,7 @@
 
 from __future__ import annotations
 
+import errno
 import json
 import os
 import shutil
@@ -12,10 +13,12 @@ from typing import TYPE_CHECKING, Any
 
 import numpy as np
 
-from pressfit.errors import OutputError, OutputExistsError
+from pressfit.errors import OutputConflictError, OutputError, OutputExistsError
 
 if TYPE_CHECKING:
     from matplotlib.figure import Figure
+
+LOCK_NAME = ".pressfit-writing"  # made in an output directory while a run moves its files in (write_directory)
 
 
 def _umask() -> int:
@@ -51,37 +54,114 @@ def _check_parent(path: Path, parent: Path) -> None:
         raise OutputError(f"cannot write {path}: {anc} is not writable")
 
 
+def _same_file(a: Path, b: Path) -> bool:
+    """The same file: equal resolved paths (symlinks followed), or one file under two names (a hard link)."""
+    if os.path.realpath(a) == os.path.realpath(b):
+        return True
+    try:
+        return os.path.samefile(a, b)
+    except OSError:
+        return False
+
+
+def check_distinct(outputs: dict[str, Path | str | None], inputs: Iterable[Path | str]) -> None:
+    """Refuse, before any computation, two output options (name -> path; None = not given) naming one file,
+    and an output that is one of the input files (``inputs``: every file the command reads, files found in
+    an input directory included); raises OutputConflictError naming both."""
+    named = [(option, Path(p)) for option, p in outputs.items() if p is not None]
+    files = [Path(f) for f in inputs]
+    for k, (option, path) in enumerate(named):
+        for other, other_path in named[k + 1:]:
+            if _same_file(path, other_path):
+                raise OutputConflictError(option, path, other, f"{option} {path} and {other} {other_path} name the "
+                                          "same file: give each output its own file")
+        for f in files:
+            if _same_file(path, f):
+                raise OutputConflictError(option, path, str(f), f"{option} {path} is the input file {f}: writing "
+                                          "it would replace the input; give another output file")
+
+
 def check_directory(out_dir: Path | str, overwrite: bool) -> Path:
     """Check before any computation that a multi-file output directory can be written: it must be new or
     empty unless ``overwrite`` (then files of the same names are replaced), and its parent writable."""
     out = Path(out_dir)
     if out.exists() and not out.is_dir():
         raise OutputError(f"cannot write {out}: it exists and is not a directory")
+    if (out / LOCK_NAME).is_dir():
+        raise OutputExistsError(f"{out} is being written by another pressfit run (or by one that was killed: "
+                                f"then remove {out / LOCK_NAME})")
     if out.is_dir() and not overwrite and any(out.iterdir()):
         raise OutputExistsError(f"{out} exists and is not empty; pass --overwrite to replace its files")
     _check_parent(out, out if out.is_dir() else out.parent)
     return out
 
 
-def write_directory(out_dir: Path | str, overwrite: bool, write: Callable[[Path], Iterable[Path]]) -> list[Path]:
-    """Run ``write(tmp)`` into a temporary directory beside ``out_dir``, then move every file it wrote into
-    ``out_dir`` (so an error or a signal leaves no partial output); returns the final paths."""
+def write_directory(out_dir: Path | str, overwrite: bool, write: Callable[[Path], Iterable[Path]],
+                    inputs: Iterable[Path | str] = ()) -> list[Path]:
+    """Run ``write(tmp)`` into a temporary directory beside ``out_dir``, then move it in (so an error or a
+    signal leaves no partial output); returns the final paths.
+
+    The check of :func:`check_directory` is repeated at the move, so of two runs writing the same directory
+    one wins and the other raises OutputExistsError (its files discarded): a directory this run creates is
+    replaced by the temporary one in one rename, which fails once it holds anything; an existing one is
+    claimed by creating ``LOCK_NAME`` in it (atomic; a second run finds it), re-checked to be empty unless
+    ``overwrite`` (then files of the same names are replaced), filled file by file and released. An output
+    that would replace one of ``inputs`` (the files the command read) raises OutputConflictError before any
+    file is moved."""
     out = check_directory(out_dir, overwrite)
-    out.parent.mkdir(parents=True, exist_ok=True)
-    tmp = Path(tempfile.mkdtemp(prefix=f".{out.name}.", dir=out.parent))
+    inputs = [Path(f) for f in inputs]
+    real = Path(os.path.realpath(out))
+    try:
+        real.parent.mkdir(parents=True, exist_ok=True)
+        tmp = Path(tempfile.mkdtemp(prefix=f".{real.name}.", dir=real.parent))
+    except OSError as exc:
+        raise OutputError(f"cannot write {out}: {exc.strerror}") from None
     try:
         written = [Path(p) for p in write(tmp)]
-        final = []
-        for p in sorted(q for q in tmp.rglob("*") if q.is_file()):
-            target = out / p.relative_to(tmp)
-            target.parent.mkdir(parents=True, exist_ok=True)
-            os.replace(p, target)
-            final.append(target)
-        return [out / p.relative_to(tmp) for p in written] if written else final
+        files = sorted(q.relative_to(tmp) for q in tmp.rglob("*") if q.is_file())
+        for f in (f for f in files if (real / f).exists()):  # only an existing file can be an input
+            check_distinct({"--out": out / f}, inputs)
+        _move_in(tmp, real, out, overwrite)
+        return [out / p.relative_to(tmp) for p in written] if written else [out / p for p in files]
     except OSError as exc:
         raise OutputError(f"cannot write {out}: {exc.strerror}") from None
     finally:
         shutil.rmtree(tmp, ignore_errors=True)
+
+
+def _move_in(tmp: Path, real: Path, out: Path, overwrite: bool) -> None:
+    """Move the files of ``tmp`` into the directory ``real`` (:func:`write_directory`)."""
+    try:
+        real.mkdir()
+        created = True
+    except FileExistsError:
+        created = False
+    if created:
+        os.chmod(tmp, real.stat().st_mode & 0o7777)
+        try:
+            os.rename(tmp, real)  # onto the empty directory made just now; fails if another run is in it
+            return
+        except OSError as exc:
+            if exc.errno not in (errno.ENOTEMPTY, errno.EEXIST):
+                raise
+    lock = real / LOCK_NAME
+    try:
+        lock.mkdir()
+    except FileExistsError:
+        raise OutputExistsError(f"{out} is being written by another pressfit run (or by one that was killed: "
+                                f"then remove {lock})") from None
+    except NotADirectoryError:
+        raise OutputError(f"cannot write {out}: it is no longer a directory") from None
+    try:
+        if not overwrite and set(os.listdir(real)) - {LOCK_NAME}:
+            raise OutputExistsError(f"{out} was filled by another run while this one computed; this run wrote "
+                                    "nothing (pass --overwrite to replace its files)")
+        for p in sorted(q for q in tmp.rglob("*") if q.is_file()):
+            target = real / p.relative_to(tmp)
+            target.parent.mkdir(parents=True, exist_ok=True)
+            os.replace(p, target)
+    finally:
+        lock.rmdir()
 
 
 def _atomic(path: Path | str, write: Callable[[Path], None], overwrite: bool) -> Path:

@@ -57,6 +57,10 @@ def write_modes(modes: Modes, out_dir: Path | str, overwrite: bool = False) -> l
 
 def run_modes(machine: Machine, pose_m: np.ndarray, count: int, out_dir: Path | None,
               overwrite: bool = False) -> tuple[Modes, list[Path]]:
-    """:func:`pressfit.dynamics.modes.natural_modes` at a pose, and its files in ``out_dir`` if given."""
+    """:func:`pressfit.dynamics.modes.natural_modes` at a pose, and its files in ``out_dir`` if given (checked
+    before computing, written through a temporary directory: :func:`pressfit.output.files.write_directory`)."""
+    if out_dir is not None:
+        io.check_directory(out_dir, overwrite)
     modes = natural_modes(machine, pose_m, count)
-    return modes, (write_modes(modes, out_dir, overwrite) if out_dir is not None else [])
+    return modes, ([] if out_dir is None else io.write_directory(
+        out_dir, overwrite, lambda tmp: write_modes(modes, tmp), inputs=[machine.source] if machine.source else []))

@@ -73,11 +73,16 @@ def run_simulation(case_path: Path | str, out_dir: Path | None, limiter: bool = 
                    progress: bool = False) -> tuple[dict[str, Any], list[Path]]:
     """Simulate the case file's insertion (:func:`pressfit.dynamics.insertion.simulate_insertion`); with the
     limiter on, the same scenario also runs without it (the comparison of the contact-force plot and of the
-    summary's ``"comparison"``). The summary, and the files in ``out_dir`` if given."""
+    summary's ``"comparison"``). The summary, and the files in ``out_dir`` if given (checked before the
+    simulation, written through a temporary directory: :func:`pressfit.output.files.write_directory`)."""
+    if out_dir is not None:
+        io.check_directory(out_dir, overwrite)  # before computing
     case = load_case(case_path)
     result = simulate_insertion(case, limiter, progress)
     comparison = simulate_insertion(case, False, progress) if limiter else None
-    paths = write_simulation(result, out_dir, overwrite, comparison) if out_dir is not None else []
+    paths = [] if out_dir is None else io.write_directory(
+        out_dir, overwrite, lambda tmp: write_simulation(result, tmp, comparison=comparison),
+        inputs=[Path(case_path), *([case.machine().source] if case.machine().source else [])])
     return _summary(result, comparison), paths
 
 

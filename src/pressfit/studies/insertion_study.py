@@ -9,7 +9,9 @@ play is invisible to it: it shows as the offset of the tool from the estimate, `
 end of the dwell, under the steady insertion force). Without preload the joints sit centred and the first
 newtons of contact force take up the play: the plate moves by the lost motion (2g / sin(alpha) at pose A).
 With a4 above the critical preload (:func:`pressfit.mechanics.clearance.critical_preload`, every joint kept
-closed up to the peak contact force) the offset is the elastic deflection alone, as with g = 0. The study
+closed by the press load up to the insertion force limit, ``[simulation.controller] force_limit_n``: a property
+of the clearance, the pose and the limit, never of the other preloads asked for; the overshoot above the limit
+is reported per run) the offset is the elastic deflection alone, as with g = 0. The study
 reports, per pair, that offset, its difference from the same preload with g = 0 (the play's share, ``play_error_m``,
 the norm of the vector difference), the lateral
 tool error at the pin, the peak contact force and its overshoot over the limit. The weight of the moving parts
@@ -82,10 +84,10 @@ def insertion_study(case: Case, preloads_n: list[float], clearances_m: list[floa
         variant = _variant(case, p, g)
         results[p, g] = simulate_insertion(variant, limiter=True)
     rows = []
+    limit_n = case.simulation.controller.force_limit_n
     for g in clearances_m:
-        peak = max(results[p, g].summary["peak_contact_force_n"] for p in preloads_n)
         clearance = clearance_from_case(_variant(case, 0.0, g), machine)
-        critical = critical_preload(machine, pose, [0.0, 1.0, 0.0], peak, clearance).preload if g > 0 else 0.0
+        critical = critical_preload(machine, pose, [0.0, 1.0, 0.0], limit_n, clearance).preload if g > 0 else 0.0
         for p in preloads_n:
             s, hidden = results[p, g].summary, _hidden_error_m(results[p, g])
             play = np.linalg.norm(hidden - _hidden_error_m(results[p, 0.0]))
