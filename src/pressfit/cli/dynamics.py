@@ -161,7 +161,7 @@ def response_cmd(x: float, y: float, z: float, force_n: tuple[float, float, floa
 @user_errors
 def control_cmd(case_path: Path, plant_model: str, out_dir: Path | None, overwrite: bool, as_json: bool) -> None:
     """The case's insertion loop (machine, drives, controller) linearised at the pin and the waypoints: margins,
-    closed-loop poles, -3 dB bandwidth, structural modes and their observability from the drives."""
+    closed-loop poles, -3 dB bandwidth, structural modes and the drives' share of each."""
     from pressfit.output.control import run_control
 
     design, paths = run_control(case_path, plant_model, out_dir, overwrite)  # type: ignore[arg-type]
@@ -177,8 +177,8 @@ def control_cmd(case_path: Path, plant_model: str, out_dir: Path | None, overwri
                        f"phase margin {m.phase_margin_deg:.3g} deg at {m.gain_crossover_hz:.3g} Hz")
         click.echo("  loop poles [Hz (damping)]: " + ", ".join(
             f"{q['frequency_hz']:.3g} ({q['damping']:.2f})" for q in p.to_dict()["loop_poles"]))
-        click.echo("  structural modes [Hz (observability)]: "
-                   + ", ".join(f"{m.frequency_hz:.4g} ({m.observability:.2g})" for m in p.modes))
+        click.echo("  structural modes [Hz (share of strain energy in the drives)]: "
+                   + ", ".join(f"{m.frequency_hz:.4g} ({m.drive_energy_fraction:.2g})" for m in p.modes))
         for w in p.warnings:
             click.echo(f"  WARNING: {w}")
     echo_written(paths)
