@@ -51,6 +51,12 @@ def main() -> None:
         tool_response(load_machine(), np.array([0.0, 0.6, 0.2]), np.array([0.0, -100.0, 0.0]))
         times.append(time.perf_counter() - t0)
     print(f"response (0, 0.6, 0.2), 100 N step, 0.5 s: {np.median(times):.2f} s wall")
+    from pressfit.dynamics.linearise import control_design
+
+    for model in ("rigid", "flexible"):
+        t0 = time.perf_counter()
+        control_design(case, model)
+        print(f"control {model} (shipped case, 4 poses): {time.perf_counter() - t0:.1f} s wall")
 
 
 if __name__ == "__main__":

@@ -158,3 +158,37 @@ def response_cmd(x: float, y: float, z: float, force_n: tuple[float, float, floa
                + ", ".join(f"{f:.4g}" for f in s["lowest_modes_hz"]) + " Hz; receptance peaks "
                + ", ".join(f"{f:.4g}" for f in s["receptance_peak_hz"]) + " Hz")
     echo_written(paths)
+
+
+@click.command("control")
+@click.argument("case_path", type=click.Path(path_type=Path))
+@click.option("--model", "plant_model", type=click.Choice(["flexible", "rigid"]), default="flexible",
+              show_default=True, help="The machine linearised: elastic VJM legs or rigid legs (fast).")
+@click.option("--out", "out_dir", type=click.Path(path_type=Path), default=None,
+              help="Directory for control.json, poles.csv and bode.png (nothing written without it).")
+@OVERWRITE_OPTION
+@click.option("--json", "as_json", is_flag=True, help="Print the summary as JSON.")
+@user_errors
+def control_cmd(case_path: Path, plant_model: str, out_dir: Path | None, overwrite: bool, as_json: bool) -> None:
+    """The case's insertion loop (machine, drives, controller) linearised at the pin and the waypoints: margins,
+    closed-loop poles, -3 dB bandwidth, structural modes and the drives' share of each."""
+    from pressfit.output.control import run_control
+
+    design, paths = run_control(case_path, plant_model, out_dir, overwrite)  # type: ignore[arg-type]
+    if as_json:
+        click.echo(to_json(design.to_dict()))
+        return
+    for p in design.poses:
+        click.echo(f"{p.name} ({', '.join(f'{c:g}' for c in p.pose_m)}) m, {p.model}"
+                   f"{', in contact' if p.in_contact else ''}: {'stable' if p.stable else 'UNSTABLE'}; -3 dB "
+                   f"bandwidth vertical {p.bandwidth_vertical_hz:.3g} Hz, lateral {p.bandwidth_lateral_hz:.3g} Hz")
+        for m in p.margins:
+            click.echo(f"  axis {m.axis}: gain margin {m.gain_margin:.3g} at {m.phase_crossover_hz:.3g} Hz, "
+                       f"phase margin {m.phase_margin_deg:.3g} deg at {m.gain_crossover_hz:.3g} Hz")
+        click.echo("  loop poles [Hz (damping)]: " + ", ".join(
+            f"{q['frequency_hz']:.3g} ({q['damping']:.2f})" for q in p.to_dict()["loop_poles"]))
+        click.echo("  structural modes [Hz (share of strain energy in the drives)]: "
+                   + ", ".join(f"{m.frequency_hz:.4g} ({m.drive_energy_fraction:.2g})" for m in p.modes))
+        for w in p.warnings:
+            click.echo(f"  WARNING: {w}")
+    echo_written(paths)

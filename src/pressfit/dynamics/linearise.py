@@ -1,0 +1,394 @@
+r"""The insertion's control loop linearised at a pose: plant, drives and Figure 12's controller as state space.
+
+Plant (``model = "flexible"``, the default): the elastic VJM machine of :func:`pressfit.dynamics.modes.reduced_system`
+(static equilibrium under the plate's and tool's weight, motions restricted to the linearised closures,
+dq = basis z) with FORCE drives, as :mod:`pressfit.dynamics.machine.flexible` runs them: the actuator joints
+carry no spring and drive i puts -F_i (F_i > 0 tension) on its actuator joint,
+
+    M_r z'' + C_r z' + K_r z = -S^T F + p_y^T f,     S = basis[actuator rows] (4, r),  p_y = plate_map[1],
+
+K_r = basis^T K basis with the actuator springs removed (three rigid-body modes remain: the plate's
+translations, held by the controller only), C_r the machine file's Rayleigh damping on the elastic motion
+(alpha M (v - v_r) + beta K v, v_r the rigid machine's velocity at the actuator rates, as the simulation damps)
+and f the contact force on the tool (N, +y). ``model = "rigid"``: the rigid-leg machine, z = h (3,) the plate
+position, M_h h'' = -A F + e_y f, M_h the apparent Cartesian mass (Pinocchio's constraint dynamics, unit plate
+forces, gravity off), S = A^T (equation 2: dl = A^T dh). In contact (the pin pose) the case's contact spring
+k_c (and damping b_c) acts at the tool: K += k_c p_y^T p_y, C += b_c p_y^T p_y, contact force = -k_c y - b_c y'.
+Drives (:mod:`pressfit.dynamics.actuators`): tau F' = F_cmd - F, tau = 1 / (2 pi f_bw). Outputs: the four
+measured lengths l = S z (the actuator joint coordinates), their rates, the tool position (3) and the contact
+force.
+
+Controller (:mod:`pressfit.dynamics.control`), unclamped (limiter inactive, the contact force below the limit):
+the Gauss-Newton estimate is linear near the pose, dh_est = J^+ dl = (A^+)^T dl, likewise its rate;
+W = K_p (r - h_est) + K_d (r' - h_est') + K_i int(r - h_est); F_cmd = -A^+ W (the preload a4 v_p and the
+gravity feed-forward are constants of the equilibrium). Left out, stated: the pose dependence of A^+, v_p
+(distribution) and of A (the legs' static tensions turning with the legs): in statics they cancel exactly
+(-A(h) N(h) = W for every h), dynamically they differ by the drive lag; the gravity feed-forward's
+|dG/dh| <= 58 N/m (``control`` module) against K_p = 2e4 N/m.
+
+Results: open loop broken at the force commands per Cartesian axis (the other two closed), margins from
+python-control's ``stability_margins``; closed-loop poles (frequency |s| / 2 pi, damping -Re s / |s|); the
+-3 dB bandwidth of reference -> tool (``control.bandwidth``) vertical and lateral (x); the structural modes
+(:func:`pressfit.dynamics.modes.natural_modes`, drives holding) with how much the drives see and move each: the
+drive forces act on, and the encoders measure, the actuator coordinates S phi_k (collocated: the controllability
+and the observability are the same vector), and the share of the mode's strain energy stored in the actuator
+springs, sum_i k_i (S phi_k)_i^2 / phi_k^T K phi_k (= / omega_k^2, phi mass-normalised), is that measure normalised
+by the mode itself: about 1 for the axial leg modes (97% at pose A's 441 Hz mode), 1-2% for the rocking pair (the
+plate sways and tilts about the legs' concurrency point, where a rigid rotation changes no leg length; what is left
+is the legs' bending), exactly 0 for the plate twist; a warning when a loop pole (a closed-loop pole the feedback
+moved by more than ``MOVED_RELATIVE`` from every open-loop pole) lies within ``WARNING_RATIO`` of a structural
+mode's frequency.
+"""
+
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass
+from typing import Any, Literal
+
+import control as ct
+import numpy as np
+import pinocchio as pin
+
+from pressfit import kinematics
+from pressfit.description.cases import Case, Contact, Controller
+from pressfit.description.machine import Machine
+from pressfit.dynamics.actuators import ForceActuators, distribution
+from pressfit.dynamics.machine.flexible import FlexibleMachine
+from pressfit.dynamics.modes import closure_jacobian, elastic_stiffness, mass_matrix, natural_modes, reduced_system
+from pressfit.dynamics.multibody import rigid_leg_model
+from pressfit.errors import PressfitError
+
+WARNING_RATIO = 0.2  # a loop pole within 20% of a structural mode's frequency is reported
+MOVED_RELATIVE = 1e-3  # a closed-loop pole farther than this (relative) from every open-loop pole is a loop pole
+MODE_COUNT = 6
+FREQUENCY_POINTS = 300  # log-spaced over 0.01-1000 Hz: Bode data and margins (~30 ms a point at 200 states)
+Model = Literal["flexible", "rigid"]
+AXES = ("x", "y", "z")
+
+
+@dataclass(frozen=True)
+class Plant:
+    """The linear plant at a pose (module doc): state x = [z, z', F]; inputs the four force commands (N) and the
+    contact force (N, +y on the tool); ``c_lengths``, ``c_rates``, ``c_tool`` (4 / 4 / 3, n) the outputs, m and
+    m/s; ``c_contact`` (n,) the contact force (N, zero out of contact). A^+ (4, 3) at the pose."""
+
+    model: str
+    pose_m: np.ndarray
+    in_contact: bool
+    a: np.ndarray
+    b_command: np.ndarray  # (n, 4)
+    b_contact: np.ndarray  # (n,)
+    c_lengths: np.ndarray
+    c_rates: np.ndarray
+    c_tool: np.ndarray
+    c_contact: np.ndarray
+    pinv: np.ndarray
+    vertical_mass_kg: float  # 1 / (e_y^T M_h^-1 e_y) of the rigid model: the apparent vertical mass
+
+    def system(self) -> ct.StateSpace:
+        """python-control state space, inputs n_cmd1..4, f_contact; outputs l1..4, tool_x..z, f_contact."""
+        c = np.vstack([self.c_lengths, self.c_tool, self.c_contact])
+        b = np.column_stack([self.b_command, self.b_contact])
+        return ct.ss(self.a, b, c, np.zeros((c.shape[0], 5)), inputs=[f"n_cmd{i}" for i in range(1, 5)] + ["f_contact"],
+                     outputs=[f"l{i}" for i in range(1, 5)] + ["tool_x", "tool_y", "tool_z", "f_contact"])
+
+
+def _second_order(mass: np.ndarray, damping: np.ndarray, stiffness: np.ndarray, forcing: np.ndarray,
+                  tau_s: float) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    """[z, z', F] state matrix and input matrices (commands, contact) of M z'' + C z' + K z = forcing[:, :4] F +
+    forcing[:, 4] f with tau F' = F_cmd - F."""
+    r = mass.shape[0]
+    minv = np.linalg.solve(mass, np.column_stack([stiffness, damping, forcing]))
+    a = np.zeros((2 * r + 4, 2 * r + 4))
+    a[:r, r:2 * r] = np.eye(r)
+    a[r:2 * r, :r], a[r:2 * r, r:2 * r] = -minv[:, :r], -minv[:, r:2 * r]
+    a[r:2 * r, 2 * r:] = minv[:, 2 * r:2 * r + 4]
+    a[2 * r:, 2 * r:] = -np.eye(4) / tau_s
+    b = np.zeros((2 * r + 4, 4))
+    b[2 * r:] = np.eye(4) / tau_s
+    bf = np.zeros(2 * r + 4)
+    bf[r:2 * r] = minv[:, -1]
+    return a, b, bf
+
+
+def _apparent_vertical_mass(machine: Machine, pose_m: np.ndarray) -> tuple[np.ndarray, float]:
+    """M_h (3, 3), kg, of the rigid-leg model at rest, gravity off (Pinocchio constraint dynamics), and
+    1 / (M_h^-1)_yy."""
+    rigid = rigid_leg_model(machine, pose_m)
+    rigid.model.gravity = pin.Motion.Zero()
+    q = rigid.configuration_at(pose_m)
+    inv = np.empty((3, 3))
+    for k in range(3):
+        tau = np.zeros(rigid.model.nv)
+        tau[k] = 1.0  # N along the unrotated plate's axes = world axes
+        inv[:, k] = rigid.accelerations(q, np.zeros(rigid.model.nv), tau)[:3]
+    inv = 0.5 * (inv + inv.T)
+    return np.linalg.inv(inv), 1.0 / inv[1, 1]
+
+
+def linear_plant(machine: Machine, pose_m: np.ndarray, contact: Contact | None = None,
+                 model: Model = "flexible") -> Plant:
+    """:class:`Plant` at the reachable pose ``pose_m`` (m); ``contact``: the contact spring engaged at the tool."""
+    if model not in ("flexible", "rigid"):
+        raise PressfitError(f"model must be 'flexible' or 'rigid', got {model!r}")
+    pose = kinematics.require_reachable(machine, np.asarray(pose_m, dtype=float))
+    tau_s = ForceActuators.of(machine).time_constant_s
+    pinv, _ = distribution(kinematics.inverse_kinematics(machine, pose).unit_vectors)
+    m_h, m_y = _apparent_vertical_mass(machine, pose)
+    if model == "rigid":
+        s = kinematics.inverse_kinematics(machine, pose).unit_vectors  # (4, 3): dl = A^T dh
+        mass, damping, stiffness = m_h, np.zeros((3, 3)), np.zeros((3, 3))
+        plate = np.eye(3)
+        forcing = np.column_stack([-s.T, plate[1]])
+    else:
+        rs = reduced_system(machine, pose)
+        act = np.array([sp.idx_v for sp in rs.mm.springs if sp.name == "actuator"])
+        k_full = elastic_stiffness(rs.mm, rs.q)
+        k_full[act, act] = 0.0  # force drives: no actuator spring
+        basis = rs.basis
+        stiffness = basis.T @ k_full @ basis
+        s = basis[act]  # (4, r)
+        plate = rs.plate_map[:3]
+        ray = FlexibleMachine(machine, pose).damping
+        damping = ray.beta_s * stiffness
+        if ray.alpha_per_s:
+            jac = closure_jacobian(rs.mm, rs.model, rs.data, rs.q)
+            rigid = np.setdiff1d(np.arange(rs.model.nv), [sp.idx_v for sp in rs.mm.springs])
+            br = jac[:, rigid]
+            v_r = np.zeros((rs.model.nv, 4))  # rigid machine velocity per unit actuator rate (flexible module)
+            v_r[act] = np.eye(4)
+            v_r[rigid] = -np.linalg.solve(br.T @ br, br.T @ jac[:, act])
+            full_mass = mass_matrix(rs.model, rs.data, rs.q)
+            damping = damping + ray.alpha_per_s * basis.T @ full_mass @ (basis - v_r @ s)
+        mass = rs.mass_kg
+        forcing = np.column_stack([-s.T, plate[1]])
+    c_contact_z = np.zeros((2, mass.shape[0]))
+    if contact is not None:
+        py = plate[1]
+        stiffness = stiffness + contact.stiffness_n_per_m * np.outer(py, py)
+        damping = damping + contact.damping_n_s_per_m * np.outer(py, py)
+        c_contact_z = np.vstack([-contact.stiffness_n_per_m * py, -contact.damping_n_s_per_m * py])
+    a, b, bf = _second_order(mass, damping, stiffness, forcing, tau_s)
+    r = mass.shape[0]
+    n = a.shape[0]
+
+    def pad(rows: np.ndarray, offset: int) -> np.ndarray:
+        out = np.zeros((rows.shape[0], n))
+        out[:, offset:offset + r] = rows
+        return out
+
+    c_contact = (pad(c_contact_z[:1], 0) + pad(c_contact_z[1:], r))[0]
+    return Plant(model=model, pose_m=pose, in_contact=contact is not None, a=a, b_command=b, b_contact=bf,
+                 c_lengths=pad(s, 0), c_rates=pad(s, r), c_tool=pad(plate, 0), c_contact=c_contact, pinv=pinv,
+                 vertical_mass_kg=float(m_y))
+
+
+@dataclass(frozen=True)
+class Loop:
+    """The linearised closed loop (module doc): plant ``plant``, closed-loop state matrix ``a`` over
+    [plant state, integral of the error (3)], the Cartesian loop transfer ``open_loop`` (inputs the Cartesian
+    force commands W, N; outputs the PID's W, N: loop broken at the force commands, F_cmd = -A^+ W) and
+    ``reference`` (reference position r (3), m -> tool position (3), m, the reference velocity fed forward)."""
+
+    plant: Plant
+    a: np.ndarray
+    open_loop: ct.StateSpace
+    reference: ct.StateSpace
+
+
+def close_loop(plant: Plant, gains: Controller) -> Loop:
+    """Figure 12's controller (unclamped) around ``plant`` (module doc)."""
+    kp, kd, ki = gains.kp_n_per_m, gains.kd_n_s_per_m, gains.ki_n_per_m_s
+    est = plant.pinv.T  # (3, 4): dh_est = J^+ dl
+    bw = plant.b_command @ (-plant.pinv)  # (n, 3): plant input per Cartesian command
+    n = plant.a.shape[0]
+    h, hd = est @ plant.c_lengths, est @ plant.c_rates  # (3, n) estimate and its rate
+    # open loop: state [x, int(h_est)], input W_in (3), output y = Kp h_est + Kd h_est' + Ki int(h_est); W = -y
+    a_ol = np.block([[plant.a, np.zeros((n, 3))], [h, np.zeros((3, 3))]])
+    b_ol = np.vstack([bw, np.zeros((3, 3))])
+    c_ol = np.hstack([kp * h + kd * hd, ki * np.eye(3)])
+    open_loop = ct.ss(a_ol, b_ol, c_ol, np.zeros((3, 3)), inputs=[f"w_{x}" for x in AXES],
+                      outputs=[f"pid_{x}" for x in AXES])
+    # closed loop: state [x, xi], xi' = r - h_est; W = Kp (r - h_est) + Kd (r' - h_est') + Ki xi
+    a_cl = np.block([[plant.a - bw @ (kp * h + kd * hd), ki * bw], [-h, np.zeros((3, 3))]])
+    b_r = np.vstack([kp * bw, np.eye(3)])
+    b_rd = np.vstack([kd * bw, np.zeros((3, 3))])
+    c_tool = np.hstack([plant.c_tool, np.zeros((3, 3))])
+    # r' = s r: s C (sI - A)^-1 B_rd = C A (sI - A)^-1 B_rd + C B_rd
+    reference = ct.ss(a_cl, b_r + a_cl @ b_rd, c_tool, c_tool @ b_rd, inputs=[f"r_{x}" for x in AXES],
+                      outputs=[f"tool_{x}" for x in AXES])
+    return Loop(plant=plant, a=a_cl, open_loop=open_loop, reference=reference)
+
+
+def axis_loop(loop: Loop, axis: int) -> ct.StateSpace:
+    """The SISO loop transfer of one Cartesian axis broken at its force command, the other two closed."""
+    ol = loop.open_loop
+    a, b, c = ol.A, ol.B, ol.C
+    others = [k for k in range(3) if k != axis]
+    return ct.ss(a - b[:, others] @ c[others], b[:, [axis]], c[[axis]], np.zeros((1, 1)))
+
+
+@dataclass(frozen=True)
+class Margins:
+    """Stability margins of one axis loop: gain margin (ratio; inf if none) at its phase crossover (Hz), phase
+    margin (deg) at the gain crossover (Hz); ``stable``: the closed loop's poles all in the left half plane."""
+
+    axis: str
+    gain_margin: float
+    phase_crossover_hz: float
+    phase_margin_deg: float
+    gain_crossover_hz: float
+
+
+@dataclass(frozen=True)
+class StructuralMode:
+    """A mode of the machine with the drives holding (``pressfit modes``): frequency (Hz) and the share of its
+    strain energy in the actuator springs (0..1: how much the drives move it and the encoders see it; module
+    doc)."""
+
+    frequency_hz: float
+    drive_energy_fraction: float
+
+
+@dataclass(frozen=True)
+class PoseDesign:
+    """What ``pressfit control`` reports at one pose (SI; module doc)."""
+
+    name: str
+    pose_m: np.ndarray
+    in_contact: bool
+    model: str
+    margins: tuple[Margins, ...]
+    poles: np.ndarray  # (n,) closed-loop poles, 1/s (complex)
+    loop_poles: np.ndarray  # (k,) bool: moved by the feedback
+    bandwidth_vertical_hz: float
+    bandwidth_lateral_hz: float
+    stable: bool
+    modes: tuple[StructuralMode, ...]
+    warnings: tuple[str, ...]
+    vertical_mass_kg: float
+    bode_frequency_hz: np.ndarray
+    bode_open_loop: np.ndarray  # (2, f) complex: vertical and lateral axis loops
+    bode_reference: np.ndarray  # (2, f) complex: r_y -> tool_y, r_x -> tool_x
+
+    @property
+    def pole_frequencies_hz(self) -> np.ndarray:
+        return np.abs(self.poles) / (2 * math.pi)
+
+    @property
+    def pole_damping(self) -> np.ndarray:
+        mag = np.abs(self.poles)
+        return np.where(mag > 0, -self.poles.real / np.where(mag > 0, mag, 1.0), 1.0)
+
+    def to_dict(self) -> dict[str, Any]:
+        loop = self.loop_poles & (self.poles.imag >= 0)
+        order = np.argsort(self.pole_frequencies_hz[loop])
+        return {"name": self.name, "pose_m": self.pose_m, "in_contact": self.in_contact, "model": self.model,
+                "stable": self.stable, "vertical_mass_kg": self.vertical_mass_kg,
+                "bandwidth_vertical_hz": _finite(self.bandwidth_vertical_hz),
+                "bandwidth_lateral_hz": _finite(self.bandwidth_lateral_hz),
+                "margins": [{k: _finite(v) if isinstance(v, float) else v for k, v in m.__dict__.items()}
+                            for m in self.margins],
+                "loop_poles": [{"real_per_s": p.real, "imag_rad_per_s": p.imag, "frequency_hz": f, "damping": z}
+                               for p, f, z in zip(self.poles[loop][order], self.pole_frequencies_hz[loop][order],
+                                                  self.pole_damping[loop][order], strict=True)],
+                "structural_modes": [m.__dict__ for m in self.modes], "warnings": list(self.warnings)}
+
+
+def _finite(value: float) -> float | None:
+    """JSON: a margin that does not exist (no crossover: inf or nan) is null."""
+    return value if math.isfinite(value) else None
+
+
+def _margins(response: ct.FrequencyResponseData, axis: str) -> Margins:
+    """From the loop's frequency response (python-control interpolates the crossings; its polynomial route is
+    ill-conditioned at a hundred states)."""
+    gm, pm, _, wpc, wgc, _ = ct.stability_margins(response)
+    return Margins(axis=axis, gain_margin=float(gm), phase_crossover_hz=float(wpc) / (2 * math.pi),
+                   phase_margin_deg=float(pm), gain_crossover_hz=float(wgc) / (2 * math.pi))
+
+
+def _bandwidth_hz(sys: ct.StateSpace) -> float:
+    bw = ct.bandwidth(sys)
+    return float(bw) / (2 * math.pi) if np.isfinite(bw) else math.inf
+
+
+def structural_modes(machine: Machine, pose_m: np.ndarray, count: int = MODE_COUNT) -> tuple[StructuralMode, ...]:
+    """The ``count`` lowest modes, drives holding, with the modal measures of the module doc."""
+    modes = natural_modes(machine, pose_m, count)
+    rs = reduced_system(machine, pose_m)
+    k = np.diag(elastic_stiffness(rs.mm, rs.q))
+    act = np.array([sp.idx_v for sp in rs.mm.springs if sp.name == "actuator"])
+    drive = np.sum(k[act] * modes.shapes[:, act] ** 2, axis=1)
+    total = np.einsum("kv,v,kv->k", modes.shapes, k, modes.shapes)
+    return tuple(StructuralMode(frequency_hz=float(f), drive_energy_fraction=float(d / t))
+                 for f, d, t in zip(modes.frequencies_hz, drive, total, strict=True))
+
+
+def design_at(machine: Machine, gains: Controller, pose_m: np.ndarray, name: str, contact: Contact | None,
+              model: Model = "flexible", frequencies_hz: np.ndarray | None = None) -> PoseDesign:
+    """The loop at one pose (module doc)."""
+    plant = linear_plant(machine, pose_m, contact, model)
+    loop = close_loop(plant, gains)
+    poles = np.linalg.eigvals(loop.a)
+    open_poles = np.concatenate([np.linalg.eigvals(plant.a), np.zeros(3)])
+    scale = np.maximum(np.abs(poles), 1.0)
+    moved = np.min(np.abs(poles[:, None] - open_poles[None, :]), axis=1) > MOVED_RELATIVE * scale
+    stable = bool(np.all(poles.real < 0))
+    f = np.logspace(-2, 3, FREQUENCY_POINTS) if frequencies_hz is None else frequencies_hz
+    w = 2 * math.pi * f
+    responses = [ct.frequency_response(axis_loop(loop, k), w) for k in (1, 0)]
+    margins = (_margins(responses[0], "y"), _margins(responses[1], "x"))
+    ref_y, ref_x = loop.reference[1, 1], loop.reference[0, 0]
+    bode_ol = np.array([np.asarray(r.complex).reshape(-1) for r in responses])
+    bode_ref = np.array([np.asarray(ct.frequency_response(s, w).complex).reshape(-1) for s in (ref_y, ref_x)])
+    modes = structural_modes(machine, pose_m)
+    warnings = []
+    freq = np.abs(poles) / (2 * math.pi)
+    mode_hz = np.array([m.frequency_hz for m in modes])
+    for p in np.flatnonzero(moved & (poles.imag >= 0)):
+        k = int(np.argmin(np.abs(mode_hz - freq[p])))
+        m = modes[k]
+        if abs(freq[p] - m.frequency_hz) <= WARNING_RATIO * m.frequency_hz:
+            warnings.append(f"loop pole at {freq[p]:.4g} Hz (damping {-poles[p].real / abs(poles[p]):.3g}) within "
+                            f"{100 * WARNING_RATIO:g}% of structural mode {k + 1} at {m.frequency_hz:.4g} Hz "
+                            f"(drive energy share {m.drive_energy_fraction:.2g})")
+    if not stable:
+        worst = poles[np.argmax(poles.real)]
+        warnings.insert(0, f"the closed loop is UNSTABLE: pole {worst.real:.4g} {worst.imag:+.4g}j 1/s "
+                           f"({abs(worst) / (2 * math.pi):.4g} Hz)")
+    return PoseDesign(name=name, pose_m=plant.pose_m, in_contact=plant.in_contact, model=model, margins=margins,
+                      poles=poles, loop_poles=moved, bandwidth_vertical_hz=_bandwidth_hz(ref_y) if stable else math.nan,
+                      bandwidth_lateral_hz=_bandwidth_hz(ref_x) if stable else math.nan, stable=stable, modes=modes,
+                      warnings=tuple(warnings), vertical_mass_kg=plant.vertical_mass_kg, bode_frequency_hz=f,
+                      bode_open_loop=bode_ol, bode_reference=bode_ref)
+
+
+@dataclass(frozen=True)
+class ControlDesign:
+    """``pressfit control``: the loop at the pin pose (in contact) and at the case's waypoints."""
+
+    case: str
+    model: str
+    poses: tuple[PoseDesign, ...]
+
+    def to_dict(self) -> dict[str, Any]:
+        return {"case": self.case, "model": self.model, "warning_ratio": WARNING_RATIO,
+                "poses": [p.to_dict() for p in self.poses]}
+
+
+def control_design(case: Case, model: Model = "flexible") -> ControlDesign:
+    """The case's loop (``[simulation]``, ``[simulation.controller]``) linearised at the pin (contact engaged)
+    and at the waypoints start, approach (above the pin) and end."""
+    sim = case.simulation
+    if sim is None:
+        raise PressfitError(f"{case.path}: no [simulation] table: pressfit control needs the insertion scenario")
+    machine = case.machine()
+    c = sim.contact
+    pin_pose = np.array([c.pin_position_m[0], c.board_height_m, c.pin_position_m[1]])
+    approach = pin_pose + np.array([0.0, sim.approach_height_m, 0.0])
+    poses = [("pin", pin_pose, c), ("start", np.array(sim.start_m), None), ("approach", approach, None),
+             ("end", np.array(sim.end_m), None)]
+    return ControlDesign(case=case.name, model=model,
+                         poses=tuple(design_at(machine, sim.controller, p, n, con, model) for n, p, con in poses))

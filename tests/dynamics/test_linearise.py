@@ -1,0 +1,109 @@
+"""The linearised insertion loop (pressfit.dynamics.linearise, pressfit control): closed forms derived here."""
+
+from __future__ import annotations
+
+from pathlib import Path
+
+import numpy as np
+import pytest
+from click.testing import CliRunner
+
+from pressfit.cli import main
+from pressfit.description.cases import load_case
+from pressfit.dynamics.actuators import ForceActuators
+from pressfit.dynamics.linearise import _apparent_vertical_mass, close_loop, linear_plant, structural_modes
+from pressfit.dynamics.modes import elastic_stiffness, natural_modes, reduced_system
+
+SHIPPED = Path(__file__).resolve().parents[2] / "cases" / "paper" / "insertion.toml"
+
+
+def test_rigid_closed_loop_poles_match_the_closed_form():
+    """Rigid legs, no contact, at the scenario's start pose. With A A^+ = I the Cartesian loop is
+    M_h h'' = D(s) C(s) (r - h), D = 1 / (tau s + 1) the drives, C = K_d s + K_p + K_i / s; in the eigenbasis of
+    the apparent mass M_h (eigenvalues m_k) each axis has the characteristic polynomial
+    m_k tau s^4 + m_k s^3 + K_d s^2 + K_p s + K_i, and the fourth drive (along v_p, which moves nothing) keeps
+    its pole -1 / tau: 3 x 4 + 1 = 13 poles."""
+    case = load_case(SHIPPED)
+    machine, gains = case.machine(), case.simulation.controller
+    pose = np.array(case.simulation.start_m)
+    loop = close_loop(linear_plant(machine, pose, None, "rigid"), gains)
+    tau = ForceActuators.of(machine).time_constant_s
+    m_h, _ = _apparent_vertical_mass(machine, pose)
+    expected = [-1.0 / tau]
+    for m in np.linalg.eigvalsh(m_h):
+        expected.extend(np.roots([m * tau, m, gains.kd_n_s_per_m, gains.kp_n_per_m, gains.ki_n_per_m_s]))
+    poles = np.sort_complex(np.linalg.eigvals(loop.a))
+    expected = np.sort_complex(np.array(expected))
+    assert poles.shape == expected.shape == (13,)
+    assert np.max(np.abs(poles - expected) / np.abs(expected)) < 1e-6
+
+
+def test_contact_spring_adds_its_stiffness_at_the_pin():
+    """Rigid legs in contact, drives and controller left out: the vertical plant is M_h h'' + k_c e_y e_y^T h = 0
+    with the other two axes free; its nonzero eigenvalue is omega^2 = k_c (M_h^-1)_yy."""
+    case = load_case(SHIPPED)
+    machine, c = case.machine(), case.simulation.contact
+    pin_pose = np.array([c.pin_position_m[0], c.board_height_m, c.pin_position_m[1]])
+    plant = linear_plant(machine, pin_pose, c, "rigid")
+    ev = np.linalg.eigvals(plant.a[:6, :6])
+    omega = np.max(np.abs(ev))
+    assert omega == pytest.approx(np.sqrt(c.stiffness_n_per_m / plant.vertical_mass_kg), rel=1e-9)
+
+
+def test_control_without_simulation_table_exits_2(tmp_path):
+    case = tmp_path / "nosim.toml"
+    case.write_text('name = "x"\n[poses]\npoints_m = [[0.0, 0.65, 0.0]]\n[loads]\nforce_n = [0.0, 10.0, 0.0]\n')
+    r = CliRunner().invoke(main, ["control", str(case), "--model", "rigid"])
+    assert r.exit_code == 2
+    lines = r.output.strip().splitlines()
+    assert len(lines) == 1 and "[simulation]" in lines[0] and "nosim.toml" in lines[0]
+
+
+def test_control_missing_file_exits_2(tmp_path):
+    r = CliRunner().invoke(main, ["control", str(tmp_path / "none.toml"), "--model", "rigid"])
+    assert r.exit_code == 2 and len(r.output.strip().splitlines()) == 1
+
+
+def test_unstable_controller_is_reported_not_refused(tmp_path):
+    """K_d = 0 with the integrator: per axis m tau s^4 + m s^3 + K_p s + K_i has no s^2 term, so by Routh it
+    has right-half-plane roots: reported as UNSTABLE, exit 0."""
+    text = SHIPPED.read_text().replace("kd_n_s_per_m = 1.0e3", "kd_n_s_per_m = 0.0")
+    case = tmp_path / "unstable.toml"
+    case.write_text(text)
+    r = CliRunner().invoke(main, ["control", str(case), "--model", "rigid"])
+    assert r.exit_code == 0, r.output
+    assert "UNSTABLE" in r.output
+
+
+def test_control_writes_its_files(tmp_path):
+    out = tmp_path / "out"
+    r = CliRunner().invoke(main, ["control", str(SHIPPED), "--model", "rigid", "--out", str(out)])
+    assert r.exit_code == 0, r.output
+    assert sorted(p.name for p in out.iterdir()) == ["bode.png", "control.json", "poles.csv"]
+    again = CliRunner().invoke(main, ["control", str(SHIPPED), "--model", "rigid", "--out", str(out)])
+    assert again.exit_code == 2
+
+
+def test_drives_hold_most_of_the_axial_mode_and_little_of_the_rocking_pair(machine):
+    """The drives' share of each mode's strain energy (module doc), at pose A: the plate twist (83 Hz) stretches no
+    leg, so the share is 0 to round-off (by the machine's symmetry: the twist turns every plate cardan
+    perpendicular to its leg); the rocking pair sways and tilts about the legs' concurrency point, where a rigid
+    rotation changes no leg length, so only the legs' bending is left (measured 0.0118); the vertical mode
+    (441 Hz) lives in the actuator springs (measured 0.970). An independent share: the energy fraction from the
+    model's own stiffness matrix restricted to the actuator coordinates, phi^T K_act phi / phi^T K phi, with
+    omega^2 (mass-normalised shapes) as the denominator instead: equal to 1e-9."""
+    modes = structural_modes(machine, np.array([0.0, 0.72, 0.0]), count=12)
+    share = np.array([m.drive_energy_fraction for m in modes])
+    f = np.array([m.frequency_hz for m in modes])
+    assert f[0] == pytest.approx(f[1], rel=1e-9)  # the rocking pair
+    assert 0.005 < share[0] < 0.03 and share[1] == pytest.approx(share[0], rel=1e-6)
+    assert share[2] < 1e-12  # the twist
+    axial = int(np.argmax(share))
+    assert share[axial] > 0.9 and 400 < f[axial] < 500
+    ref = natural_modes(machine, np.array([0.0, 0.72, 0.0]), count=12)
+    omega2 = (2 * np.pi * ref.frequencies_hz) ** 2
+    rs = reduced_system(machine, np.array([0.0, 0.72, 0.0]))
+    k = np.diag(elastic_stiffness(rs.mm, rs.q))
+    act = [sp.idx_v for sp in rs.mm.springs if sp.name == "actuator"]
+    by_omega = np.sum(k[act] * ref.shapes[:, act] ** 2, axis=1) / omega2
+    np.testing.assert_allclose(share, by_omega, rtol=1e-9, atol=1e-15)
