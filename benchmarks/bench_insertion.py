@@ -1,7 +1,8 @@
 """Speed of the insertion simulation (pressfit.dynamics.insertion) on the shipped scenario, one core.
 
-Run: ``python benchmarks/bench_insertion.py``. Prints simulated seconds per wall-clock second with and
-without the limiter (issue 11's goal: at least 1, ideally 10), and the bare closed-loop rigid-leg step
+Run: ``python benchmarks/bench_insertion.py``. Prints simulated seconds per wall-clock second on each model,
+one line per model naming it (``[simulation] model``; issue 19's goals: rigid at least 10, flexible at least 1),
+with and without the limiter on the rigid model, and the bare closed-loop rigid-leg step
 (:meth:`pressfit.dynamics.multibody.RigidLegModel.step`, passive, no controller or contact) in steps per
 second, and the wall time of ``pressfit response`` (:func:`pressfit.dynamics.response.tool_response`, median of
 three). Not a test: timings depend on the machine.
@@ -27,6 +28,14 @@ from pressfit.shipped import cases_dir
 
 def main() -> None:
     case = load_case(cases_dir() / "paper" / "insertion.toml")
+    for model in ("rigid", "flexible"):
+        variant = case.model_copy(update={"simulation": case.simulation.model_copy(update={"model": model})})
+        t0 = time.perf_counter()
+        result = simulate_insertion(variant, True)
+        wall = time.perf_counter() - t0
+        simulated = result.summary["simulated_time_s"]
+        print(f"{model}: {simulated:g} s simulated in {wall:.2f} s wall, {simulated / wall:.2f} simulated s per s, "
+              f"{len(result.series) / wall:.0f} steps/s")
     for limiter in (True, False):
         t0 = time.perf_counter()
         result = simulate_insertion(case, limiter)

@@ -116,6 +116,15 @@ def test_every_other_limit_against_a_constructed_run(free_run):
     assert summary["settling_time_s"] == pytest.approx(known["max_settling_time_s"], abs=1.5e-3)
     for key, value in known.items():
         assert _verdicts(key, value, summary, 0.01) == (False, True), key
+    # the flexible model's couples: torsion T (column 5) and bending |(M_x, M_y)| (columns 3, 4), per leg and section
+    sections = np.zeros((len(result.series), 4, 3, 6))
+    sections[:, 2, 1, 5] = -14.0 * np.sin(np.linspace(0.0, 3.0, len(result.series)))  # peak |T| 14 N m, leg 3
+    sections[:, 1, 0, 3], sections[:, 1, 0, 4] = 3.0, 4.0  # |M_b| = 5 N m at leg 2's base
+    flexible = InsertionResult(True, result.series, result.phases, result.phase_names, sections=sections)
+    summary = summarise(flexible, case, ForceActuators.of(case.machine()))
+    for key, value in {"max_torsion_nm": 14.0, "max_bending_nm": 5.0}.items():
+        assert _verdicts(key, value, summary, 0.01) == (False, True), key
+        known[key] = value
     assert set(known) | {"max_contact_force_n", "max_overshoot_n", "max_positioning_error_m"} == set(SIMULATION_LIMITS)
 
 

@@ -344,7 +344,7 @@ def test_mirror_scenario_reports_mirror_equal_results(short_runs):
     for c in SERIES_COLUMNS:
         if c.endswith("x_m"):
             expected[:, COL[c]] *= -1
-    for prefix in ("cmd_n", "act_n", "axial_n"):
+    for prefix in ("cmd_n", "act_n", "axial_n", "length_m", "rate_m_per_s"):
         idx = [COL[f"{prefix}{i}"] for i in "1234"]
         expected[:, idx] = run.series[:, np.array(idx)[perm]]
     scale = np.maximum(np.abs(expected).max(axis=0), 1e-300)

@@ -92,6 +92,22 @@ def simulate_cmd(case_path: Path, out_dir: Path | None, no_limiter: bool, overwr
     click.echo(f"internal force along v_p {s['internal_force_range_n'][0]:.1f} .. {s['internal_force_range_n'][1]:.1f}"
                f" N (commanded {s['commanded_preload_n']:g} N); peak leg axial force "
                + " ".join(f"{x:.1f}" for x in s["peak_leg_axial_force_n"]) + " N")
+    click.echo(f"model {s['model']}: tool lateral error at first contact "
+               + ("(no contact)" if s["tool_lateral_error_at_first_contact_m"] is None else
+                  f"{s['tool_lateral_error_at_first_contact_m'] * 1e6:.1f} um")
+               + f", max over the dwell {s['tool_lateral_error_dwell_max_m'] * 1e6:.1f} um; structure deflection "
+               "during the moves (tool - kinematic pose) "
+               + ("n/a" if s["max_move_deflection_m"] is None else f"{s['max_move_deflection_m'] * 1e6:.2f} um")
+               + "; residual vibration at the end pose "
+               + ("n/a (no settle)" if s["residual_vibration_m"] is None else
+                  f"{s['residual_vibration_m'] * 1e6:.2f} um peak-to-peak over {s['residual_vibration_window_s']:g} s"))
+    click.echo("drives: peak tension " + " ".join(f"{x:.1f}" for x in s["peak_actuator_tension_n"]) + " N, RMS "
+               + " ".join(f"{x:.1f}" for x in s["rms_actuator_tension_n"]) + " N, peak speed "
+               + " ".join(f"{x * 1e3:.1f}" for x in s["peak_actuator_speed_m_per_s"]) + " mm/s")
+    if "peak_leg_torsion_nm" in s:
+        click.echo("leg sections (elastic model, base/actuator/plate): peak torsion "
+                   + " ".join(f"{x:.2f}" for x in s["peak_leg_torsion_nm"]) + " N m, peak bending "
+                   + " ".join(f"{x:.2f}" for x in s["peak_leg_bending_nm"]) + " N m")
     if "comparison" in s:
         c = s["comparison"]
         click.echo(f"without the limiter: peak {c['peak_contact_force_n']:.2f} N, steady "

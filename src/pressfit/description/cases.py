@@ -386,9 +386,10 @@ class SimulationLimits(StrictModel):
     peak contact force and its overshoot over the insertion limit (N), tool positioning error (the larger of
     the lateral error at the pin and the final 3D error, m), settling time of the contact force (s; a force
     that does not settle fails), peak actuator tension |N| (N), peak per-leg axial force |N| at the plate
-    cardans (N). ``limiter``: whether the checked run uses the insertion force limiter. Leg torsion and
-    bending are not offered: the rigid-leg model's couples are statically indeterminate (split by minimum
-    norm, which depends on the frames' handedness); the elastic model is to provide objective ones."""
+    cardans (N), and with ``[simulation] model = "flexible"`` only the peak leg torsion |T| and bending
+    |M_b| over the three sections (N m; refused with the rigid-leg model, whose couples are statically
+    indeterminate: a minimum-norm split that depends on the frames' handedness). ``limiter``: whether the
+    checked run uses the insertion force limiter."""
 
     limiter: bool = True
     max_contact_force_n: NonNegative | None = None
@@ -397,17 +398,8 @@ class SimulationLimits(StrictModel):
     max_settling_time_s: NonNegative | None = None
     max_actuator_force_n: NonNegative | None = None
     max_axial_force_n: NonNegative | None = None
-
-    @model_validator(mode="before")
-    @classmethod
-    def _not_objective(cls, data: Any) -> Any:
-        bad = [k for k in NOT_OBJECTIVE_LIMITS if isinstance(data, dict) and k in data]
-        if bad:
-            raise ValueError(f"{bad[0]} is not offered for the simulation: the rigid-leg model's leg couples are "
-                             "statically indeterminate (a minimum-norm split that is not mirror-objective); "
-                             "leg torsion and bending limits await the elastic model (check them statically "
-                             "in [envelope])")
-        return data
+    max_torsion_nm: NonNegative | None = None
+    max_bending_nm: NonNegative | None = None
 
 
 class Simulation(StrictModel):
@@ -419,7 +411,10 @@ class Simulation(StrictModel):
     ``end_m`` in ``move_time_s`` and holds ``settle_s``. The commanded preload is ``[preload] a4_n`` (force
     mode). ``clearance``: the cardans' lost motion (``[clearance]`` or the machine's plays) in series at the
     tool. Time step (s) and the loop closures' Baumgarte rate (rad/s) of the multibody model. ``limits``:
-    what ``pressfit check`` asserts on the run (:class:`SimulationLimits`)."""
+    what ``pressfit check`` asserts on the run (:class:`SimulationLimits`). ``model``: ``"flexible"`` (the
+    default: the elastic legs in the equations of motion, :mod:`pressfit.dynamics.machine.flexible`, the contact
+    on the elastic tool point, no series compliance added) or ``"rigid"`` (the fast rigid-leg model with the
+    structure's compliance in series at the tool, quasi-statically)."""
 
     start_m: Vector3
     end_m: Vector3
@@ -439,6 +434,17 @@ class Simulation(StrictModel):
     contact: Contact
     controller: Controller = Controller()
     limits: SimulationLimits = SimulationLimits()
+    model: Literal["flexible", "rigid"] = "flexible"
+
+    @model_validator(mode="after")
+    def _objective_couples(self) -> Simulation:
+        bad = [k for k in NOT_OBJECTIVE_LIMITS if getattr(self.limits, k) is not None]
+        if bad and self.model == "rigid":
+            raise ValueError(f"limits.{bad[0]} is not offered with model = \"rigid\": the rigid-leg model's leg "
+                             "couples are statically indeterminate (a minimum-norm split that is not "
+                             "mirror-objective); use model = \"flexible\" (the elastic model's sections) or check "
+                             "them statically in [envelope]")
+        return self
 
 
 class Case(StrictModel):

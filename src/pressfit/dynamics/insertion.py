@@ -37,9 +37,11 @@ from pressfit.description.cases import Case, Simulation
 from pressfit.description.machine import Machine
 from pressfit.dynamics.actuators import ForceActuators
 from pressfit.dynamics.contact import ContactState, contact_force_n, solve_contact
-from pressfit.dynamics.control import ForceLimitedController, PoseCache, Trajectory
+from pressfit.dynamics.control import ForceLimitedController, PoseCache, Trajectory, estimate_pose
+from pressfit.dynamics.machine.base import SECTION_COMPONENTS, SECTIONS, DriveInput
+from pressfit.dynamics.machine.flexible import MAX_STEP_FRACTION, FlexibleMachine
 from pressfit.dynamics.multibody import RigidLegModel, rigid_leg_model
-from pressfit.errors import ModelFileError, PressfitError, UnreachablePoseError, format_violation
+from pressfit.errors import ConvergenceError, ModelFileError, PressfitError, UnreachablePoseError, format_violation
 from pressfit.mechanics.clearance import clearance_from_case, load_deflection
 from pressfit.mechanics.condensed import condensed_plate_compliance
 
@@ -47,7 +49,12 @@ LEGS = ("1", "2", "3", "4")
 SERIES_COLUMNS = ("time_s", "ref_x_m", "ref_y_m", "ref_z_m", "est_x_m", "est_y_m", "est_z_m", "plate_x_m",
                   "plate_y_m", "plate_z_m", "tool_x_m", "tool_y_m", "tool_z_m", "contact_force_n", "depth_m",
                   *(f"cmd_n{i}" for i in LEGS), *(f"act_n{i}" for i in LEGS), "reference_lift_m", "closure_drift_m",
-                  *(f"axial_n{i}" for i in LEGS), "internal_force_n")
+                  *(f"axial_n{i}" for i in LEGS), "internal_force_n", "kinematic_x_m", "kinematic_y_m",
+                  "kinematic_z_m", *(f"length_m{i}" for i in LEGS), *(f"rate_m_per_s{i}" for i in LEGS))
+SECTION_COLUMNS = ("time_s", *(f"leg{i}_{s}_{c}" for i in LEGS for s in SECTIONS for c in SECTION_COMPONENTS))
+MOVE_PHASES = ("approach", "move")  # the structure's deflection during the moves: these phases (summarise)
+VIBRATION_WINDOW_S = 0.2  # residual vibration: the tool's peak-to-peak over the last 0.2 s of the final settle
+KINEMATIC_ITERATIONS = 3  # Gauss-Newton iterations of the kinematic pose from the last row's
 SETTLING_BAND = 0.02  # settling: the contact force within 2% of its value at the end of the dwell
 SETTLING_HOLD = 0.25  # ... and inside that band over at least the last quarter of the dwell, else "did not settle"
 COMPLETION_FRACTION = 0.9  # pressed: the settled force reaches 90% of the target force (summarise)
@@ -77,6 +84,7 @@ class InsertionResult:
     phases: np.ndarray  # (n,) segment index of each row (see ``phase_names``)
     phase_names: tuple[str, ...]
     summary: dict[str, Any] = field(default_factory=dict)
+    sections: np.ndarray | None = None  # (n, 4, 3, 6) flexible model: section resultants (SECTION_COLUMNS)
 
     def column(self, name: str) -> np.ndarray:
         return self.series[:, SERIES_COLUMNS.index(name)]
@@ -258,18 +266,65 @@ def _diverged(case: Case, t: float, what: str) -> PressfitError:
 
 
 def simulate_insertion(case: Case, limiter: bool = True, progress: bool = False) -> InsertionResult:
-    """Run the case's ``[simulation]`` scenario, with or without the force limiter (module docstring)."""
+    """Run the case's ``[simulation]`` scenario, with or without the force limiter, on the case's model
+    (``[simulation] model``: the rigid-leg model with the compliance in series, or the flexible machine)."""
     machine = case.machine()
     plan = plan_scenario(case, machine)
+    drives = ForceActuators.of(machine)
+    run = _run_flexible if case.simulation.model == "flexible" else _run_rigid
+    rows, phases, sections = run(case, machine, plan, drives, limiter, progress)
+    result = InsertionResult(limiter, rows, phases, plan.trajectory.phases, sections=sections)
+    summary = summarise(result, case, drives)
+    summary["warnings"] = [*plan.warnings, *summary["warnings"]]
+    return InsertionResult(limiter, rows, phases, plan.trajectory.phases, summary, sections)
+
+
+class _Series:
+    """The series' rows, grown in chunks, and the kinematic pose (forward kinematics of the actuator lengths,
+    Gauss-Newton from the last row's, :func:`pressfit.dynamics.control.estimate_pose`)."""
+
+    def __init__(self, machine: Machine, steps: int, start_m: np.ndarray) -> None:
+        self.machine, self.steps, self.kinematic = machine, steps, np.asarray(start_m, float).copy()
+        self.chunks = [np.empty((min(steps, _CHUNK_ROWS), len(SERIES_COLUMNS)))]
+
+    def add(self, k: int, row: tuple, lengths: np.ndarray, rates: np.ndarray) -> None:
+        self.kinematic = estimate_pose(self.machine, lengths, self.kinematic, KINEMATIC_ITERATIONS)[0]
+        if k // _CHUNK_ROWS == len(self.chunks):
+            self.chunks.append(np.empty((min(self.steps - k, _CHUNK_ROWS), len(SERIES_COLUMNS))))
+        self.chunks[-1][k % _CHUNK_ROWS] = (*row, *self.kinematic, *lengths, *rates)
+
+    def rows(self) -> np.ndarray:
+        return np.concatenate(self.chunks)
+
+
+def _check_pose(case: Case, machine: Machine, k: int, steps: int, t: float, pose: np.ndarray) -> None:
+    bad = [] if k % _REACH_CHECK_STEPS and k != steps - 1 else kinematics.violations(machine, pose) \
+        if pose[1] > 0 else [(0, "y_h [m]", pose[1], "minimum 0")]
+    if bad:
+        raise _diverged(case, t, f"the plate left the reachable set at ({', '.join(f'{c:.4g}' for c in pose)})"
+                        f" m: {format_violation(*bad[0])}")
+
+
+def _drift_error(case: Case, drift: float, t: float) -> PressfitError:
+    sim = case.simulation
+    return PressfitError(f"{case.path}: the loop closures drifted open by {drift:.3g} m at t = {t:.4g} s, "
+                         f"over the tolerance of {MAX_CLOSURE_DRIFT_M:g} m (the tool position is only as "
+                         f"good as the closures): raise [simulation] baumgarte_rad_per_s (now "
+                         f"{sim.baumgarte_rad_per_s:g} rad/s) or reduce time_step_s; if the motion itself "
+                         "diverged, the [simulation.controller] gains")
+
+
+def _run_rigid(case: Case, machine: Machine, plan: ScenarioPlan, drives: ForceActuators, limiter: bool,
+               progress: bool) -> tuple[np.ndarray, np.ndarray, None]:
+    """The rigid-leg model, the compliance in series at the tool (module docstring)."""
     sim, trajectory, steps, rigid = case.simulation, plan.trajectory, plan.steps, plan.rigid
     deflection = _deflection(machine, case, sim, trajectory.waypoints_m[2])
-    drives = ForceActuators.of(machine)
     ctrl = ForceLimitedController(machine, rigid, sim.controller, limiter, np.asarray(sim.start_m, float).copy())
     q, v, dt, a4 = rigid.reference_q.copy(), np.zeros(rigid.model.nv), sim.time_step_s, case.preload.a4_n
     force = ctrl.command(q[rigid.actuator_q], v[rigid.actuator_v], trajectory.at(0.0), 0.0, 0.0)
     tension = -ctrl.pinv @ force + a4 * ctrl.null
     contact = ContactState(0.0, sim.contact.board_height_m - q[1], np.zeros(3))
-    chunks, phases = [np.empty((min(steps, _CHUNK_ROWS), len(SERIES_COLUMNS)))], np.empty(steps, dtype=int)
+    series, phases = _Series(machine, steps, sim.start_m), np.empty(steps, dtype=int)
     tau = np.zeros(rigid.model.nv)
     for k in tqdm(range(steps), desc="simulate", unit="step", disable=not progress, mininterval=0.5):
         t = (k + 1) * dt
@@ -285,34 +340,75 @@ def simulate_insertion(case: Case, limiter: bool = True, progress: bool = False)
                 raise _diverged(case, t, "the state is not finite")
             drift = rigid.closure_error_m()
             if drift > MAX_CLOSURE_DRIFT_M:
-                raise PressfitError(f"{case.path}: the loop closures drifted open by {drift:.3g} m at t = {t:.4g} s, "
-                                    f"over the tolerance of {MAX_CLOSURE_DRIFT_M:g} m (the tool position is only as "
-                                    f"good as the closures): raise [simulation] baumgarte_rad_per_s (now "
-                                    f"{sim.baumgarte_rad_per_s:g} rad/s) or reduce time_step_s; if the motion itself "
-                                    "diverged, the [simulation.controller] gains")
+                raise _drift_error(case, drift, t)
             axial = rigid.axial_forces_n()  # at the start of the step, where the accelerations were computed
             pose = q[0:3].copy()
-            bad = [] if k % _REACH_CHECK_STEPS and k != steps - 1 else kinematics.violations(machine, pose) \
-                if pose[1] > 0 else [(0, "y_h [m]", pose[1], "minimum 0")]
-            if bad:
-                raise _diverged(case, t, f"the plate left the reachable set at ({', '.join(f'{c:.4g}' for c in pose)})"
-                                f" m: {format_violation(*bad[0])}")
+            _check_pose(case, machine, k, steps, t, pose)
             depth = sim.contact.board_height_m - pose[1]
             contact = (solve_contact(sim.contact, pose, deflection(pose), contact.depth_m, dt) if depth > 0.0
                        else ContactState(0.0, depth, np.zeros(3)))
+            series.add(k, (t, *reference[0] + [0.0, ctrl.lift_m, 0.0], *ctrl.estimate_m, *pose,
+                           *(pose + contact.deflection_m), contact.force_n, contact.depth_m, *command, *tension,
+                           ctrl.lift_m, drift, *axial, ctrl.null @ tension), q[rigid.actuator_q], v[rigid.actuator_v])
         except UnreachablePoseError as exc:  # the estimate (feed-forward, compliance) left the workspace
             raise _diverged(case, t, f"the pose estimate left the reachable set: {exc}") from None
-        if k // _CHUNK_ROWS == len(chunks):
-            chunks.append(np.empty((min(steps - k, _CHUNK_ROWS), len(SERIES_COLUMNS))))
-        chunks[-1][k % _CHUNK_ROWS] = (t, *reference[0] + [0.0, ctrl.lift_m, 0.0], *ctrl.estimate_m, *pose,
-                                       *(pose + contact.deflection_m), contact.force_n, contact.depth_m, *command,
-                                       *tension, ctrl.lift_m, drift, *axial, ctrl.null @ tension)
         phases[k] = trajectory.segment(t - 1e-12)
-    rows = np.concatenate(chunks)
-    result = InsertionResult(limiter, rows, phases, trajectory.phases)
-    summary = summarise(result, case, drives)
-    summary["warnings"] = [*plan.warnings, *summary["warnings"]]
-    return InsertionResult(limiter, rows, phases, trajectory.phases, summary)
+    return series.rows(), phases, None
+
+
+def _run_flexible(case: Case, machine: Machine, plan: ScenarioPlan, drives: ForceActuators, limiter: bool,
+                  progress: bool) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    """The flexible machine (:class:`pressfit.dynamics.machine.flexible.FlexibleMachine`, the machine file's
+    ``[damping]``, cardan play with ``clearance = true``): ideal force drives on the actuator joints
+    (``DriveInput.forces``), the contact force on the elastic tool point (the plate centre), evaluated at the
+    end of each step and held over the next (as in the rigid model); no series compliance (it is in the model).
+    Starts from the static equilibrium under gravity with the drives holding the start pose's lengths."""
+    sim, trajectory, steps, rigid = case.simulation, plan.trajectory, plan.steps, plan.rigid
+    dt, a4 = sim.time_step_s, case.preload.a4_n
+    play = clearance_from_case(case, machine).cardan_compliance() if sim.clearance else None
+    fm = FlexibleMachine(machine, np.asarray(sim.start_m, float), cardan_compliance=play)
+    if dt > MAX_STEP_FRACTION * fm.first_period_s:
+        raise _refuse(case, "[simulation] time_step_s", f"at most {MAX_STEP_FRACTION:g} of the flexible machine's "
+                      f"first period ({1e3 * fm.first_period_s:.4g} ms, {fm.modes.frequencies_hz[0]:.4g} Hz at "
+                      f"start_m): {MAX_STEP_FRACTION * fm.first_period_s:.4g} s, got {dt:g} s")
+    state = fm.rest_state()
+    ctrl = ForceLimitedController(machine, rigid, sim.controller, limiter, np.asarray(sim.start_m, float).copy())
+    force = ctrl.command(fm.leg_lengths_m(state), fm.leg_rates_m_per_s(state), trajectory.at(0.0), 0.0, 0.0)
+    tension = -ctrl.pinv @ force + a4 * ctrl.null
+    board, contact_force = sim.contact.board_height_m, 0.0
+    depth = board - fm.tool_point_m(state)[1]
+    series, phases = _Series(machine, steps, sim.start_m), np.empty(steps, dtype=int)
+    sections = np.empty((steps, 4, 3, 6))
+    wrench = np.zeros(6)
+    for k in tqdm(range(steps), desc="simulate", unit="step", disable=not progress, mininterval=0.5):
+        t = (k + 1) * dt
+        reference = trajectory.at(t)
+        try:
+            force = ctrl.command(fm.leg_lengths_m(state), fm.leg_rates_m_per_s(state), reference, contact_force, dt)
+            command = -ctrl.pinv @ force + a4 * ctrl.null
+            tension = drives.step(tension, command, dt)
+            wrench[1] = contact_force
+            state = fm.step(state, DriveInput.forces(tension), wrench, dt)
+            if not (np.all(np.isfinite(state.q)) and np.all(np.isfinite(state.v))):
+                raise _diverged(case, t, "the state is not finite")
+            drift = fm.closure_error(state)[0]
+            if drift > MAX_CLOSURE_DRIFT_M:
+                raise _drift_error(case, drift, t)
+            loads = fm.section_loads(state).values
+            tool = fm.tool_point_m(state)
+            _check_pose(case, machine, k, steps, t, tool)
+            previous, depth = depth, board - tool[1]
+            contact_force = contact_force_n(sim.contact, depth, (depth - previous) / dt)
+            series.add(k, (t, *reference[0] + [0.0, ctrl.lift_m, 0.0], *ctrl.estimate_m, *tool, *tool,
+                           contact_force, depth, *command, *tension, ctrl.lift_m, drift, *loads[:, 2, 0],
+                           ctrl.null @ tension), fm.leg_lengths_m(state), fm.leg_rates_m_per_s(state))
+            sections[k] = loads
+        except UnreachablePoseError as exc:
+            raise _diverged(case, t, f"the pose estimate left the reachable set: {exc}") from None
+        except ConvergenceError as exc:
+            raise _diverged(case, t, f"the flexible model's step failed: {exc}") from None
+        phases[k] = trajectory.segment(t - 1e-12)
+    return series.rows(), phases, sections
 
 
 def settling_time_s(time_s: np.ndarray, force_n: np.ndarray, dwell: np.ndarray) -> tuple[float | None, int | None, str]:
@@ -392,6 +488,44 @@ def summarise(result: InsertionResult, case: Case, drives: ForceActuators) -> di
         return {f"{stem}_time_s": t[rows], f"{stem}_pose_m": plate[rows]}
 
     positioning_row = last if lateral >= final else len(t) - 1
+    pin_xz = np.array(sim.contact.pin_position_m)
+    touching = np.flatnonzero(force > 0.0)
+    first = int(touching[0]) if touching.size else None
+    dwell_lateral = np.linalg.norm(tool[dwell][:, [0, 2]] - pin_xz, axis=1)
+    deflection = np.linalg.norm(tool - _xyz(result, "kinematic"), axis=1)
+    moves = np.flatnonzero(np.isin(result.phases, [result.phase_names.index(p) for p in MOVE_PHASES]))
+    move_row = int(moves[np.argmax(deflection[moves])]) if moves.size else None
+    settle = np.flatnonzero(result.phases == result.phase_names.index("settle"))
+    window = settle[t[settle] >= t[-1] - VIBRATION_WINDOW_S + 0.5 * sim.time_step_s] if sim.settle_s > 0 else settle[:0]
+    tension_columns, rates = _columns(result, "act_n"), np.abs(_columns(result, "rate_m_per_s"))
+    production = {
+        "model": sim.model,
+        "tool_lateral_error_at_first_contact_m": float(np.linalg.norm(tool[first, [0, 2]] - pin_xz))
+        if first is not None else None,
+        "first_contact_time_s": float(t[first]) if first is not None else None,
+        "tool_lateral_error_dwell_max_m": float(dwell_lateral.max()),
+        **where("tool_lateral_error_dwell_max", int(dwell[np.argmax(dwell_lateral)])),
+        "max_move_deflection_m": float(deflection[move_row]) if move_row is not None else None,
+        **(where("max_move_deflection", move_row) if move_row is not None else
+           {"max_move_deflection_time_s": None, "max_move_deflection_pose_m": None}),
+        "residual_vibration_m": float(np.ptp(tool[window], axis=0).max()) if window.size else None,
+        "residual_vibration_window_s": float(t[-1] - t[window[0]] + sim.time_step_s) if window.size else None,
+        "rms_actuator_tension_n": np.sqrt(np.mean(tension_columns**2, axis=0)),
+        "peak_actuator_speed_m_per_s": rates.max(axis=0), **where("peak_actuator_speed", rates.argmax(axis=0)),
+    }
+    if result.sections is not None:  # the elastic model's objective couples (the rigid model has none)
+        sec = result.sections
+        torsion = np.abs(sec[..., 5])  # (n, leg, section)
+        bending = np.hypot(sec[..., 3], sec[..., 4])
+        peak_t, peak_b = torsion.max(axis=(0, 2)), bending.max(axis=(0, 2))
+        production.update({
+            "peak_leg_torsion_nm": peak_t, **where("peak_leg_torsion", torsion.max(axis=2).argmax(axis=0)),
+            "peak_leg_bending_nm": peak_b, **where("peak_leg_bending", bending.max(axis=2).argmax(axis=0)),
+            "peak_section_loads": [{s: {"axial_n": float(np.abs(sec[:, i, k, 0]).max()),
+                                        "torsion_nm": float(torsion[:, i, k].max()),
+                                        "bending_nm": float(bending[:, i, k].max())}
+                                    for k, s in enumerate(SECTIONS)} for i in range(4)],
+        })
     return {
         "case": case.name, "limiter": result.limiter, "force_limit_n": limit,
         "simulated_time_s": float(t[-1]), "time_step_s": sim.time_step_s,
@@ -418,5 +552,6 @@ def summarise(result: InsertionResult, case: Case, drives: ForceActuators) -> di
         "peak_leg_axial_force_n": axial.max(axis=0), **where("peak_leg_axial_force", axial.argmax(axis=0)),
         "commanded_preload_n": case.preload.a4_n,
         "internal_force_range_n": [float(internal.min()), float(internal.max())],
+        **production,
         "warnings": warnings,
     }

@@ -9,18 +9,19 @@ from typing import Any
 import numpy as np
 
 from pressfit.description.cases import load_case
-from pressfit.dynamics.insertion import LEGS, SERIES_COLUMNS, InsertionResult, simulate_insertion
+from pressfit.dynamics.insertion import LEGS, SECTION_COLUMNS, SERIES_COLUMNS, InsertionResult, simulate_insertion
 from pressfit.output import files as io
 from pressfit.output.plots import plt
 from pressfit.studies.insertion_study import COLUMNS, InsertionStudy, insertion_study
 
 
 def simulation_figure(result: InsertionResult, comparison: InsertionResult | None = None) -> plt.Figure:
-    """Four panels against time: plate positions (reference dashed, tool solid), the contact force with the
+    """Five panels against time: plate positions (reference dashed, tool solid), the contact force with the
     limit (and ``comparison``'s, the run with the limiter the other way, on the same axes), actuator
-    tensions (commanded dashed, delivered solid), leg axial forces at the plate cardans."""
+    tensions (commanded dashed, delivered solid), leg axial forces at the plate cardans, the structure's
+    deflection (tool minus the kinematic pose of the actuator lengths) with the summary's move peak."""
     t = result.column("time_s")
-    fig, axes = plt.subplots(4, 1, figsize=(10, 12), sharex=True, layout="constrained")
+    fig, axes = plt.subplots(5, 1, figsize=(10, 15), sharex=True, layout="constrained")
     for axis, colour in zip("xyz", ("tab:blue", "tab:orange", "tab:green"), strict=True):
         axes[0].plot(t, result.column(f"ref_{axis}_m"), "--", color=colour, lw=1, label=f"{axis} reference")
         axes[0].plot(t, result.column(f"tool_{axis}_m"), color=colour, lw=1.5, label=f"{axis} tool")
@@ -37,8 +38,17 @@ def simulation_figure(result: InsertionResult, comparison: InsertionResult | Non
         axes[3].plot(t, result.column(f"axial_n{i}"), lw=1.5, color=line.get_color(), label=f"leg {i}")
     limiter = "on" if result.limiter else "off"
     axes[2].set(ylabel="tension [N]", title=f"actuator forces, limiter {limiter} (dashed: commanded)")
-    axes[3].set(xlabel="time [s]", ylabel="axial force [N]",
+    axes[3].set(ylabel="axial force [N]",
                 title=f"leg axial force at the plate cardan (> 0 tension), limiter {limiter}")
+    for axis in "xyz":
+        axes[4].plot(t, 1e6 * (result.column(f"tool_{axis}_m") - result.column(f"kinematic_{axis}_m")), lw=1,
+                     label=f"{axis}")
+    s = result.summary
+    if s.get("max_move_deflection_m") is not None:
+        axes[4].plot([s["max_move_deflection_time_s"]], [0.0], "kv",
+                     label=f"move peak |u| {1e6 * s['max_move_deflection_m']:.2f} um")
+    axes[4].set(xlabel="time [s]", ylabel="deflection [um]",
+                title=f"structure deflection at the tool (tool - kinematic pose), model {s.get('model', '')}")
     for ax in axes:
         ax.grid(alpha=0.3)
         ax.legend(fontsize=8, ncols=3)
@@ -48,11 +58,15 @@ def simulation_figure(result: InsertionResult, comparison: InsertionResult | Non
 def write_simulation(result: InsertionResult, out_dir: Path | str, overwrite: bool = False,
                      comparison: InsertionResult | None = None) -> list[Path]:
     """``simulation.csv`` (one row per time step of ``result``), ``simulation.json`` (its summary, with the
-    comparison's under ``"comparison"``), ``simulation.png``."""
+    comparison's under ``"comparison"``), ``simulation.png``; with the flexible model ``sections.csv`` (the
+    leg section resultants per step, N and N m, :data:`pressfit.dynamics.insertion.SECTION_COLUMNS`)."""
     out = Path(out_dir)
     summary = _summary(result, comparison)
     paths = [io.write_csv(out / "simulation.csv", SERIES_COLUMNS, result.series, overwrite),
              io.write_json(out / "simulation.json", summary, overwrite)]
+    if result.sections is not None:
+        table = np.column_stack([result.column("time_s"), result.sections.reshape(len(result.series), -1)])
+        paths.append(io.write_csv(out / "sections.csv", SECTION_COLUMNS, table, overwrite))
     fig = simulation_figure(result, comparison)
     try:
         paths.append(io.save_figure(fig, out / "simulation.png", overwrite))

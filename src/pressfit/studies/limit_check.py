@@ -442,6 +442,10 @@ SIMULATION_LIMITS: dict[str, tuple[Limit, str, str]] = {  # [simulation.limits] 
                              "peak_actuator_tension"),
     "max_axial_force_n": (Limit("peak leg axial force |N| at the plate cardan", "N", "max"),
                           "peak_leg_axial_force_n", "peak_leg_axial_force"),
+    "max_torsion_nm": (Limit("peak leg torsion |T| over the three sections (flexible model)", "N m", "max"),
+                       "peak_leg_torsion_nm", "peak_leg_torsion"),
+    "max_bending_nm": (Limit("peak leg bending |M_b| over the three sections (flexible model)", "N m", "max"),
+                       "peak_leg_bending_nm", "peak_leg_bending"),
 }
 
 
