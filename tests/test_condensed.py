@@ -292,3 +292,54 @@ def test_cli_stiffness(tmp_path):
     maps = CliRunner().invoke(main, ["stiffness", "0", "0.6", "0", "--maps", "--out", str(tmp_path), "--n", "5"])
     assert maps.exit_code == 0 and (tmp_path / "stiffness_maps_y600mm.png").exists()
     assert CliRunner().invoke(main, ["stiffness", "0", "0.3", "0"]).exit_code == 2  # unreachable: a clear error
+
+
+# --- the singular-pose guard ------------------------------------------------------------------------
+# Near y = 0 the shipped legs (l = 0.36 m) are shorter than their 0.45 m cylinder, which gives negative
+# springs; a 0.2 m cylinder keeps every spring positive there, so only the geometry is singular.
+@pytest.fixture(scope="module")
+def short_cylinder(machine):
+    return machine.with_overrides({"cylinder": {"length_m": 0.2}}, source="test")
+
+
+def singular_height_m() -> float:
+    """The height y* below which the guard refuses h = (0, y, 0), from a closed form derived here.
+
+    At x = z = 0 every leg has sin(beta) = 0, so c_i = e_i, and with equal legs K_t / k_a = K_r / k_r =
+    sum e_i e_i^T = diag(2 cos^2 a, 4 sin^2 a, 2 cos^2 a) (tan a = y / (p - r)): both determinants are
+    16 cos^4(a) sin^2(a) times the cube of the leg spring. condensed.py refuses a block whose determinant is
+    below 1e-12 times the cube of its largest spring, i.e. below 16 cos^4 sin^2 = 1e-12 (y* = 9.0e-8 m). At
+    y = 0 the plate lies in the base plane, every leg is horizontal and nothing holds it vertically."""
+    from scipy.optimize import brentq
+
+    def margin(y):
+        a = math.atan2(y, P - R)
+        return 16 * math.cos(a) ** 4 * math.sin(a) ** 2 - 1e-12
+
+    return brentq(margin, 1e-12, 1e-3, xtol=1e-20, rtol=1e-14)
+
+
+@pytest.mark.parametrize("y", [0.0, "half"])
+def test_singular_pose_is_refused(short_cylinder, y):
+    """The stiffness is singular (y = 0) or numerically so (y*/2): a SingularPoseError naming the pose, never
+    NaN or inf compliances."""
+    h = [0.0, singular_height_m() / 2 if y == "half" else y, 0.0]
+    from pressfit.errors import SingularPoseError
+
+    for call in (lambda: condensed.solve_linear(short_cylinder, h, [0, 700, 0]),
+                 lambda: condensed.condensed_plate_compliance(short_cylinder, h),
+                 lambda: condensed.plate_stiffness(short_cylinder, [[0, 0.72, 0], h])):
+        with pytest.raises(SingularPoseError, match=r"singular at 1 pose\(s\), e\.g\. h = \[0\.0, "):
+            call()
+
+
+def test_pose_just_clear_of_the_guard_is_solved(short_cylinder):
+    """At 2 y* the guard lets the pose through and the (huge) vertical compliance is the closed form
+    1 / (4 k_a sin^2 a) (condition number 1e12: to 1e-6)."""
+    y = 2 * singular_height_m()
+    length = math.hypot(y, P - R)
+    k_a = 1 / float(short_cylinder.axial_compliance_m_per_n(length))
+    k_vert = 4 * k_a * (y / length) ** 2
+    res = condensed.solve_linear(short_cylinder, [0, y, 0], [0, 700, 0])
+    assert res.plate_displacement_m[1] == pytest.approx(700 / k_vert, rel=1e-6)
+    assert condensed.condensed_plate_compliance(short_cylinder, [0, y, 0])[1, 1] == pytest.approx(1 / k_vert, rel=1e-6)
