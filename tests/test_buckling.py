@@ -67,7 +67,7 @@ def test_leg_modes_converge_to_euler_as_one_over_n_squared(machine, load, leg, f
         modes = res.load_factors[first:first + n_modes]
         assert np.ptp(modes) < 1e-6 * modes[0]  # degenerate: the legs and planes are symmetric
         f[n] = modes[0]
-    sin_a = 2 / math.sqrt(5)  # pose A: tan(alpha) = y_h / (p - r) = 0.72 / 0.36 = 2 (DESIGN.md)
+    sin_a = 2 / math.sqrt(5)  # pose A: tan(alpha) = y_h / (p - r) = 0.72 / 0.36 = 2
     compression = 700 / (4 * sin_a) if leg == 0 else 700 / (2 * math.sqrt(1 - sin_a**2))  # statics by hand
     assert -res.axial_forces_n[leg] == pytest.approx(compression, rel=1e-9)
     euler = _euler_factor(machine, POSE_A, leg, compression)

@@ -11,7 +11,7 @@ from pressfit.mechanics.compliance import vjm_plate_compliance
 
 
 def test_linear_compliance_equals_condensation(machine):
-    # exact condensation (DESIGN.md, per-leg rank-2 stiffness), an independent formulation, to 1e-9
+    # exact condensation (docs/conventions.md, per-leg rank-2 stiffness), an independent formulation, to 1e-9
     for pose in ([0.0, 0.72, 0.0], [0.2, 0.6, -0.15]):
         c_pin = vjm_plate_compliance(machine, pose)
         c_cond = condensed.condensed_plate_compliance(machine, np.array(pose))

@@ -1,10 +1,10 @@
 """The exact condensed linear statics (pressfit.condensed) against independent references.
 
-References, each named in its test: closed forms at pose A (DESIGN.md "Facts worth knowing"); the
+References, each named in its test: closed forms at pose A (derived in the test; docs/conventions.md "Closed forms at x = z = 0"); the
 compliance-weighted truss solution of A N = F (Maxwell/Castigliano: the elastic bar forces minimise
 sum N^2 / k_a); the machine's mirror and 90-degree symmetries; a finite-difference Hessian of the
 potential energy of 4 axial springs + 4 couple springs written directly here (section properties from
-DESIGN.md's defaults, not from the package); the leg frames of pressfit.kinematics.
+docs/conventions.md's defaults, not from the package); the leg frames of pressfit.kinematics.
 """
 
 import json
@@ -24,7 +24,7 @@ from pressfit.studies import workspace_envelope
 
 P, R = 0.442, 0.082  # Table 3
 E, G = 210e9, 81e9
-L_CYL, D_CYL, T_CYL, D_STEM, K_ACT = 0.45, 0.060, 0.005, 0.030, 5e7  # DESIGN.md defaults
+L_CYL, D_CYL, T_CYL, D_STEM, K_ACT = 0.45, 0.060, 0.005, 0.030, 5e7  # docs/conventions.md defaults
 A_CYL = math.pi / 4 * (D_CYL**2 - (D_CYL - 2 * T_CYL) ** 2)
 I_CYL = math.pi / 64 * (D_CYL**4 - (D_CYL - 2 * T_CYL) ** 4)
 A_STEM, I_STEM = math.pi / 4 * D_STEM**2, math.pi / 64 * D_STEM**4
@@ -46,7 +46,8 @@ def random_poses(n, seed=0):
 # --- pose A: closed forms -------------------------------------------------------------------------
 @pytest.mark.parametrize("y", [0.55, 0.72])
 def test_pose_a_press_load_closed_form(machine, y):
-    # DESIGN.md: N_i = 700 / (4 sin alpha), zero couples; vertical stiffness = sum k_a sin^2(alpha). rel 1e-12
+    # vertical equilibrium of 4 equal legs at x = z = 0: N_i = 700 / (4 sin alpha), zero couples; vertical
+    # stiffness = sum k_a sin^2(alpha) (docs/conventions.md). rel 1e-12
     length = math.hypot(y, P - R)
     sin_a = y / length
     res = condensed.solve_linear(machine, [0, y, 0], [0, 700, 0, 0, 0, 0])
@@ -59,7 +60,7 @@ def test_pose_a_press_load_closed_form(machine, y):
 
 
 def test_pose_a_fits_table_5():
-    # DESIGN.md: y_h = 0.72 m gives tan(alpha) = 2 and 195.66 N per leg (Table 5 prints 195.6-195.8 N)
+    # y_h = 0.72 m gives tan(alpha) = 0.72 / (p - r) = 2 and 195.66 N per leg (Table 5 prints 195.6-195.8 N)
     assert 700 / (4 * math.sin(math.atan(2))) == pytest.approx(195.66, abs=0.005)
 
 
