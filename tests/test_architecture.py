@@ -134,7 +134,8 @@ MD_REF = re.compile(r"(?<![\w./-])((?:[\w.-]+/)*[\w.-]+\.md)\b")
 
 
 def _written_markdown_names() -> set[str]:
-    """The Markdown files the package writes (string constants that are a bare Markdown file name, in src): outputs, not documents."""
+    """The Markdown files the package writes (string constants in src that are a bare Markdown file name):
+    outputs, not documents."""
     return {node.value for path in SRC.rglob("*.py") for node in ast.walk(ast.parse(path.read_text()))
             if isinstance(node, ast.Constant) and isinstance(node.value, str) and MD_REF.fullmatch(node.value)}
 
