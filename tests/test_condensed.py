@@ -2,8 +2,8 @@
 
 References, each named in its test: closed forms at pose A (derived in the test; docs/conventions.md,
 "Closed forms at x = z = 0"); the compliance-weighted truss solution of A N = F (Maxwell/Castigliano:
-the elastic bar forces minimise sum N^2 / k_a); the machine's mirror and 90-degree symmetries; a finite-difference Hessian of the
-potential energy of 4 axial springs + 4 couple springs written directly here (section properties from
+the elastic bar forces minimise sum N^2 / k_a); the machine's mirror and 90-degree symmetries; a finite-difference
+Hessian of the potential energy of 4 axial springs + 4 couple springs written directly here (section properties from
 docs/conventions.md's defaults, not from the package); the leg frames of pressfit.kinematics.
 """
 
