@@ -344,3 +344,32 @@ def test_pose_just_clear_of_the_guard_is_solved(short_cylinder):
     res = condensed.solve_linear(short_cylinder, [0, y, 0], [0, 700, 0])
     assert res.plate_displacement_m[1] == pytest.approx(700 / k_vert, rel=1e-6)
     assert condensed.condensed_plate_compliance(short_cylinder, [0, y, 0])[1, 1] == pytest.approx(1 / k_vert, rel=1e-6)
+
+
+def test_stiffness_report_off_centre_against_the_vjm_model(machine):
+    """Every stiffness of ``stiffness_report`` at an asymmetric pose (where x and z, and the couplings, all
+    differ: at pose A symmetry hides a wrong index) against the second formulation: the Pinocchio VJM
+    compliance and its linear solve under the press load (they agree with the condensed model to ~1e-11;
+    asserted to 1e-8)."""
+    from pressfit.mechanics.compliance import vjm_plate_compliance
+    from pressfit.mechanics.statics import solve_equilibrium
+
+    pose = [0.2, 0.6, -0.15]
+    rep, c = condensed.stiffness_report(machine, pose), vjm_plate_compliance(machine, pose)
+    horizontal = c[np.ix_([0, 2], [0, 2])]
+    assert abs(c[0, 0] - c[2, 2]) > 0.05 * c[0, 0] and abs(horizontal[0, 1]) > 1e-3 * c[0, 0]  # no symmetry here
+    lam = np.linalg.eigvalsh(horizontal)[-1]
+    expected = {"vertical_stiffness_n_per_m": 1 / c[1, 1], "lateral_stiffness_n_per_m": 1 / lam,
+                "lateral_x_stiffness_n_per_m": 1 / c[0, 0], "lateral_z_stiffness_n_per_m": 1 / c[2, 2],
+                "lateral_to_vertical": c[1, 1] / lam}
+    for key, value in expected.items():
+        assert rep[key] == pytest.approx(value, rel=1e-8), key
+    np.testing.assert_allclose(rep["compliance_6x6"], c, rtol=0, atol=1e-8 * np.abs(c).max())
+    # the inverse of the ill-conditioned 3x3 block amplifies the 1e-11 difference: 1.2e-8 measured
+    np.testing.assert_allclose(rep["translational_stiffness_n_per_m"], np.linalg.inv(c[:3, :3]), rtol=5e-8)
+    eq = solve_equilibrium(machine, pose, [0, 700, 0, 0, 0, 0], linear=True)
+    np.testing.assert_allclose(rep["press_displacement_m"], eq.plate_displacement_m, rtol=1e-8, atol=1e-15)
+    np.testing.assert_allclose(rep["press_rotation_rad"], eq.plate_rotation_rad, rtol=1e-8, atol=1e-15)
+    assert rep["press_tilt_rad"] == pytest.approx(np.linalg.norm(eq.plate_rotation_rad), rel=1e-8)
+    np.testing.assert_allclose(rep["press_axial_forces_n"], eq.actuator_forces_n, rtol=1e-8)
+    assert rep["pose_m"] == pose and rep["press_load_n"] == 700.0
