@@ -373,3 +373,11 @@ def test_stiffness_report_off_centre_against_the_vjm_model(machine):
     assert rep["press_tilt_rad"] == pytest.approx(np.linalg.norm(eq.plate_rotation_rad), rel=1e-8)
     np.testing.assert_allclose(rep["press_axial_forces_n"], eq.actuator_forces_n, rtol=1e-8)
     assert rep["pose_m"] == pose and rep["press_load_n"] == 700.0
+    assert rep["compliance_units"] == "rows/columns (x, y, z, rx, ry, rz): m/N, rad/N, rad/(N m)"
+    # about P* the translation block is sum k_a e e^T (docs/conventions.md), from the leg vectors here
+    u = np.asarray(pose) + OFFS - BASE
+    length = np.linalg.norm(u, axis=1)
+    e = u / length[:, None]
+    k_t = sum(k_axial(li) * np.outer(ei, ei) for li, ei in zip(length, e))
+    np.testing.assert_allclose(rep["translational_stiffness_about_p_star_n_per_m"], k_t, rtol=0,
+                               atol=1e-12 * np.abs(k_t).max())
