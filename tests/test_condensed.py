@@ -373,6 +373,7 @@ def test_stiffness_report_off_centre_against_the_vjm_model(machine):
     assert rep["press_tilt_rad"] == pytest.approx(np.linalg.norm(eq.plate_rotation_rad), rel=1e-8)
     np.testing.assert_allclose(rep["press_axial_forces_n"], eq.actuator_forces_n, rtol=1e-8)
     assert rep["pose_m"] == pose and rep["press_load_n"] == 700.0
+    assert condensed.stiffness_report(machine, np.array([pose])) == rep  # a (1, 3) pose is the same pose
     assert rep["compliance_units"] == "rows/columns (x, y, z, rx, ry, rz): m/N, rad/N, rad/(N m)"
     # about P* the translation block is sum k_a e e^T (docs/conventions.md), from the leg vectors here
     u = np.asarray(pose) + OFFS - BASE
