@@ -374,6 +374,9 @@ def test_stiffness_report_off_centre_against_the_vjm_model(machine):
     np.testing.assert_allclose(rep["press_axial_forces_n"], eq.actuator_forces_n, rtol=1e-8)
     assert rep["pose_m"] == pose and rep["press_load_n"] == 700.0
     assert condensed.stiffness_report(machine, np.array([pose])) == rep  # a (1, 3) pose is the same pose
+    # leg moments (M_x, M_y, T), constant along a leg in the condensed model: the Pinocchio actuator section
+    moments = np.array([[leg.sections["actuator"].as_dict()[k] for k in ("M_x", "M_y", "T")] for leg in eq.legs])
+    np.testing.assert_allclose(rep["press_leg_moments_nm"], moments, rtol=0, atol=1e-8 * np.abs(moments).max())
     assert rep["compliance_units"] == "rows/columns (x, y, z, rx, ry, rz): m/N, rad/N, rad/(N m)"
     # about P* the translation block is sum k_a e e^T (docs/conventions.md), from the leg vectors here
     u = np.asarray(pose) + OFFS - BASE
