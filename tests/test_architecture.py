@@ -11,6 +11,7 @@
 from __future__ import annotations
 
 import ast
+import re
 from pathlib import Path
 
 import pytest
@@ -125,3 +126,38 @@ def test_the_rules_catch_a_violation(tmp_path):
         test_the_cli_holds_no_physics("cli", bad)
     with pytest.raises(AssertionError, match=r"\(kinematics\) imports pressfit.output"):
         test_no_import_of_a_higher_layer("kinematics", bad)
+
+
+# --- cited documents exist ------------------------------------------------------------------------------------
+ROOT = SRC.parents[1]
+MD_REF = re.compile(r"(?<![\w./-])((?:[\w.-]+/)*[\w.-]+\.md)\b")
+
+
+def _written_markdown_names() -> set[str]:
+    """The Markdown files the package writes (string constants in src that are a bare Markdown file name):
+    outputs, not documents."""
+    return {node.value for path in SRC.rglob("*.py") for node in ast.walk(ast.parse(path.read_text()))
+            if isinstance(node, ast.Constant) and isinstance(node.value, str) and MD_REF.fullmatch(node.value)}
+
+
+def missing_documents(text: str, outputs: set[str]) -> list[str]:
+    """The ``*.md`` references in ``text`` that name no file of the repository (at the top level or under docs/)
+    and no output the package writes."""
+    return [ref for ref in MD_REF.findall(text) if Path(ref).name not in outputs
+            and not (ROOT / ref).is_file() and not (ROOT / "docs" / ref).is_file()]
+
+
+def test_cited_documents_exist():
+    """A test or source file that gives a document as its source must name one that is in the repository."""
+    outputs = _written_markdown_names()
+    assert outputs == {"report.md", "tables.md", "cad_fit.md"}
+    files = [*SRC.rglob("*.py"), *(ROOT / "tests").rglob("*.py"), *(ROOT / "benchmarks").rglob("*.py")]
+    bad = [f"{f.relative_to(ROOT)}: {ref}" for f in files for ref in missing_documents(f.read_text(), outputs)]
+    assert not bad, "cites a document that is not in the repository: " + "; ".join(bad)
+
+
+def test_missing_document_check_catches_a_phantom_source():
+    outputs = _written_markdown_names()
+    phantom, nested = "DESIGN" + ".md", "notes/derivation" + ".md"  # split so that this file cites neither
+    assert missing_documents(f"# closed form ({phantom}) and (see {nested})", outputs) == [phantom, nested]
+    assert missing_documents("docs/conventions.md, README.md, conventions.md, DIR/report.md", outputs) == []

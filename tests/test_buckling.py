@@ -67,7 +67,7 @@ def test_leg_modes_converge_to_euler_as_one_over_n_squared(machine, load, leg, f
         modes = res.load_factors[first:first + n_modes]
         assert np.ptp(modes) < 1e-6 * modes[0]  # degenerate: the legs and planes are symmetric
         f[n] = modes[0]
-    sin_a = 2 / math.sqrt(5)  # pose A: tan(alpha) = y_h / (p - r) = 0.72 / 0.36 = 2 (DESIGN.md)
+    sin_a = 2 / math.sqrt(5)  # pose A: tan(alpha) = y_h / (p - r) = 0.72 / 0.36 = 2
     compression = 700 / (4 * sin_a) if leg == 0 else 700 / (2 * math.sqrt(1 - sin_a**2))  # statics by hand
     assert -res.axial_forces_n[leg] == pytest.approx(compression, rel=1e-9)
     euler = _euler_factor(machine, POSE_A, leg, compression)
@@ -82,9 +82,11 @@ def test_machine_buckles_before_its_legs_at_press_poses(machine, pose):
     plate rotation about an axis through P* (where the leg lines meet), which only the legs' torsion and
     bending resist and the legs' compression destabilises (pose A: factor 143 vs 1197; a hand estimate with
     rigid legs, k_rot = 2 k_torsion cos^2(alpha) = 6.3e3 N m/rad against the compressed bars' and the dead
-    load's geometric terms, gives 155). The mode carries plate rotation, not only leg bending."""
+    load's geometric terms, gives 155). The mode carries plate rotation, not only leg bending. Measured: the
+    machine's factor is 0.094-0.120 of the smallest leg Euler factor at these poses (per-leg Euler overstates the
+    safety about 8 times, README); asserted between 0.08 and 0.15."""
     res = machine_buckling(machine, pose, [0, -700, 0, 0, 0, 0])
-    assert res.load_factor < 0.5 * res.leg_euler_factors.min()
+    assert 0.08 < res.load_factor / res.leg_euler_factors.min() < 0.15
     assert np.abs(res.plate_motion[3:]).max() > 0.5  # mode normalised to max |dq| = 1: the plate rotates
 
 

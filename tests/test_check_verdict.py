@@ -66,6 +66,36 @@ def test_load_beyond_buckling_is_a_failed_limit_with_case_pose_and_load(tmp_path
         assert shown == pytest.approx(at_700 * 700 / 2e6, rel=1e-5) and shown < 1
 
 
+def test_unstable_refinement_without_a_buckling_limit_is_a_stable_equilibrium_line(tmp_path):
+    """The same press with only a tension limit: a separate stable_equilibrium line (limit 1 = stable, value
+    0 = none found) with the pose and the load."""
+    path = write_case(tmp_path / "t.toml", {"max_tension_n": 1e7}, poses=[[0.0, 0.72, 0.0]],
+                      loads={"press_force_n": 2e6, "direction": [0.0, -1.0, 0.0]})
+    lines = {x.key: x for x in evaluate_case(load_case(path)).limits}
+    assert set(lines) == {"max_tension_n", "stable_equilibrium"}
+    line = lines["stable_equilibrium"]
+    assert (line.worst, line.limit, line.passed, line.sense) == (0.0, 1.0, False, "min")
+    assert line.pose_m == [0.0, 0.72, 0.0] and line.load == [0.0, -2e6, 0.0, 0.0, 0.0, 0.0]
+
+
+@pytest.mark.parametrize("poses", [[[0.0, 0.72, 0.0]], [[0.0, 0.72, 0.0], [0.1, 0.7, 0.1]]])
+def test_unstable_refinement_fails_the_buckling_line_of_a_case_that_has_one(tmp_path, poses):
+    """The tension refinement under a 2 MN downward press (every leg far beyond Euler at both poses) finds no
+    stable equilibrium. With a buckling limit in the case that is its line, reported as factor 0 with the pose
+    and load and how many more pairs are likewise unstable (none with one pose, 1 with two); there is no
+    separate stable_equilibrium line, and the tension line stays."""
+    path = write_case(tmp_path / "both.toml", {"max_tension_n": 1e7, "min_buckling_safety_factor": 2.0},
+                      poses=poses, loads={"press_force_n": 2e6, "direction": [0.0, -1.0, 0.0]})
+    lines = {x.key: x for x in evaluate_case(load_case(path)).limits}
+    assert set(lines) == {"max_tension_n", "min_buckling_safety_factor"}
+    line = lines["min_buckling_safety_factor"]
+    assert line.worst == 0.0 and not line.passed and line.sense == "min" and line.limit == 2.0
+    assert line.load == [0.0, -2e6, 0.0, 0.0, 0.0, 0.0] and line.pose_m in poses
+    assert line.method.startswith("no stable equilibrium under this load in the nonlinear solve")
+    more = "; 1 more (pose, load) pairs likewise"
+    assert line.method.endswith(more) if len(poses) == 2 else "more (pose, load)" not in line.method
+
+
 def test_malformed_files_are_errors_and_the_others_are_still_checked(tmp_path):
     good = write_case(tmp_path / "good.toml", {"max_tension_n": 1e6}, poses=[[0.0, 0.72, 0.0]])
     (tmp_path / "broken.toml").write_text("name = ")

@@ -1,7 +1,8 @@
 """Clearance, preload, load-deflection and the preload study (pressfit.clearance).
 
-Each test names its independent reference and tolerance. Pose A = (0, 0.72, 0): tan(alpha) = 2 for every
-leg (DESIGN.md), so sin(alpha) = 2 / sqrt(5), and v_p = (-1, 1, -1, 1) / 2 (Table 4's centre row).
+Each test names its independent reference and tolerance. Pose A = (0, 0.72, 0):
+tan(alpha) = y_h / (p - r) = 0.72 / 0.36 = 2 for every leg, so sin(alpha) = 2 / sqrt(5), and
+v_p = (-1, 1, -1, 1) / 2 (Table 4's centre row).
 """
 
 import math

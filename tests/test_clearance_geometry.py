@@ -85,7 +85,7 @@ def test_lost_motion_off_centre_matches_the_closed_form(machine, geometry):
 
 def test_box_differs_from_axial_by_3_to_6_percent_and_sphere_equals_axial(machine):
     """Off-centre the box adds (|cos b| + |sin b| - 1) g per joint: the deflection at 700 N grows by the
-    closed-form difference of lost motion (3e-6 of it) and by 3.1% at OFF, within the 3-6% DESIGN.md states
+    closed-form difference of lost motion (3e-6 of it) and by 3.1% at OFF, within the 3-6% docs/conventions.md states
     for off-centre poses (the lost motion alone grows by 26%). The sphere's effective gap is g in every
     direction: to first order it equals the axial play, so its curve is the axial one exactly (it differs only
     by the second-order lateral slide, |t|^2 / l ~ 1e-9 m, which the model leaves out)."""

@@ -1,10 +1,10 @@
 """The exact condensed linear statics (pressfit.condensed) against independent references.
 
-References, each named in its test: closed forms at pose A (DESIGN.md "Facts worth knowing"); the
-compliance-weighted truss solution of A N = F (Maxwell/Castigliano: the elastic bar forces minimise
-sum N^2 / k_a); the machine's mirror and 90-degree symmetries; a finite-difference Hessian of the
-potential energy of 4 axial springs + 4 couple springs written directly here (section properties from
-DESIGN.md's defaults, not from the package); the leg frames of pressfit.kinematics.
+References, each named in its test: closed forms at pose A (derived in the test; docs/conventions.md,
+"Closed forms at x = z = 0"); the compliance-weighted truss solution of A N = F (Maxwell/Castigliano:
+the elastic bar forces minimise sum N^2 / k_a); the machine's mirror and 90-degree symmetries; a finite-difference
+Hessian of the potential energy of 4 axial springs + 4 couple springs written directly here (section properties from
+docs/conventions.md's defaults, not from the package); the leg frames of pressfit.kinematics.
 """
 
 import json
@@ -24,7 +24,7 @@ from pressfit.studies import workspace_envelope
 
 P, R = 0.442, 0.082  # Table 3
 E, G = 210e9, 81e9
-L_CYL, D_CYL, T_CYL, D_STEM, K_ACT = 0.45, 0.060, 0.005, 0.030, 5e7  # DESIGN.md defaults
+L_CYL, D_CYL, T_CYL, D_STEM, K_ACT = 0.45, 0.060, 0.005, 0.030, 5e7  # docs/conventions.md defaults
 A_CYL = math.pi / 4 * (D_CYL**2 - (D_CYL - 2 * T_CYL) ** 2)
 I_CYL = math.pi / 64 * (D_CYL**4 - (D_CYL - 2 * T_CYL) ** 4)
 A_STEM, I_STEM = math.pi / 4 * D_STEM**2, math.pi / 64 * D_STEM**4
@@ -46,7 +46,8 @@ def random_poses(n, seed=0):
 # --- pose A: closed forms -------------------------------------------------------------------------
 @pytest.mark.parametrize("y", [0.55, 0.72])
 def test_pose_a_press_load_closed_form(machine, y):
-    # DESIGN.md: N_i = 700 / (4 sin alpha), zero couples; vertical stiffness = sum k_a sin^2(alpha). rel 1e-12
+    # vertical equilibrium of 4 equal legs at x = z = 0: N_i = 700 / (4 sin alpha), zero couples; vertical
+    # stiffness = sum k_a sin^2(alpha) (docs/conventions.md). rel 1e-12
     length = math.hypot(y, P - R)
     sin_a = y / length
     res = condensed.solve_linear(machine, [0, y, 0], [0, 700, 0, 0, 0, 0])
@@ -59,7 +60,7 @@ def test_pose_a_press_load_closed_form(machine, y):
 
 
 def test_pose_a_fits_table_5():
-    # DESIGN.md: y_h = 0.72 m gives tan(alpha) = 2 and 195.66 N per leg (Table 5 prints 195.6-195.8 N)
+    # y_h = 0.72 m gives tan(alpha) = 0.72 / (p - r) = 2 and 195.66 N per leg (Table 5 prints 195.6-195.8 N)
     assert 700 / (4 * math.sin(math.atan(2))) == pytest.approx(195.66, abs=0.005)
 
 
@@ -292,3 +293,95 @@ def test_cli_stiffness(tmp_path):
     maps = CliRunner().invoke(main, ["stiffness", "0", "0.6", "0", "--maps", "--out", str(tmp_path), "--n", "5"])
     assert maps.exit_code == 0 and (tmp_path / "stiffness_maps_y600mm.png").exists()
     assert CliRunner().invoke(main, ["stiffness", "0", "0.3", "0"]).exit_code == 2  # unreachable: a clear error
+
+
+# --- the singular-pose guard ------------------------------------------------------------------------
+# Near y = 0 the shipped legs (l = 0.36 m) are shorter than their 0.45 m cylinder, which gives negative
+# springs; a 0.2 m cylinder keeps every spring positive there, so only the geometry is singular.
+@pytest.fixture(scope="module")
+def short_cylinder(machine):
+    return machine.with_overrides({"cylinder": {"length_m": 0.2}}, source="test")
+
+
+def singular_height_m() -> float:
+    """The height y* below which the guard refuses h = (0, y, 0), from a closed form derived here.
+
+    At x = z = 0 every leg has sin(beta) = 0, so c_i = e_i, and with equal legs K_t / k_a = K_r / k_r =
+    sum e_i e_i^T = diag(2 cos^2 a, 4 sin^2 a, 2 cos^2 a) (tan a = y / (p - r)): both determinants are
+    16 cos^4(a) sin^2(a) times the cube of the leg spring. condensed.py refuses a block whose determinant is
+    below 1e-12 times the cube of its largest spring, i.e. below 16 cos^4 sin^2 = 1e-12 (y* = 9.0e-8 m). At
+    y = 0 the plate lies in the base plane, every leg is horizontal and nothing holds it vertically."""
+    from scipy.optimize import brentq
+
+    def margin(y):
+        a = math.atan2(y, P - R)
+        return 16 * math.cos(a) ** 4 * math.sin(a) ** 2 - 1e-12
+
+    return brentq(margin, 1e-12, 1e-3, xtol=1e-20, rtol=1e-14)
+
+
+@pytest.mark.parametrize("y", [0.0, "half"])
+def test_singular_pose_is_refused(short_cylinder, y):
+    """The stiffness is singular (y = 0) or numerically so (y*/2): a SingularPoseError naming the pose, never
+    NaN or inf compliances."""
+    h = [0.0, singular_height_m() / 2 if y == "half" else y, 0.0]
+    from pressfit.errors import SingularPoseError
+
+    for call in (lambda: condensed.solve_linear(short_cylinder, h, [0, 700, 0]),
+                 lambda: condensed.condensed_plate_compliance(short_cylinder, h),
+                 lambda: condensed.plate_stiffness(short_cylinder, [[0, 0.72, 0], h])):
+        with pytest.raises(SingularPoseError, match=r"singular at 1 pose\(s\), e\.g\. h = \[0\.0, "):
+            call()
+
+
+def test_pose_just_clear_of_the_guard_is_solved(short_cylinder):
+    """At 2 y* the guard lets the pose through and the (huge) vertical compliance is the closed form
+    1 / (4 k_a sin^2 a) (condition number 1e12: to 1e-6)."""
+    y = 2 * singular_height_m()
+    length = math.hypot(y, P - R)
+    k_a = 1 / float(short_cylinder.axial_compliance_m_per_n(length))
+    k_vert = 4 * k_a * (y / length) ** 2
+    res = condensed.solve_linear(short_cylinder, [0, y, 0], [0, 700, 0])
+    assert res.plate_displacement_m[1] == pytest.approx(700 / k_vert, rel=1e-6)
+    assert condensed.condensed_plate_compliance(short_cylinder, [0, y, 0])[1, 1] == pytest.approx(1 / k_vert, rel=1e-6)
+
+
+def test_stiffness_report_off_centre_against_the_vjm_model(machine):
+    """Every stiffness of ``stiffness_report`` at an asymmetric pose (where x and z, and the couplings, all
+    differ: at pose A symmetry hides a wrong index) against the second formulation: the Pinocchio VJM
+    compliance and its linear solve under the press load (they agree with the condensed model to ~1e-11;
+    asserted to 1e-8)."""
+    from pressfit.mechanics.compliance import vjm_plate_compliance
+    from pressfit.mechanics.statics import solve_equilibrium
+
+    pose = [0.2, 0.6, -0.15]
+    rep, c = condensed.stiffness_report(machine, pose), vjm_plate_compliance(machine, pose)
+    horizontal = c[np.ix_([0, 2], [0, 2])]
+    assert abs(c[0, 0] - c[2, 2]) > 0.05 * c[0, 0] and abs(horizontal[0, 1]) > 1e-3 * c[0, 0]  # no symmetry here
+    lam = np.linalg.eigvalsh(horizontal)[-1]
+    expected = {"vertical_stiffness_n_per_m": 1 / c[1, 1], "lateral_stiffness_n_per_m": 1 / lam,
+                "lateral_x_stiffness_n_per_m": 1 / c[0, 0], "lateral_z_stiffness_n_per_m": 1 / c[2, 2],
+                "lateral_to_vertical": c[1, 1] / lam}
+    for key, value in expected.items():
+        assert rep[key] == pytest.approx(value, rel=1e-8), key
+    np.testing.assert_allclose(rep["compliance_6x6"], c, rtol=0, atol=1e-8 * np.abs(c).max())
+    # the inverse of the ill-conditioned 3x3 block amplifies the 1e-11 difference: 1.2e-8 measured
+    np.testing.assert_allclose(rep["translational_stiffness_n_per_m"], np.linalg.inv(c[:3, :3]), rtol=5e-8)
+    eq = solve_equilibrium(machine, pose, [0, 700, 0, 0, 0, 0], linear=True)
+    np.testing.assert_allclose(rep["press_displacement_m"], eq.plate_displacement_m, rtol=1e-8, atol=1e-15)
+    np.testing.assert_allclose(rep["press_rotation_rad"], eq.plate_rotation_rad, rtol=1e-8, atol=1e-15)
+    assert rep["press_tilt_rad"] == pytest.approx(np.linalg.norm(eq.plate_rotation_rad), rel=1e-8)
+    np.testing.assert_allclose(rep["press_axial_forces_n"], eq.actuator_forces_n, rtol=1e-8)
+    assert rep["pose_m"] == pose and rep["press_load_n"] == 700.0
+    assert condensed.stiffness_report(machine, np.array([pose])) == rep  # a (1, 3) pose is the same pose
+    # leg moments (M_x, M_y, T), constant along a leg in the condensed model: the Pinocchio actuator section
+    moments = np.array([[leg.sections["actuator"].as_dict()[k] for k in ("M_x", "M_y", "T")] for leg in eq.legs])
+    np.testing.assert_allclose(rep["press_leg_moments_nm"], moments, rtol=0, atol=1e-8 * np.abs(moments).max())
+    assert rep["compliance_units"] == "rows/columns (x, y, z, rx, ry, rz): m/N, rad/N, rad/(N m)"
+    # about P* the translation block is sum k_a e e^T (docs/conventions.md), from the leg vectors here
+    u = np.asarray(pose) + OFFS - BASE
+    length = np.linalg.norm(u, axis=1)
+    e = u / length[:, None]
+    k_t = sum(k_axial(li) * np.outer(ei, ei) for li, ei in zip(length, e))
+    np.testing.assert_allclose(rep["translational_stiffness_about_p_star_n_per_m"], k_t, rtol=0,
+                               atol=1e-12 * np.abs(k_t).max())

@@ -106,7 +106,7 @@ def test_memory_flat_in_spring_count(machine):
 
 def test_spring_count_convergence_to_32(machine):
     """Nonlinear axial forces converge as 1/n^2 toward the smooth beam (a bent segment's chord shortens by
-    L phi^2/8 with one kink against L phi^2/24 smooth; DESIGN.md): with N_32 as the reference, the error
+    L phi^2/8 with one kink against L phi^2/24 smooth; docs/conventions.md): with N_32 as the reference, the error
     ratio e_4 / e_8 is (1/16 - 1/1024) / (1/64 - 1/1024) = 4.2 for a pure 1/n^2 law (accepted 3.5-5), and
     the default count (4) is within 1e-4 of the largest force."""
     pose, load = np.array([[0.2, 0.6, -0.2]]), np.array([60.0, 700.0, -60.0, 8.0, 12.0, -6.0])

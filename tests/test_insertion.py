@@ -142,7 +142,7 @@ def test_without_limiter_the_steady_force_is_the_series_stiffness_times_interfer
     sim, s = case.simulation, free.summary
     c_yy = condensed_plate_compliance(case.machine(), PIN)[1, 1]
     k = sim.contact.stiffness_n_per_m
-    assert s["steady_insertion_force_n"] == pytest.approx(k * sim.interference_m / (1 + k * c_yy), rel=0.01)
+    assert s["steady_insertion_force_n"] == pytest.approx(k * sim.interference_m / (1 + k * c_yy), rel=3e-3)
     assert s["steady_insertion_force_n"] == pytest.approx(s["contact_law_at_steady_depth_n"], rel=1e-6)
 
 
@@ -152,8 +152,8 @@ def test_scenario_tracks_and_keeps_the_loops_closed(runs):
     copy with faster moves) and no actuator saturates (peak tensions ~150 N against the 1000 N limit)."""
     for result in runs[1:]:
         s = result.summary
-        assert s["tool_final_error_m"] < 1e-4
-        assert s["max_closure_drift_m"] < 3e-5
+        assert s["tool_final_error_m"] < 5e-6
+        assert s["max_closure_drift_m"] < 8e-6
         assert s["actuator_saturation_time_s"] == 0.0 and max(s["peak_actuator_tension_n"]) < 1000.0
 
 

@@ -8,7 +8,7 @@ from pressfit.errors import ModelFileError
 
 
 def test_default_model(machine):
-    """Table 3's geometry and limits, and the legs of DESIGN.md's table."""
+    """Table 3's geometry and limits, and the legs of docs/conventions.md's table."""
     assert machine.geometry.base_half_side_m == 0.442 and machine.geometry.plate_half_side_m == 0.082
     assert (machine.limits.leg_length_min_m, machine.limits.leg_length_max_m) == (0.5, 1.0)
     assert machine.limits.beta_max_rad == pytest.approx(np.pi / 4, rel=1e-15)

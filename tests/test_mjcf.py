@@ -111,28 +111,28 @@ def test_passive_plate_trajectories_agree(runs):
     Both integrate with semi-implicit Euler; their difference comes from the closure treatment and is first
     order in the step h: Pinocchio's Baumgarte-corrected drift (largest 1.1e-5 m at h = 1e-4 s) falls as h,
     MuJoCo's soft-weld violation (measured 5.6e-7 m) as h^2. Measured deviation of the plate positions:
-    2.6e-6 m at h = 1e-4 s over a 0.73 m path (tolerance 1e-5 m), halving with h (ratio 1.96; 2 within 10%,
+    2.6e-6 m at h = 1e-4 s over a 0.73 m path (tolerance 8e-6 m), halving with h (ratio 1.96; 2 within 10%,
     the signature of a first-order integrator error, not of a modelling difference, which would not scale).
-    Richardson-extrapolated to h -> 0 (2 D(h/2) - D(h)) the engines agree to 5.6e-8 m (tolerance 3e-7 m)."""
+    Richardson-extrapolated to h -> 0 (2 D(h/2) - D(h)) the engines agree to 5.6e-8 m (tolerance 1.7e-7 m)."""
     coarse, fine = runs[1e-4], runs[5e-5]
     assert coarse.time_s[-1] == pytest.approx(0.5)
     assert np.ptp(coarse.pinocchio_plate_m[:, 1]) > 0.4  # the run did move the plate
-    assert coarse.deviation_m.max() < 1e-5
+    assert coarse.deviation_m.max() < 8e-6
     assert coarse.deviation_m.max() / fine.deviation_m.max() == pytest.approx(2.0, rel=0.1)
     d_coarse = coarse.pinocchio_plate_m - coarse.mujoco_plate_m
     d_fine = (fine.pinocchio_plate_m - fine.mujoco_plate_m)[::2]
-    assert np.linalg.norm(2 * d_fine - d_coarse, axis=1).max() < 3e-7
+    assert np.linalg.norm(2 * d_fine - d_coarse, axis=1).max() < 1.7e-7
 
 
 def test_closures_and_plate_orientation_hold_in_both_engines(runs):
-    """The 4-UPU plate only translates: its rotation stays below 1e-5 rad in both engines (MuJoCo's soft welds
+    """The 4-UPU plate only translates: its rotation stays below 5e-6 rad in both engines (MuJoCo's soft welds
     give 1.8e-6 rad at h = 1e-4 s). MuJoCo's weld violation follows the h^2 law of its stiffest safe solref
-    (time constant 2 h): 5.6e-7 m at h = 1e-4 s (tolerance 3e-6 m), 4x less at h / 2 (ratio 3.98, 4 within
+    (time constant 2 h): 5.6e-7 m at h = 1e-4 s (tolerance 1.7e-6 m), 4x less at h / 2 (ratio 3.98, 4 within
     10%); Pinocchio's drift stays below 3e-5 m (1.1e-5 m) and halves with h (first-order Baumgarte drift)."""
     coarse, fine = runs[1e-4], runs[5e-5]
     for run in (coarse, fine):
-        assert max(run.pinocchio_rotation_rad.max(), run.mujoco_rotation_rad.max()) < 1e-5
-    assert coarse.mujoco_closure_error_m < 3e-6
+        assert max(run.pinocchio_rotation_rad.max(), run.mujoco_rotation_rad.max()) < 5e-6
+    assert coarse.mujoco_closure_error_m < 1.7e-6
     assert coarse.mujoco_closure_error_m / fine.mujoco_closure_error_m == pytest.approx(4.0, rel=0.1)
     assert coarse.pinocchio_closure_error_m < 3e-5
     assert coarse.pinocchio_closure_error_m / fine.pinocchio_closure_error_m == pytest.approx(2.0, rel=0.1)

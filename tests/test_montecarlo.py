@@ -13,7 +13,7 @@ from pressfit.errors import ModelFileError
 from pressfit.mechanics import condensed
 from pressfit.studies import montecarlo as mc
 
-POSE_A = [0.0, 0.72, 0.0]  # tan(alpha) = 2 at y_h = 0.72 m (DESIGN.md)
+POSE_A = [0.0, 0.72, 0.0]  # tan(alpha) = y_h / (p - r) = 0.72 / 0.36 = 2
 SIGMA_M = 5e-6
 
 

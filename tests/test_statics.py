@@ -1,6 +1,6 @@
 """Compliant statics (pressfit.statics) against independent references.
 
-* the exact condensation of DESIGN.md (written here from scratch: per leg k_a w1 w1^T + k_r w2 w2^T
+* the exact condensation of docs/conventions.md (written here from scratch: per leg k_a w1 w1^T + k_r w2 w2^T
   about P*), for the linear solve, to 1e-9 (both sides are exact; round-off is ~1e-13);
 * energy stationarity on the constraint manifold, evaluated with forward kinematics only;
 * global equilibrium (sum of base reactions = load), machine symmetry, preload, rigid limit,
@@ -24,7 +24,7 @@ WRENCH = np.array([30.0, 700.0, -50.0, 5.0, 10.0, -7.0])
 
 
 def condensed(machine, pose, wrench):
-    """Independent exact linear condensation (DESIGN.md): axial forces, couple vectors (world) and plate
+    """Independent exact linear condensation (docs/conventions.md): axial forces, couple vectors (world) and plate
     displacement / rotation at the plate centre."""
     h = np.asarray(pose, float)
     p, r = machine.geometry.base_half_side_m, machine.geometry.plate_half_side_m

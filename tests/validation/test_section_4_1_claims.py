@@ -1,6 +1,6 @@
 """Paper section 4.1 (Table 3, Figures 6, 9, 10): claims about the workspace, n and F_y.
 
-Claims and what is true (see DESIGN.md, "What the paper's text gets wrong"):
+Claims and what is true (docs/conventions.md, "Where the printed paper is wrong"):
 - "The manipulator complies with the workspace specifications" (a 500 x 500 mm square, >= 100 mm high):
   true; the whole square is reachable for y_h in about [0.4877, 0.7519] m (264 mm of height).
 - "F_y is lower than one inside the workspace": true at every height where the square is reachable.
@@ -32,7 +32,7 @@ def _dims(machine):
 
 
 def test_workspace_claim_axis_aligned(machine, ranges):
-    """Square reachable for y_h in [~0.4877, ~0.7519] m: to 1e-4 m against DESIGN.md's four decimals,
+    """Square reachable for y_h in [~0.4877, ~0.7519] m: to 1e-4 m against docs/conventions.md's four decimals,
     to 1e-6 m against the closed form (bisection tolerance 1e-7 m; the binding points, an edge midpoint
     and a corner, are samples); and both ends are leg-length limits."""
     r = ranges[0.0]
@@ -89,7 +89,7 @@ def test_force_index_y_below_one(machine, ranges, angle):
 
 def test_dexterity_claim(machine):
     """Figure 9 (y_h = 0.6 m): the paper says n varies <= 15 %; measured (max - min) / max is about
-    23 % (DESIGN.md; asserted to one digit of the percentage, 0.225-0.245) and disagrees with the paper.
+    23 % (docs/conventions.md; asserted to one digit of the percentage, 0.225-0.245) and disagrees with the paper.
     Cross-check, independent of the closed-form eigenvalues: n = cot(alpha) / sqrt(2) at the centre
     (tan(alpha) = y_h / (p - r)) is the maximum, numpy's SVD at a corner the minimum (1e-7: arccos
     in the closed-form eigenvalues keeps about half the digits near repeated eigenvalues)."""
@@ -106,7 +106,7 @@ def test_dexterity_claim(machine):
 
 
 def test_dexterity_claim_holds_in_smaller_square(machine):
-    """DESIGN.md: the 15 % holds only within about +-0.19 m (asserted to 5 mm); bisection to 1e-5 m."""
+    """docs/conventions.md: the 15 % holds only within about +-0.19 m (asserted to 5 mm); bisection to 1e-5 m."""
     s = workspace.dexterity_half_width(machine, Y_FIGURES, 0.15)
     assert s == pytest.approx(0.19, abs=5e-3)
     assert workspace.square_statistics(machine, Y_FIGURES, half_width_m=s).dexterity_variation <= 0.15

@@ -73,7 +73,7 @@ def test_table4_exactly_four_rows_are_mislabelled(machine):
 
 
 def test_preload_vector_closed_form(machine):
-    """v_p is proportional to (-l_1, l_2, -l_3, l_4) (DESIGN.md; all leg lines meet at P*), and it is the
+    """v_p is proportional to (-l_1, l_2, -l_3, l_4) (docs/conventions.md; all leg lines meet at P*), and it is the
     right singular vector of A for the zero singular value (equation 9). Both to 1e-12: round-off only."""
     rng = np.random.default_rng(4)
     poses = np.column_stack([rng.uniform(-0.25, 0.25, 200), rng.uniform(0.49, 0.75, 200),

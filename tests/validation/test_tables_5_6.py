@@ -4,7 +4,7 @@ The paper's CAD model numbers legs differently (CAD 1, 2, 3, 4 = kinematic 1, 3,
 axial force compression-positive; ``pressfit.tables`` applies that map explicitly (never abs()).
 The paper's model is rigid with locked actuators; it is compared with pressfit's linear solution.
 Tolerances: case A 0.1% (the paper prints 4 digits; 195.6-195.8 N spread is its own asymmetry of
-0.1%), case B axial forces 1.5% (DESIGN.md: the pose (0.2765, 0.72, -0.2765) is fitted to the axial
+0.1%), case B axial forces 1.5% (docs/conventions.md: the pose (0.2765, 0.72, -0.2765) is fitted to the axial
 forces, not given). B and C moments and the C axial split are reported, not asserted (see README).
 """
 
@@ -71,8 +71,8 @@ def test_case_C_pose_breaks_table3_leg_length(machine):
 
 def test_table6_large_B_and_C_moments_are_26_to_39_percent_below_print(entries):
     """Documented disagreement (README "Tables 5 and 6"): with Table 3's geometry the large moments of
-    cases B (CAD legs 2, 3) and C (CAD legs 3, 4) come out 26-39% below the printed values; the band is
-    the one an independent prototype found (DESIGN.md). Torsion keeps the paper's sign under the map."""
+    cases B (CAD legs 2, 3) and C (CAD legs 3, 4) come out 26-39% below the printed values (docs/conventions.md,
+    "Where the printed paper is wrong"; asserted as that band). Torsion keeps the paper's sign under the map."""
     for name, cad_legs in (("B", (2, 3)), ("C", (3, 4))):
         for e in entries[name]:
             if e.cad_leg in cad_legs and e.quantity in ("M_z", "M_bend"):
