@@ -159,7 +159,7 @@ class BucklingBasis:
         for pose in poses_m:
             ref = statics.reference_tangent(solver, pose, np.zeros(6), None)
             z = null_space(ref.jacobian)
-            sym = lambda a: 0.5 * (z.T @ a @ z + (z.T @ a @ z).T)
+            sym = lambda a, z=z: 0.5 * (z.T @ a @ z + (z.T @ a @ z).T)
             el.append(sym(ref.elastic) + sym(ref.geometric))
             off.append([sym(statics.reference_tangent(solver, pose, np.zeros(6), e * _DL).geometric) / _DL
                         for e in np.eye(4)])
