@@ -66,3 +66,12 @@ class OutputError(PressfitError):
 
 class UnstableEquilibriumError(PressfitError):
     """The solution found is not a physical, stable state (a leg beyond buckling, a huge displacement)."""
+
+
+class StudyFailedError(PressfitError):
+    """Every sample (or design) of a study failed: nothing to summarise; ``failed`` counts the reasons."""
+
+    def __init__(self, what: str, failed: dict[str, int]) -> None:
+        self.failed = failed
+        reasons = ", ".join(f"{n} x {reason}" for reason, n in sorted(failed.items(), key=lambda t: -t[1]))
+        super().__init__(f"{what}: every sample failed ({reasons}); nothing to summarise")

@@ -127,8 +127,12 @@ class MonteCarloPlan:
         return ["sample", "status", *self.input_columns(), *OUTPUTS, *EXTRA_OUTPUTS]
 
     def fingerprint(self) -> dict[str, object]:
-        """What must match for a rerun to resume an earlier one (JSON-ready)."""
-        return {"name": self.name, "samples": self.samples, "seed": self.seed, "chunk_size": self.chunk_size,
+        """What must match for a rerun to resume an earlier one (JSON-ready): the case content that defines
+        the samples, the sampling plan and the pressfit version."""
+        from pressfit import __version__
+
+        return {"pressfit": __version__, "name": self.name, "samples": self.samples, "seed": self.seed,
+                "chunk_size": self.chunk_size,
                 "machine": self.machine.model_dump(exclude={"source"}), "poses_m": self.poses_m.tolist(),
                 "wrenches": self.wrenches.tolist(), "preload": [self.preload_a4, self.preload_mode],
                 "inputs": {n: d.model_dump() for n, d in self.inputs}}
@@ -213,9 +217,15 @@ def plan_from_case(case: Case, samples: int | None = None, seed: int | None = No
                           BucklingBasis.of(machine, poses))
 
 
+def chunk_seed(plan: MonteCarloPlan, k: int) -> np.random.SeedSequence:
+    """Chunk k's seed, ``SeedSequence(seed).spawn(n_chunks)[k]`` made alone (the k-th child of a spawn has
+    ``spawn_key = (k,)``): the draws of a sample depend on its chunk only, never on the number of workers or
+    the order in which chunks finish, and a study of 1e7 chunks needs no list of seeds."""
+    return np.random.SeedSequence(plan.seed, spawn_key=(k,))
+
+
 def chunk_seeds(plan: MonteCarloPlan) -> list[np.random.SeedSequence]:
-    """One independent seed per chunk, ``SeedSequence(seed).spawn(n_chunks)``: the draws of a sample depend
-    on its chunk only, never on the number of workers or the order in which chunks finish."""
+    """Every chunk's seed (:func:`chunk_seed`), ``SeedSequence(seed).spawn(n_chunks)``."""
     return np.random.SeedSequence(plan.seed).spawn(plan.n_chunks)
 
 
@@ -478,6 +488,7 @@ def evaluate_chunk(plan: MonteCarloPlan, k: int, seed: np.random.SeedSequence) -
 
 # --- summary ---------------------------------------------------------------------------------------------
 QUANTILES = (0.01, 0.05, 0.5, 0.95, 0.99)
+MIN_SENSITIVITY_SAMPLES = 3  # Spearman's rho of 2 points is +-1 whatever the data
 
 
 def wilson_interval(k: int, n: int, z: float = 1.959963984540054) -> tuple[float, float]:
@@ -564,8 +575,11 @@ def summarize(plan: MonteCarloPlan, columns: dict[str, np.ndarray], envelope: di
         exceed.append(Exceedance(key, float(limit), count, n, count / n, wilson_interval(count, n)))
     names = plan.input_columns()
     sens = {}
-    for key in outputs[:-1]:
-        if ok.sum() > 2:
+    if ok.sum() < MIN_SENSITIVITY_SAMPLES:
+        notes.append(f"sensitivity: undefined with {int(ok.sum())} solved sample(s) (a rank correlation needs at "
+                     f"least {MIN_SENSITIVITY_SAMPLES}); none computed")
+    else:
+        for key in (k for k in outputs if k != "residual"):
             rho = [(name, _spearman(columns[name][ok], columns[key][ok])) for name in names]
             sens[key] = sorted(rho, key=lambda t: -abs(t[1]))
     return MonteCarloSummary(n, failed, quantiles, exceed, sens, notes)
