@@ -67,6 +67,10 @@ def _client(workers: int | None, scheduler: str | None, dashboard: bool) -> Clie
             tqdm.write(warn, file=sys.stderr)
         try:
             return Client(scheduler, timeout="20s")
+        except TypeError:  # distributed: "TLS expects a `ssl_context` argument ... Instead got None"
+            raise ClusterError(f"cannot reach the Dask scheduler at {scheduler!r}: tls:// needs the client's "
+                               "certificates in the Dask configuration (distributed.comm.tls.ca-file, "
+                               "distributed.comm.tls.client.cert, distributed.comm.tls.client.key)") from None
         except (OSError, TimeoutError, ValueError) as exc:
             raise ClusterError(f"cannot reach the Dask scheduler at {scheduler!r}: {exc}") from None
     n = workers or default_workers()
