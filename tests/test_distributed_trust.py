@@ -278,3 +278,35 @@ def test_a_tls_scheduler_with_certificates_from_the_dask_configuration(case, tmp
             p.terminate()
         for p in procs:
             p.wait(timeout=30)
+
+
+# --- tiny and failed studies -----------------------------------------------------------------------------
+@pytest.mark.parametrize("samples", [1, 2, 3])
+def test_one_or_two_samples_work_and_say_the_sensitivity_is_undefined(case, cluster, tmp_path, samples):
+    """1 or 2 samples (old code: a traceback in the sensitivity plot after partial writes): the study is
+    summarised, the notes say the rank correlation is undefined, and no sensitivity plot is written; from 3
+    samples on it is computed and plotted."""
+    run = mcf.run_montecarlo(case, tmp_path / "mc", samples=samples, chunk_size=3,
+                             scheduler=cluster.scheduler_address, progress=False)
+    assert run.summary.samples == samples
+    undefined = any(n.startswith("sensitivity: undefined") for n in run.summary.notes)
+    assert undefined == (samples < 3) and bool(run.summary.sensitivity) == (samples >= 3)
+    assert (tmp_path / "mc" / "sensitivity.png").exists() == (samples >= 3)
+    assert (tmp_path / "mc" / "histograms.png").exists()
+
+
+def test_a_study_where_every_sample_fails_exits_2_with_the_reasons_counted(tmp_path):
+    """120 kN down at pose A buckles the machine (factor 0.83): every sample is unstable; the command exits 2
+    with one line counting the reasons (old code: a traceback from the plots), the chunks kept."""
+    from click.testing import CliRunner
+
+    from pressfit.cli import main
+    from tests.test_montecarlo_trust import pose_a_case
+
+    path = pose_a_case(tmp_path, -120e3, samples=4, limit=0.5)
+    result = CliRunner().invoke(main, ["study", "montecarlo", str(path), "--workers", "1", "--no-progress",
+                                       "--out", str(tmp_path / "mc")])
+    assert result.exit_code == 2, result.output
+    assert "every sample failed (4 x UnstableEquilibriumError)" in result.output
+    assert result.output.strip().count("\n") == 0
+    assert len(list((tmp_path / "mc" / "samples").glob("chunk-*.parquet"))) == 2

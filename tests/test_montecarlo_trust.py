@@ -10,6 +10,7 @@ import pytest
 
 from pressfit import kinematics
 from pressfit.description.cases import load_case
+from pressfit.errors import ModelFileError, PressfitError
 from pressfit.mechanics import buckling, statics
 from pressfit.studies import limit_check
 from pressfit.studies import montecarlo as mc
@@ -183,3 +184,45 @@ def test_failed_samples_count_as_exceedances(tmp_path):
     (e,) = s.exceedance
     assert (e.count, e.samples, e.probability) == (1, 3, pytest.approx(1 / 3))
     assert s.failed == {"ConvergenceError": 1}
+
+
+# --- item 9: bad input -----------------------------------------------------------------------------------
+@pytest.mark.parametrize(("table", "ok"), [
+    ('distribution = "uniform"\nlow = 0.0\nhigh = 100.0', False),
+    ('distribution = "uniform"\nlow = 0.0\nhigh = 1.5708', False),  # just above pi/2
+    ('distribution = "uniform"\nlow = 0.0\nhigh = 1.5707', True),
+    ('distribution = "normal"\nmean = 0.0\nstd = 0.01', False),  # unbounded
+])
+def test_a_load_tilt_beyond_pi_over_2_is_refused(tmp_path, table, ok):
+    """A tilt of the load of 100 rad is refused naming the key and the bound pi/2 (a load turned further is
+    another load case); just below the bound is accepted, just above is not."""
+    path = pose_a_case(tmp_path, inputs="[montecarlo.inputs.load_tilt_rad]\n" + table + "\n")
+    if ok:
+        assert load_case(path).montecarlo.inputs.load_tilt_rad.high == 1.5707
+        return
+    with pytest.raises(ModelFileError, match=r"montecarlo.inputs.*load_tilt_rad must be uniform or truncnormal "
+                                             r"within \[-1.5708, 1.5708\]") as err:
+        load_case(path)
+    assert "\n" not in str(err.value)
+
+
+@pytest.mark.parametrize(("option", "value"), [("--chunk-size", "100001"), ("--samples", "1000000001")])
+def test_chunk_size_and_samples_above_the_schema_cap_are_refused(tmp_path, option, value):
+    """The command line takes the case schema's caps (chunk_size <= 100000, samples <= 1e9): one usage line,
+    exit 2, before anything is computed or written."""
+    from click.testing import CliRunner
+
+    from pressfit.cli import main
+
+    out = tmp_path / "o"
+    result = CliRunner().invoke(main, ["study", "montecarlo", str(pose_a_case(tmp_path)), option, value,
+                                       "--out", str(out)])
+    assert result.exit_code == 2 and option in result.output and not out.exists()
+
+
+def test_a_pose_the_machine_cannot_reach_is_refused_up_front(tmp_path):
+    """An unreachable pose makes every sample fail: refused when the study is planned, naming the key."""
+    path = pose_a_case(tmp_path)
+    path.write_text(path.read_text().replace(f"points_m = [{POSE_A}]", "points_m = [[0.0, 5.0, 0.0]]"))
+    with pytest.raises(PressfitError, match="key 'poses': .*not reachable"):
+        mc.plan_from_case(load_case(path))

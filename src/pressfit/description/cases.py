@@ -349,9 +349,10 @@ class Design(StrictModel):
         if self.heights_m[0] > self.heights_m[1]:
             raise ValueError("heights_m must be [low, high] with low <= high")
         n = len(self.parameters.ranges())
-        if self.search == "grid" and self.grid_points**n > MAX_GRID_DESIGNS:
+        if self.search == "grid" and (total := self.grid_points**n) > MAX_GRID_DESIGNS:
             raise ValueError(f"grid_points = {self.grid_points} over {n} parameters is {self.grid_points}^{n} = "
-                             f"{float(self.grid_points)**n:.3g} designs, above the cap of {MAX_GRID_DESIGNS} "
+                             f"{total if total < 10**12 else f'{float(total):.3g}'} designs, above the cap of "
+                             f"{MAX_GRID_DESIGNS} "
                              "designs of a grid search; lower grid_points or use search = \"nsga2\"")
         return self
 

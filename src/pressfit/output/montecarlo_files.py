@@ -208,7 +208,11 @@ def _histograms(summary: montecarlo.MonteCarloSummary, columns: dict[str, np.nda
     try:
         for ax, key in zip(axes.flat, keys):
             v = columns[key][np.isfinite(columns[key])]
-            ax.hist(v, bins=40, color="0.5")
+            if np.ptp(v) > 1e-9 * np.abs(v).max():
+                ax.hist(v, bins=40, color="0.5")
+            else:  # one value (or all equal): one bar around it (40 bins of width ~0 are not representable)
+                half = 1e-6 * abs(float(v[0])) or 0.5
+                ax.hist(v, bins=1, range=(float(v[0]) - half, float(v[0]) + half), color="0.5")
             if key in envelope:
                 ax.axvline(envelope[key], color="r", label="envelope limit")
                 ax.legend(fontsize=7)

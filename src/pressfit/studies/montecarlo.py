@@ -208,7 +208,9 @@ def plan_from_case(case: Case, samples: int | None = None, seed: int | None = No
                             f"{len(poses)} (each sample solves every pose)")
     bad = ~kinematics.is_reachable(machine, poses)
     if bad.any():
-        raise PressfitError(f"{case.path}: key 'poses': {kinematics.unreachable_reason(machine, poses[bad][0])}")
+        h = poses[bad][0]
+        raise PressfitError(f"{case.path}: key 'poses': pose {tuple(float(c) for c in h)} m is not reachable (every "
+                            f"sample would fail): {kinematics.unreachable_reason(machine, h)}")
     lengths = kinematics.inverse_kinematics(machine, poses).lengths_m
     crit = lambda d: np.vectorize(lambda v: buckling.leg_critical_load_n(machine, v))(lengths + d)
     return MonteCarloPlan(case.name, machine, poses, case.loads.wrenches(), case.preload.a4,
