@@ -128,3 +128,31 @@ def test_a_reversed_range_is_a_named_error(tmp_path):
     (tmp_path / "bad.toml").write_text(p)
     with pytest.raises(ModelFileError, match="stem_diameter_m must be"):
         load_case(tmp_path / "bad.toml")
+
+
+def test_a_grid_beyond_the_cap_is_refused_before_it_is_built(tmp_path):
+    """grid_points = 1000 over 5 parameters would be 1e15 designs (old code: built them): refused by the case
+    schema naming the key and the cap; the cap itself (MAX_GRID_DESIGNS = 100000) is accepted, one point
+    above it is not (316^2 = 99856 <= 1e5 < 317^2 = 100489)."""
+    from click.testing import CliRunner
+
+    from pressfit.cli import main
+    from pressfit.description.cases import MAX_GRID_DESIGNS
+
+    assert MAX_GRID_DESIGNS == 100_000
+    two = "stem_diameter_m = [0.015, 0.035]\nbase_half_side_m = [0.4, 0.5]"
+    five = (two + "\nplate_half_side_m = [0.1, 0.2]\ncylinder_outer_diameter_m = [0.04, 0.06]\n"
+            "cylinder_wall_thickness_m = [0.003, 0.005]")
+    for points, params, ok in [(316, two, True), (317, two, False), (1000, five, False)]:
+        p = one_parameter_case(tmp_path).read_text().replace("grid_points = 41", f"grid_points = {points}")
+        (tmp_path / "g.toml").write_text(p.replace("stem_diameter_m = [0.015, 0.035]", params))
+        if ok:
+            assert load_case(tmp_path / "g.toml").design.grid_points == points
+            continue
+        with pytest.raises(ModelFileError, match=f"key 'design': .*grid_points = {points} over .* above the cap of "
+                                                 "100000 designs") as err:
+            load_case(tmp_path / "g.toml")
+        assert "\n" not in str(err.value)
+    result = CliRunner().invoke(main, ["study", "design", str(tmp_path / "g.toml"), "--out", str(tmp_path / "o")])
+    assert result.exit_code == 2 and result.output.count("\n") == 1 and "grid_points = 1000" in result.output
+    assert not (tmp_path / "o").exists()

@@ -33,7 +33,7 @@ def cluster():
     """One LocalCluster of 2 single-threaded worker processes shared by the tests (startup costs seconds)."""
     from distributed import LocalCluster
 
-    with LocalCluster(n_workers=2, threads_per_worker=1, processes=True, dashboard_address=":0",
+    with LocalCluster(n_workers=2, threads_per_worker=1, processes=True, host="127.0.0.1", dashboard_address=None,
                       silence_logs=50) as c:
         yield c
 
@@ -58,17 +58,18 @@ def test_one_and_two_workers_and_a_resumed_run_agree(case, cluster, tmp_path, mo
 
     real, written = mcf.io.write_parquet, []
 
-    def interrupt_after_two(path, cols, overwrite=False):  # the user presses Ctrl-C after two chunks
+    def interrupt_after_two(path, cols, overwrite=False, **kw):  # the user presses Ctrl-C after two chunks
         if len(written) == 2:
             raise KeyboardInterrupt
         written.append(path)
-        return real(path, cols, overwrite)
+        return real(path, cols, overwrite, **kw)
 
     monkeypatch.setattr(mcf.io, "write_parquet", interrupt_after_two)
     with pytest.raises(KeyboardInterrupt):
         mcf.run_montecarlo(case, tmp_path / "resumed", chunk_size=4, **two_workers, progress=False)
     monkeypatch.setattr(mcf.io, "write_parquet", real)
-    assert mcf.finished_chunks(tmp_path / "resumed") == {int(p.stem.split("-")[1]) for p in written}
+    done, damaged = mcf.finished_chunks(tmp_path / "resumed", montecarlo.plan_from_case(case, chunk_size=4))
+    assert done == {int(p.stem.split("-")[1]) for p in written} and not damaged
     resumed = mcf.run_montecarlo(case, tmp_path / "resumed", chunk_size=4, **two_workers, progress=False)
     assert resumed.chunks_run == 4
     _same(_columns(tmp_path / "one"), _columns(tmp_path / "resumed"))

@@ -94,3 +94,12 @@ class DriveStepError(PressfitError):
     def __init__(self, kind: str, leg: int, quantity: str, value: float, limit: str) -> None:
         self.kind, self.leg, self.quantity, self.value, self.limit = kind, leg, quantity, value, limit
         super().__init__(f"{kind} drive of leg {leg}: {quantity} = {value:.6g} breaks {limit}")
+
+
+class StudyFailedError(PressfitError):
+    """Every sample (or design) of a study failed: nothing to summarise; ``failed`` counts the reasons."""
+
+    def __init__(self, what: str, failed: dict[str, int]) -> None:
+        self.failed = failed
+        reasons = ", ".join(f"{n} x {reason}" for reason, n in sorted(failed.items(), key=lambda t: -t[1]))
+        super().__init__(f"{what}: every sample failed ({reasons}); nothing to summarise")

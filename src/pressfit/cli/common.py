@@ -105,9 +105,13 @@ OVERWRITE_OPTION = click.option("--overwrite", is_flag=True, help="Replace exist
 
 
 def cluster_options(func: Callable[..., Any]) -> Callable[..., Any]:
-    """``--workers N`` (a local Dask cluster of N processes; default one per core) or ``--scheduler ADDRESS``."""
-    func = click.option("--scheduler", help="Address of a running Dask scheduler, e.g. tcp://10.0.0.5:8786 "
-                        "(instead of --workers).")(func)
+    """``--workers N`` (a local Dask cluster of N processes; default one per core) or ``--scheduler ADDRESS``,
+    and ``--dashboard`` (the local cluster's dashboard, on 127.0.0.1 only)."""
+    func = click.option("--dashboard", is_flag=True, help="Start the local cluster's Dask dashboard (on 127.0.0.1; "
+                        "its address is printed).")(func)
+    func = click.option("--scheduler", help="Address of a running Dask scheduler: tls://HOST:8786 (certificates "
+                        "from the Dask configuration, distributed.comm.tls) or tcp://HOST:8786 (unencrypted; "
+                        "instead of --workers).")(func)
     return click.option("--workers", type=click.IntRange(1),
                         help="Worker processes of the local cluster (default: one per core).")(func)
 

@@ -18,7 +18,7 @@ from pressfit.cli.common import (
     echo_written,
     user_errors,
 )
-from pressfit.description.cases import MAX_FORCE_N
+from pressfit.description.cases import MAX_CHUNK_SIZE, MAX_FORCE_N, MAX_SAMPLES
 from pressfit.description.machine import load_machine
 from pressfit.errors import PressfitError
 from pressfit.output.files import check_directory, to_json, write_directory
@@ -85,9 +85,10 @@ def study_preload_cmd(case_file: Path | None, pose: tuple[float, ...] | None, cl
 
 @study_group.command("montecarlo")
 @click.argument("case_file", type=click.Path(path_type=Path))
-@click.option("--samples", type=click.IntRange(1), help="Number of samples (default: the case's [montecarlo]).")
+@click.option("--samples", type=click.IntRange(1, MAX_SAMPLES),
+              help="Number of samples (default: the case's [montecarlo]).")
 @click.option("--seed", type=click.IntRange(0), help="Seed (default: the case's).")
-@click.option("--chunk-size", type=click.IntRange(1), help="Samples per task (default: the case's).")
+@click.option("--chunk-size", type=click.IntRange(1, MAX_CHUNK_SIZE), help="Samples per task (default: the case's).")
 @cluster_options
 @click.option("--out", "out_dir", type=click.Path(path_type=Path), default=Path("out/montecarlo"), show_default=True,
               help="Study directory: samples/*.parquet, summary.json, quantiles.csv, PNG plots; rerun to resume.")
@@ -96,15 +97,18 @@ def study_preload_cmd(case_file: Path | None, pose: tuple[float, ...] | None, cl
 @click.option("--progress/--no-progress", default=True, help="Show a progress bar over samples.")
 @user_errors
 def study_montecarlo_cmd(case_file: Path, samples: int | None, seed: int | None, chunk_size: int | None,
-                         workers: int | None, scheduler: str | None, out_dir: Path, overwrite: bool, as_json: bool,
-                         progress: bool) -> None:
+                         workers: int | None, scheduler: str | None, dashboard: bool, out_dir: Path, overwrite: bool,
+                         as_json: bool, progress: bool) -> None:
     """Monte Carlo tolerances: exceedance probability of each envelope limit (Wilson 95% interval) and a
     sensitivity ranking, on a Dask cluster (SI units)."""
     from pressfit.description.cases import load_case
     from pressfit.output.montecarlo_files import run_montecarlo
 
     run = run_montecarlo(load_case(case_file), out_dir, samples=samples, seed=seed, chunk_size=chunk_size,
-                         workers=workers, scheduler=scheduler, overwrite=overwrite, progress=progress)
+                         workers=workers, scheduler=scheduler, overwrite=overwrite, progress=progress,
+                         dashboard=dashboard)
+    for path in run.rerun:
+        click.echo(f"warning: {path} was damaged (not a complete Parquet file); its chunk was run again", err=True)
     if as_json:
         click.echo(to_json(run.summary.to_dict() | {"outputs": [str(p) for p in run.written]}))
         return
@@ -158,15 +162,15 @@ def study_insertion_cmd(case_file: Path, preloads: list[float] | None, clearance
 @click.option("--json", "as_json", is_flag=True, help="Print the summary as JSON.")
 @click.option("--progress/--no-progress", default=True, help="Show a progress bar over designs.")
 @user_errors
-def study_design_cmd(case_file: Path, trials: int | None, workers: int | None, scheduler: str | None, out_dir: Path,
-                     overwrite: bool, as_json: bool, progress: bool) -> None:
+def study_design_cmd(case_file: Path, trials: int | None, workers: int | None, scheduler: str | None,
+                     dashboard: bool, out_dir: Path, overwrite: bool, as_json: bool, progress: bool) -> None:
     """Design search: the Pareto front of the case's objectives under its constraints over the workspace,
     and the best designs as machine files, on a Dask cluster (SI units)."""
     from pressfit.description.cases import load_case
     from pressfit.output.design_files import run_design_study, summary
 
     run = run_design_study(load_case(case_file), out_dir, trials=trials, workers=workers, scheduler=scheduler,
-                           overwrite=overwrite, progress=progress)
+                           overwrite=overwrite, progress=progress, dashboard=dashboard)
     s = summary(run.result)
     if as_json:
         click.echo(to_json(s | {"outputs": [str(p) for p in run.written]}))

@@ -32,6 +32,9 @@ from pressfit.spatial import cone_directions
 
 MAX_FORCE_N = 1e7  # a press-fit machine load above 10 MN is a typo, not a load case
 MAX_POSES = 2_000_000
+MAX_SAMPLES, MAX_CHUNK_SIZE = 10**9, 100_000  # [montecarlo] (and --samples, --chunk-size)
+MAX_LOAD_TILT_RAD = math.pi / 2  # a load turned beyond 90 degrees off its direction is another load case
+MAX_GRID_DESIGNS = 100_000  # [design] search = "grid": grid_points ** parameters designs at most
 
 
 class Axis(StrictModel):
@@ -252,6 +255,11 @@ class MonteCarloInputs(StrictModel):
         c = self.cardan_clearance_m
         if c is not None and (c.distribution == "normal" or c.low < 0 or c.high > 1e-2):  # type: ignore[operator]
             raise ValueError("cardan_clearance_m must be uniform or truncnormal within [0, 0.01] m")
+        t = self.load_tilt_rad
+        if t is not None and (t.distribution == "normal" or t.low < -MAX_LOAD_TILT_RAD  # type: ignore[operator]
+                              or t.high > MAX_LOAD_TILT_RAD):  # type: ignore[operator]
+            raise ValueError(f"load_tilt_rad must be uniform or truncnormal within [-{MAX_LOAD_TILT_RAD:.6g}, "
+                             f"{MAX_LOAD_TILT_RAD:.6g}] rad (pi/2: a load turned further is another load case)")
         t, bound = self.cardan_misalignment_rad, MAX_CARDAN_TILT_RAD / math.sqrt(3.0)
         if t is not None and (t.distribution == "normal" or t.low < -bound or t.high > bound):  # type: ignore[operator]
             raise ValueError(f"cardan_misalignment_rad must be uniform or truncnormal within [-{bound:.6g}, "
@@ -263,9 +271,9 @@ class MonteCarlo(StrictModel):
     """``pressfit study montecarlo``: ``samples`` draws of ``inputs``, seeded by ``seed``, run in chunks of
     ``chunk_size`` samples; every sample solves every pose and load of the case."""
 
-    samples: Annotated[int, Field(ge=1, le=10**9)] = 1000
+    samples: Annotated[int, Field(ge=1, le=MAX_SAMPLES)] = 1000
     seed: Annotated[int, Field(ge=0)] = 0
-    chunk_size: Annotated[int, Field(ge=1, le=100_000)] = 50
+    chunk_size: Annotated[int, Field(ge=1, le=MAX_CHUNK_SIZE)] = 50
     inputs: MonteCarloInputs
 
 
@@ -340,6 +348,12 @@ class Design(StrictModel):
             raise ValueError("objectives must be distinct")
         if self.heights_m[0] > self.heights_m[1]:
             raise ValueError("heights_m must be [low, high] with low <= high")
+        n = len(self.parameters.ranges())
+        if self.search == "grid" and (total := self.grid_points**n) > MAX_GRID_DESIGNS:
+            raise ValueError(f"grid_points = {self.grid_points} over {n} parameters is {self.grid_points}^{n} = "
+                             f"{total if total < 10**12 else f'{float(total):.3g}'} designs, above the cap of "
+                             f"{MAX_GRID_DESIGNS} "
+                             "designs of a grid search; lower grid_points or use search = \"nsga2\"")
         return self
 
 

@@ -66,10 +66,11 @@ def write_design(result: design.DesignResult, out: Path) -> list[Path]:
 
 
 def run_design_study(case: Case, out_dir: Path | str, *, trials: int | None = None, workers: int | None = None,
-                     scheduler: str | None = None, overwrite: bool = False, progress: bool = True) -> DesignRun:
+                     scheduler: str | None = None, overwrite: bool = False, progress: bool = True,
+                     dashboard: bool = False) -> DesignRun:
     """Run the case's design study on Dask and write its directory atomically (nothing existing is
     replaced without ``overwrite``)."""
     plan = design.plan_from_case(case, trials)
     io.check_directory(out_dir, overwrite)
-    result = design.run_design(plan, workers=workers, scheduler=scheduler, progress=progress)
+    result = design.run_design(plan, workers=workers, scheduler=scheduler, progress=progress, dashboard=dashboard)
     return DesignRun(result, io.write_directory(out_dir, overwrite, lambda tmp: write_design(result, tmp)))

@@ -223,10 +223,14 @@ def save_figure(fig: Figure, path: Path | str, overwrite: bool = False) -> Path:
     return _atomic(path, lambda p: fig.savefig(p, format=fmt, dpi=120, bbox_inches="tight"), overwrite)
 
 
-def write_parquet(path: Path | str, columns: dict[str, np.ndarray], overwrite: bool = False) -> Path:
-    """Write named columns (equal-length arrays) as one Parquet file (pyarrow, zstd)."""
+def write_parquet(path: Path | str, columns: dict[str, np.ndarray], overwrite: bool = False,
+                  metadata: dict[str, str] | None = None) -> Path:
+    """Write named columns (equal-length arrays) as one Parquet file (pyarrow, zstd), with optional
+    key-value ``metadata`` in its schema."""
     import pyarrow as pa
     import pyarrow.parquet as pq
 
     table = pa.table({k: np.asarray(v) for k, v in columns.items()})
+    if metadata:
+        table = table.replace_schema_metadata(metadata)
     return _atomic(path, lambda p: pq.write_table(table, p, compression="zstd"), overwrite)

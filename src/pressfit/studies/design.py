@@ -218,9 +218,9 @@ def _nsga2(plan: DesignPlan, client: object, progress: bool) -> dict[str, np.nda
 
 
 def run_design(plan: DesignPlan, *, workers: int | None = None, scheduler: str | None = None,
-               progress: bool = True) -> DesignResult:
+               progress: bool = True, dashboard: bool = False) -> DesignResult:
     """Search the design space on Dask (module doc) and return every trial with the Pareto front."""
-    with distributed.connect(workers, scheduler) as client:
+    with distributed.connect(workers, scheduler, dashboard) as client:
         cols = _nsga2(plan, client, progress) if plan.design.search == "nsga2" else \
             _evaluate(plan, client, _grid(plan), 0, progress)
     objectives = np.column_stack([cols[k] for k in plan.design.objectives])

@@ -25,9 +25,15 @@ equilibrium (:func:`pressfit.mechanics.statics.solve_equilibrium`) at every pose
 Per sample the worst value over poses, loads, legs and sections of every ``[envelope]`` load quantity
 (:data:`pressfit.studies.limit_check.LIMITS`, same names and definitions), the internal force
 |v_p . N| (N, the self-stress amplitude along the nominal preload vector v_p, equations 9-10) and the
-largest relative residual are recorded. A sample whose solve fails (unreachable pose, no convergence,
-a leg beyond its Euler load) gets NaN values and a non-"ok" ``status``; it counts as an exceedance of
-every limit (conservative) and is reported separately.
+largest relative residual are recorded. ``min_buckling_safety_factor`` is, as in ``pressfit check``, the
+whole machine's linearised buckling load factor (:func:`pressfit.mechanics.buckling.machine_buckling`: the
+sample's actuator offsets held, its load scaled), computed exactly at **every** pose and load of every
+sample (:class:`BucklingBasis`); the per-leg Euler factor (leg Euler load / compression) is the extra
+column ``min_leg_euler_factor``. A sample whose machine factor is below 1 is unstable (status
+``UnstableEquilibriumError``, whatever its solve did); one below ``STABILITY_RECHECK_FACTOR`` (or with a
+leg Euler factor below it) on the fast path gets the reference solve, whose stability check can refuse it.
+A sample whose solve fails (unreachable pose, no convergence, unstable) gets NaN values and a non-"ok"
+``status``; it counts as an exceedance of every limit (conservative) and is reported separately.
 
 Exceedance probability: the fraction of samples beyond the limit with the **Wilson score** 95%
 interval (it keeps its coverage near 0 and 1, where the normal approximation fails). Sensitivity: the
@@ -47,6 +53,7 @@ from typing import Any
 
 import numpy as np
 from scipy import special, stats
+from scipy.linalg import eigh, null_space
 
 from pressfit import kinematics
 from pressfit.description.cases import Case, Distribution
@@ -60,8 +67,9 @@ from pressfit.studies.limit_check import LIMITS, equilibrium_quantities, section
 
 OUTPUTS = ("max_tension_n", "max_compression_n", "max_shear_n", "max_bending_nm", "max_torsion_nm",
            "max_actuator_force_n", "max_plate_deflection_m", "max_plate_tilt_rad", "min_buckling_safety_factor")
-EXTRA_OUTPUTS = ("internal_force_n", "residual")
-STABILITY_RECHECK_FACTOR = 2.0  # fast path: a sample with a leg above 1/2 its Euler load gets the reference solve
+EXTRA_OUTPUTS = ("internal_force_n", "residual", "min_leg_euler_factor")
+STABILITY_RECHECK_FACTOR = 2.0  # fast path: a machine (or leg Euler) factor below 2 gets the reference solve
+MAX_POSES = 64  # poses of a Monte Carlo case: the buckling basis keeps 11 (r, r) matrices per pose (~0.85 MB)
 _DL = 1e-5  # m, step of the central difference of the Euler load against the leg length
 CLEARANCE_STEPS = 8  # load continuation steps with cardan clearances (the dead zone needs a path)
 _AXES = "xyz"
@@ -92,6 +100,7 @@ class MonteCarloPlan:
     chunk_size: int
     critical_n: np.ndarray  # (P, 4) Euler loads of the nominal legs at the poses, N
     critical_slope_n_per_m: np.ndarray  # (P, 4) their derivative with the leg length, N/m
+    buckling: BucklingBasis  # the whole machine's linearised buckling problem per pose
 
     def critical_loads_n(self, lengths_m: np.ndarray) -> np.ndarray:
         """Euler loads (P, 4), N, of legs of lengths (P, 4), m, near the nominal ones: first order about them
@@ -118,11 +127,65 @@ class MonteCarloPlan:
         return ["sample", "status", *self.input_columns(), *OUTPUTS, *EXTRA_OUTPUTS]
 
     def fingerprint(self) -> dict[str, object]:
-        """What must match for a rerun to resume an earlier one (JSON-ready)."""
-        return {"name": self.name, "samples": self.samples, "seed": self.seed, "chunk_size": self.chunk_size,
+        """What must match for a rerun to resume an earlier one (JSON-ready): the case content that defines
+        the samples, the sampling plan and the pressfit version."""
+        from pressfit import __version__
+
+        return {"pressfit": __version__, "name": self.name, "samples": self.samples, "seed": self.seed,
+                "chunk_size": self.chunk_size,
                 "machine": self.machine.model_dump(exclude={"source"}), "poses_m": self.poses_m.tolist(),
                 "wrenches": self.wrenches.tolist(), "preload": [self.preload_a4, self.preload_mode],
                 "inputs": {n: d.model_dump() for n, d in self.inputs}}
+
+
+@dataclass(frozen=True)
+class BucklingBasis:
+    r"""The whole machine's linearised buckling problem (:func:`pressfit.mechanics.buckling.machine_buckling`)
+    at each pose of a plan, split by its linearity: on the tangent space of the loop closures (Z orthonormal,
+    J_c Z = 0, the nominal machine's reference state) ``elastic`` = Z^T K_e Z (P, r, r), ``per_offset`` the
+    geometric stiffness Z^T K_g0 Z per metre of each actuator's rest-length offset (P, 4, r, r) and
+    ``per_wrench`` Z^T K_g Z per unit plate wrench component (P, 6, r, r) (per N, per N m). K_g0 and K_g
+    are linear in the offsets and the wrench (the reference state is a linear solve; tested), so a sample's
+    factor is one symmetric eigenproblem: the smallest lambda > 0 with
+    (elastic + sum_i o_i per_offset_i + lambda sum_j w_j per_wrench_j) phi = 0. Joint position errors enter
+    through their length offsets (l_nominal - l_real) on the nominal geometry (first order: the geometry
+    change e / l ~ 1e-5 is dropped; tested against the perturbed machine)."""
+
+    elastic: np.ndarray
+    per_offset: np.ndarray
+    per_wrench: np.ndarray
+
+    @classmethod
+    def of(cls, machine: Machine, poses_m: np.ndarray) -> BucklingBasis:
+        """The basis on ``machine`` at ``poses_m`` (P, 3), m: 11 reference tangents per pose (~0.1-0.3 s)."""
+        solver = statics.EquilibriumSolver(machine, pose_m=poses_m[0])
+        el, off, wr = [], [], []
+        for pose in poses_m:
+            ref = statics.reference_tangent(solver, pose, np.zeros(6), None)
+            z = null_space(ref.jacobian)
+            sym = lambda a, z=z: 0.5 * (z.T @ a @ z + (z.T @ a @ z).T)
+            el.append(sym(ref.elastic) + sym(ref.geometric))
+            off.append([sym(statics.reference_tangent(solver, pose, np.zeros(6), e * _DL).geometric) / _DL
+                        for e in np.eye(4)])
+            wr.append([sym(statics.reference_tangent(solver, pose, e, None).geometric) for e in np.eye(6)])
+        return cls(np.array(el), np.array(off), np.array(wr))
+
+    def load_factors(self, p: int, offsets_m: np.ndarray, wrenches: np.ndarray) -> np.ndarray:
+        """Load factors (n,) at pose ``p`` for actuator offsets (n, 4), m, and plate wrenches (n, 6) (N, N m):
+        inf when no positive factor exists (the load only stiffens), 0 when the offsets alone make the machine
+        unstable (the stiffness is not positive definite before any load). One generalised symmetric eigenproblem
+        for the smallest eigenvalue each (LAPACK sygvx, ~1 ms for r = 98)."""
+        out = np.empty(len(offsets_m))
+        for j, (o, w) in enumerate(zip(offsets_m, wrenches)):
+            k = self.elastic[p] + np.tensordot(o, self.per_offset[p], 1)
+            g = np.tensordot(w, self.per_wrench[p], 1)
+            try:  # G phi = mu K phi <=> lambda = -1 / mu: the smallest lambda > 0 is the most negative mu
+                mu = float(eigh(g, k, eigvals_only=True, subset_by_index=[0, 0])[0])
+            except np.linalg.LinAlgError:  # K not positive definite
+                out[j] = 0.0
+                continue
+            out[j] = -1.0 / mu if mu < 0 else math.inf
+        return out
 
 
 def plan_from_case(case: Case, samples: int | None = None, seed: int | None = None,
@@ -139,16 +202,31 @@ def plan_from_case(case: Case, samples: int | None = None, seed: int | None = No
     if n < 1:
         raise PressfitError(f"the number of samples must be at least 1, got {n}")
     machine, poses = case.machine(), case.poses.array()
+    if len(poses) > MAX_POSES:
+        raise PressfitError(f"{case.path}: key 'poses': a Monte Carlo study takes at most {MAX_POSES} poses, got "
+                            f"{len(poses)} (each sample solves every pose)")
+    bad = ~kinematics.is_reachable(machine, poses)
+    if bad.any():
+        h = poses[bad][0]
+        raise PressfitError(f"{case.path}: key 'poses': pose {tuple(float(c) for c in h)} m is not reachable (every "
+                            f"sample would fail): {kinematics.unreachable_reason(machine, h)}")
     lengths = kinematics.inverse_kinematics(machine, poses).lengths_m
     crit = lambda d: np.vectorize(lambda v: buckling.leg_critical_load_n(machine, v))(lengths + d)
     return MonteCarloPlan(case.name, machine, poses, case.loads.wrenches(), case.preload.a4,
                           case.preload.mode, inputs, n, mc.seed if seed is None else seed,
-                          chunk_size or mc.chunk_size, crit(0.0), (crit(_DL) - crit(-_DL)) / (2 * _DL))
+                          chunk_size or mc.chunk_size, crit(0.0), (crit(_DL) - crit(-_DL)) / (2 * _DL),
+                          BucklingBasis.of(machine, poses))
+
+
+def chunk_seed(plan: MonteCarloPlan, k: int) -> np.random.SeedSequence:
+    """Chunk k's seed, ``SeedSequence(seed).spawn(n_chunks)[k]`` made alone (the k-th child of a spawn has
+    ``spawn_key = (k,)``): the draws of a sample depend on its chunk only, never on the number of workers or
+    the order in which chunks finish, and a study of 1e7 chunks needs no list of seeds."""
+    return np.random.SeedSequence(plan.seed, spawn_key=(k,))
 
 
 def chunk_seeds(plan: MonteCarloPlan) -> list[np.random.SeedSequence]:
-    """One independent seed per chunk, ``SeedSequence(seed).spawn(n_chunks)``: the draws of a sample depend
-    on its chunk only, never on the number of workers or the order in which chunks finish."""
+    """Every chunk's seed (:func:`chunk_seed`), ``SeedSequence(seed).spawn(n_chunks)``."""
     return np.random.SeedSequence(plan.seed).spawn(plan.n_chunks)
 
 
@@ -259,10 +337,36 @@ def _sample_loads(plan: MonteCarloPlan, nominal: _Nominal, x: dict[str, np.ndarr
     return _SampleLoads(machine, wrenches, offsets, lengths, plan.critical_loads_n(lengths))
 
 
-def _sample_row(q: dict[str, np.ndarray], internal_n: np.ndarray, residual: np.ndarray) -> dict[str, float]:
-    """The worst of every output over one sample's m solves (arrays with m leading)."""
+def _sample_row(q: dict[str, np.ndarray], internal_n: np.ndarray, residual: np.ndarray,
+                machine_factor: float) -> dict[str, float]:
+    """The worst of every output over one sample's m solves (arrays with m leading); the buckling key is the
+    sample's whole-machine factor, the per-leg Euler factor goes to ``min_leg_euler_factor``."""
     row = {k: float(q[k].min() if LIMITS[k].sense == "min" else q[k].max()) for k in OUTPUTS}
+    row["min_leg_euler_factor"] = row["min_buckling_safety_factor"]
+    row["min_buckling_safety_factor"] = machine_factor
     return row | {"internal_force_n": float(np.abs(internal_n).max()), "residual": float(residual.max())}
+
+
+def machine_factors(plan: MonteCarloPlan, setups: list[_SampleLoads]) -> np.ndarray:
+    """Each sample's whole-machine linearised buckling factor (n,): the smallest over every pose and load
+    (one batched eigenproblem per pose over the samples x loads)."""
+    w = len(plan.wrenches)
+    out = np.full(len(setups), math.inf)
+    for p in range(len(plan.poses_m)):
+        offsets = np.repeat(np.array([s.offsets_m[p] for s in setups]), w, axis=0)
+        f = plan.buckling.load_factors(p, offsets, np.concatenate([s.wrenches for s in setups]))
+        out = np.minimum(out, f.reshape(len(setups), w).min(1))
+    return out
+
+
+def machine_factor(plan: MonteCarloPlan, s: _SampleLoads) -> float:
+    """One sample's whole-machine linearised buckling factor (:func:`machine_factors`)."""
+    return float(machine_factors(plan, [s])[0])
+
+
+def _unstable(factor: float) -> UnstableEquilibriumError:
+    return UnstableEquilibriumError(f"the whole machine buckles below the full load (linearised buckling factor "
+                                    f"{factor:.4g} < 1)")
 
 
 def evaluate_sample(plan: MonteCarloPlan, x: dict[str, np.ndarray], azimuth: float,
@@ -271,6 +375,9 @@ def evaluate_sample(plan: MonteCarloPlan, x: dict[str, np.ndarray], azimuth: flo
     reference solver (stability checked with every solve). ``model``: the nominal machine's solver, reused
     when the sample changes neither geometry nor joints."""
     s = _sample_loads(plan, _nominal(plan), x, azimuth)
+    factor = machine_factor(plan, s)
+    if factor < 1:
+        raise _unstable(factor)
     g = x.get("cardan_clearance_m")
     clearance = None if g is None else Clearance.per_joint(s.machine, g.tolist(), geometry="axial")
     solver = model if s.machine is plan.machine and clearance is None and model is not None else \
@@ -281,7 +388,7 @@ def evaluate_sample(plan: MonteCarloPlan, x: dict[str, np.ndarray], azimuth: flo
     qs = [equilibrium_quantities(eq, s.critical_n[p]) for p, eq in eqs]
     return _sample_row({k: np.stack([q[k] for q in qs]) for k in OUTPUTS},
                        np.array([vp(plan.machine, eq.pose_m) @ eq.actuator_forces_n for _, eq in eqs]),
-                       np.array([eq.residuals.worst() for _, eq in eqs]))
+                       np.array([eq.residuals.worst() for _, eq in eqs]), factor)
 
 
 def solver_path(plan: MonteCarloPlan) -> str:
@@ -295,8 +402,8 @@ def solver_path(plan: MonteCarloPlan) -> str:
         why = " and ".join(label for n, label in _REFERENCE_ONLY.items() if n in names)
         return f"reference solver ({why}), one model per sample, stability checked with every solve"
     per = "sample" if names & {"base_point_error_m", "plate_point_error_m"} else "chunk"
-    return (f"fast batched solver, one model per {per}; samples with a leg above 1/{STABILITY_RECHECK_FACTOR:g} "
-            "of its Euler load re-solved by the reference solver (stability check)")
+    return (f"fast batched solver, one model per {per}; samples with a whole-machine buckling factor (or a leg's "
+            f"Euler factor) below {STABILITY_RECHECK_FACTOR:g} re-solved by the reference solver (stability check)")
 
 
 def _fast_rows(plan: MonteCarloPlan, nominal: _Nominal, setups: list[_SampleLoads],
@@ -320,13 +427,14 @@ def _fast_rows(plan: MonteCarloPlan, nominal: _Nominal, setups: list[_SampleLoad
     res[:, 4] /= be.length_scale_m
     strain = np.abs(be.actuator_forces_n) * setups[0].machine.axial_compliance_m_per_n(lengths) / lengths
     m = p * w
+    factors = machine_factors(plan, setups)
     rows: list[dict[str, float] | PressfitError] = []
     for j in range(n):
         sl = slice(j * m, (j + 1) * m)
         if strain[sl].max() > statics.MAX_AXIAL_STRAIN:
             rows.append(UnstableEquilibriumError(f"a leg strains beyond {statics.MAX_AXIAL_STRAIN:g}"))
             continue
-        rows.append(_sample_row({k: v[sl] for k, v in q.items()}, internal[sl], res[sl].max(1)))
+        rows.append(_sample_row({k: v[sl] for k, v in q.items()}, internal[sl], res[sl].max(1), float(factors[j])))
     return rows
 
 
@@ -350,7 +458,12 @@ def _evaluate_fast(plan: MonteCarloPlan, x: list[dict[str, np.ndarray]], azimuth
     else:
         rows = _fast_rows(plan, nominal, setups, FastEquilibriumSolver(plan.machine, pose_m=plan.poses_m[0]))
     for j, r in enumerate(rows):
-        if isinstance(r, dict) and r["min_buckling_safety_factor"] < STABILITY_RECHECK_FACTOR:
+        if not isinstance(r, dict):  # a failed fast solve: unstable if the machine buckles below the load
+            factor = machine_factor(plan, setups[j])
+            rows[j] = _unstable(factor) if factor < 1 else r
+        elif r["min_buckling_safety_factor"] < 1:
+            rows[j] = _unstable(r["min_buckling_safety_factor"])
+        elif min(r["min_buckling_safety_factor"], r["min_leg_euler_factor"]) < STABILITY_RECHECK_FACTOR:
             try:
                 rows[j] = evaluate_sample(plan, x[j], float(azimuths[j]))
             except PressfitError as exc:
@@ -386,6 +499,7 @@ def evaluate_chunk(plan: MonteCarloPlan, k: int, seed: np.random.SeedSequence) -
 
 # --- summary ---------------------------------------------------------------------------------------------
 QUANTILES = (0.01, 0.05, 0.5, 0.95, 0.99)
+MIN_SENSITIVITY_SAMPLES = 3  # Spearman's rho of 2 points is +-1 whatever the data
 
 
 def wilson_interval(k: int, n: int, z: float = 1.959963984540054) -> tuple[float, float]:
@@ -472,8 +586,11 @@ def summarize(plan: MonteCarloPlan, columns: dict[str, np.ndarray], envelope: di
         exceed.append(Exceedance(key, float(limit), count, n, count / n, wilson_interval(count, n)))
     names = plan.input_columns()
     sens = {}
-    for key in outputs[:-1]:
-        if ok.sum() > 2:
+    if ok.sum() < MIN_SENSITIVITY_SAMPLES:
+        notes.append(f"sensitivity: undefined with {int(ok.sum())} solved sample(s) (a rank correlation needs at "
+                     f"least {MIN_SENSITIVITY_SAMPLES}); none computed")
+    else:
+        for key in (k for k in outputs if k != "residual"):
             rho = [(name, _spearman(columns[name][ok], columns[key][ok])) for name in names]
             sens[key] = sorted(rho, key=lambda t: -abs(t[1]))
     return MonteCarloSummary(n, failed, quantiles, exceed, sens, notes)
