@@ -152,12 +152,13 @@ def _core(machine: Machine, h: np.ndarray) -> _Core:
     a = machine.cardan_axes.T[:, :, None]
     s = e[0] * a[0] + e[1] * a[1] + e[2] * a[2]
     cos2 = 1.0 - s * s
-    c = (e - s * a) / np.sqrt(cos2)
-    c_t, c_m = rotational_compliances(machine, length)
-    k_a = 1.0 / machine.axial_compliance_m_per_n(length)
-    k_r = 1.0 / (cos2 * c_t + s * s * c_m)
-    kt, kr = _sym_outer(k_a, e), _sym_outer(k_r, c)
-    (ct, det_t), (cr, det_r) = _sym_inv(kt), _sym_inv(kr)
+    with np.errstate(divide="ignore", invalid="ignore"):  # a singular pose is refused just below, by name
+        c = (e - s * a) / np.sqrt(cos2)
+        c_t, c_m = rotational_compliances(machine, length)
+        k_a = 1.0 / machine.axial_compliance_m_per_n(length)
+        k_r = 1.0 / (cos2 * c_t + s * s * c_m)
+        kt, kr = _sym_outer(k_a, e), _sym_outer(k_r, c)
+        (ct, det_t), (cr, det_r) = _sym_inv(kt), _sym_inv(kr)
     # a block is singular when its determinant vanishes against the cube of its largest spring
     bad = ~((det_t > 1e-12 * k_a.max(0) ** 3) & (det_r > 1e-12 * k_r.max(0) ** 3))
     if np.any(bad):
