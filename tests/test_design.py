@@ -156,3 +156,18 @@ def test_a_grid_beyond_the_cap_is_refused_before_it_is_built(tmp_path):
     result = CliRunner().invoke(main, ["study", "design", str(tmp_path / "g.toml"), "--out", str(tmp_path / "o")])
     assert result.exit_code == 2 and result.output.count("\n") == 1 and "grid_points = 1000" in result.output
     assert not (tmp_path / "o").exists()
+
+
+def test_overwrite_never_replaces_the_case_file_with_a_design(tmp_path):
+    """A case file that sits where the study writes a design (``designs/design-NNNNNN.toml``) is an input: a rerun
+    with --overwrite is refused before anything is moved in, and the case file is unchanged."""
+    from pressfit.errors import OutputConflictError
+
+    out = tmp_path / "out"
+    first = design_files.run_design_study(load_case(one_parameter_case(tmp_path)), out, workers=1, progress=False)
+    target = next(p for p in first.written if p.parent.name == "designs")
+    target.write_text(one_parameter_case(tmp_path).read_text())
+    before = target.read_text()
+    with pytest.raises(OutputConflictError, match="input file"):
+        design_files.run_design_study(load_case(target), out, workers=1, overwrite=True, progress=False)
+    assert target.read_text() == before

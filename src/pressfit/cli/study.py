@@ -75,7 +75,8 @@ def study_preload_cmd(case_file: Path | None, pose: tuple[float, ...] | None, cl
               "preloads": preloads, "load_max_n": load_max, "steps": steps,
               "direction": direction, "preload_mode": preload_mode}
     study = preload_study.preload_study(**kw, progress=progress)
-    written = write_directory(out_dir, overwrite, lambda tmp: map_files.write_preload_study(study, tmp))
+    inputs = [case_file] if case_file is not None else [model_path]
+    written = write_directory(out_dir, overwrite, lambda tmp: map_files.write_preload_study(study, tmp), inputs=inputs)
     if as_json:
         click.echo(to_json(study.to_dict() | {"outputs": [str(p) for p in written]}))
         return

@@ -141,4 +141,6 @@ def run_insertion_study(case_path: Path | str, preloads_n: list[float] | None, c
     case = load_case(case_path)
     study = insertion_study(case, preloads_n or sorted({0.0, case.preload.a4_n}), clearances_m or [1e-5, 5e-5],
                             progress)
-    return study, io.write_directory(out_dir, overwrite, lambda tmp: write_insertion_study(study, tmp))
+    source = case.machine().source
+    return study, io.write_directory(out_dir, overwrite, lambda tmp: write_insertion_study(study, tmp),
+                                     inputs=[p for p in (case_path, source) if p and Path(str(p)).is_file()])
