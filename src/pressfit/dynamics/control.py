@@ -118,6 +118,10 @@ class Trajectory:
     waypoints_m: np.ndarray  # (k + 1, 3)
     durations_s: np.ndarray  # (k,)
     phases: tuple[str, ...]  # (k,) segment names
+    ends_s: np.ndarray = field(init=False, repr=False, compare=False)  # (k,) cumulative durations, s
+
+    def __post_init__(self) -> None:
+        object.__setattr__(self, "ends_s", np.cumsum(self.durations_s))  # computed once: at() runs every step
 
     @classmethod
     def insertion(cls, sim: Simulation) -> Trajectory:
@@ -136,12 +140,12 @@ class Trajectory:
 
     def segment(self, t_s: float) -> int:
         """Index of the segment running at time ``t_s`` (the last one after the end)."""
-        return min(int(np.searchsorted(np.cumsum(self.durations_s), t_s, side="right")), len(self.durations_s) - 1)
+        return min(int(np.searchsorted(self.ends_s, t_s, side="right")), len(self.durations_s) - 1)
 
     def at(self, t_s: float) -> tuple[np.ndarray, np.ndarray]:
         """Reference position (m) and velocity (m/s) at ``t_s`` (s)."""
         k = self.segment(t_s)
-        t0 = float(self.durations_s[:k].sum())
+        t0 = float(self.ends_s[k - 1]) if k else 0.0
         s, ds = _quintic((t_s - t0) / self.durations_s[k])
         delta = self.waypoints_m[k + 1] - self.waypoints_m[k]
         return self.waypoints_m[k] + s * delta, ds / self.durations_s[k] * delta
