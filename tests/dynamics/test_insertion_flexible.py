@@ -141,3 +141,100 @@ def test_model_key_is_strict_and_defaults_to_flexible(tmp_path):
     path.write_text(path.read_text().replace('model = "rigid"', ""))
     assert load_case(path).simulation.model == "flexible"  # the schema's default (issue 19)
     assert load_case("cases/paper/insertion_fast.toml").simulation.model == "flexible"
+
+
+SOFT_DRIVE_N_PER_M = 5.0e5  # equal actuator springs 100x softer than the shipped 5e7 N/m: the reference's drives
+
+
+def _structural_deflection(case, result):
+    """Tool minus kinematic pose (n, 3), m: the structure's deflection (issue 19, deliverable 5)."""
+    return (result.series[:, [COL[f"tool_{a}_m"] for a in "xyz"]]
+            - result.series[:, [COL[f"kinematic_{a}_m"] for a in "xyz"]])
+
+
+def _quasi_static_per_newton(case, pose_m):
+    """The elastic model's static tool deflection against its kinematic pose per newton of contact force (+y at the
+    tool) at ``pose_m``, m/N, with the contact force shared among the drives as the force drives share it.
+
+    Derivation: the controller commands N = -A^+ W + a4 v_p, so a change dF of the contact force changes the drive
+    forces by the minimum-norm A^+ dF (the preload term is fixed). A static solve with position drives shares a load
+    by compatibility; with four equal actuator springs k much softer than the rest of each leg (here 100x softer
+    than the shipped drives, so 5e5 N/m against legs of ~2.5e8 N/m) the leg forces are k e_i . u, and equilibrium
+    gives N = E^T (E E^T)^-1 dF = A^+ dF, the same split, up to O(k / k_leg) = 0.2%. The deflection is read, as in
+    the run, against the forward kinematics of the actuator-joint lengths (which the soft springs let move), and
+    the difference of the loaded and unloaded equilibria removes gravity (the model is linear in the small load).
+    The actuators' axial compliance is so left out, as it is in the force-driven flexible model."""
+    from pressfit.dynamics.control import estimate_pose
+    from pressfit.dynamics.machine.flexible import FlexibleMachine
+
+    machine = case.machine()
+    soft = machine.model_copy(update={"actuator": machine.actuator.model_copy(
+        update={"axial_stiffness_n_per_m": SOFT_DRIVE_N_PER_M})})
+    fm = FlexibleMachine(soft, pose_m)
+    force = 10.0  # N; the response is linear: the per-newton value does not depend on it to 1e-4
+    out = []
+    for f in (0.0, force):
+        state = fm.rest_state(np.array([0.0, f, 0.0, 0.0, 0.0, 0.0]))
+        out.append(fm.tool_point_m(state) - estimate_pose(machine, fm.leg_lengths_m(state), pose_m, 5)[0])
+    return (out[1] - out[0]) / force
+
+
+@pytest.fixture(scope="module")
+def slow_and_fast(tmp_path_factory):
+    """The insertion at the paper's descent (1 s) and ten times faster (0.1 s), flexible model, 1 s dwell, a
+    contact ten times stiffer than the shipped one (5e5 N/m: the tool moves 0.06 mm from first contact to the
+    30 N limit, so the rows compared below sit at nearly one pose)."""
+    tmp = tmp_path_factory.mktemp("speed")
+    out = {}
+    for name, descent in (("slow", 1.0), ("fast", 0.1)):
+        case = load_case(write_case(tmp, f"{name}.toml", simulation={
+            "model": "flexible", "move_time_s": 0.25, "descent_time_s": descent, "dwell_s": 1.0, "settle_s": 0.0,
+            "contact": {"stiffness_n_per_m": 5.0e5}}))
+        out[name] = case, simulate_insertion(case)
+    return out
+
+
+def _contact_rows(result):
+    force = result.column("contact_force_n")
+    dwell = np.flatnonzero(result.phases == result.phase_names.index("dwell"))
+    return force, int(np.flatnonzero(force > 0.0)[0]), int(dwell[-1])
+
+
+def test_slow_insertion_reproduces_the_quasi_static_deflection(slow_and_fast):
+    """Issue 19: at the paper's speed the contact's share of the structure's deflection at the end of the dwell
+    (against the last row before first contact) is the static one (:func:`_quasi_static_per_newton`) at the
+    contact force there: 0.31% is measured, bound 1% (the issue asks 2%; with the shipped 5e4 N/m contact the
+    pose moves 0.6 mm between the two rows and the gravity deflection with it: 2.4%)."""
+    case, run = slow_and_fast["slow"]
+    force, first, last = _contact_rows(run)
+    d = _structural_deflection(case, run)
+    dynamic = d[last] - d[first - 1]
+    pose = run.series[last, [COL[f"kinematic_{a}_m"] for a in "xyz"]]
+    static = _quasi_static_per_newton(case, pose) * force[last]
+    assert np.linalg.norm(static) > 5e-6  # micrometres of deflection: the comparison is not of round-off
+    assert np.linalg.norm(dynamic - static) <= 0.01 * np.linalg.norm(static), (dynamic, static)
+
+
+def _lateral_ratio(case, run):
+    """The largest lateral (x, z) contact-induced deflection over the run's contact (the structure's deflection
+    against the last row before first contact) over the quasi-static lateral deflection at the run's peak contact
+    force (:func:`_quasi_static_per_newton` at the pose of the peak)."""
+    force, first, _ = _contact_rows(run)
+    d = _structural_deflection(case, run)
+    peak = int(np.argmax(force))
+    c = _quasi_static_per_newton(case, run.series[peak, [COL[f"kinematic_{a}_m"] for a in "xyz"]])
+    touching = np.flatnonzero(force > 0.0)
+    dynamic = np.linalg.norm((d[touching] - d[first - 1])[:, [0, 2]], axis=1).max()
+    return dynamic / np.linalg.norm(c[[0, 2]] * force[peak]), force[peak]
+
+
+def test_fast_insertion_does_not_reproduce_it(slow_and_fast):
+    """Issue 19: with a ten times faster descent the stiff contact chatters (peak 318 N against 57 N at the paper's
+    speed) and the tool's lateral deflection in contact reaches 1.84 times the quasi-static lateral deflection at
+    that peak force ("more than half again": bound 1.5); at the paper's speed it stays below the quasi-static one
+    at its peak force (0.63: the overshoot is brief; bound 1)."""
+    slow, slow_peak = _lateral_ratio(*slow_and_fast["slow"])
+    fast, fast_peak = _lateral_ratio(*slow_and_fast["fast"])
+    assert fast_peak > 3.0 * slow_peak, (slow_peak, fast_peak)
+    assert slow < 1.0, slow
+    assert fast > 1.5, fast

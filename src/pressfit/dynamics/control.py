@@ -29,6 +29,7 @@ Force limiter (on the measured contact force F_c along +y, limit F_lim), both pa
 
 from __future__ import annotations
 
+import math
 from dataclasses import dataclass, field
 
 import numpy as np
@@ -51,13 +52,44 @@ def _legs(machine: Machine, pose_m: np.ndarray) -> tuple[np.ndarray, np.ndarray]
 def estimate_pose(machine: Machine, lengths_m: np.ndarray, guess_m: np.ndarray,
                   iterations: int = 2) -> tuple[np.ndarray, np.ndarray, float]:
     """Plate position (3,), m, whose leg lengths best fit ``lengths_m`` (4,), m (Gauss-Newton from
-    ``guess_m``), the leg unit vectors there (4, 3) (rows of dl/dh) and the largest length residual (m)."""
-    h = np.asarray(guess_m, dtype=float).copy()
-    lengths, e = _legs(machine, h)
+    ``guess_m``), the leg unit vectors there (4, 3) (rows of dl/dh) and the largest length residual (m).
+    In Python floats (the 3 x 3 normal equations by the adjugate): at this size numpy's per-call overhead
+    costs more than the arithmetic; the normal matrix is well conditioned wherever A is (singular poses are
+    refused by :func:`pressfit.dynamics.actuators.distribution`)."""
+    offsets = (machine.plate_offsets_m - machine.base_points_m).tolist()  # u_i = h + d_i - B_i (equation 1)
+    measured = [float(x) for x in lengths_m]
+    hx, hy, hz = (float(x) for x in guess_m)
+
+    def legs() -> tuple[list, list]:
+        rows, residuals = [], []
+        for (dx, dy, dz), lm in zip(offsets, measured, strict=True):
+            ux, uy, uz = hx + dx, hy + dy, hz + dz
+            n = math.sqrt(ux * ux + uy * uy + uz * uz)
+            rows.append((ux / n, uy / n, uz / n))
+            residuals.append(n - lm)
+        return rows, residuals
+
+    e, r = legs()
     for _ in range(iterations):
-        h -= np.linalg.solve(e.T @ e, e.T @ (lengths - lengths_m))  # normal equations of the 4 x 3 problem
-        lengths, e = _legs(machine, h)
-    return h, e, float(np.max(np.abs(lengths - lengths_m)))
+        a00 = a01 = a02 = a11 = a12 = a22 = b0 = b1 = b2 = 0.0
+        for (ex, ey, ez), ri in zip(e, r, strict=True):  # e^T e and e^T r
+            a00 += ex * ex
+            a01 += ex * ey
+            a02 += ex * ez
+            a11 += ey * ey
+            a12 += ey * ez
+            a22 += ez * ez
+            b0 += ex * ri
+            b1 += ey * ri
+            b2 += ez * ri
+        c00, c01, c02 = a11 * a22 - a12 * a12, a02 * a12 - a01 * a22, a01 * a12 - a02 * a11
+        c11, c12, c22 = a00 * a22 - a02 * a02, a02 * a01 - a00 * a12, a00 * a11 - a01 * a01
+        det = a00 * c00 + a01 * c01 + a02 * c02
+        hx -= (c00 * b0 + c01 * b1 + c02 * b2) / det
+        hy -= (c01 * b0 + c11 * b1 + c12 * b2) / det
+        hz -= (c02 * b0 + c12 * b1 + c22 * b2) / det
+        e, r = legs()
+    return np.array([hx, hy, hz]), np.array(e), max(abs(x) for x in r)
 
 
 def gravity_feedforward_n(rigid: RigidLegModel, pose_m: np.ndarray) -> np.ndarray:
@@ -86,6 +118,10 @@ class Trajectory:
     waypoints_m: np.ndarray  # (k + 1, 3)
     durations_s: np.ndarray  # (k,)
     phases: tuple[str, ...]  # (k,) segment names
+    ends_s: np.ndarray = field(init=False, repr=False, compare=False)  # (k,) cumulative durations, s
+
+    def __post_init__(self) -> None:
+        object.__setattr__(self, "ends_s", np.cumsum(self.durations_s))  # computed once: at() runs every step
 
     @classmethod
     def insertion(cls, sim: Simulation) -> Trajectory:
@@ -104,12 +140,12 @@ class Trajectory:
 
     def segment(self, t_s: float) -> int:
         """Index of the segment running at time ``t_s`` (the last one after the end)."""
-        return min(int(np.searchsorted(np.cumsum(self.durations_s), t_s, side="right")), len(self.durations_s) - 1)
+        return min(int(np.searchsorted(self.ends_s, t_s, side="right")), len(self.durations_s) - 1)
 
     def at(self, t_s: float) -> tuple[np.ndarray, np.ndarray]:
         """Reference position (m) and velocity (m/s) at ``t_s`` (s)."""
         k = self.segment(t_s)
-        t0 = float(self.durations_s[:k].sum())
+        t0 = float(self.ends_s[k - 1]) if k else 0.0
         s, ds = _quintic((t_s - t0) / self.durations_s[k])
         delta = self.waypoints_m[k + 1] - self.waypoints_m[k]
         return self.waypoints_m[k] + s * delta, ds / self.durations_s[k] * delta

@@ -171,6 +171,7 @@ class FlexibleMachine:
         self.refreshes = 0  # iteration-matrix factorisations so far (a diagnostic)
         self._factor: tuple | None = None
         self._factor_key: tuple | None = None
+        self._fext: pin.StdVec_Force | None = None  # section_loads' external forces
 
     # --- model -----------------------------------------------------------------------------------
     def _place(self, stem_lengths_m: np.ndarray) -> None:
@@ -467,31 +468,32 @@ class FlexibleMachine:
     def section_loads(self, state: FlexibleState) -> SectionLoads:
         """Leg section resultants at the three sections (module doc, :mod:`.base`)."""
         w = self.closure_wrenches(state)
-        fext = pin.StdVec_Force()
-        for _ in range(self.model.njoints):
-            fext.append(pin.Force.Zero())
+        if self._fext is None:  # external forces per joint: zero but on the plate ends (set below)
+            self._fext = pin.StdVec_Force()
+            for _ in range(self.model.njoints):
+                self._fext.append(pin.Force.Zero())
+        fext, omi, f_sub = self._fext, self.data.oMi, self.data.f
         for i, j in enumerate(self.plate_end):
-            fext[j] = self.data.oMi[j].actInv(pin.Force(w[i, :3], w[i, 3:]))
+            fext[j] = omi[j].actInv(pin.Force(w[i, :3], w[i, 3:]))
         pin.rnea(self.model, self.data, state.q, state.v, state.acceleration, fext)
-        out, frames = np.empty((4, 3, 6)), np.empty((4, 3, 3))
-        axes = self.machine.cardan_axes
+        pts, force, moment = np.empty((4, 3, 3)), np.empty((4, 3, 3)), np.empty((4, 3, 3))
         for i in range(4):
-            pts, wr = [], []
-            for sub, j, z in self.sec[i]:
-                o = self.data.oMi[j]
-                pts.append(o.translation + o.rotation[:, 2] * z)
-                f = self.data.oMi[sub].act(self.data.f[sub])
-                wr.append((-np.asarray(f.linear), -np.asarray(f.angular)))
-            ez = pts[2] - pts[0]
-            ez /= np.linalg.norm(ez)
-            ex = axes[i] - (axes[i] @ ez) * ez
-            ex /= np.linalg.norm(ex)
-            fr = np.column_stack([ex, np.cross(ez, ex), ez])
-            frames[i] = fr
-            for s, (p, (f, m)) in enumerate(zip(pts, wr)):
-                mp = m - np.cross(p, f)  # moment about the section point
-                fl, ml = fr.T @ f, fr.T @ mp
-                out[i, s] = [fl[2], fl[0], fl[1], ml[0], ml[1], ml[2]]
+            for s, (sub, j, z) in enumerate(self.sec[i]):
+                o = omi[j]
+                pts[i, s] = o.translation + o.rotation[:, 2] * z
+                f = omi[sub].act(f_sub[sub])
+                force[i, s], moment[i, s] = f.linear, f.angular
+        force, moment = -force, -moment
+        ez = pts[:, 2] - pts[:, 0]
+        ez /= np.sqrt((ez * ez).sum(axis=1))[:, None]
+        axes = self.machine.cardan_axes
+        ex = axes - (axes * ez).sum(axis=1)[:, None] * ez
+        ex /= np.sqrt((ex * ex).sum(axis=1))[:, None]
+        frames = np.stack([ex, np.cross(ez, ex), ez], axis=2)  # (leg, xyz, column)
+        mp = moment - np.cross(pts, force)  # moments about the section points
+        fl = np.einsum("lji,lsj->lsi", frames, force)  # in the leg frames
+        ml = np.einsum("lji,lsj->lsi", frames, mp)
+        out = np.concatenate([fl[..., 2:3], fl[..., 0:2], ml], axis=2)
         return SectionLoads(out, frames)
 
 
