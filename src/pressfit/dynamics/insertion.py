@@ -238,7 +238,7 @@ _LIMIT_KEYS = {"force": "[actuator] force_limit_n",
 def drive_limit(drives: drive_kinds.Drive) -> str:
     """The drives' force limit and the key that sets it, for messages ("the drives' [actuator] force_limit_n =
     1000 N")."""
-    return f"the drives' {_LIMIT_KEYS[drives.kind]} = {drives.force_limit_n:g} N"
+    return f"the drives' {_LIMIT_KEYS[getattr(drives, 'kind', 'force')]} = {drives.force_limit_n:g} N"
 
 
 def _require_reachable(case: Case, machine: Machine, pose: np.ndarray, key: str, what: str) -> None:
