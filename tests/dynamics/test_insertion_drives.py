@@ -19,7 +19,7 @@ from pressfit.dynamics import insertion
 from pressfit.dynamics.actuators import ForceActuators
 from pressfit.dynamics.machine.flexible import FlexibleMachine
 from pressfit.dynamics.multibody import rigid_leg_model
-from tests.test_simulation_trust import write_case
+from tests.test_simulation_trust import refused, write_case
 
 ROOT = Path(__file__).resolve().parents[2]
 SHORT = {"move_time_s": 0.5, "descent_time_s": 0.6, "dwell_s": 1.5, "settle_s": 0.2}  # as tests/test_simulation_trust
@@ -155,3 +155,13 @@ def test_electric_reflected_inertia_is_on_both_models():
         pytest.approx(reflected, rel=1e-12)
     force_rigid = rigid_leg_model(load_machine(ROOT / "models/pressfit_4upu.toml"), pose)
     assert np.all(force_rigid.model.armature == 0.0)
+
+
+def test_a_drive_refusing_its_step_stops_the_run_in_one_line(tmp_path):
+    """The hydraulic case on the flexible model at the 1 ms step: the oil column on the light stem is too fast for
+    the held leg rate and a chamber pressure leaves the drive's range early in the first move: exit 2, one line
+    naming the drive, the leg, the quantity, the limit and the time (no traceback, no partial output)."""
+    path = drive_case(tmp_path, "hydraulic", {"model": "flexible", **SHORT})
+    line = refused(path, "the hydraulic drive of leg", "pressure_", "breaks [-300000, 3e+07] Pa", "at t = ",
+                   "[actuator.hydraulic]")
+    assert float(line.split("at t = ")[1].split(" s")[0]) < SHORT["move_time_s"]
