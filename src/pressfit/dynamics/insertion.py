@@ -35,13 +35,20 @@ from tqdm import tqdm
 from pressfit import kinematics
 from pressfit.description.cases import Case, Simulation
 from pressfit.description.machine import Machine
-from pressfit.dynamics.actuators import ForceActuators
+from pressfit.dynamics import drives as drive_kinds
 from pressfit.dynamics.contact import ContactState, contact_force_n, solve_contact
 from pressfit.dynamics.control import ForceLimitedController, PoseCache, Trajectory, estimate_pose
 from pressfit.dynamics.machine.base import SECTION_COMPONENTS, SECTIONS, DriveInput
 from pressfit.dynamics.machine.flexible import MAX_STEP_FRACTION, FlexibleMachine
 from pressfit.dynamics.multibody import RigidLegModel, rigid_leg_model
-from pressfit.errors import ConvergenceError, ModelFileError, PressfitError, UnreachablePoseError, format_violation
+from pressfit.errors import (
+    ConvergenceError,
+    DriveStepError,
+    ModelFileError,
+    PressfitError,
+    UnreachablePoseError,
+    format_violation,
+)
 from pressfit.mechanics.clearance import clearance_from_case, load_deflection
 from pressfit.mechanics.condensed import condensed_plate_compliance
 
@@ -208,12 +215,12 @@ def plan_scenario(case: Case, machine: Machine | None = None, preload_key: str =
     if np.any(path[free, 1] <= board):
         raise _refuse(case, "[simulation] start_m", "a planned approach and move above the board face")
     warnings = []
-    drives = ForceActuators.of(machine)
+    drives = drive_kinds.of(machine)
     a4 = case.preload.a4_n
     vp = float(np.abs(kinematics.preload_vector(machine, path)).max())
     if abs(a4) * vp > drives.force_limit_n:
-        raise _refuse(case, preload_key, f"|a4| max|v_p| at most the drives' [actuator] force_limit_n = "
-                      f"{drives.force_limit_n:g} N: a4 = {a4:g} N with max|v_p| = {vp:.4g} over the planned path "
+        raise _refuse(case, preload_key, f"|a4| max|v_p| at most {drive_limit(drives)}: a4 = {a4:g} N with "
+                      f"max|v_p| = {vp:.4g} over the planned path "
                       f"commands {abs(a4) * vp:.4g} N from the preload alone")
     rigid = rigid_leg_model(machine, np.asarray(sim.start_m, float), sim.baumgarte_rad_per_s)
     _check_steps(case, rigid, trajectory)
@@ -221,6 +228,17 @@ def plan_scenario(case: Case, machine: Machine | None = None, preload_key: str =
         warnings.append(f"{steps} time steps (time_step_s = {dt:g} s over {trajectory.duration_s:g} s): expect about "
                         f"{steps * 8e-4 / 60:.0f} min per run")
     return ScenarioPlan(trajectory, steps, path, tuple(warnings), rigid)
+
+
+_LIMIT_KEYS = {"force": "[actuator] force_limit_n",
+               "electric": "k_f [actuator.electric] current_limit_a (k_f = 2 pi eta K_t / lead)",
+               "hydraulic": "A ([actuator.hydraulic] supply_pressure_pa - tank_pressure_pa)"}
+
+
+def drive_limit(drives: drive_kinds.Drive) -> str:
+    """The drives' force limit and the key that sets it, for messages ("the drives' [actuator] force_limit_n =
+    1000 N")."""
+    return f"the drives' {_LIMIT_KEYS[getattr(drives, 'kind', 'force')]} = {drives.force_limit_n:g} N"
 
 
 def _require_reachable(case: Case, machine: Machine, pose: np.ndarray, key: str, what: str) -> None:
@@ -270,7 +288,7 @@ def simulate_insertion(case: Case, limiter: bool = True, progress: bool = False)
     (``[simulation] model``: the rigid-leg model with the compliance in series, or the flexible machine)."""
     machine = case.machine()
     plan = plan_scenario(case, machine)
-    drives = ForceActuators.of(machine)
+    drives = drive_kinds.of(machine)
     run = _run_flexible if case.simulation.model == "flexible" else _run_rigid
     rows, phases, sections = run(case, machine, plan, drives, limiter, progress)
     result = InsertionResult(limiter, rows, phases, plan.trajectory.phases, sections=sections)
@@ -305,6 +323,11 @@ def _check_pose(case: Case, machine: Machine, k: int, steps: int, t: float, pose
                         f" m: {format_violation(*bad[0])}")
 
 
+def _drive_failed(case: Case, t: float, exc: DriveStepError) -> PressfitError:
+    return PressfitError(f"{case.path}: the {exc} at t = {t:.4g} s (the machine file's [actuator.{exc.kind}] "
+                         "table, or the scenario's speed and forces)")
+
+
 def _drift_error(case: Case, drift: float, t: float) -> PressfitError:
     sim = case.simulation
     return PressfitError(f"{case.path}: the loop closures drifted open by {drift:.3g} m at t = {t:.4g} s, "
@@ -314,7 +337,7 @@ def _drift_error(case: Case, drift: float, t: float) -> PressfitError:
                          "diverged, the [simulation.controller] gains")
 
 
-def _run_rigid(case: Case, machine: Machine, plan: ScenarioPlan, drives: ForceActuators, limiter: bool,
+def _run_rigid(case: Case, machine: Machine, plan: ScenarioPlan, drives: drive_kinds.Drive, limiter: bool,
                progress: bool) -> tuple[np.ndarray, np.ndarray, None]:
     """The rigid-leg model, the compliance in series at the tool (module docstring)."""
     sim, trajectory, steps, rigid = case.simulation, plan.trajectory, plan.steps, plan.rigid
@@ -323,6 +346,7 @@ def _run_rigid(case: Case, machine: Machine, plan: ScenarioPlan, drives: ForceAc
     q, v, dt, a4 = rigid.reference_q.copy(), np.zeros(rigid.model.nv), sim.time_step_s, case.preload.a4_n
     force = ctrl.command(q[rigid.actuator_q], v[rigid.actuator_v], trajectory.at(0.0), 0.0, 0.0)
     tension = -ctrl.pinv @ force + a4 * ctrl.null
+    drive = drives.initial_state(tension, q[rigid.actuator_q])
     contact = ContactState(0.0, sim.contact.board_height_m - q[1], np.zeros(3))
     series, phases = _Series(machine, steps, sim.start_m), np.empty(steps, dtype=int)
     tau = np.zeros(rigid.model.nv)
@@ -332,7 +356,7 @@ def _run_rigid(case: Case, machine: Machine, plan: ScenarioPlan, drives: ForceAc
         try:
             force = ctrl.command(q[rigid.actuator_q], v[rigid.actuator_v], reference, contact.force_n, dt)
             command = -ctrl.pinv @ force + a4 * ctrl.null  # equation 5 at the estimate, plus the preload
-            tension = drives.step(tension, command, dt)
+            drive, tension = drives.step(drive, command, q[rigid.actuator_q], v[rigid.actuator_v], dt)
             tau[rigid.actuator_v] = -tension
             tau[0:3] = pin.Quaternion(q[3:7]).matrix().T @ np.array([0.0, contact.force_n, 0.0])  # local frame
             q, v = rigid.step(q, v, tau, dt)
@@ -352,11 +376,13 @@ def _run_rigid(case: Case, machine: Machine, plan: ScenarioPlan, drives: ForceAc
                            ctrl.lift_m, drift, *axial, ctrl.null @ tension), q[rigid.actuator_q], v[rigid.actuator_v])
         except UnreachablePoseError as exc:  # the estimate (feed-forward, compliance) left the workspace
             raise _diverged(case, t, f"the pose estimate left the reachable set: {exc}") from None
+        except DriveStepError as exc:
+            raise _drive_failed(case, t, exc) from None
         phases[k] = trajectory.segment(t - 1e-12)
     return series.rows(), phases, None
 
 
-def _run_flexible(case: Case, machine: Machine, plan: ScenarioPlan, drives: ForceActuators, limiter: bool,
+def _run_flexible(case: Case, machine: Machine, plan: ScenarioPlan, drives: drive_kinds.Drive, limiter: bool,
                   progress: bool) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
     """The flexible machine (:class:`pressfit.dynamics.machine.flexible.FlexibleMachine`, the machine file's
     ``[damping]``, cardan play with ``clearance = true``): ideal force drives on the actuator joints
@@ -375,6 +401,7 @@ def _run_flexible(case: Case, machine: Machine, plan: ScenarioPlan, drives: Forc
     ctrl = ForceLimitedController(machine, rigid, sim.controller, limiter, np.asarray(sim.start_m, float).copy())
     force = ctrl.command(fm.leg_lengths_m(state), fm.leg_rates_m_per_s(state), trajectory.at(0.0), 0.0, 0.0)
     tension = -ctrl.pinv @ force + a4 * ctrl.null
+    drive = drives.initial_state(tension, fm.leg_lengths_m(state))
     board, contact_force = sim.contact.board_height_m, 0.0
     depth = board - fm.tool_point_m(state)[1]
     series, phases = _Series(machine, steps, sim.start_m), np.empty(steps, dtype=int)
@@ -384,9 +411,10 @@ def _run_flexible(case: Case, machine: Machine, plan: ScenarioPlan, drives: Forc
         t = (k + 1) * dt
         reference = trajectory.at(t)
         try:
-            force = ctrl.command(fm.leg_lengths_m(state), fm.leg_rates_m_per_s(state), reference, contact_force, dt)
+            lengths, rates = fm.leg_lengths_m(state), fm.leg_rates_m_per_s(state)
+            force = ctrl.command(lengths, rates, reference, contact_force, dt)
             command = -ctrl.pinv @ force + a4 * ctrl.null
-            tension = drives.step(tension, command, dt)
+            drive, tension = drives.step(drive, command, lengths, rates, dt)
             wrench[1] = contact_force
             state = fm.step(state, DriveInput.forces(tension), wrench, dt)
             if not (np.all(np.isfinite(state.q)) and np.all(np.isfinite(state.v))):
@@ -407,6 +435,8 @@ def _run_flexible(case: Case, machine: Machine, plan: ScenarioPlan, drives: Forc
             raise _diverged(case, t, f"the pose estimate left the reachable set: {exc}") from None
         except ConvergenceError as exc:
             raise _diverged(case, t, f"the flexible model's step failed: {exc}") from None
+        except DriveStepError as exc:
+            raise _drive_failed(case, t, exc) from None
         phases[k] = trajectory.segment(t - 1e-12)
     return series.rows(), phases, sections
 
@@ -441,7 +471,7 @@ def _xyz(result: InsertionResult, prefix: str) -> np.ndarray:
     return result.series[:, [SERIES_COLUMNS.index(f"{prefix}_{a}_m") for a in "xyz"]]
 
 
-def summarise(result: InsertionResult, case: Case, drives: ForceActuators) -> dict[str, Any]:
+def summarise(result: InsertionResult, case: Case, drives: drive_kinds.Drive) -> dict[str, Any]:
     """Peak contact force and overshoot over the limit, insertion depth, the steady insertion force at the
     end of the dwell against the contact law at the depth reached, its settling time (:func:`settling_time_s`;
     None if it did not settle), whether the insertion completed (the force settled in contact at the end of the
@@ -477,7 +507,7 @@ def summarise(result: InsertionResult, case: Case, drives: ForceActuators) -> di
     tensions, axial = np.abs(_columns(result, "act_n")), np.abs(_columns(result, "axial_n"))
     warnings = []
     if saturated.any():
-        warnings.append(f"the drives saturated (a command beyond [actuator] force_limit_n = {drives.force_limit_n:g} N)"
+        warnings.append(f"the drives saturated (a command beyond {drive_limit(drives)})"
                         f" for {saturated.sum() * sim.time_step_s:g} s, {100 * saturated.mean():.3g}% of the run")
     if not completed:
         warnings.append(f"the insertion did not complete (the pin is not pressed): {why}")

@@ -5,7 +5,8 @@ virtual joints frozen: plate free flyer, per leg base cardan (2 revolutes), the 
 (coordinate = leg length l_i, m), plate cardan (2 revolutes), closed on the plate by four 6D loop closures
 (``pin.RigidConstraintModel`` CONTACT_6D, the same anchor frames as the elastic model). Body inertias are
 those of :func:`pressfit.dynamics.inertia.inertial_model` lumped onto the rigid bodies (the stem's mass is
-that at the model's pose and moves with the plate cardan, like a rod sliding out of its cylinder); gravity
+that at the model's pose and moves with the plate cardan, like a rod sliding out of its cylinder), and the
+prismatic joints carry its armature (an electric drive's reflected rotor and screw inertia); gravity
 -9.81 m/s^2 along y. The elastic structure is left out because its modes (from 20 Hz for the plate's
 rocking up to kHz for the legs' axial modes, ``pressfit modes``) would need time steps of microseconds.
 
@@ -203,6 +204,8 @@ def rigid_leg_model(machine: Machine, pose_m: np.ndarray, baumgarte_rad_per_s: f
     pin.forwardKinematics(model, data, rigid.reference_q)
     for j, body in owner.items():
         model.inertias[body] = model.inertias[body] + data.oMi[body].actInv(full_data.oMi[j].act(full.inertias[j]))
+    for i, ids in enumerate(mm.leg_joint_ids):  # an electric drive's reflected inertia (dynamics/inertia.py)
+        model.armature[rigid.actuator_v[i]] = full.armature[full.joints[ids["actuator"]].idx_v]
     gains = pin.BaumgarteCorrectorParameters(baumgarte_rad_per_s**2, 2 * baumgarte_rad_per_s)
     for i in range(4):
         end = model.getJointId(f"leg{i + 1}.plate_cardan.a")
