@@ -26,23 +26,22 @@ from pressfit.dynamics.response import tool_response
 from pressfit.shipped import cases_dir
 
 
+def _timed(label: str, case: object, limiter: bool = True) -> None:
+    """One insertion run: simulated seconds per wall-clock second and steps per second."""
+    t0 = time.perf_counter()
+    result = simulate_insertion(case, limiter)
+    wall = time.perf_counter() - t0
+    simulated = result.summary["simulated_time_s"]
+    print(f"{label}: {simulated:g} s simulated in {wall:.2f} s wall, {simulated / wall:.2f} simulated s per s, "
+          f"{len(result.series) / wall:.0f} steps/s")
+
+
 def main() -> None:
     case = load_case(cases_dir() / "paper" / "insertion.toml")
     for model in ("rigid", "flexible"):
-        variant = case.model_copy(update={"simulation": case.simulation.model_copy(update={"model": model})})
-        t0 = time.perf_counter()
-        result = simulate_insertion(variant, True)
-        wall = time.perf_counter() - t0
-        simulated = result.summary["simulated_time_s"]
-        print(f"{model}: {simulated:g} s simulated in {wall:.2f} s wall, {simulated / wall:.2f} simulated s per s, "
-              f"{len(result.series) / wall:.0f} steps/s")
+        _timed(model, case.model_copy(update={"simulation": case.simulation.model_copy(update={"model": model})}))
     for limiter in (True, False):
-        t0 = time.perf_counter()
-        result = simulate_insertion(case, limiter)
-        wall = time.perf_counter() - t0
-        simulated = result.summary["simulated_time_s"]
-        print(f"limiter {'on ' if limiter else 'off'}: {simulated:g} s simulated in {wall:.2f} s wall, "
-              f"{simulated / wall:.2f} simulated s per s, {len(result.series) / wall:.0f} steps/s")
+        _timed(f"limiter {'on ' if limiter else 'off'}", case, limiter)
     rigid = rigid_leg_model(load_machine(), np.array([0.05, 0.65, -0.05]))
     q, tau = rigid.reference_q.copy(), np.zeros(rigid.model.nv)
     v = rigid.admissible_velocity(q, [0.2, 0.1, -0.2])

@@ -72,6 +72,11 @@ class ToolResponse:
         return np.abs(along), np.linalg.norm(u - along[..., None] * self.direction, axis=-1)
 
     @property
+    def direct_receptance_m_per_n(self) -> np.ndarray:
+        """d^T H d (m,) complex, m/N: the tool's motion along the force per newton along it."""
+        return np.einsum("i,fij,j->f", self.direction, self.receptance_m_per_n, self.direction)
+
+    @property
     def dominant_frequency_hz(self) -> float:
         """The natural frequency of the mode with the largest share of the tool displacement."""
         return float(self.modes_hz[int(np.argmax(self.contribution_m))])
@@ -96,7 +101,7 @@ class ToolResponse:
     def receptance_peaks_hz(self, count: int = 4) -> list[float]:
         """Frequencies of the ``count`` highest local maxima of the direct receptance |d^T H d| (d the force
         direction), lowest frequency first."""
-        mag = np.abs(np.einsum("i,fij,j->f", self.direction, self.receptance_m_per_n, self.direction))
+        mag = np.abs(self.direct_receptance_m_per_n)
         inner = np.flatnonzero((mag[1:-1] > mag[:-2]) & (mag[1:-1] >= mag[2:])) + 1
         best = inner[np.argsort(mag[inner])[::-1][:count]]
         return sorted(float(self.frequencies_hz[i]) for i in best)

@@ -21,7 +21,7 @@ def response_figure(r: ToolResponse) -> plt.Figure:
     ax.set(xlabel="time [s]", ylabel="tool displacement [um]",
            title=f"step {np.array2string(r.force_n, precision=4)} N, zeta = {r.damping_ratio:g}")
     ax.legend()
-    direct = np.einsum("i,fij,j->f", r.direction, r.receptance_m_per_n, r.direction)
+    direct = r.direct_receptance_m_per_n
     mag.loglog(r.frequencies_hz, np.abs(direct), color="tab:blue")
     mag.set(xlabel="frequency [Hz]", ylabel="|receptance| along the force [m/N]", title="tool-point receptance")
     for f in r.modes_hz[(r.modes_hz >= r.frequencies_hz[0]) & (r.modes_hz <= r.frequencies_hz[-1])][:12]:
@@ -34,7 +34,7 @@ def response_figure(r: ToolResponse) -> plt.Figure:
 
 def write_response(r: ToolResponse, out: Path) -> list[Path]:
     """``response.json``, ``response.csv`` (time, displacement), ``receptance.csv``, ``response.png`` in ``out``."""
-    direct = np.einsum("i,fij,j->f", r.direction, r.receptance_m_per_n, r.direction)
+    direct = r.direct_receptance_m_per_n
     column = np.einsum("fij,j->fi", r.receptance_m_per_n, r.direction)  # tool motion per N along the force
     rec_rows = [[f, abs(d), np.degrees(np.angle(d)), *np.abs(c)]
                 for f, d, c in zip(r.frequencies_hz, direct, column, strict=True)]
