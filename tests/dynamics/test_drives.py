@@ -445,3 +445,27 @@ def test_readme_drive_numbers(electric, hydraulic):
     assert_printed(float(hydraulic.drive_stiffness_n_per_m(0.75)), "3.45e6")
     assert_printed(hydraulic.actuator.drive_force_limit_n, "1188")
     assert_printed(_closed_form_crossing(_pressure_loop_magnitude(hydraulic, 0.75)), "53")
+
+
+def test_electric_back_emf_is_rejected_by_the_current_loop_integral(electric):
+    """A leg moving at a constant rate with no force commanded: the motor's back-EMF e = K_t omega is a voltage
+    step on the winding, L di/dt = v - R i - e with v = k_p (i_ref - i) + k_i z, z' = i_ref - i. From
+    I(s) = -(e / s) s / (L s^2 + (R + k_p) s + k_i) the current returns to zero (integral action) after a
+    transient whose charge is int i dt = I(s)|_{s -> 0} = -e / k_i (derived here). Without the EMF term the
+    current would stay 0: the drive would deliver no force transient at all while the leg moves."""
+    el = electric.actuator.electric
+    drive = drives.of(electric)
+    rate = np.array([-0.05, -0.02, 0.02, 0.05])  # m/s, well inside the speed limit
+    omega = drive.motor_speed_rad_per_s(rate)
+    assert np.all(np.abs(omega) < el.speed_limit_rad_per_s)
+    dt, steps = 1e-6, 30000  # 30 ms: ~190 time constants of the 1 kHz loop
+    state, charge, previous = drive.initial_state(np.zeros(4), np.full(4, 0.7)), np.zeros(4), np.zeros(4)
+    peak = np.zeros(4)
+    for _ in range(steps):
+        state, _ = drive.step(state, np.zeros(4), np.full(4, 0.7), rate, dt)
+        charge += 0.5 * (previous + state.current_a) * dt
+        previous = state.current_a
+        peak = np.maximum(peak, np.abs(state.current_a))
+    expected = -el.torque_constant_nm_per_a * omega / el.current_loop_ki_v_per_a_s
+    np.testing.assert_allclose(charge, expected, rtol=1e-3)
+    assert np.all(peak > 0) and np.all(np.abs(state.current_a) < 1e-3 * peak)  # the transient has died out
