@@ -380,7 +380,10 @@ class Controller(StrictModel):
     """Figure 12's force-limited position control (:mod:`pressfit.dynamics.control`). PID gains of the
     Cartesian position loop on the plate position estimated from the actuator lengths (N/m, N s/m, N/(m s));
     the insertion force limit (N, paper: 30 N) and the limiter's reference back-off rate per newton over the
-    limit (m/(s N)); the gravity feed-forward (weight of the moving parts, Cartesian). Defaults: a ~5 Hz
+    limit (m/(s N)); the gravity feed-forward (weight of the moving parts, Cartesian); ``deflection_compensation``:
+    the loop acts on the tool estimated as the pose of the measured lengths plus the structure's predicted static
+    deflection under the weight and the measured contact force (the condensed compliance; on a real machine a
+    calibrated sag map), which the lengths cannot see (off: the paper's controller). Defaults: a ~5 Hz
     position loop for the ~25 kg moving machine, well below the 40 Hz actuators."""
 
     kp_n_per_m: Positive = 2.0e4
@@ -389,6 +392,7 @@ class Controller(StrictModel):
     force_limit_n: Positive = 30.0
     backoff_m_per_s_n: NonNegative = 1.0e-3
     gravity_compensation: bool = True
+    deflection_compensation: bool = False
     estimator_iterations: Annotated[int, Field(ge=1, le=20)] = 2
 
 

@@ -6,17 +6,19 @@ face, F(d) = k d + f_fit(d) + b d_dot (N, pushing the tool up, +y), F = 0 out of
 ``press_fit``: f_fit(d) = k_fit d (linear) or F_fit tanh(d / d_fit) (saturating).
 
 The tool sees the machine's compliance: the rigid-leg multibody model (:mod:`pressfit.dynamics.multibody`)
-gives the rigid tool position r, the structure adds the deflection u(F) under the contact force, applied
-quasi-statically (in series, no inertia of its own). This holds below the first structural mode
+gives the rigid tool position r, the structure adds the deflection u(F) under the contact force and the moving
+parts' weight, applied quasi-statically (in series, no inertia of its own). This holds below the first structural mode
 (``pressfit modes``: 18 Hz plate rocking at pose A, above the force loop's bandwidth of a few Hz). u(F) is
-either C F y (C the condensed plate compliance at the current pose, translation block,
-:func:`pressfit.mechanics.condensed.condensed_plate_compliance`) or, with the cardans' clearance on, the
+either C F y + s (C the condensed plate compliance at the current pose, translation block,
+:func:`pressfit.mechanics.condensed.condensed_plate_compliance`, s the sag under the weight,
+:func:`pressfit.dynamics.control.static_deflection_columns`) or, plus s, with the cardans' clearance on, the
 load-deflection curve of :func:`pressfit.mechanics.clearance.load_deflection` at the insertion pose (lost
 motion, preload and compliance together, interpolated in the load).
 
 Each step solves the scalar equation F = F(d(F)), d(F) = h_b - r_y - u_y(F), with the damping term taken
-backward in time (d_dot = (d - d_prev) / dt): the residual is increasing in F, so bisection on
-[0, F(d_rigid)] always converges (to 1e-9 of the bracket).
+backward in time (d_dot = (d - d_prev) / dt): the residual is increasing in F (u_y grows with F), so
+bisection on [0, F(d(0))] always converges (to 1e-9 of the bracket); d(0) includes the sag, which can press
+the tool below the rigid depth.
 """
 
 from __future__ import annotations
@@ -65,7 +67,8 @@ def solve_contact(contact: Contact, rigid_tip_m: np.ndarray, deflection: Callabl
     r0, d0, u0 = residual(0.0)
     if r0 >= 0.0:
         return ContactState(0.0, d0, u0)
-    lo, hi = 0.0, contact_force_n(contact, rigid_depth, max(rigid_depth - previous_depth_m, 0.0) / dt_s)
+    # the deflection grows with the force (compliance >= 0), so the depth at zero force bounds the force
+    lo, hi = 0.0, contact_force_n(contact, d0, max(d0 - previous_depth_m, 0.0) / dt_s)
     for _ in range(_BISECTIONS):
         mid = 0.5 * (lo + hi)
         if residual(mid)[0] < 0.0:

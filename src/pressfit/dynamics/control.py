@@ -40,6 +40,7 @@ from pressfit.description.cases import Controller, Simulation
 from pressfit.description.machine import Machine
 from pressfit.dynamics.actuators import distribution
 from pressfit.dynamics.multibody import PoseCache, RigidLegModel
+from pressfit.mechanics.condensed import condensed_plate_compliance
 
 
 def _legs(machine: Machine, pose_m: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
@@ -103,6 +104,18 @@ def gravity_feedforward_n(rigid: RigidLegModel, pose_m: np.ndarray) -> np.ndarra
 
 
 GRAVITY_UPDATE_M = 1e-3  # the gravity feed-forward is recomputed when the estimate moved more than this, m
+DEFLECTION_UPDATE_M = 1e-4  # the static deflection's compliance is recomputed beyond this, m (3.4% over 5 mm)
+
+
+def static_deflection_columns(machine: Machine, rigid: RigidLegModel, pose_m: np.ndarray) -> np.ndarray:
+    """The structure's quasi-static tool deflection at a pose, (3, 2), m: column 0 per newton of contact force
+    along +y, column 1 under the moving parts' weight (the condensed compliance,
+    :func:`pressfit.mechanics.condensed.condensed_plate_compliance`, under -G, G the Cartesian force that holds
+    them: :func:`gravity_feedforward_n`). The legs' own bending under their weight is not in a plate load: the
+    weight column is 12-14% short of the elastic model's static sag at four poses over the workspace
+    (tests/dynamics/test_static_deflection.py); zero when the model has no gravity."""
+    compliance = condensed_plate_compliance(machine, pose_m)[:3, :3]
+    return np.column_stack([compliance[:, 1], compliance @ -gravity_feedforward_n(rigid, pose_m)])
 
 
 def _quintic(s: float) -> tuple[float, float]:
@@ -167,9 +180,20 @@ class ForceLimitedController:
     pinv: np.ndarray = field(default_factory=lambda: np.zeros((4, 3)))  # A^+ at the estimate
     null: np.ndarray = field(default_factory=lambda: np.zeros(4))  # v_p at the estimate
     gravity: PoseCache = field(init=False)
+    deflection: PoseCache = field(init=False)
 
     def __post_init__(self) -> None:
         self.gravity = PoseCache(lambda pose: gravity_feedforward_n(self.rigid, pose), GRAVITY_UPDATE_M)
+        self.deflection = PoseCache(lambda pose: static_deflection_columns(self.machine, self.rigid, pose),
+                                    DEFLECTION_UPDATE_M)
+
+    def tool_estimate_m(self, contact_force_n: float) -> np.ndarray:
+        """The position the loop acts on (3,), m: the pose estimate, plus with ``deflection_compensation`` the
+        structure's predicted static deflection under the weight and the measured contact force (N, +y)."""
+        if not self.gains.deflection_compensation:
+            return self.estimate_m
+        columns = self.deflection(self.estimate_m)
+        return self.estimate_m + columns[:, 0] * contact_force_n + columns[:, 1]
 
     def command(self, lengths_m: np.ndarray, rates_m_per_s: np.ndarray, reference: tuple[np.ndarray, np.ndarray],
                 contact_force_n: float, dt_s: float) -> np.ndarray:
@@ -182,7 +206,7 @@ class ForceLimitedController:
         velocity = self.pinv.T @ rates_m_per_s  # J^+ = (A^+)^T, J = dl/dh = A^T
         target, target_velocity = reference
         target = target + np.array([0.0, self.lift_m, 0.0])
-        error = target - self.estimate_m
+        error = target - self.tool_estimate_m(contact_force_n)
         pid = g.kp_n_per_m * error + g.kd_n_s_per_m * target_velocity + g.ki_n_per_m_s * self.integral_m_s
         self.clamped = self.limiter and contact_force_n > 0.0 and pid[1] < -g.force_limit_n
         if self.clamped:

@@ -36,8 +36,15 @@ from pressfit import kinematics
 from pressfit.description.cases import Case, Simulation
 from pressfit.description.machine import Machine
 from pressfit.dynamics import drives as drive_kinds
-from pressfit.dynamics.contact import ContactState, contact_force_n, solve_contact
-from pressfit.dynamics.control import ForceLimitedController, PoseCache, Trajectory, estimate_pose
+from pressfit.dynamics.contact import contact_force_n, solve_contact
+from pressfit.dynamics.control import (
+    DEFLECTION_UPDATE_M,
+    ForceLimitedController,
+    PoseCache,
+    Trajectory,
+    estimate_pose,
+    static_deflection_columns,
+)
 from pressfit.dynamics.machine.base import SECTION_COMPONENTS, SECTIONS, DriveInput
 from pressfit.dynamics.machine.flexible import MAX_STEP_FRACTION, FlexibleMachine
 from pressfit.dynamics.multibody import RigidLegModel, rigid_leg_model
@@ -50,7 +57,6 @@ from pressfit.errors import (
     format_violation,
 )
 from pressfit.mechanics.clearance import clearance_from_case, load_deflection
-from pressfit.mechanics.condensed import condensed_plate_compliance
 
 LEGS = ("1", "2", "3", "4")
 SERIES_COLUMNS = ("time_s", "ref_x_m", "ref_y_m", "ref_z_m", "est_x_m", "est_y_m", "est_z_m", "plate_x_m",
@@ -73,7 +79,6 @@ MAX_CLOSURE_DRIFT_M = 2e-5  # the run stops when the loop closures open more tha
 STABILITY_FRACTION = 0.5  # the explicit step is refused beyond this fraction of the stability limit
 _CHUNK_ROWS = 4096  # the series grows by this many rows at a time
 _REACH_CHECK_STEPS = 10  # the plate's joint limits are checked every this many steps (and at the last)
-COMPLIANCE_UPDATE_M = 1e-4  # the plate compliance is recomputed when the rigid pose moved more than this, m
 _CURVE_POINTS = 41  # load steps of the clearance load-deflection curve
 
 
@@ -97,17 +102,21 @@ class InsertionResult:
         return self.series[:, SERIES_COLUMNS.index(name)]
 
 
-def _deflection(machine: Machine, case: Case, sim: Simulation, pin_pose: np.ndarray) -> Callable[
-        [np.ndarray], Callable[[float], np.ndarray]]:
-    """pose -> (F -> u): the tool's deflection u (3,), m, under the contact force F (N, +y) at the rigid pose."""
-    if not sim.clearance:  # C varies by 3.4% over 5 mm at the pin: 0.07% error at the 0.1 mm update distance
-        compliance = PoseCache(lambda pose: condensed_plate_compliance(machine, pose)[:3, 1], COMPLIANCE_UPDATE_M)
-        return lambda pose: (lambda force, column=compliance(pose): column * force)  # noqa: B008 (bound per pose)
+def _deflection(machine: Machine, case: Case, sim: Simulation, pin_pose: np.ndarray, rigid: RigidLegModel
+                ) -> Callable[[np.ndarray], Callable[[float], np.ndarray]]:
+    """pose -> (F -> u): the tool's quasi-static deflection u (3,), m, at the rigid pose under the contact force F
+    (N, +y) and the moving parts' weight (:func:`pressfit.dynamics.control.static_deflection_columns`); with
+    ``clearance`` the contact force's part follows the clearance model's load-deflection curve at the pin."""
+    # C varies by 3.4% over 5 mm at the pin: 0.07% error at the 0.1 mm update distance
+    columns = PoseCache(lambda pose: static_deflection_columns(machine, rigid, pose), DEFLECTION_UPDATE_M)
+    if not sim.clearance:
+        return lambda pose: (lambda force, c=columns(pose): c[:, 0] * force + c[:, 1])  # noqa: B008 (bound per pose)
     limit = max(4.0 * sim.controller.force_limit_n, sim.contact.stiffness_n_per_m * sim.interference_m)
     curve = load_deflection(machine, pin_pose, [0.0, 1.0, 0.0], np.linspace(0.0, limit, _CURVE_POINTS),
                             clearance_from_case(case, machine), case.preload.a4_n, unload=False)
     loads, disp = curve.loads_n, curve.loading.displacement_m - curve.loading.displacement_m[0]
-    return lambda pose: lambda force: np.array([np.interp(force, loads, disp[:, k]) for k in range(3)])
+    return lambda pose: (lambda force, sag=columns(pose)[:, 1]: sag + np.array(  # noqa: B008 (bound per pose)
+        [np.interp(force, loads, disp[:, k]) for k in range(3)]))
 
 
 @dataclass(frozen=True)
@@ -341,13 +350,13 @@ def _run_rigid(case: Case, machine: Machine, plan: ScenarioPlan, drives: drive_k
                progress: bool) -> tuple[np.ndarray, np.ndarray, None]:
     """The rigid-leg model, the compliance in series at the tool (module docstring)."""
     sim, trajectory, steps, rigid = case.simulation, plan.trajectory, plan.steps, plan.rigid
-    deflection = _deflection(machine, case, sim, trajectory.waypoints_m[2])
+    deflection = _deflection(machine, case, sim, trajectory.waypoints_m[2], rigid)
     ctrl = ForceLimitedController(machine, rigid, sim.controller, limiter, np.asarray(sim.start_m, float).copy())
     q, v, dt, a4 = rigid.reference_q.copy(), np.zeros(rigid.model.nv), sim.time_step_s, case.preload.a4_n
     force = ctrl.command(q[rigid.actuator_q], v[rigid.actuator_v], trajectory.at(0.0), 0.0, 0.0)
     tension = -ctrl.pinv @ force + a4 * ctrl.null
     drive = drives.initial_state(tension, q[rigid.actuator_q])
-    contact = ContactState(0.0, sim.contact.board_height_m - q[1], np.zeros(3))
+    contact = solve_contact(sim.contact, q[0:3], deflection(q[0:3]), 0.0, dt)
     series, phases = _Series(machine, steps, sim.start_m), np.empty(steps, dtype=int)
     tau = np.zeros(rigid.model.nv)
     for k in tqdm(range(steps), desc="simulate", unit="step", disable=not progress, mininterval=0.5):
@@ -368,9 +377,7 @@ def _run_rigid(case: Case, machine: Machine, plan: ScenarioPlan, drives: drive_k
             axial = rigid.axial_forces_n()  # at the start of the step, where the accelerations were computed
             pose = q[0:3].copy()
             _check_pose(case, machine, k, steps, t, pose)
-            depth = sim.contact.board_height_m - pose[1]
-            contact = (solve_contact(sim.contact, pose, deflection(pose), contact.depth_m, dt) if depth > 0.0
-                       else ContactState(0.0, depth, np.zeros(3)))
+            contact = solve_contact(sim.contact, pose, deflection(pose), contact.depth_m, dt)
             series.add(k, (t, *reference[0] + [0.0, ctrl.lift_m, 0.0], *ctrl.estimate_m, *pose,
                            *(pose + contact.deflection_m), contact.force_n, contact.depth_m, *command, *tension,
                            ctrl.lift_m, drift, *axial, ctrl.null @ tension), q[rigid.actuator_q], v[rigid.actuator_v])
