@@ -204,6 +204,20 @@ def test_static_preload_share_at_a_held_pose_is_a4_vp(rigid_runs):
     assert record["rms_force_without_preload_n"] == pytest.approx(float(np.sqrt(np.mean(n_0[:, 0] ** 2))), rel=1e-12)
 
 
+def test_the_preload_does_no_net_work_but_moves_energy_between_drives(rigid_runs):
+    """v_p is the null vector of the static matrix, whose transpose maps the plate velocity to the leg rates, so
+    a4 v_p . l_dot = 0 at every instant: with or without the preload the drives' net work (sum over the legs of
+    E+ - E-) is the same (measured 5.57364 J against 5.57287 J, 1.4e-4: the two runs' trajectories differ by the
+    controller's error; asserted to 1e-3), while each drive's motoring and regenerated energy moves by joules
+    (measured 0.6-4.5 J per drive; asserted: the largest change above 1 J)."""
+    case, with_a4, without = rigid_runs
+    out = sizing.run_sizing(with_a4, drives.of(case.machine()), 1e-3, without).drives
+    net = sum(d.positive_energy_j - d.regenerative_energy_j for d in out)
+    net_0 = sum(d.without_preload.positive_energy_j - d.without_preload.regenerative_energy_j for d in out)
+    assert net == pytest.approx(net_0, rel=1e-3)
+    assert max(abs(d.positive_energy_j - d.without_preload.positive_energy_j) for d in out) > 1.0
+
+
 def _balance(result):
     return sizing.run_sizing(result, drives.of(FORCE), 1e-3).energy
 
