@@ -104,6 +104,8 @@ def simulate_cmd(case_path: Path, out_dir: Path | None, no_limiter: bool, overwr
     click.echo("drives: peak tension " + " ".join(f"{x:.1f}" for x in s["peak_actuator_tension_n"]) + " N, RMS "
                + " ".join(f"{x:.1f}" for x in s["rms_actuator_tension_n"]) + " N, peak speed "
                + " ".join(f"{x * 1e3:.1f}" for x in s["peak_actuator_speed_m_per_s"]) + " mm/s")
+    if "drives" in s:
+        _echo_sizing(s)
     if "peak_leg_torsion_nm" in s:
         click.echo("leg sections (elastic model, base/actuator/plate): peak torsion "
                    + " ".join(f"{x:.2f}" for x in s["peak_leg_torsion_nm"]) + " N m, peak bending "
@@ -113,6 +115,48 @@ def simulate_cmd(case_path: Path, out_dir: Path | None, no_limiter: bool, overwr
         click.echo(f"without the limiter: peak {c['peak_contact_force_n']:.2f} N, steady "
                    f"{c['steady_insertion_force_n']:.2f} N")
     echo_written(paths)
+
+
+def _each(drives: list[dict], key: str, fmt: str) -> str:
+    return " ".join(f"{d[key]:{fmt}}" for d in drives)
+
+
+def _echo_sizing(s: dict) -> None:
+    """The drive sizing's lines of ``pressfit simulate`` (per leg 1..4; a figure over its rating is marked)."""
+    drives = s["drives"]
+
+    def row(key: str, scale: float = 1.0, fmt: str = ".1f") -> str:
+        out = []
+        for d in drives:
+            rating = d["ratings"].get(key)
+            mark = "" if rating is None else f" ({100 * rating['ratio']:.0f}%{' OVER' * rating['exceeded']})"
+            out.append(f"{d[key] * scale:{fmt}}{mark}")
+        return " ".join(out)
+
+    rated = sorted({k for d in drives for k in d["ratings"]})
+    click.echo(f"drive sizing (legs 1-{len(drives)}; % of the rating: {', '.join(rated)}): peak force "
+               f"{row('peak_force_n')} N, RMS force {row('rms_force_n')} N"
+               + (f" ({_each(drives, 'rms_force_without_preload_n', '.1f')} N with a4 = 0)"
+                  if "rms_force_without_preload_n" in drives[0] else "")
+               + f", peak speed {row('peak_speed_m_per_s', 1e3)} mm/s, peak power {row('peak_power_w')} W, energy "
+               + " ".join(f"+{d['positive_energy_j']:.2f}/-{d['regenerative_energy_j']:.2f}" for d in drives) + " J")
+    if "rms_torque_nm" in drives[0]:
+        loss = drives[0]["copper_loss_w"] is not None
+        click.echo(f"motors: RMS torque {row('rms_torque_nm', 1.0, '.3f')} N m, RMS current "
+                   f"{row('rms_current_a', 1.0, '.3f')} A, peak speed "
+                   f"{row('peak_motor_speed_rad_per_s', 1.0, '.0f')} rad/s"
+                   + (f", copper loss {row('copper_loss_w', 1.0, '.2f')} W" if loss else "")
+                   + (f" ({_each(drives, 'copper_loss_without_preload_w', '.2f')} W with a4 = 0)"
+                      if loss and "copper_loss_without_preload_w" in drives[0] else ""))
+    if "peak_flow_m3_per_s" in drives[0]:
+        click.echo(f"valves: peak flow {row('peak_flow_m3_per_s', 6e4, '.2f')} l/min, supplied power p_s Q peak "
+                   f"{row('peak_supply_power_w')} W, mean {row('mean_supply_power_w')} W")
+    e = s["energy_balance"]
+    click.echo(f"energy balance: drive work {e['drive_work_j']:.4g} J = kinetic {e['kinetic_change_j']:.4g} + "
+               f"potential {e['potential_change_j']:.4g} + elastic {e['elastic_change_j']:.4g} + pin "
+               f"{e['pin_work_j']:.4g} + damping {e['damping_j']:.4g} + residual {e['residual_j']:.3g} J "
+               f"({100 * e['relative_residual']:.2g}% of the drives' gross work {e['gross_drive_work_j']:.4g} J, "
+               f"tolerance {100 * e['tolerance']:g}%); drive losses {e['drive_losses_j']:.4g} J")
 
 
 @click.command("export-mjcf", context_settings={"ignore_unknown_options": True})  # negative coordinates

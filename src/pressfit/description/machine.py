@@ -167,6 +167,8 @@ class ElectricDrive(StrictModel):
     current_loop_ki_v_per_a_s: Positive | None = None
     winding_inductance_h: Positive | None = None
     winding_resistance_ohm: Positive | None = None
+    continuous_torque_nm: Positive | None = None  # the motor's rated (continuous, S1) torque: the RMS torque's rating
+    rated_power_w: Positive | None = None  # the motor's rated power: the peak mechanical power's rating
 
     @model_validator(mode="after")
     def _one_of_each(self) -> ElectricDrive:

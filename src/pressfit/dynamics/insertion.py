@@ -45,7 +45,7 @@ from pressfit.dynamics.control import (
     estimate_pose,
     static_deflection_columns,
 )
-from pressfit.dynamics.machine.base import SECTION_COMPONENTS, SECTIONS, DriveInput
+from pressfit.dynamics.machine.base import SECTION_COMPONENTS, SECTIONS, DriveInput, Energy
 from pressfit.dynamics.machine.flexible import MAX_STEP_FRACTION, FlexibleMachine
 from pressfit.dynamics.multibody import RigidLegModel, rigid_leg_model
 from pressfit.errors import (
@@ -59,11 +59,15 @@ from pressfit.errors import (
 from pressfit.mechanics.clearance import clearance_from_case, load_deflection
 
 LEGS = ("1", "2", "3", "4")
+# the machine's energies after the step and the Rayleigh damping's work over it (flexible model; 0 on the rigid one,
+# which has no elastic energy either), J: the energy balance of :mod:`pressfit.dynamics.sizing`
+ENERGY_COLUMNS = ("kinetic_energy_j", "potential_energy_j", "elastic_energy_j", "damping_work_j")
 SERIES_COLUMNS = ("time_s", "ref_x_m", "ref_y_m", "ref_z_m", "est_x_m", "est_y_m", "est_z_m", "plate_x_m",
                   "plate_y_m", "plate_z_m", "tool_x_m", "tool_y_m", "tool_z_m", "contact_force_n", "depth_m",
                   *(f"cmd_n{i}" for i in LEGS), *(f"act_n{i}" for i in LEGS), "reference_lift_m", "closure_drift_m",
                   *(f"axial_n{i}" for i in LEGS), "internal_force_n", "kinematic_x_m", "kinematic_y_m",
-                  "kinematic_z_m", *(f"length_m{i}" for i in LEGS), *(f"rate_m_per_s{i}" for i in LEGS))
+                  "kinematic_z_m", *(f"length_m{i}" for i in LEGS), *(f"rate_m_per_s{i}" for i in LEGS),
+                  *ENERGY_COLUMNS)
 SECTION_COLUMNS = ("time_s", *(f"leg{i}_{s}_{c}" for i in LEGS for s in SECTIONS for c in SECTION_COMPONENTS))
 MOVE_PHASES = ("approach", "move")  # the structure's deflection during the moves: these phases (summarise)
 VIBRATION_WINDOW_S = 0.2  # residual vibration: the tool's peak-to-peak over the last 0.2 s of the final settle
@@ -89,7 +93,8 @@ class InsertionResult:
     (+y on the tool) and interference, commanded and delivered actuator tensions, reference lift, closure
     drift, the legs' axial force at the plate cardan (:meth:`pressfit.dynamics.multibody.RigidLegModel.leg_loads`;
     its torsion and bending are left out: the rigid model's couples are not objective) and the internal force
-    along v_p, v_p . N (N) of the delivered tensions. ``summary`` is the JSON-ready digest (:func:`summarise`)."""
+    along v_p, v_p . N (N) of the delivered tensions, the kinematic pose, leg lengths and rates, and the energies
+    (``ENERGY_COLUMNS``, J). ``summary`` is the JSON-ready digest (:func:`summarise`)."""
 
     limiter: bool
     series: np.ndarray
@@ -314,11 +319,11 @@ class _Series:
         self.machine, self.steps, self.kinematic = machine, steps, np.asarray(start_m, float).copy()
         self.chunks = [np.empty((min(steps, _CHUNK_ROWS), len(SERIES_COLUMNS)))]
 
-    def add(self, k: int, row: tuple, lengths: np.ndarray, rates: np.ndarray) -> None:
+    def add(self, k: int, row: tuple, lengths: np.ndarray, rates: np.ndarray, energy: tuple) -> None:
         self.kinematic = estimate_pose(self.machine, lengths, self.kinematic, KINEMATIC_ITERATIONS)[0]
         if k // _CHUNK_ROWS == len(self.chunks):
             self.chunks.append(np.empty((min(self.steps - k, _CHUNK_ROWS), len(SERIES_COLUMNS))))
-        self.chunks[-1][k % _CHUNK_ROWS] = (*row, *self.kinematic, *lengths, *rates)
+        self.chunks[-1][k % _CHUNK_ROWS] = (*row, *self.kinematic, *lengths, *rates, *energy)
 
     def rows(self) -> np.ndarray:
         return np.concatenate(self.chunks)
@@ -380,7 +385,8 @@ def _run_rigid(case: Case, machine: Machine, plan: ScenarioPlan, drives: drive_k
             contact = solve_contact(sim.contact, pose, deflection(pose), contact.depth_m, dt)
             series.add(k, (t, *reference[0] + [0.0, ctrl.lift_m, 0.0], *ctrl.estimate_m, *pose,
                            *(pose + contact.deflection_m), contact.force_n, contact.depth_m, *command, *tension,
-                           ctrl.lift_m, drift, *axial, ctrl.null @ tension), q[rigid.actuator_q], v[rigid.actuator_v])
+                           ctrl.lift_m, drift, *axial, ctrl.null @ tension), q[rigid.actuator_q], v[rigid.actuator_v],
+                       (*rigid.energy_j(q, v), 0.0, 0.0))
         except UnreachablePoseError as exc:  # the estimate (feed-forward, compliance) left the workspace
             raise _diverged(case, t, f"the pose estimate left the reachable set: {exc}") from None
         except DriveStepError as exc:
@@ -436,7 +442,8 @@ def _run_flexible(case: Case, machine: Machine, plan: ScenarioPlan, drives: driv
             contact_force = contact_force_n(sim.contact, depth, (depth - previous) / dt)
             series.add(k, (t, *reference[0] + [0.0, ctrl.lift_m, 0.0], *ctrl.estimate_m, *tool, *tool,
                            contact_force, depth, *command, *tension, ctrl.lift_m, drift, *loads[:, 2, 0],
-                           ctrl.null @ tension), fm.leg_lengths_m(state), fm.leg_rates_m_per_s(state))
+                           ctrl.null @ tension), fm.leg_lengths_m(state), fm.leg_rates_m_per_s(state),
+                       _energies(fm.energy(state), state.damping_work_j))
             sections[k] = loads
         except UnreachablePoseError as exc:
             raise _diverged(case, t, f"the pose estimate left the reachable set: {exc}") from None
@@ -446,6 +453,10 @@ def _run_flexible(case: Case, machine: Machine, plan: ScenarioPlan, drives: driv
             raise _drive_failed(case, t, exc) from None
         phases[k] = trajectory.segment(t - 1e-12)
     return series.rows(), phases, sections
+
+
+def _energies(energy: Energy, damping_work_j: float) -> tuple[float, float, float, float]:
+    return energy.kinetic_j, energy.potential_j, energy.elastic_j, damping_work_j
 
 
 def settling_time_s(time_s: np.ndarray, force_n: np.ndarray, dwell: np.ndarray) -> tuple[float | None, int | None, str]:

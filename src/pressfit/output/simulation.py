@@ -10,6 +10,7 @@ import numpy as np
 
 from pressfit.description.cases import load_case
 from pressfit.dynamics.insertion import LEGS, SECTION_COLUMNS, SERIES_COLUMNS, InsertionResult, simulate_insertion
+from pressfit.dynamics.sizing import RunSizing, size_insertion
 from pressfit.output import files as io
 from pressfit.output.plots import plt
 from pressfit.studies.insertion_study import COLUMNS, InsertionStudy, insertion_study
@@ -56,12 +57,13 @@ def simulation_figure(result: InsertionResult, comparison: InsertionResult | Non
 
 
 def write_simulation(result: InsertionResult, out_dir: Path | str, overwrite: bool = False,
-                     comparison: InsertionResult | None = None) -> list[Path]:
+                     comparison: InsertionResult | None = None, sizing: RunSizing | None = None) -> list[Path]:
     """``simulation.csv`` (one row per time step of ``result``), ``simulation.json`` (its summary, with the
-    comparison's under ``"comparison"``), ``simulation.png``; with the flexible model ``sections.csv`` (the
-    leg section resultants per step, N and N m, :data:`pressfit.dynamics.insertion.SECTION_COLUMNS`)."""
+    comparison's under ``"comparison"`` and the drive sizing's records, :meth:`RunSizing.to_dict`),
+    ``simulation.png``; with the flexible model ``sections.csv`` (the leg section resultants per step, N and N m,
+    :data:`pressfit.dynamics.insertion.SECTION_COLUMNS`)."""
     out = Path(out_dir)
-    summary = _summary(result, comparison)
+    summary = _summary(result, comparison, sizing)
     paths = [io.write_csv(out / "simulation.csv", SERIES_COLUMNS, result.series, overwrite),
              io.write_json(out / "simulation.json", summary, overwrite)]
     if result.sections is not None:
@@ -75,29 +77,33 @@ def write_simulation(result: InsertionResult, out_dir: Path | str, overwrite: bo
     return paths
 
 
-def _summary(result: InsertionResult, comparison: InsertionResult | None) -> dict[str, Any]:
+def _summary(result: InsertionResult, comparison: InsertionResult | None, sizing: RunSizing | None = None
+             ) -> dict[str, Any]:
+    extra = sizing.to_dict() if sizing is not None else {}
     if comparison is None:
-        return result.summary
+        return {**result.summary, **extra}
     keys = ("limiter", "peak_contact_force_n", "overshoot_n", "steady_insertion_force_n", "steady_insertion_depth_m",
             "positioning_error_m", "settling_time_s", "insertion_completed", "release_time_s", "warnings")
-    return {**result.summary, "comparison": {k: comparison.summary[k] for k in keys}}
+    return {**result.summary, "comparison": {k: comparison.summary[k] for k in keys}, **extra}
 
 
 def run_simulation(case_path: Path | str, out_dir: Path | None, limiter: bool = True, overwrite: bool = False,
                    progress: bool = False) -> tuple[dict[str, Any], list[Path]]:
     """Simulate the case file's insertion (:func:`pressfit.dynamics.insertion.simulate_insertion`); with the
     limiter on, the same scenario also runs without it (the comparison of the contact-force plot and of the
-    summary's ``"comparison"``). The summary, and the files in ``out_dir`` if given (checked before the
-    simulation, written through a temporary directory: :func:`pressfit.output.files.write_directory`)."""
+    summary's ``"comparison"``) and, for the drive sizing's preload cost, with ``[preload] a4_n`` = 0
+    (:func:`pressfit.dynamics.sizing.size_insertion`). The summary, and the files in ``out_dir`` if given (checked
+    before the simulation, written through a temporary directory: :func:`pressfit.output.files.write_directory`)."""
     if out_dir is not None:
         io.check_directory(out_dir, overwrite)  # before computing
     case = load_case(case_path)
     result = simulate_insertion(case, limiter, progress)
     comparison = simulate_insertion(case, False, progress) if limiter else None
+    sizing = size_insertion(case, result, limiter, progress)
     paths = [] if out_dir is None else io.write_directory(
-        out_dir, overwrite, lambda tmp: write_simulation(result, tmp, comparison=comparison),
+        out_dir, overwrite, lambda tmp: write_simulation(result, tmp, comparison=comparison, sizing=sizing),
         inputs=[Path(case_path), *([case.machine().source] if case.machine().source else [])])
-    return _summary(result, comparison), paths
+    return _summary(result, comparison, sizing), paths
 
 
 def insertion_study_figure(study: InsertionStudy) -> plt.Figure:

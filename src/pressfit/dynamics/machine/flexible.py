@@ -107,6 +107,7 @@ class FlexibleState(MachineState):
     drive: DriveInput
     stem_lengths_m: np.ndarray
     iterations: int = 0
+    damping_work_j: float = 0.0  # the Rayleigh forces' dissipation over the last step, f_d . (q_n+1 - q_n), J
 
 
 @dataclass(frozen=True)
@@ -356,7 +357,8 @@ class FlexibleMachine:
             r = np.array(pin.rnea(self.model, self.data, q, v, acc)) + bj.T @ lam - tau_ext
             f, kt = self._springs(q, rest, k, drive_input)
             r[self.sv] += f
-            r += self._damping_terms(v, v_r, kt, me)
+            fd = self._damping_terms(v, v_r, kt, me)
+            r += fd
             dx = lu_solve(self._factor, -np.concatenate([r, phi]), check_finite=False)
             size = float(np.max(np.abs(dx[:nv])))
             acc += scale * dx[:nv]
@@ -380,7 +382,8 @@ class FlexibleMachine:
         a_ps = ((1 - af) * acc + af * acc_n - am * a_n) / (1 - am)
         q = pin.integrate(self.model, q_n, base_dq + h * h * b * a_ps)
         v = base_v + h * g * a_ps
-        return FlexibleState(state.time_s + h, q, v, acc, a_ps, lam, drive_input, self._placed.copy(), it)
+        work = float(fd @ pin.difference(self.model, q_n, q))
+        return FlexibleState(state.time_s + h, q, v, acc, a_ps, lam, drive_input, self._placed.copy(), it, work)
 
     def _damping_terms(self, v: np.ndarray, v_r: np.ndarray, kt: np.ndarray, mass: np.ndarray | None
                        ) -> np.ndarray:

@@ -1,0 +1,369 @@
+r"""Drive sizing from a motion: per drive the thermal and peak figures against its ratings, the preload's cost, and
+the energy balance of a run (issue 20; docs/sizing.md).
+
+Inputs are time series on one grid of step dt (s): the delivered leg tensions N_i(t) (N, > 0 tension, what acts
+on the prismatic joints as -N_i) and the leg rates l_dot_i(t) (m/s); the leg count is the series' width. The
+power a drive delivers to its leg is P_i = -N_i l_dot_i (W: > 0 while a tension shortens the leg, the drive
+motoring; < 0 regenerating). Over the n samples, RMS x = sqrt(mean x^2), integrals are sums x dt (the series'
+zero-order hold). Energies: positive E+ = sum max(P, 0) dt, regenerative E- = sum max(-P, 0) dt (J, both >= 0).
+
+Electric drive (servo motor + ball screw, docs/drives.md): N = k_f i, k_f = 2 pi eta K_t / lead, so the
+current is i = N / k_f, the motor torque T = K_t i = N lead / (2 pi eta) and the motor speed
+omega = 2 pi |l_dot| / lead. The rotor and screw inertia J is the prismatic joint's armature in the multibody
+models (:mod:`pressfit.dynamics.inertia`), so the delivered N already includes J alpha (2 pi / lead): adding it
+again would count it twice. Copper loss R mean(i^2) = R (RMS i)^2 (W) where ``winding_resistance_ohm`` is given.
+Hydraulic drive (servo valve + symmetric cylinder): the valve supplies the displacement and leakage flow
+Q = A |l_dot| + C_L |N| / A (m^3/s; the compressibility flow, which averages out, is left out) at the supply
+pressure: supplied power p_s Q (W, what the pump delivers: the difference to P is throttled in the valve).
+
+Ratings (:class:`Rating`, ratio = figure / rating, exceeded when the ratio is above 1): the peak force against
+the drive's force limit; for an electric drive the peak speed against ``speed_limit_rad_per_s`` lead / (2 pi), the
+RMS torque against ``continuous_torque_nm`` and the peak power against ``rated_power_w`` (both optional); for a
+hydraulic one the peak flow against the valve's no-load flow K_v sqrt((p_s - p_t) / 2).
+
+Energy balance of a run (:func:`energy_balance`), between its first and last rows:
+
+    W_drives = dK + dV_g + dV_el + W_pin + D + residual,
+
+W_drives = sum_i sum_k -N_i,k (l_i,k - l_i,k-1), the exact work of the tensions held over each step; W_pin =
+sum_k F_k-1 (y_k-1 - y_k), the work of the tool on the pin (the contact force F, +y on the tool, held over the
+step after it was computed; on the rigid model through the series compliance, whose quasi-static spring is the
+pin's side); K (armature included) and V_g from Pinocchio; V_el the flexible model's springs and D its Rayleigh
+damping's work per step (:class:`pressfit.dynamics.machine.flexible.FlexibleState`). The drives' own losses
+(copper, valve throttling) are upstream of the joints, so they are reported beside the balance, not in it. The
+relative residual is |residual| / the drives' gross work sum_k |sum_i -N_i,k (l_i,k - l_i,k-1)| (the energy the
+drives move in and out of the machine, motoring and regenerating; the preload's circulating power, which sums to
+zero over the legs at every instant on a rigid machine, v_p . l_dot = 0, does not inflate it). What is left is the
+integrators' own energy error, first order in dt on both models (docs/sizing.md): semi-implicit Euler's
+sum 1/2 dv^T M dv per step (its velocity update is explicit) on the rigid model, generalised-alpha's with its
+rectangle-rule damping work and numerical damping (rho_inf) on the flexible one; ``ENERGY_BALANCE_TOLERANCE``.
+"""
+
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass
+from typing import Any
+
+import numpy as np
+
+from pressfit.dynamics import drives as drive_kinds
+from pressfit.errors import PressfitError, ResidualError
+
+# relative residual of the energy balance: 3x the largest measured on the shipped insertions at their 1 ms step
+# (1.6%, the hydraulic case on the rigid model; 0.2-0.3% rigid force and electric, 1.4-1.5% flexible; docs/sizing.md)
+ENERGY_BALANCE_TOLERANCE = 0.05
+PRELOAD_FIGURES = ("rms_force_n", "copper_loss_w", "positive_energy_j", "regenerative_energy_j",
+                   "supply_energy_j")  # given again with a4 = 0 (the preload's cost)
+
+
+@dataclass(frozen=True)
+class Rating:
+    """A sizing figure beside its rating: ``value`` and ``rating`` in the figure's unit, ``key`` the machine-file
+    key the rating comes from."""
+
+    figure: str
+    value: float
+    rating: float
+    key: str
+
+    @property
+    def ratio(self) -> float:
+        return self.value / self.rating
+
+    @property
+    def exceeded(self) -> bool:
+        return self.ratio > 1.0
+
+    def to_dict(self) -> dict[str, Any]:
+        return {"value": self.value, "rating": self.rating, "ratio": self.ratio, "exceeded": self.exceeded,
+                "key": self.key}
+
+
+@dataclass(frozen=True)
+class ElectricSizing:
+    """An electric drive's motor figures (module docstring): torque N m, current A, speed rad/s, loss W, energy J
+    (the copper figures None without ``winding_resistance_ohm``)."""
+
+    rms_torque_nm: float
+    peak_torque_nm: float
+    rms_current_a: float
+    peak_current_a: float
+    peak_motor_speed_rad_per_s: float
+    copper_loss_w: float | None
+    copper_energy_j: float | None
+
+
+@dataclass(frozen=True)
+class HydraulicSizing:
+    """A hydraulic drive's supply figures (module docstring): flow m^3/s, power W, energy J."""
+
+    peak_flow_m3_per_s: float
+    peak_supply_power_w: float
+    mean_supply_power_w: float
+    supply_energy_j: float
+
+
+@dataclass(frozen=True)
+class DriveSizing:
+    """One drive over a motion (module docstring). ``leg`` from 1; forces N, speed m/s, power W, energy J."""
+
+    leg: int
+    peak_force_n: float
+    rms_force_n: float
+    peak_speed_m_per_s: float
+    peak_power_w: float
+    peak_regenerative_power_w: float
+    positive_energy_j: float
+    regenerative_energy_j: float
+    electric: ElectricSizing | None
+    hydraulic: HydraulicSizing | None
+    ratings: tuple[Rating, ...]
+    without_preload: DriveSizing | None = None
+    rms_preload_share_n: float | None = None  # RMS of N(a4) - N(a4 = 0) on the same time grid, N
+
+    def figures(self) -> dict[str, float | None]:
+        """Every figure by its key (the drive-specific ones included)."""
+        out = {k: getattr(self, k) for k in ("peak_force_n", "rms_force_n", "peak_speed_m_per_s", "peak_power_w",
+                                             "peak_regenerative_power_w", "positive_energy_j",
+                                             "regenerative_energy_j")}
+        for part in (self.electric, self.hydraulic):
+            if part is not None:
+                out.update(vars(part))
+        return out
+
+    def to_dict(self) -> dict[str, Any]:
+        """JSON record: the figures, ``ratings`` by figure, and with a preload comparison each of
+        ``PRELOAD_FIGURES`` again as ``<stem>_without_preload_<unit>`` and ``rms_preload_share_n``."""
+        out: dict[str, Any] = {"leg": self.leg, **self.figures(),
+                               "ratings": {r.figure: r.to_dict() for r in self.ratings}}
+        if self.without_preload is not None:
+            other = self.without_preload.figures()
+            for key in PRELOAD_FIGURES:
+                if key in other:
+                    stem, unit = key.rsplit("_", 1)
+                    out[f"{stem}_without_preload_{unit}"] = other[key]
+            out["rms_preload_share_n"] = self.rms_preload_share_n
+        return out
+
+
+def _series(tensions_n: np.ndarray, rates_m_per_s: np.ndarray, dt_s: float) -> tuple[np.ndarray, np.ndarray]:
+    n, v = np.asarray(tensions_n, dtype=float), np.asarray(rates_m_per_s, dtype=float)
+    if n.ndim != 2 or n.shape != v.shape or n.shape[0] == 0:
+        raise PressfitError(f"drive sizing needs tensions and rates of one shape (samples, legs), got "
+                            f"{n.shape} and {v.shape}")
+    if not (np.all(np.isfinite(n)) and np.all(np.isfinite(v))):
+        raise PressfitError("drive sizing needs finite tensions (N) and rates (m/s)")
+    if not (math.isfinite(dt_s) and dt_s > 0):
+        raise PressfitError(f"drive sizing needs a positive time step (s), got {dt_s!r}")
+    return n, v
+
+
+def _rms(x: np.ndarray) -> np.ndarray:
+    return np.sqrt(np.mean(x * x, axis=0))
+
+
+def drive_sizing(tensions_n: np.ndarray, rates_m_per_s: np.ndarray, dt_s: float, drive: drive_kinds.Drive
+                 ) -> tuple[DriveSizing, ...]:
+    """Per drive (column) the sizing figures and ratings (module docstring) of tensions (samples, legs) N and leg
+    rates (samples, legs) m/s sampled every ``dt_s`` (s), for a drive model of :mod:`pressfit.dynamics.drives`."""
+    n, v = _series(tensions_n, rates_m_per_s, dt_s)
+    power = -n * v
+    peak_force, rms_force = np.abs(n).max(axis=0), _rms(n)
+    speed = np.abs(v).max(axis=0)
+    kind = getattr(drive, "kind", "force")
+    out = []
+    for i in range(n.shape[1]):
+        ratings = [Rating("peak_force_n", float(peak_force[i]), float(drive.force_limit_n),
+                          _FORCE_LIMIT_KEYS[kind])]
+        electric = hydraulic = None
+        if kind == "electric":
+            electric, more = _electric(drive.table, n[:, i], v[:, i], dt_s, float(power[:, i].max()),
+                                       float(speed[i]))
+            ratings += more
+        elif kind == "hydraulic":
+            hydraulic, more = _hydraulic(drive.table, n[:, i], v[:, i], dt_s)
+            ratings += more
+        out.append(DriveSizing(
+            leg=i + 1, peak_force_n=float(peak_force[i]), rms_force_n=float(rms_force[i]),
+            peak_speed_m_per_s=float(speed[i]), peak_power_w=float(max(power[:, i].max(), 0.0)),
+            peak_regenerative_power_w=float(max(-power[:, i].min(), 0.0)),
+            positive_energy_j=float(np.maximum(power[:, i], 0.0).sum() * dt_s),
+            regenerative_energy_j=float(np.maximum(-power[:, i], 0.0).sum() * dt_s),
+            electric=electric, hydraulic=hydraulic, ratings=tuple(ratings)))
+    return tuple(out)
+
+
+_FORCE_LIMIT_KEYS = {"force": "[actuator] force_limit_n",
+                     "electric": "2 pi eta K_t [actuator.electric] current_limit_a / lead",
+                     "hydraulic": "A ([actuator.hydraulic] supply_pressure_pa - tank_pressure_pa)"}
+
+
+def _electric(t: Any, n: np.ndarray, v: np.ndarray, dt_s: float, peak_power_w: float, peak_speed: float
+              ) -> tuple[ElectricSizing, list[Rating]]:
+    current = n / t.force_per_current_n_per_a
+    torque = t.torque_constant_nm_per_a * current
+    rms_i = float(_rms(current))
+    loss = None if t.winding_resistance_ohm is None else t.winding_resistance_ohm * rms_i**2
+    sizing = ElectricSizing(
+        rms_torque_nm=float(_rms(torque)), peak_torque_nm=float(np.abs(torque).max()), rms_current_a=rms_i,
+        peak_current_a=float(np.abs(current).max()),
+        peak_motor_speed_rad_per_s=2.0 * math.pi * peak_speed / t.lead_m,
+        copper_loss_w=loss, copper_energy_j=None if loss is None else loss * n.size * dt_s)
+    ratings = [Rating("peak_speed_m_per_s", peak_speed, t.speed_limit_rad_per_s * t.lead_m / (2.0 * math.pi),
+                      "[actuator.electric] speed_limit_rad_per_s lead / (2 pi)")]
+    if t.continuous_torque_nm is not None:
+        ratings.append(Rating("rms_torque_nm", sizing.rms_torque_nm, t.continuous_torque_nm,
+                              "[actuator.electric] continuous_torque_nm"))
+    if t.rated_power_w is not None:
+        ratings.append(Rating("peak_power_w", max(peak_power_w, 0.0), t.rated_power_w,
+                              "[actuator.electric] rated_power_w"))
+    return sizing, ratings
+
+
+def _hydraulic(t: Any, n: np.ndarray, v: np.ndarray, dt_s: float) -> tuple[HydraulicSizing, list[Rating]]:
+    flow = t.area_m2 * np.abs(v) + t.leakage_m3_per_s_pa * np.abs(n) / t.area_m2
+    power = t.supply_pressure_pa * flow
+    sizing = HydraulicSizing(peak_flow_m3_per_s=float(flow.max()), peak_supply_power_w=float(power.max()),
+                             mean_supply_power_w=float(power.mean()), supply_energy_j=float(power.sum() * dt_s))
+    rated = t.valve_flow_gain_m3_per_s_sqrt_pa * math.sqrt(0.5 * (t.supply_pressure_pa - t.tank_pressure_pa))
+    return sizing, [Rating("peak_flow_m3_per_s", sizing.peak_flow_m3_per_s, rated,
+                           "[actuator.hydraulic] valve_flow_gain_m3_per_s_sqrt_pa sqrt((p_s - p_t) / 2)")]
+
+
+def with_preload_cost(sizing: tuple[DriveSizing, ...], tensions_n: np.ndarray, without: tuple[DriveSizing, ...],
+                      tensions_without_n: np.ndarray) -> tuple[DriveSizing, ...]:
+    """``sizing`` with the same figures of the run with a4 = 0 beside it and the preload's RMS share
+    RMS(N - N_0) (N; the two runs on one time grid: the same scenario and step)."""
+    a, b = np.asarray(tensions_n, dtype=float), np.asarray(tensions_without_n, dtype=float)
+    if a.shape != b.shape or len(sizing) != len(without) or a.shape[1] != len(sizing):
+        raise PressfitError(f"the preload's cost compares two runs on one time grid: got {a.shape} and {b.shape}")
+    share = _rms(a - b)
+    return tuple(DriveSizing(**{**vars(s), "without_preload": w, "rms_preload_share_n": float(share[i])})
+                 for i, (s, w) in enumerate(zip(sizing, without, strict=True)))
+
+
+@dataclass(frozen=True)
+class EnergyBalance:
+    """The energy balance of a run (module docstring), J; ``relative_residual`` = |residual_j| /
+    ``gross_drive_work_j``; ``drive_losses_j`` (copper, valve throttling) upstream of the joints, beside it."""
+
+    drive_work_j: float
+    kinetic_change_j: float
+    potential_change_j: float
+    elastic_change_j: float
+    pin_work_j: float
+    damping_j: float
+    residual_j: float
+    gross_drive_work_j: float
+    relative_residual: float
+    tolerance: float
+    drive_losses_j: float
+
+    def to_dict(self) -> dict[str, Any]:
+        return dict(vars(self))
+
+    def require_closed(self, where: str = "") -> EnergyBalance:
+        """Itself, or ResidualError when ``relative_residual`` exceeds ``tolerance`` (the energies are not trusted)."""
+        if not self.relative_residual <= self.tolerance:
+            raise ResidualError(f"the run's energy balance (residual {self.residual_j:.4g} J of the drives' gross work "
+                                f"{self.gross_drive_work_j:.4g} J: the integrator's energy error, first order in "
+                                "[simulation] time_step_s)", "relative energy residual", self.relative_residual,
+                                self.tolerance, where)
+        return self
+
+
+def energy_balance(lengths_m: np.ndarray, tensions_n: np.ndarray, contact_force_n: np.ndarray,
+                   contact_y_m: np.ndarray, kinetic_j: np.ndarray, potential_j: np.ndarray, elastic_j: np.ndarray,
+                   damping_work_j: np.ndarray, drive_losses_j: float = 0.0) -> EnergyBalance:
+    """The balance between the first and the last of n rows (module docstring): leg lengths (n, legs) m, the
+    tensions held over the step ending at each row (n, legs) N, the contact force at each row (n,) N (+y on the
+    tool, held over the next step) and the y of the point it acts on (n,) m, the energies at each row (n,) J and
+    the damping's work over the step ending at each row (n,) J."""
+    lengths, n = np.asarray(lengths_m, float), np.asarray(tensions_n, float)
+    force, y = np.asarray(contact_force_n, float), np.asarray(contact_y_m, float)
+    if lengths.shape != n.shape or lengths.shape[0] < 2:
+        raise PressfitError(f"an energy balance needs at least two rows of lengths and tensions, got {lengths.shape}")
+    step_work = np.sum(-n[1:] * np.diff(lengths, axis=0), axis=1)  # all drives, per step
+    drive, gross = float(step_work.sum()), float(np.abs(step_work).sum())
+    pin_work = float(np.sum(force[:-1] * -np.diff(y)))
+    kin, pot, el = (float(np.asarray(e, float)[-1] - np.asarray(e, float)[0]) for e in (kinetic_j, potential_j,
+                                                                                         elastic_j))
+    damp = float(np.sum(np.asarray(damping_work_j, float)[1:]))
+    residual = drive - kin - pot - el - pin_work - damp
+    return EnergyBalance(drive_work_j=drive, kinetic_change_j=kin, potential_change_j=pot, elastic_change_j=el,
+                         pin_work_j=pin_work, damping_j=damp, residual_j=residual,
+                         gross_drive_work_j=gross, relative_residual=abs(residual) / gross if gross > 0 else 0.0,
+                         tolerance=ENERGY_BALANCE_TOLERANCE, drive_losses_j=float(drive_losses_j))
+
+
+@dataclass(frozen=True)
+class RunSizing:
+    """The drive sizing of one simulated run (:func:`run_sizing`): per drive, and the run's energy balance."""
+
+    drives: tuple[DriveSizing, ...]
+    energy: EnergyBalance
+
+    def to_dict(self) -> dict[str, Any]:
+        """``drives`` (one record per drive, :meth:`DriveSizing.to_dict`), ``energy_balance`` and
+        ``energy_balance_residual`` (its relative residual)."""
+        return {"drives": [d.to_dict() for d in self.drives], "energy_balance": self.energy.to_dict(),
+                "energy_balance_residual": self.energy.relative_residual}
+
+
+def _columns(result: Any, prefix: str) -> np.ndarray:
+    from pressfit.dynamics.insertion import LEGS, SERIES_COLUMNS
+
+    return result.series[:, [SERIES_COLUMNS.index(f"{prefix}{i}") for i in LEGS]]
+
+
+def drive_losses_j(sizing: tuple[DriveSizing, ...]) -> float:
+    """The drives' losses upstream of the joints, J: copper R i^2 (electric, with the winding resistance), the valve's
+    throttling p_s Q - P (hydraulic: supplied minus net mechanical work), 0 for the force kind."""
+    total = 0.0
+    for s in sizing:
+        if s.electric is not None and s.electric.copper_energy_j is not None:
+            total += s.electric.copper_energy_j
+        if s.hydraulic is not None:
+            total += s.hydraulic.supply_energy_j - (s.positive_energy_j - s.regenerative_energy_j)
+    return total
+
+
+def run_sizing(result: Any, drive: drive_kinds.Drive, dt_s: float, without_preload: Any | None = None) -> RunSizing:
+    """Drive sizing and energy balance of an :class:`pressfit.dynamics.insertion.InsertionResult` stepped every
+    ``dt_s`` (s); ``without_preload``: the same scenario run with a4 = 0 (the preload's cost,
+    :func:`with_preload_cost`)."""
+    from pressfit.dynamics.insertion import SERIES_COLUMNS
+
+    def col(name: str) -> np.ndarray:
+        return result.series[:, SERIES_COLUMNS.index(name)]
+
+    tensions, rates = _columns(result, "act_n"), _columns(result, "rate_m_per_s")
+    sizing = drive_sizing(tensions, rates, dt_s, drive)
+    if without_preload is not None:
+        base = _columns(without_preload, "act_n")
+        sizing = with_preload_cost(sizing, tensions, drive_sizing(base, _columns(without_preload, "rate_m_per_s"),
+                                                                  dt_s, drive), base)
+    balance = energy_balance(_columns(result, "length_m"), tensions, col("contact_force_n"), col("plate_y_m"),
+                             col("kinetic_energy_j"), col("potential_energy_j"), col("elastic_energy_j"),
+                             col("damping_work_j"), drive_losses_j(sizing))
+    return RunSizing(sizing, balance)
+
+
+def size_insertion(case: Any, result: Any, limiter: bool = True, progress: bool = False) -> RunSizing:
+    """:func:`run_sizing` of a case's simulated insertion, the preload's cost from a second run of the same scenario
+    with ``[preload] a4_n`` = 0 (``result`` itself when a4 is 0)."""
+    from pressfit.dynamics.insertion import simulate_insertion
+
+    a4 = case.preload.a4_n
+    baseline = result
+    if a4 != 0.0:
+        zero = case.model_copy(update={"preload": case.preload.model_copy(update={"a4_n": 0.0})})
+        try:
+            baseline = simulate_insertion(zero, limiter, progress)
+        except PressfitError as exc:
+            raise PressfitError(f"the preload's cost (the same scenario with [preload] a4_n = 0 instead of "
+                                f"{a4:g} N) could not be simulated: {exc}") from None
+    sizing = run_sizing(result, drive_kinds.of(case.machine()), case.simulation.time_step_s, baseline)
+    sizing.energy.require_closed(f"of {case.path}")
+    return sizing
