@@ -31,6 +31,7 @@ from __future__ import annotations
 
 import math
 from dataclasses import dataclass, field
+from typing import Protocol
 
 import numpy as np
 import pinocchio as pin
@@ -40,6 +41,7 @@ from pressfit.description.cases import Controller, Simulation
 from pressfit.description.machine import Machine
 from pressfit.dynamics.actuators import distribution
 from pressfit.dynamics.multibody import PoseCache, RigidLegModel
+from pressfit.kinematics.profiles import quintic as _quintic
 
 
 def _legs(machine: Machine, pose_m: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
@@ -105,19 +107,22 @@ def gravity_feedforward_n(rigid: RigidLegModel, pose_m: np.ndarray) -> np.ndarra
 GRAVITY_UPDATE_M = 1e-3  # the gravity feed-forward is recomputed when the estimate moved more than this, m
 
 
-def _quintic(s: float) -> tuple[float, float]:
-    """Minimum-jerk profile and its derivative on s in [0, 1]."""
-    s = min(max(s, 0.0), 1.0)
-    return s**3 * (10 - 15 * s + 6 * s * s), 30 * s * s * (1 - s) ** 2
+class Shape(Protocol):
+    """The time law of one straight segment: the fraction of it covered at time t from its start and its
+    rate (1/s), e.g. :class:`pressfit.kinematics.profiles.SCurve`."""
+
+    def fraction(self, t_s: float) -> tuple[float, float]: ...
 
 
 @dataclass(frozen=True)
 class Trajectory:
-    """Piecewise minimum-jerk reference through waypoints (m) with segment durations (s)."""
+    """Piecewise reference on straight segments through waypoints (m) with segment durations (s): each
+    segment minimum-jerk (the quintic) unless ``shapes`` gives its time law (None: the quintic)."""
 
     waypoints_m: np.ndarray  # (k + 1, 3)
     durations_s: np.ndarray  # (k,)
     phases: tuple[str, ...]  # (k,) segment names
+    shapes: tuple[Shape | None, ...] | None = None  # (k,) per segment, or None: all quintic
     ends_s: np.ndarray = field(init=False, repr=False, compare=False)  # (k,) cumulative durations, s
 
     def __post_init__(self) -> None:
@@ -146,8 +151,12 @@ class Trajectory:
         """Reference position (m) and velocity (m/s) at ``t_s`` (s)."""
         k = self.segment(t_s)
         t0 = float(self.ends_s[k - 1]) if k else 0.0
-        s, ds = _quintic((t_s - t0) / self.durations_s[k])
         delta = self.waypoints_m[k + 1] - self.waypoints_m[k]
+        shape = self.shapes[k] if self.shapes is not None else None
+        if shape is not None:
+            s, rate = shape.fraction(t_s - t0)
+            return self.waypoints_m[k] + s * delta, rate * delta
+        s, ds = _quintic((t_s - t0) / self.durations_s[k])
         return self.waypoints_m[k] + s * delta, ds / self.durations_s[k] * delta
 
 
@@ -167,8 +176,10 @@ class ForceLimitedController:
     pinv: np.ndarray = field(default_factory=lambda: np.zeros((4, 3)))  # A^+ at the estimate
     null: np.ndarray = field(default_factory=lambda: np.zeros(4))  # v_p at the estimate
     gravity: PoseCache = field(init=False)
+    force_limit_n: float = field(init=False)  # the insertion limit in force (N): the gains' unless a run sets it
 
     def __post_init__(self) -> None:
+        self.force_limit_n = self.gains.force_limit_n
         self.gravity = PoseCache(lambda pose: gravity_feedforward_n(self.rigid, pose), GRAVITY_UPDATE_M)
 
     def command(self, lengths_m: np.ndarray, rates_m_per_s: np.ndarray, reference: tuple[np.ndarray, np.ndarray],
@@ -184,14 +195,14 @@ class ForceLimitedController:
         target = target + np.array([0.0, self.lift_m, 0.0])
         error = target - self.estimate_m
         pid = g.kp_n_per_m * error + g.kd_n_s_per_m * target_velocity + g.ki_n_per_m_s * self.integral_m_s
-        self.clamped = self.limiter and contact_force_n > 0.0 and pid[1] < -g.force_limit_n
+        self.clamped = self.limiter and contact_force_n > 0.0 and pid[1] < -self.force_limit_n
         if self.clamped:
-            pid[1] = -g.force_limit_n
+            pid[1] = -self.force_limit_n
             error[1] = 0.0  # anti-windup: the vertical integrator holds while clamped
         pid -= g.kd_n_s_per_m * velocity  # damping acts outside the clamp: a clamped contact stays damped
         self.integral_m_s = self.integral_m_s + dt_s * error
-        if self.limiter and (contact_force_n > g.force_limit_n or self.lift_m > 0.0):
-            self.lift_m = max(0.0, self.lift_m + dt_s * g.backoff_m_per_s_n * (contact_force_n - g.force_limit_n))
+        if self.limiter and (contact_force_n > self.force_limit_n or self.lift_m > 0.0):
+            self.lift_m = max(0.0, self.lift_m + dt_s * g.backoff_m_per_s_n * (contact_force_n - self.force_limit_n))
         if g.gravity_compensation:
             pid = pid + self.gravity(self.estimate_m)
         return pid

@@ -127,6 +127,52 @@ def s_curve(distance_m: float, speed_m_per_s: float, acceleration_m_per_s2: floa
     return SCurve(d, v, a, j, tj, tc, tv, tuple(knots))
 
 
+def quintic(s: float) -> tuple[float, float]:
+    """The minimum-jerk (quintic) profile 10 s^3 - 15 s^4 + 6 s^5 and its derivative on s in [0, 1] (clamped)."""
+    s = min(max(s, 0.0), 1.0)
+    return s**3 * (10 - 15 * s + 6 * s * s), 30 * s * s * (1 - s) ** 2
+
+
+@dataclass(frozen=True)
+class Quintic:
+    """The minimum-jerk rest-to-rest move of ``distance_m`` (m) in the least time ``duration_s`` (s) its peak
+    speed 15 D / (8 T) (at s = 1/2), acceleration 10 D / (sqrt(3) T^2) (at s = (3 - sqrt(3)) / 6) and jerk
+    60 D / T^3 (at both ends) allow under the three limits (:func:`quintic_move`)."""
+
+    distance_m: float
+    duration_s: float
+    binding_limit: str
+
+    @property
+    def peak_speed_m_per_s(self) -> float:
+        return 15.0 * self.distance_m / (8.0 * self.duration_s) if self.duration_s > 0 else 0.0
+
+    @property
+    def peak_acceleration_m_per_s2(self) -> float:
+        return 10.0 * self.distance_m / (math.sqrt(3.0) * self.duration_s**2) if self.duration_s > 0 else 0.0
+
+    @property
+    def limits_reached(self) -> tuple[str, ...]:
+        return (self.binding_limit,) if self.binding_limit else ()
+
+    def fraction(self, t_s: float) -> tuple[float, float]:
+        """The fraction covered at ``t_s`` and its rate (1/s), as the insertion's reference computes it."""
+        if self.duration_s <= 0.0:
+            return 0.0, 0.0
+        s, ds = quintic(t_s / self.duration_s)
+        return s, ds / self.duration_s
+
+
+def quintic_move(distance_m: float, speed_m_per_s: float, acceleration_m_per_s2: float,
+                 jerk_m_per_s3: float) -> Quintic:
+    """The least-time quintic of a distance (m) under the three limits (:class:`Quintic`)."""
+    d = float(distance_m)
+    times = (15.0 * d / (8.0 * speed_m_per_s), math.sqrt(10.0 * d / (math.sqrt(3.0) * acceleration_m_per_s2)),
+             (60.0 * d / jerk_m_per_s3) ** (1.0 / 3.0))
+    k = int(np.argmax(times))
+    return Quintic(d, float(times[k]), LIMITS[k] if d > 0 else "")
+
+
 def s_curve_time_s(distance_m: float, speed_m_per_s: float, acceleration_m_per_s2: float,
                    jerk_m_per_s3: float) -> float:
     """The minimum time (s) of a rest-to-rest move of ``distance_m`` under the three limits."""
