@@ -19,7 +19,10 @@ def test_long_move_time_is_distance_over_speed_plus_v_over_a_plus_a_over_j():
     # D >= v (v/a + a/j): cruise; the speed-up takes v/a + a/j and covers half of v (v/a + a/j) twice
     d = 1.0
     assert s_curve_time_s(d, V, A, J) == pytest.approx(d / V + V / A + A / J, rel=1e-14)
-    assert s_curve(d, V, A, J).limits_reached == ("speed", "acceleration", "jerk")
+    profile = s_curve(d, V, A, J)
+    assert profile.limits_reached == ("speed", "acceleration", "jerk")
+    # the cruise takes D/v - v/a - a/j = 1.65 s of the 2.35 s: the speed holds it longest
+    assert profile.cruise_time_s == pytest.approx(d / V - V / A - A / J, rel=1e-13) and profile.binding_limit == "speed"
 
 
 def test_speed_not_reached_but_acceleration_reached():
@@ -29,7 +32,8 @@ def test_speed_not_reached_but_acceleration_reached():
     profile = s_curve(d, V, A, J)
     assert profile.duration_s == pytest.approx(2 * (vp / A + A / J), rel=1e-13)
     assert profile.peak_speed_m_per_s == pytest.approx(vp, rel=1e-13)
-    assert profile.binding_limit == "acceleration"
+    # constant acceleration 2 T_c = 2 (v_p/a - a/j) = 0.258 s against 4 T_j = 4 a/j = 0.2 s of jerk phases
+    assert 2 * (vp / A - A / J) > 4 * A / J and profile.binding_limit == "acceleration"
     # the distance check: the speed-up covers v_p (v_p/a + a/j) / 2, the move twice that
     assert vp * (vp / A + A / J) == pytest.approx(d, rel=1e-13)
 

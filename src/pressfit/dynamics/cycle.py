@@ -7,8 +7,9 @@ The reference: from ``start_m`` to the first pin's approach point (x, h_b + appr
 "descent" to (x, h_b - interference, z), "dwell", "retract" to the approach point, then "traverse" to the next
 pin's approach point; after the last pin "move" to ``end_m`` and "settle". Each move is the minimum-time
 rest-to-rest S-curve under ``[cycle.motion]`` (approach, traverse, move) or ``[cycle.descent]`` (descent,
-retract), with the speed and acceleration scaled down where the drives would bind along the segment (sampled at
-``FORCE_SAMPLES`` points; the legs and the inertia vary smoothly along a straight move):
+retract), with the speed and acceleration scaled down where the drives would bind along the segment (the speed
+every ``PATH_SAMPLE_M``, the force at ``FORCE_SAMPLES`` points: the weight and the inertia vary smoothly along a
+straight move):
 
 * drive speed: |l_dot_i| = |e_i . u| v must stay within the drive kind's speed limit (electric: the motor's
   ``speed_limit_rad_per_s`` x lead / 2 pi; the force and hydraulic models have none of their own);
@@ -19,8 +20,10 @@ retract), with the speed and acceleration scaled down where the drives would bin
   N at 0.5 m/s) and the force loop's lag are left out of this bound (the simulation has them; its saturation
   time is reported).
 
-Each segment reports the limit that binds it: "speed", "acceleration" or "jerk" (the profile's highest-order
-limit reached), "drive speed" or "drive force" (a scaled limit reached), "dwell" or "settle".
+Each segment reports the limit that binds it: "speed", "acceleration" or "jerk" (the profile's
+:attr:`pressfit.kinematics.profiles.SCurve.binding_limit`, the reached limit that holds it longest; the quintic's
+largest of its three times), "drive speed" or "drive force" when that limit is the drives' scaled one, "dwell"
+or "settle" for a hold.
 
 Before the run the board is refused (one line naming the pin by its number and (x, z), its key and the file)
 when a pin's approach point or the bottom of its insertion is unreachable, start or end is not above the board
@@ -49,6 +52,7 @@ from pressfit.dynamics.insertion import (
     LEGS,
     MAX_STEPS,
     MIN_SEGMENT_STEPS,
+    PATH_SAMPLE_M,
     SERIES_COLUMNS,
     WARN_STEPS,
     ScenarioPlan,
@@ -129,6 +133,12 @@ def _pin_label(pin: ResolvedPin) -> str:
     return f"pin {pin.index} (x = {pin.x_m:g} m, z = {pin.z_m:g} m)"
 
 
+def _unit_legs(machine: Machine, a: np.ndarray, b: np.ndarray, count: int) -> np.ndarray:
+    """Leg unit vectors e_i (count, legs, 3) at ``count`` points evenly spaced from a to b (m)."""
+    legs = kinematics.leg_vectors(machine, a + np.linspace(0.0, 1.0, count)[:, None] * (b - a))
+    return legs / np.linalg.norm(legs, axis=-1, keepdims=True)
+
+
 def _scaled(case: Case, rigid: Any, machine: Machine, drives: drive_kinds.Drive, a: np.ndarray, b: np.ndarray,
             limits: MotionLimits, key: str, label: str) -> tuple[float, float, float, SCurve | Quintic, str]:
     """The segment a -> b (m) under ``limits`` scaled down for the drives (module docstring): v, a, j, the
@@ -139,13 +149,12 @@ def _scaled(case: Case, rigid: Any, machine: Machine, drives: drive_kinds.Drive,
     if distance == 0.0:
         return v, acc, jerk, move(0.0, v, acc, jerk), ""
     u = (b - a) / distance
-    samples = a + np.linspace(0.0, 1.0, FORCE_SAMPLES)[:, None] * (b - a)
-    legs = kinematics.leg_vectors(machine, samples)
-    e = legs / np.linalg.norm(legs, axis=-1, keepdims=True)  # (n, 4, 3)
     speed_limit, _ = drive_speed_limit_m_per_s(drives)
-    v_drive = speed_limit / np.abs(e @ u).max() if speed_limit is not None else math.inf
+    dense = max(2, math.ceil(distance / PATH_SAMPLE_M) + 1)
+    v_drive = speed_limit / np.abs(_unit_legs(machine, a, b, dense) @ u).max() if speed_limit is not None else math.inf
+    samples = a + np.linspace(0.0, 1.0, FORCE_SAMPLES)[:, None] * (b - a)
     a_drive = math.inf
-    for p, ep in zip(samples, e, strict=True):
+    for p, ep in zip(samples, _unit_legs(machine, a, b, FORCE_SAMPLES), strict=True):
         pinv, null = distribution(ep)
         static = -pinv @ gravity_feedforward_n(rigid, p) + case.preload.a4_n * null
         per_acc = np.abs(pinv @ np.linalg.solve(plate_mobility(rigid, p), u))
@@ -155,15 +164,10 @@ def _scaled(case: Case, rigid: Any, machine: Machine, drives: drive_kinds.Drive,
                                  f"({', '.join(f'{c:.4g}' for c in p)}) m the weight and the preload alone need "
                                  f"{np.abs(static).max():.4g} N, beyond {drive_limit(drives)}")
         a_drive = min(a_drive, float(np.min(margin / np.maximum(per_acc, 1e-300))))
-    v_used, a_used = min(v, v_drive), min(acc, a_drive)
+    v_used, a_used = float(min(v, v_drive)), float(min(acc, a_drive))
     profile = move(distance, v_used, a_used, jerk)
-    reached = profile.limits_reached
-    if "speed" in reached:
-        binding = "drive speed" if v_used < v else "speed"
-    elif "acceleration" in reached:
-        binding = "drive force" if a_used < acc else "acceleration"
-    else:
-        binding = "jerk"
+    binding = {"speed": "drive speed" if v_used < v else "speed",
+               "acceleration": "drive force" if a_used < acc else "acceleration"}.get(profile.binding_limit, "jerk")
     return v_used, a_used, jerk, profile, binding
 
 

@@ -65,9 +65,14 @@ class SCurve:
 
     @property
     def binding_limit(self) -> str:
-        """The highest-order limit reached: "speed", else "acceleration", else "jerk" ("" for D = 0)."""
-        reached = self.limits_reached
-        return reached[0] if reached else ""
+        """The limit that holds the move longest: of the reached ones, the one whose phases take the largest share
+        of T (the cruise T_v: "speed"; the constant-acceleration phases 2 T_c: "acceleration"; the jerk phases
+        4 T_j: "jerk"); "" for D = 0."""
+        if self.distance_m <= 0.0:
+            return ""
+        shares = {"speed": self.cruise_time_s, "acceleration": 2.0 * self.constant_acceleration_time_s,
+                  "jerk": 4.0 * self.jerk_time_s}
+        return max(self.limits_reached, key=shares.__getitem__)
 
     def at(self, t_s: np.ndarray | float) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
         """Position (m, from 0 to D), speed (m/s) and acceleration (m/s^2) at ``t_s`` (s; clamped to [0, T])."""
