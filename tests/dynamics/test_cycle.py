@@ -23,6 +23,7 @@ from pressfit.dynamics.control import gravity_feedforward_n
 from pressfit.dynamics.cycle import CYCLE_COLUMNS, plan_cycle, simulate_cycle, summarise_cycle
 from pressfit.dynamics.insertion import SERIES_COLUMNS, simulate_insertion
 from pressfit.kinematics.profiles import s_curve_time_s
+from tests.readme import assert_printed, readme_fragment
 
 ROOT = Path(__file__).resolve().parents[2]
 BOARD = ROOT / "cases/paper/board.toml"
@@ -261,3 +262,48 @@ def test_pin_pass_fail_turns_at_its_limits_recomputed_from_the_csv(tmp_path):
             variant = load_case(board(tmp_path, "v.toml", pins=[{**PIN, **limits}], dwell_s=0.5, settle_s=0.1))
             pin = summarise_cycle(series, plan_cycle(variant))["pins"][0]
             assert pin["passed"] is passes, (limits, pin["checks"])
+
+
+def test_each_pin_is_pressed_at_its_own_force_limit(tmp_path):
+    """Two pins, the second with a 20 N limit: the limiter of each pin's segments uses that pin's limit (the
+    contact law reaches 100 N at the 2 mm commanded, so the limit sets the steady force: within the 2% settling
+    band of it)."""
+    path = board(tmp_path, pins=[dict(PIN), {"x_m": 0.0, "z_m": -0.05, "force_limit_n": 20.0}], dwell_s=0.5,
+                 settle_s=0.1)
+    pins = simulate_cycle(load_case(path)).summary["pins"]
+    assert [p["force_limit_n"] for p in pins] == [30.0, 20.0]
+    assert pins[0]["steady_insertion_force_n"] == pytest.approx(30.0, rel=0.02)
+    assert pins[1]["steady_insertion_force_n"] == pytest.approx(20.0, rel=0.02)
+    assert all(p["insertion_completed"] for p in pins)
+
+
+def test_an_unstable_step_names_the_cycles_keys(tmp_path):
+    """The explicit-step check is [simulation]'s; on a board it names [cycle]'s keys (the same meaning)."""
+    refused(board(tmp_path, controller={"kp_n_per_m": 1e8}), "[cycle] time_step_s", "[cycle.controller] gains")
+
+
+def test_shipped_board_cycle_time_in_closed_form():
+    """cases/paper/board.toml: 20 pins at a 100 mm pitch. Every move is a rest-to-rest S-curve in closed form
+    (v = 0.5, a = 2, j = 20: the speed-up takes v/a + a/j = 0.35 s over v (v/a + a/j) / 2 = 87.5 mm):
+    the approach (0.259 m) and the final move (0.214 m) cruise: T = D/v + v/a + a/j; the 19 traverses of 0.1 m
+    do not: T = 2 (v_p/a + a/j), v_p^2 + v_p a^2/j - a D = 0; the descents and retracts (7 mm at v = 0.01,
+    a = 0.05, j = 0.5) cruise: 0.7 + 0.2 + 0.1 = 1 s; the dwells 0.5 s. None is held by the drives."""
+    v, a, j = 0.5, 2.0, 20.0
+    start, end = np.array([-0.15, 0.65, 0.10]), np.array([0.0, 0.68, 0.15])
+    first, last = np.array([-0.2, 0.605, -0.15]), np.array([-0.2, 0.605, 0.15])  # snaking: row 4 ends at x min
+    cruise = [float(np.linalg.norm(first - start)), float(np.linalg.norm(end - last))]
+    assert min(cruise) > v * (v / a + a / j)
+    vp = (math.sqrt(a**4 / j**2 + 4 * a * 0.1) - a * a / j) / 2
+    expected = sum(d / v + v / a + a / j for d in cruise) + 19 * 2 * (vp / a + a / j) + 20 * (1.0 + 0.5 + 1.0)
+    plan = plan_cycle(load_case(BOARD))
+    assert len(plan.pins) == 20 and plan.cycle_time_s == pytest.approx(expected, rel=1e-12)
+    assert not any(s.binding_limit.startswith("drive") for s in plan.segments)
+    # a traverse: 2 T_c = 2 (v_p/a - a/j) = 0.158 s at constant acceleration, 4 T_j = 4 a/j = 0.4 s of jerk phases
+    assert 2 * (vp / a - a / j) < 4 * a / j
+    assert {s.binding_limit for s in plan.segments if s.phase == "traverse"} == {"jerk"}
+    assert {s.binding_limit for s in plan.segments if s.phase in ("descent", "retract")} == {"speed"}
+    text = readme_fragment("the shipped board (20 pins) plans to a 62.25 s cycle, 19.28 pins per minute, its "
+                           "traverses held by the jerk")
+    assert_printed(plan.cycle_time_s, "62.25")
+    assert_printed(60 * 20 / plan.cycle_time_s, "19.28")
+    assert "62.25" in text

@@ -16,7 +16,9 @@ the estimate has moved more than ``GRAVITY_UPDATE_M`` (1 mm) from the pose it wa
 poses), so the feed-forward is off by at most sqrt(3) * 58 N/m * 1 mm = 0.1 N (0.06% of the ~180 N weight
 it carries), a fixed force error the integrator removes.
 
-Force limiter (on the measured contact force F_c along +y, limit F_lim), both parts of Figure 12:
+Force limiter (on the measured contact force F_c along +y, limit F_lim: the gains' ``force_limit_n``, or the
+running segment's pin limit that a board's run sets in ``ForceLimitedController.force_limit_n``), both parts of
+Figure 12:
 * force reference clamp: in contact (F_c > 0) the vertical push of the loop beyond the feed-forward is
   clamped, (Kp e + Kd dh_ref/dt + Ki int(e))_y >= -F_lim, so in a steady contact F_c <= F_lim (in free motion
   the loop keeps its full authority); the integrator holds
