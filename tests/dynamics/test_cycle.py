@@ -148,6 +148,10 @@ def test_start_below_the_board_huge_boards_short_dwells_and_unknown_keys_are_ref
     huge = board(tmp_path, "h.toml", grid={"x": {"min_m": -0.2, "max_m": 0.2, "count": 40},
                                            "z": {"min_m": -0.2, "max_m": 0.2, "count": 40}})
     refused(huge, "1601 pins, above the cap of 1000")
+    # 999 pins of 2 s dwell are 2e6 steps at 1 ms before any move: refused before the drives' scaling is computed
+    long = board(tmp_path, "l.toml", grid={"x": {"min_m": -0.2, "max_m": 0.2, "count": 37},
+                                           "z": {"min_m": -0.2, "max_m": 0.2, "count": 27}})
+    refused(long, "[cycle] time_step_s", "a run of at most 1000000 steps", "(1000 pins)")
     short = board(tmp_path, "d.toml", pins=[{**PIN, "dwell_s": 0.005}])
     refused(short, "[cycle] pins[0] dwell_s", "pin 1 (x = 0.1 m, z = -0.05 m)", "at least 10 time steps")
     refused(board(tmp_path, "k.toml", pins=[{**PIN, "force_limit": 3.0}]), "force_limit")
@@ -311,8 +315,8 @@ def test_shipped_board_cycle_time_in_closed_form():
 
 def test_cli_runs_the_flexible_model_and_refuses_an_existing_output_before_computing(tmp_path):
     """``--model flexible`` overrides the case's rigid model: the same step loop as ``simulate``'s flexible runs
-    (elastic legs, contact on the elastic tool point); a short fast board (2.6 s at 2 ms steps) presses its pin. A non-empty
-    --out is refused before any computation (exit 2, nothing written), and accepted with --overwrite."""
+    (elastic legs, contact on the elastic tool point); a short fast board (2.6 s at 2 ms steps) presses its pin.
+    A non-empty --out is refused before any computation (exit 2, nothing written)."""
     fast = {"motion": {"speed_m_per_s": 1.0, "acceleration_m_per_s2": 5.0, "jerk_m_per_s3": 50.0},
             "descent": {"speed_m_per_s": 0.02, "acceleration_m_per_s2": 0.2, "jerk_m_per_s3": 2.0}}
     path = board(tmp_path, dwell_s=0.3, settle_s=0.0, time_step_s=2e-3, **fast)

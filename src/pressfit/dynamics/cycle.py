@@ -139,15 +139,33 @@ def _unit_legs(machine: Machine, a: np.ndarray, b: np.ndarray, count: int) -> np
     return legs / np.linalg.norm(legs, axis=-1, keepdims=True)
 
 
+def _profile(limits: MotionLimits, distance_m: float, speed_m_per_s: float | None = None,
+             acceleration_m_per_s2: float | None = None) -> SCurve | Quintic:
+    """The move of ``limits.profile`` over a distance (m) under ``limits`` (or the speed and acceleration given)."""
+    move = quintic_move if limits.profile == "quintic" else s_curve
+    v = limits.speed_m_per_s if speed_m_per_s is None else speed_m_per_s
+    a = limits.acceleration_m_per_s2 if acceleration_m_per_s2 is None else acceleration_m_per_s2
+    return move(distance_m, v, a, limits.jerk_m_per_s3)
+
+
+def _check_length(case: Case, duration_s: float, dt_s: float, pins: int) -> int:
+    """The number of steps of a run of ``duration_s``; refused above ``MAX_STEPS``."""
+    steps = int(np.ceil(duration_s / dt_s))
+    if steps > MAX_STEPS:
+        raise ModelFileError(case.path, "[cycle] time_step_s", f"a run of at most {MAX_STEPS} steps: time_step_s = "
+                             f"{dt_s:g} s over the board's {duration_s:g} s ({pins} pins) makes {steps} steps or more "
+                             "(use a larger time step, fewer pins or faster motion limits)")
+    return steps
+
+
 def _scaled(case: Case, rigid: Any, machine: Machine, drives: drive_kinds.Drive, a: np.ndarray, b: np.ndarray,
             limits: MotionLimits, key: str, label: str) -> tuple[float, float, float, SCurve | Quintic, str]:
     """The segment a -> b (m) under ``limits`` scaled down for the drives (module docstring): v, a, j, the
     profile and the binding limit."""
     v, acc, jerk = limits.speed_m_per_s, limits.acceleration_m_per_s2, limits.jerk_m_per_s3
     distance = float(np.linalg.norm(b - a))
-    move = quintic_move if limits.profile == "quintic" else s_curve
     if distance == 0.0:
-        return v, acc, jerk, move(0.0, v, acc, jerk), ""
+        return v, acc, jerk, _profile(limits, 0.0), ""
     u = (b - a) / distance
     speed_limit, _ = drive_speed_limit_m_per_s(drives)
     dense = max(2, math.ceil(distance / PATH_SAMPLE_M) + 1)
@@ -165,7 +183,7 @@ def _scaled(case: Case, rigid: Any, machine: Machine, drives: drive_kinds.Drive,
                                  f"{np.abs(static).max():.4g} N, beyond {drive_limit(drives)}")
         a_drive = min(a_drive, float(np.min(margin / np.maximum(per_acc, 1e-300))))
     v_used, a_used = float(min(v, v_drive)), float(min(acc, a_drive))
-    profile = move(distance, v_used, a_used, jerk)
+    profile = _profile(limits, distance, v_used, a_used)
     binding = {"speed": "drive speed" if v_used < v else "speed",
                "acceleration": "drive force" if a_used < acc else "acceleration"}.get(profile.binding_limit, "jerk")
     return v_used, a_used, jerk, profile, binding
@@ -206,8 +224,16 @@ def plan_cycle(case: Case, machine: Machine | None = None, model: str | None = N
                                               f"{pin.interference_m:g} m below the board face")):
             _require_reachable(case, machine, np.array([pin.x_m, board + height, pin.z_m]),
                                f"{pin.source} (x_m, z_m)", f"{_pin_label(pin)}: {what}")
-    rigid = rigid_leg_model(machine, np.asarray(cycle.start_m, float), cycle.baumgarte_rad_per_s)
     descent = cycle.descent or cycle.motion
+    bound, previous = cycle.settle_s, np.asarray(cycle.start_m, float)  # the run without the drives' scaling
+    for pin in pins:  # (which only lengthens the moves): refused at once if that is already too long
+        above = np.array([pin.x_m, board + pin.approach_height_m, pin.z_m])
+        bound += (_profile(cycle.motion, float(np.linalg.norm(above - previous))).duration_s + pin.dwell_s
+                  + 2.0 * _profile(descent, pin.approach_height_m + pin.interference_m).duration_s)
+        previous = above
+    _check_length(case, bound + _profile(cycle.motion, float(np.linalg.norm(cycle.end_m - previous))).duration_s,
+                  dt, len(pins))
+    rigid = rigid_leg_model(machine, np.asarray(cycle.start_m, float), cycle.baumgarte_rad_per_s)
     points, segments = [np.asarray(cycle.start_m, float)], []
 
     def add(phase: str, pin: ResolvedPin, target: np.ndarray, hold_s: float | None = None) -> None:
@@ -234,11 +260,7 @@ def plan_cycle(case: Case, machine: Machine | None = None, model: str | None = N
     add("settle", pins[-1], points[-1], max(cycle.settle_s, 1e-9))
     trajectory = Trajectory(np.array(points), np.array([s.duration_s for s in segments]),
                             tuple(s.phase for s in segments), tuple(s.profile for s in segments))
-    steps = int(np.ceil(trajectory.duration_s / dt))
-    if steps > MAX_STEPS:
-        raise ModelFileError(case.path, "[cycle] time_step_s", f"a run of at most {MAX_STEPS} steps: time_step_s = "
-                             f"{dt:g} s over the board's {trajectory.duration_s:g} s ({len(pins)} pins) makes {steps} "
-                             "steps (use a larger time step, fewer pins or faster motion limits)")
+    steps = _check_length(case, trajectory.duration_s, dt, len(pins))
     path, index = _path(trajectory)
     ok = kinematics.is_reachable(machine, path)
     if not ok.all():
