@@ -68,5 +68,5 @@ def main() -> None:
 for command in (pose.kinematics_cmd, listing.list_cmd, pose.solve_cmd, paper.tables_cmd, check.check_cmd,
                 workspace.workspace_cmd, pose.stiffness_cmd, pose.interference_cmd, paper.report_cmd,
                 study.study_group, dynamics.modes_cmd, dynamics.simulate_cmd,
-                dynamics.export_mjcf_cmd, dynamics.response_cmd, dynamics.control_cmd):
+                dynamics.export_mjcf_cmd, dynamics.response_cmd, dynamics.control_cmd, dynamics.cycle_cmd):
     main.add_command(command)

@@ -1,8 +1,9 @@
 """Commands about the machine in motion: ``pressfit modes``, ``pressfit simulate``, ``pressfit export-mjcf``,
-``pressfit response``."""
+``pressfit response``, ``pressfit control``, ``pressfit cycle``."""
 
 from __future__ import annotations
 
+import sys
 from pathlib import Path
 
 import click
@@ -252,3 +253,49 @@ def control_cmd(case_path: Path, plant_model: str, out_dir: Path | None, overwri
         for w in p.warnings:
             click.echo(f"  WARNING: {w}")
     echo_written(paths)
+
+
+@click.command("cycle")
+@click.argument("case_path", type=click.Path(path_type=Path))
+@click.option("--model", "plant_model", type=click.Choice(["flexible", "rigid"]), default=None,
+              help="The machine simulated (default: the case's [cycle] model).")
+@click.option("--out", "out_dir", type=click.Path(path_type=Path), default=None,
+              help="Directory for cycle.csv, cycle.json, cycle_path.png and cycle_force.png (nothing written "
+                   "without it).")
+@OVERWRITE_OPTION
+@click.option("--json", "as_json", is_flag=True, help="Print the summary as JSON.")
+@click.option("--progress/--no-progress", default=True, help="Show a progress bar over simulated time.")
+@user_errors
+def cycle_cmd(case_path: Path, plant_model: str | None, out_dir: Path | None, overwrite: bool, as_json: bool,
+              progress: bool) -> None:
+    """Simulate a whole board, the case file's [cycle] table: per pin the insertion figures and pass/fail, the
+    cycle time, pins per minute and what limits each segment (SI units). Exit 1 when a pin fails its limits."""
+    from pressfit.output.cycle import run_cycle
+
+    s, paths = run_cycle(case_path, plant_model, out_dir, overwrite, progress)
+    for warning in dict.fromkeys(s["warnings"]):
+        click.echo(f"warning: {warning}", err=True)
+    if as_json:
+        click.echo(to_json(s))
+    else:
+        click.echo(f"{s['case']}: {s['pin_count']} pins, model {s['model']}; cycle time {s['cycle_time_s']:.3f} s, "
+                   f"{s['pins_per_minute']:.2f} pins per minute; {s['pins_passed']} of {s['pin_count']} pins pass")
+        slow = s["slowest_segment"]
+        click.echo(f"slowest segment: {slow['phase']} of pin {slow['pin']}, {slow['duration_s']:.3f} s, limited by "
+                   f"{slow['binding_limit']}")
+        click.echo(" pin        x [m]      z [m]  contact [s]  peak [N]  steady [N]  overshoot [N]  lateral [um]  "
+                   "settling [s]  result")
+        for p in s["pins"]:
+            lateral = p["tool_lateral_error_at_first_contact_m"]
+            click.echo(f"{p['index']:>4}  {p['x_m']:>+9.4f}  {p['z_m']:>+9.4f}  "
+                       + ("{:>11}".format("none" if p["first_contact_time_s"] is None else
+                                          f"{p['first_contact_time_s']:.3f}"))
+                       + f"  {p['peak_contact_force_n']:>8.2f}  {p['steady_insertion_force_n']:>10.2f}  "
+                       f"{p['overshoot_n']:>13.2f}  " + ("{:>12}".format("n/a" if lateral is None else
+                                                                         f"{lateral * 1e6:.2f}"))
+                       + "  " + ("{:>12}".format("none" if p["settling_time_s"] is None else
+                                                 f"{p['settling_time_s']:.3f}"))
+                       + f"  {'pass' if p['passed'] else 'FAIL'}")
+        echo_written(paths)
+    if s["pins_passed"] < s["pin_count"]:
+        sys.exit(1)

@@ -28,6 +28,7 @@ def list_cmd() -> None:
                 ("reference table", c.reference),
                 ("envelope", c.envelope.model_dump(exclude_none=True)),
                 ("study", getattr(c, "study", None)),
+                ("cycle", c.cycle),
             )
             if v
         ]

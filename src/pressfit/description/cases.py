@@ -357,16 +357,13 @@ class Design(StrictModel):
         return self
 
 
-class Contact(StrictModel):
-    """Tool-board contact of the insertion simulation (:mod:`pressfit.dynamics.contact`). The board's top
-    face is the plane y = ``board_height_m``; the pin to insert sits on it at (x, z) = ``pin_position_m``.
+class ContactLaw(StrictModel):
+    """The pin-board contact law of the insertion simulation (:mod:`pressfit.dynamics.contact`):
     ``law = "elastic"``: F = k d + b d_dot for an interference d > 0 (paper section 4.2: force proportional
     to the interference); ``"press_fit"`` adds f_fit(d): ``fit = "linear"`` (``fit_stiffness_n_per_m`` d) or
     ``"saturating"`` (``fit_force_n`` tanh(d / ``fit_depth_m``)). Defaults: an estimate of a compliant
     pin-board stack, 30 N at 0.6 mm, no damping."""
 
-    board_height_m: Positive
-    pin_position_m: Annotated[list[Finite], Field(min_length=2, max_length=2)]
     stiffness_n_per_m: Positive = 5.0e4
     damping_n_s_per_m: NonNegative = 0.0
     law: Literal["elastic", "press_fit"] = "elastic"
@@ -374,6 +371,14 @@ class Contact(StrictModel):
     fit_stiffness_n_per_m: NonNegative = 0.0
     fit_force_n: NonNegative = 0.0
     fit_depth_m: Positive = 1e-3
+
+
+class Contact(ContactLaw):
+    """Tool-board contact of ``[simulation]``: the law (:class:`ContactLaw`) on the board's top face, the plane
+    y = ``board_height_m``, with the pin to insert on it at (x, z) = ``pin_position_m``."""
+
+    board_height_m: Positive
+    pin_position_m: Annotated[list[Finite], Field(min_length=2, max_length=2)]
 
 
 class Controller(StrictModel):
@@ -396,6 +401,12 @@ class Controller(StrictModel):
     estimator_iterations: Annotated[int, Field(ge=1, le=20)] = 2
 
 
+TimeStep = Annotated[float, Field(gt=0, le=2e-3, allow_inf_nan=False)]  # s
+# Baumgarte rate omega_b of the loop closures: at least 10 rad/s (a drift correction time 1/omega_b of at
+# most 0.1 s, the scale of the scenario's motions; slower lets the closures open, 0.48 mm at 1e-9 rad/s),
+# at most 1e4 rad/s (the explicit corrector needs omega_b dt < 0.83, checked against time_step_s before a
+# run: dt <= 45 us at the cap). The run also refuses a closure drift over its tolerance (dynamics.insertion).
+BaumgarteRate = Annotated[float, Field(ge=10.0, le=1e4, allow_inf_nan=False)]
 NOT_OBJECTIVE_LIMITS = ("max_torsion_nm", "max_bending_nm")  # refused in [simulation.limits] (SimulationLimits)
 
 
@@ -442,12 +453,8 @@ class Simulation(StrictModel):
     descent_time_s: Positive = 1.0
     dwell_s: Positive = 1.0
     settle_s: NonNegative = 0.5
-    time_step_s: Annotated[float, Field(gt=0, le=2e-3, allow_inf_nan=False)] = 5e-4
-    # Baumgarte rate omega_b of the loop closures: at least 10 rad/s (a drift correction time 1/omega_b of at
-    # most 0.1 s, the scale of the scenario's motions; slower lets the closures open, 0.48 mm at 1e-9 rad/s),
-    # at most 1e4 rad/s (the explicit corrector needs omega_b dt < 0.83, checked against time_step_s before a
-    # run: dt <= 45 us at the cap). The run also refuses a closure drift over its tolerance (dynamics.insertion).
-    baumgarte_rad_per_s: Annotated[float, Field(ge=10.0, le=1e4, allow_inf_nan=False)] = 200.0
+    time_step_s: TimeStep = 5e-4
+    baumgarte_rad_per_s: BaumgarteRate = 200.0
     clearance: bool = False
     contact: Contact
     controller: Controller = Controller()
@@ -463,6 +470,116 @@ class Simulation(StrictModel):
                              "mirror-objective); use model = \"flexible\" (the elastic model's sections) or check "
                              "them statically in [envelope]")
         return self
+
+
+MAX_PINS = 1000  # [cycle]: a board of more pins is refused (the run is also capped at MAX_STEPS time steps)
+PIN_KEYS = ("force_limit_n", "approach_height_m", "interference_m", "dwell_s", "max_overshoot_n",
+            "max_alignment_error_m")  # per pin, defaulting to [cycle]'s (force_limit_n: [cycle.controller]'s)
+
+
+class Pin(StrictModel):
+    """One pin of a board at (``x_m``, ``z_m``) on the board face (m), with optional overrides of the board's
+    defaults (``PIN_KEYS``; meanings as in :class:`Cycle`)."""
+
+    x_m: Finite
+    z_m: Finite
+    force_limit_n: Positive | None = None
+    approach_height_m: Positive | None = None
+    interference_m: Positive | None = None
+    dwell_s: Positive | None = None
+    max_overshoot_n: NonNegative | None = None
+    max_alignment_error_m: NonNegative | None = None
+
+
+class PinGrid(StrictModel):
+    """A rectangular grid of pins: ``x`` and ``z`` ranges (m) with their counts."""
+
+    x: Axis
+    z: Axis
+
+
+class MotionLimits(StrictModel):
+    """The tool's Cartesian limits on a straight move: speed (m/s), acceleration (m/s^2), jerk (m/s^3), and the
+    profile of each move: ``"s_curve"`` (the minimum-time jerk-limited move) or ``"quintic"`` (the minimum-jerk
+    move of ``[simulation]``, in the least time the three limits allow)."""
+
+    speed_m_per_s: Annotated[float, Field(gt=0, le=10.0, allow_inf_nan=False)]
+    acceleration_m_per_s2: Annotated[float, Field(gt=0, le=1000.0, allow_inf_nan=False)]
+    jerk_m_per_s3: Annotated[float, Field(gt=0, le=1e6, allow_inf_nan=False)]
+    profile: Literal["s_curve", "quintic"] = "s_curve"
+
+
+class ResolvedPin(StrictModel):
+    """A pin with every value resolved (its own, else the board's): ``index`` is its place in the cycle (from 1)."""
+
+    index: int
+    x_m: float
+    z_m: float
+    force_limit_n: float
+    approach_height_m: float
+    interference_m: float
+    dwell_s: float
+    max_overshoot_n: float | None
+    max_alignment_error_m: float | None
+    source: str  # where it is defined: "[cycle] pins[k]" or "[cycle.grid]"
+
+
+class Cycle(StrictModel):
+    """A whole board (``pressfit cycle``; :mod:`pressfit.dynamics.cycle`): the board face is the plane
+    y = ``board_height_m``; the pins are ``pins`` (in their order) then the ``grid`` (row by row in z, each row
+    in alternating x direction). Per pin (``PIN_KEYS``, overriding the defaults here): the insertion force limit
+    (N; default ``[cycle.controller] force_limit_n``), ``approach_height_m`` above the face where the descent
+    starts, the commanded ``interference_m`` below it, ``dwell_s`` at the bottom, and the pass/fail limits
+    ``max_overshoot_n`` (peak contact force over the pin's limit, N) and ``max_alignment_error_m`` (the tool's
+    lateral distance from the pin at first contact, m), unchecked when not given. The tool moves from
+    ``start_m`` above the first pin, descends, dwells, retracts to the approach height, traverses above the next
+    pin, ..., and after the last to ``end_m``, where it holds ``settle_s``; each move is the minimum-time S-curve
+    under ``motion`` (lift and traverse) or ``descent`` (descent and retract; default ``motion``), scaled down
+    where the drives' speed or force limit would bind. ``time_step_s``, ``baumgarte_rad_per_s``, ``model``,
+    ``contact`` (the law) and ``controller`` mean what they mean in ``[simulation]``."""
+
+    board_height_m: Positive
+    start_m: Vector3
+    end_m: Vector3
+    pins: list[Pin] = []
+    grid: PinGrid | None = None
+    approach_height_m: Positive = 0.005
+    interference_m: Positive = 0.002
+    dwell_s: Positive = 0.5
+    max_overshoot_n: NonNegative | None = None
+    max_alignment_error_m: NonNegative | None = None
+    settle_s: NonNegative = 0.5
+    motion: MotionLimits
+    descent: MotionLimits | None = None
+    time_step_s: TimeStep = 5e-4
+    baumgarte_rad_per_s: BaumgarteRate = 200.0
+    model: Literal["flexible", "rigid"] = "flexible"
+    contact: ContactLaw = ContactLaw()
+    controller: Controller = Controller()
+
+    @model_validator(mode="after")
+    def _some_pins(self) -> Cycle:
+        count = len(self.pins) + (self.grid.x.count * self.grid.z.count if self.grid is not None else 0)
+        if count == 0:
+            raise ValueError("give pins (a list of {x_m, z_m}) and/or a grid (x and z ranges with counts)")
+        if count > MAX_PINS:
+            raise ValueError(f"the board has {count} pins, above the cap of {MAX_PINS} pins per cycle")
+        return self
+
+    def resolved_pins(self) -> list[ResolvedPin]:
+        """Every pin in cycle order with its values resolved (class docstring)."""
+        defaults = {k: getattr(self, k) for k in PIN_KEYS if k != "force_limit_n"}
+        defaults["force_limit_n"] = self.controller.force_limit_n
+        places = [(p, f"[cycle] pins[{k}]") for k, p in enumerate(self.pins)]
+        if self.grid is not None:
+            for row, z in enumerate(self.grid.z.values()):
+                xs = self.grid.x.values() if row % 2 == 0 else self.grid.x.values()[::-1]
+                places += [(Pin(x_m=float(x), z_m=float(z)), "[cycle.grid]") for x in xs]
+        out = []
+        for k, (pin, source) in enumerate(places):
+            values = {key: getattr(pin, key) if getattr(pin, key) is not None else defaults[key] for key in PIN_KEYS}
+            out.append(ResolvedPin(index=k + 1, x_m=pin.x_m, z_m=pin.z_m, source=source, **values))
+        return out
 
 
 class Case(StrictModel):
@@ -483,6 +600,7 @@ class Case(StrictModel):
     montecarlo: MonteCarlo | None = None
     design: Design | None = None
     simulation: Simulation | None = None
+    cycle: Cycle | None = None
     path: str = ""
 
     def machine(self) -> Machine:

@@ -16,7 +16,9 @@ the estimate has moved more than ``GRAVITY_UPDATE_M`` (1 mm) from the pose it wa
 poses), so the feed-forward is off by at most sqrt(3) * 58 N/m * 1 mm = 0.1 N (0.06% of the ~180 N weight
 it carries), a fixed force error the integrator removes.
 
-Force limiter (on the measured contact force F_c along +y, limit F_lim), both parts of Figure 12:
+Force limiter (on the measured contact force F_c along +y, limit F_lim: the gains' ``force_limit_n``, or the
+running segment's pin limit that a board's run sets in ``ForceLimitedController.force_limit_n``), both parts of
+Figure 12:
 * force reference clamp: in contact (F_c > 0) the vertical push of the loop beyond the feed-forward is
   clamped, (Kp e + Kd dh_ref/dt + Ki int(e))_y >= -F_lim, so in a steady contact F_c <= F_lim (in free motion
   the loop keeps its full authority); the integrator holds
@@ -31,6 +33,7 @@ from __future__ import annotations
 
 import math
 from dataclasses import dataclass, field
+from typing import Protocol
 
 import numpy as np
 import pinocchio as pin
@@ -40,6 +43,7 @@ from pressfit.description.cases import Controller, Simulation
 from pressfit.description.machine import Machine
 from pressfit.dynamics.actuators import distribution
 from pressfit.dynamics.multibody import PoseCache, RigidLegModel
+from pressfit.kinematics.profiles import quintic as _quintic
 from pressfit.mechanics.condensed import condensed_plate_compliance
 
 
@@ -118,19 +122,22 @@ def static_deflection_columns(machine: Machine, rigid: RigidLegModel, pose_m: np
     return np.column_stack([compliance[:, 1], compliance @ -gravity_feedforward_n(rigid, pose_m)])
 
 
-def _quintic(s: float) -> tuple[float, float]:
-    """Minimum-jerk profile and its derivative on s in [0, 1]."""
-    s = min(max(s, 0.0), 1.0)
-    return s**3 * (10 - 15 * s + 6 * s * s), 30 * s * s * (1 - s) ** 2
+class Shape(Protocol):
+    """The time law of one straight segment: the fraction of it covered at time t from its start and its
+    rate (1/s), e.g. :class:`pressfit.kinematics.profiles.SCurve`."""
+
+    def fraction(self, t_s: float) -> tuple[float, float]: ...
 
 
 @dataclass(frozen=True)
 class Trajectory:
-    """Piecewise minimum-jerk reference through waypoints (m) with segment durations (s)."""
+    """Piecewise reference on straight segments through waypoints (m) with segment durations (s): each
+    segment minimum-jerk (the quintic) unless ``shapes`` gives its time law (None: the quintic)."""
 
     waypoints_m: np.ndarray  # (k + 1, 3)
     durations_s: np.ndarray  # (k,)
     phases: tuple[str, ...]  # (k,) segment names
+    shapes: tuple[Shape | None, ...] | None = None  # (k,) per segment, or None: all quintic
     ends_s: np.ndarray = field(init=False, repr=False, compare=False)  # (k,) cumulative durations, s
 
     def __post_init__(self) -> None:
@@ -159,8 +166,12 @@ class Trajectory:
         """Reference position (m) and velocity (m/s) at ``t_s`` (s)."""
         k = self.segment(t_s)
         t0 = float(self.ends_s[k - 1]) if k else 0.0
-        s, ds = _quintic((t_s - t0) / self.durations_s[k])
         delta = self.waypoints_m[k + 1] - self.waypoints_m[k]
+        shape = self.shapes[k] if self.shapes is not None else None
+        if shape is not None:
+            s, rate = shape.fraction(t_s - t0)
+            return self.waypoints_m[k] + s * delta, rate * delta
+        s, ds = _quintic((t_s - t0) / self.durations_s[k])
         return self.waypoints_m[k] + s * delta, ds / self.durations_s[k] * delta
 
 
@@ -181,8 +192,10 @@ class ForceLimitedController:
     null: np.ndarray = field(default_factory=lambda: np.zeros(4))  # v_p at the estimate
     gravity: PoseCache = field(init=False)
     deflection: PoseCache = field(init=False)
+    force_limit_n: float = field(init=False)  # the insertion limit in force (N): the gains' unless a run sets it
 
     def __post_init__(self) -> None:
+        self.force_limit_n = self.gains.force_limit_n
         self.gravity = PoseCache(lambda pose: gravity_feedforward_n(self.rigid, pose), GRAVITY_UPDATE_M)
         self.deflection = PoseCache(lambda pose: static_deflection_columns(self.machine, self.rigid, pose),
                                     DEFLECTION_UPDATE_M)
@@ -208,14 +221,14 @@ class ForceLimitedController:
         target = target + np.array([0.0, self.lift_m, 0.0])
         error = target - self.tool_estimate_m(contact_force_n)
         pid = g.kp_n_per_m * error + g.kd_n_s_per_m * target_velocity + g.ki_n_per_m_s * self.integral_m_s
-        self.clamped = self.limiter and contact_force_n > 0.0 and pid[1] < -g.force_limit_n
+        self.clamped = self.limiter and contact_force_n > 0.0 and pid[1] < -self.force_limit_n
         if self.clamped:
-            pid[1] = -g.force_limit_n
+            pid[1] = -self.force_limit_n
             error[1] = 0.0  # anti-windup: the vertical integrator holds while clamped
         pid -= g.kd_n_s_per_m * velocity  # damping acts outside the clamp: a clamped contact stays damped
         self.integral_m_s = self.integral_m_s + dt_s * error
-        if self.limiter and (contact_force_n > g.force_limit_n or self.lift_m > 0.0):
-            self.lift_m = max(0.0, self.lift_m + dt_s * g.backoff_m_per_s_n * (contact_force_n - g.force_limit_n))
+        if self.limiter and (contact_force_n > self.force_limit_n or self.lift_m > 0.0):
+            self.lift_m = max(0.0, self.lift_m + dt_s * g.backoff_m_per_s_n * (contact_force_n - self.force_limit_n))
         if g.gravity_compensation:
             pid = pid + self.gravity(self.estimate_m)
         return pid

@@ -126,14 +126,18 @@ def _deflection(machine: Machine, case: Case, sim: Simulation, pin_pose: np.ndar
 
 @dataclass(frozen=True)
 class ScenarioPlan:
-    """A validated scenario (:func:`plan_scenario`): its reference, the number of steps, the planned path
-    samples (n, 3), m, and the warnings to show before the run."""
+    """A validated scenario (:func:`plan_scenario`, or a board's :func:`pressfit.dynamics.cycle.plan_cycle`): its
+    reference, the number of steps, the planned path samples (n, 3), m, the warnings to show before the run, the
+    run's settings (``simulation``: time step, model, contact law, controller gains, start pose) and the insertion
+    force limit of each segment of the reference (N; the controller's limiter uses the running segment's)."""
 
     trajectory: Trajectory
     steps: int
     path_m: np.ndarray
     warnings: tuple[str, ...]
     rigid: RigidLegModel
+    simulation: Simulation
+    force_limits_n: np.ndarray
 
 
 def _refuse(case: Case, key: str, expected: str) -> ModelFileError:
@@ -158,8 +162,14 @@ _SEGMENT_KEYS = ("[simulation] start_m", "[simulation] interference_m", "[simula
 
 
 def apparent_mass_kg(rigid: RigidLegModel, pose_m: np.ndarray) -> float:
-    """The plate's smallest apparent translational mass (kg) at a pose: 1 / the largest eigenvalue of the
-    acceleration per unit plate force (constraint dynamics at rest, three unit forces, gravity's share removed)."""
+    """The plate's smallest apparent translational mass (kg) at a pose: 1 / the largest eigenvalue of
+    :func:`plate_mobility`."""
+    return float(1.0 / np.linalg.eigvalsh(plate_mobility(rigid, pose_m)).max())
+
+
+def plate_mobility(rigid: RigidLegModel, pose_m: np.ndarray) -> np.ndarray:
+    """The plate's acceleration per unit plate force (3, 3), 1/kg, world axes, at a pose (constraint dynamics at
+    rest, three unit forces, gravity's share removed; symmetrised): the inverse of its apparent mass matrix."""
     q, v = rigid.configuration_at(pose_m), np.zeros(rigid.model.nv)
     tau = np.zeros(rigid.model.nv)
     saved = rigid.data, rigid.constraint_datas  # scratch datas: the run's solver state stays untouched
@@ -176,7 +186,7 @@ def apparent_mass_kg(rigid: RigidLegModel, pose_m: np.ndarray) -> float:
             inverse[:, j] = rigid.accelerations(q, v, tau)[:3] - rest
     finally:
         rigid.data, rigid.constraint_datas = saved
-    return float(1.0 / np.linalg.eigvalsh(0.5 * (inverse + inverse.T)).max())
+    return 0.5 * (inverse + inverse.T)
 
 
 def step_stability(mass_kg: float, stiffness_n_per_m: float, damping_n_s_per_m: float, dt_s: float) -> float:
@@ -192,9 +202,7 @@ def plan_scenario(case: Case, machine: Machine | None = None, preload_key: str =
     sim = case.simulation
     if sim is None:
         raise PressfitError(f"{case.path}: the case has no [simulation] table")
-    if case.preload.mode != "force":
-        raise PressfitError(f"{case.path}: [preload] mode must be \"force\" (a4_n, N) for the force-controlled "
-                            f"drives of the simulation, got \"{case.preload.mode}\"")
+    require_force_preload(case)
     machine = machine or case.machine()
     dt, board = sim.time_step_s, sim.contact.board_height_m
     for key in ("move_time_s", "descent_time_s", "dwell_s", "settle_s"):
@@ -229,19 +237,35 @@ def plan_scenario(case: Case, machine: Machine | None = None, preload_key: str =
     if np.any(path[free, 1] <= board):
         raise _refuse(case, "[simulation] start_m", "a planned approach and move above the board face")
     warnings = []
-    drives = drive_kinds.of(machine)
+    check_preload(case, machine, drive_kinds.of(machine), path, preload_key)
+    rigid = rigid_leg_model(machine, np.asarray(sim.start_m, float), sim.baumgarte_rad_per_s)
+    _check_steps(case, sim, rigid, trajectory.waypoints_m[[0, 1, 5]])
+    if steps > WARN_STEPS:
+        warnings.append(run_time_warning(steps, dt, trajectory.duration_s))
+    return ScenarioPlan(trajectory, steps, path, tuple(warnings), rigid, sim,
+                        np.full(len(trajectory.durations_s), sim.controller.force_limit_n))
+
+
+def run_time_warning(steps: int, dt_s: float, duration_s: float) -> str:
+    return (f"{steps} time steps (time_step_s = {dt_s:g} s over {duration_s:g} s): expect about "
+            f"{steps * 8e-4 / 60:.0f} min per run")
+
+
+def require_force_preload(case: Case) -> None:
+    """The simulated drives are force-controlled: the case's preload must be in force mode (a4_n, N)."""
+    if case.preload.mode != "force":
+        raise PressfitError(f"{case.path}: [preload] mode must be \"force\" (a4_n, N) for the force-controlled "
+                            f"drives of the simulation, got \"{case.preload.mode}\"")
+
+
+def check_preload(case: Case, machine: Machine, drives: drive_kinds.Drive, path_m: np.ndarray, key: str) -> None:
+    """The preload alone must not saturate a drive anywhere on the planned path (n, 3), m."""
     a4 = case.preload.a4_n
-    vp = float(np.abs(kinematics.preload_vector(machine, path)).max())
+    vp = float(np.abs(kinematics.preload_vector(machine, path_m)).max())
     if abs(a4) * vp > drives.force_limit_n:
-        raise _refuse(case, preload_key, f"|a4| max|v_p| at most {drive_limit(drives)}: a4 = {a4:g} N with "
+        raise _refuse(case, key, f"|a4| max|v_p| at most {drive_limit(drives)}: a4 = {a4:g} N with "
                       f"max|v_p| = {vp:.4g} over the planned path "
                       f"commands {abs(a4) * vp:.4g} N from the preload alone")
-    rigid = rigid_leg_model(machine, np.asarray(sim.start_m, float), sim.baumgarte_rad_per_s)
-    _check_steps(case, rigid, trajectory)
-    if steps > WARN_STEPS:
-        warnings.append(f"{steps} time steps (time_step_s = {dt:g} s over {trajectory.duration_s:g} s): expect about "
-                        f"{steps * 8e-4 / 60:.0f} min per run")
-    return ScenarioPlan(trajectory, steps, path, tuple(warnings), rigid)
 
 
 _LIMIT_KEYS = {"force": "[actuator] force_limit_n",
@@ -264,12 +288,11 @@ def _require_reachable(case: Case, machine: Machine, pose: np.ndarray, key: str,
                       f"breaks {reasons}") from None
 
 
-def _check_steps(case: Case, rigid: RigidLegModel, trajectory: Trajectory) -> None:
+def _check_steps(case: Case, sim: Simulation, rigid: RigidLegModel, poses_m: np.ndarray) -> None:
     """The explicit step against the position loop (PD gains plus the contact's stiffness and damping on the
-    plate's lightest apparent mass at the waypoints) and the Baumgarte corrector (m = 1, k = omega_b^2,
-    c = 2 omega_b): refused beyond ``STABILITY_FRACTION`` of the stability limit (:func:`step_stability`),
-    the margin left for the drives' lag and the sampled estimator the index does not see."""
-    sim = case.simulation
+    plate's lightest apparent mass at the poses ``poses_m`` (n, 3), m, the waypoints) and the Baumgarte corrector
+    (m = 1, k = omega_b^2, c = 2 omega_b): refused beyond ``STABILITY_FRACTION`` of the stability limit
+    (:func:`step_stability`), the margin left for the drives' lag and the sampled estimator the index does not see."""
     dt, g, c = sim.time_step_s, sim.controller, sim.contact
     omega = sim.baumgarte_rad_per_s
     if step_stability(1.0, omega**2, 2.0 * omega, dt) > STABILITY_FRACTION:
@@ -277,7 +300,7 @@ def _check_steps(case: Case, rigid: RigidLegModel, trajectory: Trajectory) -> No
         raise _refuse(case, "[simulation] baumgarte_rad_per_s", f"omega_b dt at most {bound:.3g} (the explicit "
                       f"corrector is stable below 2 sqrt(2) - 2 = 0.83), got {omega:g} rad/s x time_step_s "
                       f"{dt:g} s = {omega * dt:.3g}")
-    mass = min(apparent_mass_kg(rigid, p) for p in trajectory.waypoints_m[[0, 1, 5]])
+    mass = min(apparent_mass_kg(rigid, p) for p in poses_m)
     fit = (c.fit_stiffness_n_per_m if c.fit == "linear" else c.fit_force_n / c.fit_depth_m) if c.law == "press_fit" \
         else 0.0
     stiffness, damping = g.kp_n_per_m + c.stiffness_n_per_m + fit, g.kd_n_s_per_m + c.damping_n_s_per_m
@@ -303,12 +326,19 @@ def simulate_insertion(case: Case, limiter: bool = True, progress: bool = False)
     machine = case.machine()
     plan = plan_scenario(case, machine)
     drives = drive_kinds.of(machine)
-    run = _run_flexible if case.simulation.model == "flexible" else _run_rigid
-    rows, phases, sections = run(case, machine, plan, drives, limiter, progress)
+    rows, phases, sections = run_plan(case, machine, plan, drives, limiter, progress)
     result = InsertionResult(limiter, rows, phases, plan.trajectory.phases, sections=sections)
     summary = summarise(result, case, drives)
     summary["warnings"] = [*plan.warnings, *summary["warnings"]]
     return InsertionResult(limiter, rows, phases, plan.trajectory.phases, summary, sections)
+
+
+def run_plan(case: Case, machine: Machine, plan: ScenarioPlan, drives: drive_kinds.Drive, limiter: bool,
+             progress: bool) -> tuple[np.ndarray, np.ndarray, np.ndarray | None]:
+    """Run a validated plan on its model (``plan.simulation.model``): the series (one row per step,
+    ``SERIES_COLUMNS``), the segment index of each row and, with the flexible model, the section resultants."""
+    run = _run_flexible if plan.simulation.model == "flexible" else _run_rigid
+    return run(case, machine, plan, drives, limiter, progress)
 
 
 class _Series:
@@ -354,7 +384,7 @@ def _drift_error(case: Case, drift: float, t: float) -> PressfitError:
 def _run_rigid(case: Case, machine: Machine, plan: ScenarioPlan, drives: drive_kinds.Drive, limiter: bool,
                progress: bool) -> tuple[np.ndarray, np.ndarray, None]:
     """The rigid-leg model, the compliance in series at the tool (module docstring)."""
-    sim, trajectory, steps, rigid = case.simulation, plan.trajectory, plan.steps, plan.rigid
+    sim, trajectory, steps, rigid = plan.simulation, plan.trajectory, plan.steps, plan.rigid
     deflection = _deflection(machine, case, sim, trajectory.waypoints_m[2], rigid)
     ctrl = ForceLimitedController(machine, rigid, sim.controller, limiter, np.asarray(sim.start_m, float).copy())
     q, v, dt, a4 = rigid.reference_q.copy(), np.zeros(rigid.model.nv), sim.time_step_s, case.preload.a4_n
@@ -367,6 +397,7 @@ def _run_rigid(case: Case, machine: Machine, plan: ScenarioPlan, drives: drive_k
     for k in tqdm(range(steps), desc="simulate", unit="step", disable=not progress, mininterval=0.5):
         t = (k + 1) * dt
         reference = trajectory.at(t)
+        ctrl.force_limit_n = plan.force_limits_n[trajectory.segment(t)]
         try:
             force = ctrl.command(q[rigid.actuator_q], v[rigid.actuator_v], reference, contact.force_n, dt)
             command = -ctrl.pinv @ force + a4 * ctrl.null  # equation 5 at the estimate, plus the preload
@@ -402,7 +433,7 @@ def _run_flexible(case: Case, machine: Machine, plan: ScenarioPlan, drives: driv
     (``DriveInput.forces``), the contact force on the elastic tool point (the plate centre), evaluated at the
     end of each step and held over the next (as in the rigid model); no series compliance (it is in the model).
     Starts from the static equilibrium under gravity with the drives holding the start pose's lengths."""
-    sim, trajectory, steps, rigid = case.simulation, plan.trajectory, plan.steps, plan.rigid
+    sim, trajectory, steps, rigid = plan.simulation, plan.trajectory, plan.steps, plan.rigid
     dt, a4 = sim.time_step_s, case.preload.a4_n
     play = clearance_from_case(case, machine).cardan_compliance() if sim.clearance else None
     fm = FlexibleMachine(machine, np.asarray(sim.start_m, float), cardan_compliance=play)
@@ -423,6 +454,7 @@ def _run_flexible(case: Case, machine: Machine, plan: ScenarioPlan, drives: driv
     for k in tqdm(range(steps), desc="simulate", unit="step", disable=not progress, mininterval=0.5):
         t = (k + 1) * dt
         reference = trajectory.at(t)
+        ctrl.force_limit_n = plan.force_limits_n[trajectory.segment(t)]
         try:
             lengths, rates = fm.leg_lengths_m(state), fm.leg_rates_m_per_s(state)
             force = ctrl.command(lengths, rates, reference, contact_force, dt)

@@ -1,0 +1,386 @@
+r"""A whole board in one run (``pressfit cycle``): the case's ``[cycle]`` (:class:`pressfit.description.cases.Cycle`)
+as one reference of straight S-curve moves (:mod:`pressfit.kinematics.profiles`) through the approach heights,
+simulated by the insertion's own step loops (:func:`pressfit.dynamics.insertion.run_plan`, rigid or flexible
+model) with each segment's insertion force limit the pin's, and per pin and per cycle figures.
+
+The reference: from ``start_m`` to the first pin's approach point (x, h_b + approach, z) ("approach"), per pin
+"descent" to (x, h_b - interference, z), "dwell", "retract" to the approach point, then "traverse" to the next
+pin's approach point; after the last pin "move" to ``end_m`` and "settle". Each move is the minimum-time
+rest-to-rest S-curve under ``[cycle.motion]`` (approach, traverse, move) or ``[cycle.descent]`` (descent,
+retract), with the speed and acceleration scaled down where the drives would bind along the segment (the speed
+every ``PATH_SAMPLE_M``, the force at ``FORCE_SAMPLES`` points: the weight and the inertia vary smoothly along a
+straight move):
+
+* drive speed: |l_dot_i| = |e_i . u| v must stay within the drive kind's speed limit (electric: the motor's
+  ``speed_limit_rad_per_s`` x lead / 2 pi; the force and hydraulic models have none of their own);
+* drive force: the rigid-model inverse dynamics at rest, N = -A^+ (G(h) + M(h) a u) + a4 v_p (G the gravity
+  feed-forward, M = the plate's apparent mass matrix, the inverse of
+  :func:`pressfit.dynamics.insertion.plate_mobility`, reflected drive inertia included), must stay within the
+  drives' force limit for |a| up to the acceleration limit; the velocity-product terms (about m v^2 / l, a few
+  N at 0.5 m/s) and the force loop's lag are left out of this bound (the simulation has them; its saturation
+  time is reported).
+
+Each segment reports the limit that binds it: "speed", "acceleration" or "jerk" (the profile's
+:attr:`pressfit.kinematics.profiles.SCurve.binding_limit`, the reached limit that holds it longest; the quintic's
+largest of its three times), "drive speed" or "drive force" when that limit is the drives' scaled one, "dwell"
+or "settle" for a hold.
+
+Before the run the board is refused (one line naming the pin by its number and (x, z), its key and the file)
+when a pin's approach point or the bottom of its insertion is unreachable, start or end is not above the board
+face or unreachable, any point of the path (every ``PATH_SAMPLE_M``) breaks a joint limit, a dwell spans fewer
+than ``MIN_SEGMENT_STEPS`` steps, the run exceeds ``MAX_STEPS`` steps, the preload alone saturates a drive, the
+drives cannot hold a segment even at rest, or the explicit step is unstable (as ``[simulation]``).
+"""
+
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass
+from typing import Any
+
+import numpy as np
+
+from pressfit import kinematics
+from pressfit.description.cases import Case, Contact, Cycle, MotionLimits, ResolvedPin, Simulation
+from pressfit.description.machine import Machine
+from pressfit.dynamics import drives as drive_kinds
+from pressfit.dynamics.actuators import distribution
+from pressfit.dynamics.contact import contact_force_n
+from pressfit.dynamics.control import Trajectory, gravity_feedforward_n
+from pressfit.dynamics.insertion import (
+    COMPLETION_FRACTION,
+    LEGS,
+    MAX_STEPS,
+    MIN_SEGMENT_STEPS,
+    PATH_SAMPLE_M,
+    SERIES_COLUMNS,
+    WARN_STEPS,
+    ScenarioPlan,
+    _check_steps,
+    _path,
+    _require_reachable,
+    check_preload,
+    drive_limit,
+    plate_mobility,
+    require_force_preload,
+    run_plan,
+    run_time_warning,
+    settling_time_s,
+)
+from pressfit.dynamics.multibody import rigid_leg_model
+from pressfit.errors import ModelFileError, PressfitError
+from pressfit.kinematics.profiles import Quintic, SCurve, quintic_move, s_curve
+
+CYCLE_COLUMNS = (*SERIES_COLUMNS, "pin", "segment")  # the simulate columns, the pin (0: none) and the segment
+FORCE_SAMPLES = 11  # points per segment where the drive speed and force bounds are evaluated
+PIN_PHASES = ("descent", "dwell", "retract")  # a pin's window: its figures are computed on these rows
+
+
+@dataclass(frozen=True)
+class Segment:
+    """One segment of the reference: its phase, the pin it serves (from 1; the traverse and the approach: the pin
+    they lead to, the final move and settle: the last pin), its end points (m), duration (s), the limits it ran
+    under (m/s, m/s^2, m/s^3; None for a hold), its profile and the limit that binds it (module docstring)."""
+
+    index: int
+    phase: str
+    pin: int
+    start_m: np.ndarray
+    end_m: np.ndarray
+    duration_s: float
+    limits: tuple[float, float, float] | None
+    profile: SCurve | Quintic | None
+    binding_limit: str
+
+    def to_dict(self) -> dict[str, Any]:
+        p = self.profile
+        return {"index": self.index, "phase": self.phase, "pin": self.pin, "start_m": self.start_m,
+                "end_m": self.end_m, "distance_m": float(np.linalg.norm(self.end_m - self.start_m)),
+                "duration_s": self.duration_s, "binding_limit": self.binding_limit,
+                "speed_limit_m_per_s": self.limits[0] if self.limits else None,
+                "acceleration_limit_m_per_s2": self.limits[1] if self.limits else None,
+                "jerk_limit_m_per_s3": self.limits[2] if self.limits else None,
+                "peak_speed_m_per_s": p.peak_speed_m_per_s if p else 0.0,
+                "peak_acceleration_m_per_s2": p.peak_acceleration_m_per_s2 if p else 0.0}
+
+
+@dataclass(frozen=True)
+class CyclePlan:
+    """A validated board (:func:`plan_cycle`): the scenario plan the step loops run, the resolved pins, the
+    segments and the run case (the case with ``simulation`` = the cycle's settings)."""
+
+    scenario: ScenarioPlan
+    pins: tuple[ResolvedPin, ...]
+    segments: tuple[Segment, ...]
+    run_case: Case
+
+    @property
+    def cycle_time_s(self) -> float:
+        """From the start until the reference reaches ``end_m`` (the settle hold excluded), s."""
+        return float(sum(s.duration_s for s in self.segments if s.phase != "settle"))
+
+
+def drive_speed_limit_m_per_s(drives: drive_kinds.Drive) -> tuple[float | None, str]:
+    """The leg speed (m/s) the drive kind cannot exceed and the key that sets it (None: the model has none)."""
+    if getattr(drives, "kind", "force") == "electric":
+        table = drives.table  # type: ignore[attr-defined]
+        return table.speed_limit_rad_per_s * table.lead_m / (2.0 * math.pi), \
+            "[actuator.electric] speed_limit_rad_per_s x lead_m / 2 pi"
+    return None, ""
+
+
+def _pin_label(pin: ResolvedPin) -> str:
+    return f"pin {pin.index} (x = {pin.x_m:g} m, z = {pin.z_m:g} m)"
+
+
+def _unit_legs(machine: Machine, a: np.ndarray, b: np.ndarray, count: int) -> np.ndarray:
+    """Leg unit vectors e_i (count, legs, 3) at ``count`` points evenly spaced from a to b (m)."""
+    legs = kinematics.leg_vectors(machine, a + np.linspace(0.0, 1.0, count)[:, None] * (b - a))
+    return legs / np.linalg.norm(legs, axis=-1, keepdims=True)
+
+
+def _profile(limits: MotionLimits, distance_m: float, speed_m_per_s: float | None = None,
+             acceleration_m_per_s2: float | None = None) -> SCurve | Quintic:
+    """The move of ``limits.profile`` over a distance (m) under ``limits`` (or the speed and acceleration given)."""
+    move = quintic_move if limits.profile == "quintic" else s_curve
+    v = limits.speed_m_per_s if speed_m_per_s is None else speed_m_per_s
+    a = limits.acceleration_m_per_s2 if acceleration_m_per_s2 is None else acceleration_m_per_s2
+    return move(distance_m, v, a, limits.jerk_m_per_s3)
+
+
+def _check_length(case: Case, duration_s: float, dt_s: float, pins: int) -> int:
+    """The number of steps of a run of ``duration_s``; refused above ``MAX_STEPS``."""
+    steps = int(np.ceil(duration_s / dt_s))
+    if steps > MAX_STEPS:
+        raise ModelFileError(case.path, "[cycle] time_step_s", f"a run of at most {MAX_STEPS} steps: time_step_s = "
+                             f"{dt_s:g} s over the board's {duration_s:g} s ({pins} pins) makes {steps} steps or more "
+                             "(use a larger time step, fewer pins or faster motion limits)")
+    return steps
+
+
+def _scaled(case: Case, rigid: Any, machine: Machine, drives: drive_kinds.Drive, a: np.ndarray, b: np.ndarray,
+            limits: MotionLimits, key: str, label: str) -> tuple[float, float, float, SCurve | Quintic, str]:
+    """The segment a -> b (m) under ``limits`` scaled down for the drives (module docstring): v, a, j, the
+    profile and the binding limit."""
+    v, acc, jerk = limits.speed_m_per_s, limits.acceleration_m_per_s2, limits.jerk_m_per_s3
+    distance = float(np.linalg.norm(b - a))
+    if distance == 0.0:
+        return v, acc, jerk, _profile(limits, 0.0), ""
+    u = (b - a) / distance
+    speed_limit, _ = drive_speed_limit_m_per_s(drives)
+    dense = max(2, math.ceil(distance / PATH_SAMPLE_M) + 1)
+    v_drive = speed_limit / np.abs(_unit_legs(machine, a, b, dense) @ u).max() if speed_limit is not None else math.inf
+    samples = a + np.linspace(0.0, 1.0, FORCE_SAMPLES)[:, None] * (b - a)
+    a_drive = math.inf
+    for p, ep in zip(samples, _unit_legs(machine, a, b, FORCE_SAMPLES), strict=True):
+        pinv, null = distribution(ep)
+        static = -pinv @ gravity_feedforward_n(rigid, p) + case.preload.a4_n * null
+        per_acc = np.abs(pinv @ np.linalg.solve(plate_mobility(rigid, p), u))
+        margin = drives.force_limit_n - np.abs(static)
+        if np.any(margin <= 0.0):
+            raise ModelFileError(case.path, key, f"{label}: a segment the drives can hold: at "
+                                 f"({', '.join(f'{c:.4g}' for c in p)}) m the weight and the preload alone need "
+                                 f"{np.abs(static).max():.4g} N, beyond {drive_limit(drives)}")
+        a_drive = min(a_drive, float(np.min(margin / np.maximum(per_acc, 1e-300))))
+    v_used, a_used = float(min(v, v_drive)), float(min(acc, a_drive))
+    profile = _profile(limits, distance, v_used, a_used)
+    binding = {"speed": "drive speed" if v_used < v else "speed",
+               "acceleration": "drive force" if a_used < acc else "acceleration"}.get(profile.binding_limit, "jerk")
+    return v_used, a_used, jerk, profile, binding
+
+
+def cycle_simulation(cycle: Cycle, first: ResolvedPin, model: str) -> Simulation:
+    """The cycle's run settings as the insertion's :class:`Simulation` (the keys mean the same in both)."""
+    return Simulation(start_m=cycle.start_m, end_m=cycle.end_m, settle_s=cycle.settle_s,
+                      time_step_s=cycle.time_step_s, baumgarte_rad_per_s=cycle.baumgarte_rad_per_s, model=model,
+                      contact=Contact(board_height_m=cycle.board_height_m, pin_position_m=[first.x_m, first.z_m],
+                                      **cycle.contact.model_dump()),
+                      controller=cycle.controller)
+
+
+def plan_cycle(case: Case, machine: Machine | None = None, model: str | None = None) -> CyclePlan:
+    """Validate the case's ``[cycle]`` (module docstring; ModelFileError naming the pin, the key and the file)
+    and plan it. ``model`` overrides ``[cycle] model``."""
+    cycle = case.cycle
+    if cycle is None:
+        raise PressfitError(f"{case.path}: the case has no [cycle] table")
+    require_force_preload(case)
+    machine = machine or case.machine()
+    drives = drive_kinds.of(machine)
+    pins = tuple(cycle.resolved_pins())
+    dt, board = cycle.time_step_s, cycle.board_height_m
+    for key, pose in (("start_m", cycle.start_m), ("end_m", cycle.end_m)):
+        if not pose[1] > board:
+            raise ModelFileError(case.path, f"[cycle] {key}", f"a pose above the board face (the plane y = "
+                                 f"[cycle] board_height_m = {board:g} m), got y = {pose[1]:g} m")
+        _require_reachable(case, machine, np.asarray(pose, float), f"[cycle] {key}", f"the {key[:-2]} pose")
+    for pin in pins:
+        if pin.dwell_s < MIN_SEGMENT_STEPS * dt * (1 - 1e-9):
+            raise ModelFileError(case.path, f"{pin.source} dwell_s", f"{_pin_label(pin)}: a dwell of at least "
+                                 f"{MIN_SEGMENT_STEPS} time steps ({MIN_SEGMENT_STEPS * dt:g} s at time_step_s = "
+                                 f"{dt:g} s), got {pin.dwell_s:g} s")
+        for height, what in ((pin.approach_height_m, f"its approach point {pin.approach_height_m:g} m above the "
+                              "board face"), (-pin.interference_m, f"the bottom of its insertion "
+                                              f"{pin.interference_m:g} m below the board face")):
+            _require_reachable(case, machine, np.array([pin.x_m, board + height, pin.z_m]),
+                               f"{pin.source} (x_m, z_m)", f"{_pin_label(pin)}: {what}")
+    descent = cycle.descent or cycle.motion
+    bound, previous = cycle.settle_s, np.asarray(cycle.start_m, float)  # the run without the drives' scaling
+    for pin in pins:  # (which only lengthens the moves): refused at once if that is already too long
+        above = np.array([pin.x_m, board + pin.approach_height_m, pin.z_m])
+        bound += (_profile(cycle.motion, float(np.linalg.norm(above - previous))).duration_s + pin.dwell_s
+                  + 2.0 * _profile(descent, pin.approach_height_m + pin.interference_m).duration_s)
+        previous = above
+    _check_length(case, bound + _profile(cycle.motion, float(np.linalg.norm(cycle.end_m - previous))).duration_s,
+                  dt, len(pins))
+    rigid = rigid_leg_model(machine, np.asarray(cycle.start_m, float), cycle.baumgarte_rad_per_s)
+    points, segments = [np.asarray(cycle.start_m, float)], []
+
+    def add(phase: str, pin: ResolvedPin, target: np.ndarray, hold_s: float | None = None) -> None:
+        a, index = points[-1], len(segments)
+        if hold_s is not None:
+            segments.append(Segment(index, phase, pin.index, a, target, hold_s, None, None, phase))
+        else:
+            limits, key = (descent, "[cycle.descent]") if phase in ("descent", "retract") else \
+                (cycle.motion, "[cycle.motion]")
+            v, acc, jerk, profile, binding = _scaled(case, rigid, machine, drives, a, target, limits, key,
+                                                     f"{_pin_label(pin)}, its {phase}")
+            segments.append(Segment(index, phase, pin.index, a, target, profile.duration_s, (v, acc, jerk), profile,
+                                    binding))
+        points.append(target)
+
+    for k, pin in enumerate(pins):
+        above = np.array([pin.x_m, board + pin.approach_height_m, pin.z_m])
+        bottom = np.array([pin.x_m, board - pin.interference_m, pin.z_m])
+        add("approach" if k == 0 else "traverse", pin, above)
+        add("descent", pin, bottom)
+        add("dwell", pin, bottom, pin.dwell_s)
+        add("retract", pin, above)
+    add("move", pins[-1], np.asarray(cycle.end_m, float))
+    add("settle", pins[-1], points[-1], max(cycle.settle_s, 1e-9))
+    trajectory = Trajectory(np.array(points), np.array([s.duration_s for s in segments]),
+                            tuple(s.phase for s in segments), tuple(s.profile for s in segments))
+    steps = _check_length(case, trajectory.duration_s, dt, len(pins))
+    path, index = _path(trajectory)
+    ok = kinematics.is_reachable(machine, path)
+    if not ok.all():
+        first = int(np.flatnonzero(~ok)[0])
+        seg = segments[index[first]]
+        pin = pins[seg.pin - 1]
+        _require_reachable(case, machine, path[first], f"{pin.source} (x_m, z_m)" if seg.phase != "move" else
+                           "[cycle] end_m", f"{_pin_label(pin)}: the planned path ({seg.phase} segment)")
+    check_preload(case, machine, drives, path, "[preload] a4_n")
+    sim = cycle_simulation(cycle, pins[0], model or cycle.model)
+    try:  # the start, every approach point and the end
+        _check_steps(case, sim, rigid, np.array([cycle.start_m, *points[1::4], cycle.end_m]))
+    except ModelFileError as exc:  # it names [simulation]'s keys: here they are [cycle]'s (the same meaning)
+        raise ModelFileError(case.path, exc.key.replace("[simulation", "[cycle"),
+                             exc.expected.replace("[simulation", "[cycle")) from None
+    limits = np.array([pins[s.pin - 1].force_limit_n for s in segments])
+    warnings = (run_time_warning(steps, dt, trajectory.duration_s),) if steps > WARN_STEPS else ()
+    scenario = ScenarioPlan(trajectory, steps, path, warnings, rigid, sim, limits)
+    return CyclePlan(scenario, pins, tuple(segments), case.model_copy(update={"simulation": sim}))
+
+
+@dataclass(frozen=True)
+class CycleResult:
+    """A simulated board: ``series`` (n, len(CYCLE_COLUMNS)), one row per step (the simulate columns, the pin
+    and the segment of the row), the plan, and ``summary`` (:func:`summarise_cycle`, JSON-ready)."""
+
+    series: np.ndarray
+    plan: CyclePlan
+    summary: dict[str, Any]
+    sections: np.ndarray | None = None
+
+    def column(self, name: str) -> np.ndarray:
+        return self.series[:, CYCLE_COLUMNS.index(name)]
+
+
+def simulate_cycle(case: Case, model: str | None = None, progress: bool = False) -> CycleResult:
+    """Plan (:func:`plan_cycle`) and run the board with the force limiter on, and summarise it."""
+    machine = case.machine()
+    plan = plan_cycle(case, machine, model)
+    drives = drive_kinds.of(machine)
+    try:
+        rows, phases, sections = run_plan(plan.run_case, machine, plan.scenario, drives, True, progress)
+    except PressfitError as exc:  # the loops name [simulation]'s keys: here they are [cycle]'s (the same meaning)
+        raise PressfitError(str(exc).replace("[simulation", "[cycle")) from None
+    pin = np.array([plan.segments[k].pin if plan.segments[k].phase in PIN_PHASES else 0 for k in phases])
+    series = np.column_stack([rows, pin, phases])
+    summary = summarise_cycle(series, plan, drives)
+    return CycleResult(series, plan, summary, sections)
+
+
+def summarise_cycle(series: np.ndarray, plan: CyclePlan, drives: drive_kinds.Drive | None = None) -> dict[str, Any]:
+    """Per pin (``pins``), on the rows of its descent, dwell and retract: ``first_contact_time_s``,
+    ``peak_contact_force_n`` (and its time), ``steady_insertion_force_n`` (at the end of the dwell),
+    ``overshoot_n`` over the pin's ``force_limit_n``, ``tool_lateral_error_at_first_contact_m`` (the tool's
+    (x, z) against the pin's), ``settling_time_s`` (:func:`pressfit.dynamics.insertion.settling_time_s`),
+    ``insertion_completed`` (settled at ``COMPLETION_FRACTION`` of the target: the contact law at the pin's
+    interference or its force limit if lower), ``checks`` (each given pin limit: ``max_overshoot_n`` on
+    ``overshoot_n``, ``max_alignment_error_m`` on the lateral error) and ``passed`` (completed and every check
+    holds). The cycle: ``cycle_time_s`` (:attr:`CyclePlan.cycle_time_s`), ``pins_per_minute``, ``segments``,
+    ``slowest_segment`` (the longest segment but the settle, and its binding limit), the drives' saturation."""
+    col = {name: k for k, name in enumerate(CYCLE_COLUMNS)}
+    t, force = series[:, col["time_s"]], series[:, col["contact_force_n"]]
+    tool = series[:, [col["tool_x_m"], col["tool_z_m"]]]
+    segment = series[:, col["segment"]].astype(int)
+    contact = plan.scenario.simulation.contact
+    pins, warnings = [], []
+    for pin in plan.pins:
+        mine = [s.index for s in plan.segments if s.pin == pin.index and s.phase in PIN_PHASES]
+        rows = np.flatnonzero(np.isin(segment, mine))
+        dwell = np.flatnonzero(segment[rows] == mine[1])
+        f, tt = force[rows], t[rows]
+        touching = np.flatnonzero(f > 0.0)
+        first = int(touching[0]) if touching.size else None
+        peak = int(np.argmax(f))
+        settling, _, why = settling_time_s(tt, f, dwell)
+        target = min(contact_force_n(contact, pin.interference_m), pin.force_limit_n)
+        steady = float(f[dwell[-1]])
+        completed = settling is not None and steady >= COMPLETION_FRACTION * target
+        if settling is not None and not completed:
+            why = f"the steady contact force {steady:.4g} N is below {100 * COMPLETION_FRACTION:g}% of the target " \
+                  f"{target:.4g} N"
+        lateral = float(np.linalg.norm(tool[rows[first]] - [pin.x_m, pin.z_m])) if first is not None else None
+        overshoot = float(max(f[peak] - pin.force_limit_n, 0.0))
+        checks = []
+        if pin.max_overshoot_n is not None:
+            checks.append({"key": "max_overshoot_n", "value_n": overshoot, "limit_n": pin.max_overshoot_n,
+                           "passed": overshoot <= pin.max_overshoot_n})
+        if pin.max_alignment_error_m is not None:
+            checks.append({"key": "max_alignment_error_m", "value_m": lateral, "limit_m": pin.max_alignment_error_m,
+                           "passed": lateral is not None and lateral <= pin.max_alignment_error_m})
+        passed = completed and all(c["passed"] for c in checks)
+        if not completed:
+            warnings.append(f"{_pin_label(pin)}: the insertion did not complete: {why}")
+        pins.append({
+            "index": pin.index, "x_m": pin.x_m, "z_m": pin.z_m, "source": pin.source,
+            "force_limit_n": pin.force_limit_n, "interference_m": pin.interference_m, "dwell_s": pin.dwell_s,
+            "first_contact_time_s": float(tt[first]) if first is not None else None,
+            "peak_contact_force_n": float(f[peak]), "peak_contact_force_time_s": float(tt[peak]),
+            "steady_insertion_force_n": steady, "overshoot_n": overshoot,
+            "tool_lateral_error_at_first_contact_m": lateral,
+            "settling_time_s": settling, "insertion_completed": bool(completed),
+            "insertion_target_force_n": target, "insertion_note": why if not completed else "",
+            "checks": checks, "passed": bool(passed)})
+    records = [s.to_dict() for s in plan.segments]
+    slowest = max((r for r in records if r["phase"] != "settle"), key=lambda r: r["duration_s"])
+    cycle_time = plan.cycle_time_s
+    summary: dict[str, Any] = {
+        "case": plan.run_case.name, "model": plan.scenario.simulation.model,
+        "time_step_s": plan.scenario.simulation.time_step_s, "simulated_time_s": float(t[-1]),
+        "pin_count": len(pins), "pins": pins, "pins_passed": sum(p["passed"] for p in pins),
+        "cycle_time_s": cycle_time, "pins_per_minute": 60.0 * len(pins) / cycle_time,
+        "slowest_segment": {k: slowest[k] for k in ("index", "phase", "pin", "duration_s", "binding_limit")},
+        "segments": records,
+    }
+    if drives is not None:
+        commands = series[:, [col[f"cmd_n{i}"] for i in LEGS]]
+        saturated = drives.saturated(commands).any(axis=1)
+        summary["actuator_saturation_time_s"] = float(saturated.sum() * plan.scenario.simulation.time_step_s)
+        if saturated.any():
+            warnings.append(f"the drives saturated (a command beyond {drive_limit(drives)}) for "
+                            f"{summary['actuator_saturation_time_s']:g} s")
+    summary["warnings"] = [*plan.scenario.warnings, *warnings]
+    return summary
