@@ -156,6 +156,9 @@ class FlexibleMachine:
         self.rigid = np.setdiff1d(np.arange(self.nv), self.sv)  # plate and cardan coordinates
         ids = mm.leg_joint_ids
         self.plate_end = [d["plate_end"] for d in ids]
+        if [cm.extract().joint1_id for cm in self.cms] != self.plate_end:
+            raise PressfitError("the loop closures must act on the legs' plate-end joints (joint1), in leg order")
+        self._c1 = [cm.extract().joint1_placement for cm in self.cms]  # closure frames in the plate-end joints
         self.leg_v = [np.asarray(v) for v in mm.leg_v]
         # (joint whose subtree is the plate side, joint carrying the point, z offset) per leg and section
         sec = [(j if z == 0.0 else j + 1, j, z) for i in range(4) for j, z in (mm.sections[i][s] for s in SECTIONS)]
@@ -388,7 +391,7 @@ class FlexibleMachine:
                 r[sv] += k * (q[self.sq] - rest + beta * rel[sv])
             rhs[:nv], rhs[nv:] = r, phi
             dx = self._solve(rhs)
-            size = float(np.max(np.abs(dx[:nv])))
+            size = float(np.abs(dx[:nv]).max())
             acc -= scale * dx[:nv]
             lam -= dx[nv:]
             it += 1
@@ -507,8 +510,8 @@ class FlexibleMachine:
             for _ in range(self.model.njoints):
                 self._fext.append(pin.Force.Zero())
         fext, lam = self._fext, state.multipliers.reshape(4, 6)
-        for i, (j, cm) in enumerate(zip(self.plate_end, self.cms)):  # the closure force, in joint j's frame
-            fext[j] = cm.extract().joint1_placement.act(pin.Force(lam[i]))
+        for i, (j, c1) in enumerate(zip(self.plate_end, self._c1)):  # the closure force, in joint j's frame
+            fext[j] = c1.act(pin.Force(lam[i]))
         pin.forwardKinematics(self.model, self.data, state.q)  # oMi: Pinocchio's rnea leaves them as they were
         pin.rnea(self.model, self.data, state.q, state.v, state.acceleration, fext)
         omi, f_sub = self.data.oMi, self.data.f
