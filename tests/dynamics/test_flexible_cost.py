@@ -99,8 +99,8 @@ def test_section_loads_do_not_depend_on_what_the_model_evaluated_before(machine)
 
 @pytest.mark.parametrize("drive", ["position", "force"])
 def test_batched_leg_frame_loads_equal_the_per_state_loads(machine, drive):
-    """leg_frame_loads over a stack of section wrenches (the insertion converts its whole run at once) equals
-    section_loads state by state, exactly."""
+    """section_wrenches_from and leg_frame_loads over a stack of section_state arrays (the insertion converts its
+    whole run at once) equal section_loads state by state, exactly."""
     from pressfit.dynamics.machine.flexible import leg_frame_loads
 
     fm = FlexibleMachine(machine, OFF_CENTRE)
@@ -111,7 +111,8 @@ def test_batched_leg_frame_loads_equal_the_per_state_loads(machine, drive):
         d = s.drive if drive == "position" else DriveInput.forces(tension * (1 + 0.01 * n))
         s = fm.step(s, d, WRENCH, H)
         states.append(s)
-    batched = leg_frame_loads(np.array([fm.section_wrenches(x) for x in states]), machine.cardan_axes)
+    placements, subtrees = (np.array(a) for a in zip(*(fm.section_state(x) for x in states)))
+    batched = leg_frame_loads(fm.section_wrenches_from(placements, subtrees), machine.cardan_axes)
     for k, x in enumerate(states):
         loads = fm.section_loads(x)
         assert np.array_equal(batched[0][k], loads.values) and np.array_equal(batched[1][k], loads.frames)

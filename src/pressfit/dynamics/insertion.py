@@ -406,7 +406,8 @@ def _run_flexible(case: Case, machine: Machine, plan: ScenarioPlan, drives: driv
     board, contact_force = sim.contact.board_height_m, 0.0
     depth = board - fm.tool_point_m(state)[1]
     series, phases = _Series(machine, steps, sim.start_m), np.empty(steps, dtype=int)
-    wrenches = np.empty((steps, 4, 3, 9))  # world section wrenches, in the leg frames after the run (batched)
+    placement, subtree = fm.section_state(state)  # per step; the section loads from them after the run (batched)
+    placements, wrenches = np.empty((steps, *placement.shape)), np.empty((steps, *subtree.shape))
     wrench, no_axial = np.zeros(6), (0.0,) * 4
     for k in tqdm(range(steps), desc="simulate", unit="step", disable=not progress, mininterval=0.5):
         t = (k + 1) * dt
@@ -422,7 +423,7 @@ def _run_flexible(case: Case, machine: Machine, plan: ScenarioPlan, drives: driv
             drift = fm.closure_error(state)[0]
             if drift > MAX_CLOSURE_DRIFT_M:
                 raise _drift_error(case, drift, t)
-            wrenches[k] = fm.section_wrenches(state)
+            placements[k], wrenches[k] = fm.section_state(state)
             tool = fm.tool_point_m(state)
             _check_pose(case, machine, k, steps, t, tool)
             previous, depth = depth, board - tool[1]
@@ -438,7 +439,7 @@ def _run_flexible(case: Case, machine: Machine, plan: ScenarioPlan, drives: driv
         except DriveStepError as exc:
             raise _drive_failed(case, t, exc) from None
         phases[k] = trajectory.segment(t - 1e-12)
-    sections = leg_frame_loads(wrenches, machine.cardan_axes)[0]
+    sections = leg_frame_loads(fm.section_wrenches_from(placements, wrenches), machine.cardan_axes)[0]
     rows = series.rows()
     rows[:, SERIES_COLUMNS.index("axial_n1"):SERIES_COLUMNS.index("axial_n4") + 1] = sections[:, :, 2, 0]  # plate
     return rows, phases, sections

@@ -500,10 +500,10 @@ class FlexibleMachine:
         lam = state.multipliers.reshape(4, 6)
         return np.array([cd.extract().oMc1.act(pin.Force(lam[i])).vector for i, cd in enumerate(self.cds)])
 
-    def section_wrenches(self, state: FlexibleState) -> np.ndarray:
-        """(4, 3, 9) per leg and section (module doc): the section point (m), the force (N) and the moment
-        about the point (N m) of the plate side on the base side, world axes (:func:`leg_frame_loads` writes
-        them in the leg frames)."""
+    def section_state(self, state: FlexibleState) -> tuple[np.ndarray, np.ndarray]:
+        """What the section resultants need of a state (the Pinocchio part; :meth:`section_wrenches_from` the
+        rest, batched): the placements (n, 3, 4) (rotation | translation, m) of the joints involved and the
+        wrench (12, 6) (force N, moment N m; local) each section's plate-side subtree receives from its parent."""
         self._place(state.stem_lengths_m)
         if self._fext is None:  # external forces per joint: zero but on the plate ends (set below)
             self._fext = pin.StdVec_Force()
@@ -516,14 +516,23 @@ class FlexibleMachine:
         pin.rnea(self.model, self.data, state.q, state.v, state.acceleration, fext)
         omi, f_sub = self.data.oMi, self.data.f
         joints, subs = self._sec_joints
-        h = np.array([omi[j].homogeneous for j in joints])  # (n, 4, 4) placements of the joints involved
-        fv = np.array([f_sub[j].vector for j in subs])  # (12, 6) what each section's subtree receives, local
-        out = np.empty((12, 9))
-        hj, hs = h[self._sec_j], h[self._sec_sub]
-        out[:, :3] = pts = hj[:, :3, 3] + hj[:, :3, 2] * self._sec_z[:, None]  # the section points
-        out[:, 3:6] = force = -np.einsum("sij,sj->si", hs[:, :3, :3], fv[:, :3])  # plate side on base side
-        out[:, 6:] = _cross(hs[:, :3, 3] - pts, force) - np.einsum("sij,sj->si", hs[:, :3, :3], fv[:, 3:])
-        return out.reshape(4, 3, 9)
+        return (np.array([omi[j].homogeneous[:3] for j in joints]), np.array([f_sub[j].vector for j in subs]))
+
+    def section_wrenches_from(self, placements: np.ndarray, wrenches: np.ndarray) -> np.ndarray:
+        """(..., 4, 3, 9) per leg and section (module doc): the section point (m), the force (N) and the moment
+        about the point (N m) of the plate side on the base side, world axes, from :meth:`section_state`'s
+        arrays (..., n, 3, 4) and (..., 12, 6); batched."""
+        hj, hs = placements[..., self._sec_j, :, :], placements[..., self._sec_sub, :, :]
+        pts = hj[..., :, 3] + hj[..., :, 2] * self._sec_z[:, None]  # the section points
+        force = -np.einsum("...sij,...sj->...si", hs[..., :3], wrenches[..., :3])  # plate side on base side
+        moment = _cross(hs[..., :, 3] - pts, force) - np.einsum("...sij,...sj->...si", hs[..., :3], wrenches[..., 3:])
+        out = np.concatenate([pts, force, moment], axis=-1)
+        return out.reshape(*out.shape[:-2], 4, 3, 9)
+
+    def section_wrenches(self, state: FlexibleState) -> np.ndarray:
+        """(4, 3, 9) the section wrenches of one state (:meth:`section_wrenches_from`); :func:`leg_frame_loads`
+        writes them in the leg frames."""
+        return self.section_wrenches_from(*self.section_state(state))
 
     def section_loads(self, state: FlexibleState) -> SectionLoads:
         """Leg section resultants at the three sections (module doc, :mod:`.base`)."""
