@@ -116,3 +116,22 @@ def test_batched_leg_frame_loads_equal_the_per_state_loads(machine, drive):
     for k, x in enumerate(states):
         loads = fm.section_loads(x)
         assert np.array_equal(batched[0][k], loads.values) and np.array_equal(batched[1][k], loads.frames)
+
+
+def test_the_flexible_run_keeps_blas_on_one_thread(monkeypatch):
+    """OpenBLAS starts one thread per core; on the flexible step's small matrices (146 x 146) they only spin
+    (the shipped scenario took 3.6 times the CPU time with them on the shared 2-core machine). The flexible run
+    holds every BLAS library to one thread, and gives the caller's setting back afterwards."""
+    import scipy.linalg  # noqa: F401 (loads scipy's OpenBLAS beside numpy's)
+    from threadpoolctl import threadpool_info, threadpool_limits
+
+    from pressfit.dynamics import insertion
+
+    def blas_threads():
+        return [i["num_threads"] for i in threadpool_info() if i["user_api"] == "blas"]
+
+    monkeypatch.setattr(insertion, "_flexible_steps", lambda *args: blas_threads())
+    with threadpool_limits(limits=2, user_api="blas"):
+        assert blas_threads() and set(blas_threads()) == {2}
+        assert set(insertion._run_flexible(None, None, None, None, True, False)) == {1}
+        assert set(blas_threads()) == {2}

@@ -30,6 +30,7 @@ from typing import Any
 
 import numpy as np
 import pinocchio as pin
+from threadpoolctl import threadpool_limits
 from tqdm import tqdm
 
 from pressfit import kinematics
@@ -384,6 +385,15 @@ def _run_rigid(case: Case, machine: Machine, plan: ScenarioPlan, drives: drive_k
 
 def _run_flexible(case: Case, machine: Machine, plan: ScenarioPlan, drives: drive_kinds.Drive, limiter: bool,
                   progress: bool) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    """:func:`_flexible_steps` with BLAS on one thread: its matrices are small (nv + 24 = 146), and OpenBLAS's
+    default threads (one per core) cost 3.6 times the CPU time of the run on the shared 2-core machine
+    (docs/benchmarks.md)."""
+    with threadpool_limits(limits=1, user_api="blas"):
+        return _flexible_steps(case, machine, plan, drives, limiter, progress)
+
+
+def _flexible_steps(case: Case, machine: Machine, plan: ScenarioPlan, drives: drive_kinds.Drive, limiter: bool,
+                    progress: bool) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
     """The flexible machine (:class:`pressfit.dynamics.machine.flexible.FlexibleMachine`, the machine file's
     ``[damping]``, cardan play with ``clearance = true``): ideal force drives on the actuator joints
     (``DriveInput.forces``), the contact force on the elastic tool point (the plate centre), evaluated at the
