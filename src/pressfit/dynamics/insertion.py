@@ -30,6 +30,7 @@ from typing import Any
 
 import numpy as np
 import pinocchio as pin
+from threadpoolctl import threadpool_limits
 from tqdm import tqdm
 
 from pressfit import kinematics
@@ -46,7 +47,7 @@ from pressfit.dynamics.control import (
     static_deflection_columns,
 )
 from pressfit.dynamics.machine.base import SECTION_COMPONENTS, SECTIONS, DriveInput, Energy
-from pressfit.dynamics.machine.flexible import MAX_STEP_FRACTION, FlexibleMachine
+from pressfit.dynamics.machine.flexible import MAX_STEP_FRACTION, FlexibleMachine, leg_frame_loads
 from pressfit.dynamics.multibody import RigidLegModel, rigid_leg_model
 from pressfit.errors import (
     ConvergenceError,
@@ -428,6 +429,15 @@ def _run_rigid(case: Case, machine: Machine, plan: ScenarioPlan, drives: drive_k
 
 def _run_flexible(case: Case, machine: Machine, plan: ScenarioPlan, drives: drive_kinds.Drive, limiter: bool,
                   progress: bool) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    """:func:`_flexible_steps` with BLAS on one thread: its matrices are small (nv + 24 = 146), and OpenBLAS's
+    default threads (one per core) cost 3.6 times the CPU time of the run on the shared 2-core machine
+    (docs/benchmarks.md)."""
+    with threadpool_limits(limits=1, user_api="blas"):
+        return _flexible_steps(case, machine, plan, drives, limiter, progress)
+
+
+def _flexible_steps(case: Case, machine: Machine, plan: ScenarioPlan, drives: drive_kinds.Drive, limiter: bool,
+                    progress: bool) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
     """The flexible machine (:class:`pressfit.dynamics.machine.flexible.FlexibleMachine`, the machine file's
     ``[damping]``, cardan play with ``clearance = true``): ideal force drives on the actuator joints
     (``DriveInput.forces``), the contact force on the elastic tool point (the plate centre), evaluated at the
@@ -443,20 +453,21 @@ def _run_flexible(case: Case, machine: Machine, plan: ScenarioPlan, drives: driv
                       f"start_m): {MAX_STEP_FRACTION * fm.first_period_s:.4g} s, got {dt:g} s")
     state = fm.rest_state()
     ctrl = ForceLimitedController(machine, rigid, sim.controller, limiter, np.asarray(sim.start_m, float).copy())
-    force = ctrl.command(fm.leg_lengths_m(state), fm.leg_rates_m_per_s(state), trajectory.at(0.0), 0.0, 0.0)
+    lengths, rates = fm.leg_lengths_m(state), fm.leg_rates_m_per_s(state)  # what the drives measure
+    force = ctrl.command(lengths, rates, trajectory.at(0.0), 0.0, 0.0)
     tension = -ctrl.pinv @ force + a4 * ctrl.null
-    drive = drives.initial_state(tension, fm.leg_lengths_m(state))
+    drive = drives.initial_state(tension, lengths)
     board, contact_force = sim.contact.board_height_m, 0.0
     depth = board - fm.tool_point_m(state)[1]
     series, phases = _Series(machine, steps, sim.start_m), np.empty(steps, dtype=int)
-    sections = np.empty((steps, 4, 3, 6))
-    wrench = np.zeros(6)
+    placement, subtree = fm.section_state(state)  # per step; the section loads from them after the run (batched)
+    placements, wrenches = np.empty((steps, *placement.shape)), np.empty((steps, *subtree.shape))
+    wrench, no_axial = np.zeros(6), (0.0,) * 4
     for k in tqdm(range(steps), desc="simulate", unit="step", disable=not progress, mininterval=0.5):
         t = (k + 1) * dt
         reference = trajectory.at(t)
         ctrl.force_limit_n = plan.force_limits_n[trajectory.segment(t)]
         try:
-            lengths, rates = fm.leg_lengths_m(state), fm.leg_rates_m_per_s(state)
             force = ctrl.command(lengths, rates, reference, contact_force, dt)
             command = -ctrl.pinv @ force + a4 * ctrl.null
             drive, tension = drives.step(drive, command, lengths, rates, dt)
@@ -467,16 +478,15 @@ def _run_flexible(case: Case, machine: Machine, plan: ScenarioPlan, drives: driv
             drift = fm.closure_error(state)[0]
             if drift > MAX_CLOSURE_DRIFT_M:
                 raise _drift_error(case, drift, t)
-            loads = fm.section_loads(state).values
+            placements[k], wrenches[k] = fm.section_state(state)
             tool = fm.tool_point_m(state)
             _check_pose(case, machine, k, steps, t, tool)
             previous, depth = depth, board - tool[1]
             contact_force = contact_force_n(sim.contact, depth, (depth - previous) / dt)
+            lengths, rates = fm.leg_lengths_m(state), fm.leg_rates_m_per_s(state)
             series.add(k, (t, *reference[0] + [0.0, ctrl.lift_m, 0.0], *ctrl.estimate_m, *tool, *tool,
-                           contact_force, depth, *command, *tension, ctrl.lift_m, drift, *loads[:, 2, 0],
-                           ctrl.null @ tension), fm.leg_lengths_m(state), fm.leg_rates_m_per_s(state),
-                       _energies(fm.energy(state), state.damping_work_j))
-            sections[k] = loads
+                           contact_force, depth, *command, *tension, ctrl.lift_m, drift, *no_axial,
+                           ctrl.null @ tension), lengths, rates, _energies(fm.energy(state), state.damping_work_j))
         except UnreachablePoseError as exc:
             raise _diverged(case, t, f"the pose estimate left the reachable set: {exc}") from None
         except ConvergenceError as exc:
@@ -484,7 +494,10 @@ def _run_flexible(case: Case, machine: Machine, plan: ScenarioPlan, drives: driv
         except DriveStepError as exc:
             raise _drive_failed(case, t, exc) from None
         phases[k] = trajectory.segment(t - 1e-12)
-    return series.rows(), phases, sections
+    sections = leg_frame_loads(fm.section_wrenches_from(placements, wrenches), machine.cardan_axes)[0]
+    rows = series.rows()
+    rows[:, SERIES_COLUMNS.index("axial_n1"):SERIES_COLUMNS.index("axial_n4") + 1] = sections[:, :, 2, 0]  # plate
+    return rows, phases, sections
 
 
 def _energies(energy: Energy, damping_work_j: float) -> tuple[float, float, float, float]:

@@ -23,8 +23,9 @@ Damping: Rayleigh, f_d = alpha M (v - v_r) + beta K (v - v_r), acting on the ela
 velocity of the rigid machine (springs frozen) at the commanded leg rates (a position drive's rest-length
 rate, a force drive's actual actuator rate at the start of the step), from the closure Jacobian's rigid
 columns (least squares; the rigid closures are redundant, rank 23 of 24), so a commanded motion of the
-machine is not damped; M at the start of the step, K the springs' tangents (zero on the cardans and the
-plate, and on the actuators of force drives). With the drives holding (v_r = 0) this is classical Rayleigh
+machine is not damped; M at the end of the step, where the other forces are evaluated (one ``rnea`` gives
+M (vdot + alpha (v - v_r)) + h), K the springs' tangents (zero on the cardans and the plate, and on the
+actuators of force drives). With the drives holding (v_r = 0) this is classical Rayleigh
 damping, zeta_k = alpha / (2 omega_k) + beta omega_k / 2, which ``kind = "modal"`` solves for (alpha, beta)
 at the two named modes (the drives holding their lengths, at the build pose).
 
@@ -48,16 +49,20 @@ is factored at a configuration and kept (modified Newton; the geometric and iner
 with spring stiffnesses of 1e4-1e7 they slow convergence by a factor of about 1e-3 per iteration); it is
 refactored when an iteration contracts by less than REFRESH_RATIO, and a step whose freshly factored Newton
 does not reach NEWTON_TOL (m and rad, the largest position correction) in MAX_ITERATIONS is refused
-(ConvergenceError). A step longer than MAX_STEP_FRACTION of the first mode's period (at the build pose, the
-drives holding) is refused too: the rocking mode then has fewer than 20 steps per period, its period
-error (omega h)^2 / 12 passes 0.8%. No finite differences: M (``crba``), the spring tangents and B
-(``getConstraintsJacobian``) are Pinocchio's or analytic.
+(ConvergenceError). Per iteration one ``computeJointJacobians`` (B and Phi) and one ``rnea``; B and Phi at
+the end state are kept for the closure error and the next step's rigid velocity; ``crba`` only when refactoring;
+the factor is applied by LAPACK ``getrs`` directly (scipy's checks cost more than the solve). A step longer
+than MAX_STEP_FRACTION of the first mode's period (at the build pose, the drives holding) is refused too: the
+rocking mode then has fewer than 20 steps per period, its period error (omega h)^2 / 12 passes 0.8%. No finite
+differences: M (``crba``), the spring tangents and B (``getConstraintsJacobian``) are Pinocchio's or analytic.
 
 Section resultants (objective, mirror-exact): ``pin.rnea`` with the closure forces as external forces on the
 legs' last bodies gives the wrench each joint transmits to its subtree; the section's wrench (plate side on
 base side) is its opposite, carried to the section point and written in the deformed leg frame
-(:mod:`.base`). The closure force of leg i is the world wrench W_i whose generalised forces S_k . W_i on the
-leg's joints equal -(B^T lambda) there (6 unknowns, one per leg, least squares over its twists S_k).
+(:mod:`.base`; :func:`leg_frame_loads`, batched over a run). The closure force of leg i is its constraint
+force lambda_i (6,) in the closure frame c1 on the leg's last body (the world wrench W_i whose generalised
+forces S_k . W_i on the leg's joints are -(B^T lambda) there: tests/dynamics/test_flexible_cost.py checks it
+against that least squares over the leg's twists S_k).
 
 Initial state: :meth:`FlexibleMachine.rest_state` is the static equilibrium under gravity and a plate
 wrench with the drives holding their rest lengths (Newton on [K B^T; B 0]); a state with a velocity gets
@@ -71,7 +76,9 @@ from dataclasses import dataclass
 
 import numpy as np
 import pinocchio as pin
-from scipy.linalg import eigh, lu_factor, lu_solve, null_space
+from scipy.linalg import eigh, lu_factor, null_space
+from scipy.linalg.lapack import dgetrs as _getrs
+from scipy.linalg.lapack import dposv as _posv
 
 from pressfit.description.machine import Damping, Machine
 from pressfit.dynamics.inertia import inertial_model
@@ -150,16 +157,27 @@ class FlexibleMachine:
         self.rigid = np.setdiff1d(np.arange(self.nv), self.sv)  # plate and cardan coordinates
         ids = mm.leg_joint_ids
         self.plate_end = [d["plate_end"] for d in ids]
+        if [cm.extract().joint1_id for cm in self.cms] != self.plate_end:
+            raise PressfitError("the loop closures must act on the legs' plate-end joints (joint1), in leg order")
+        self._c1 = [cm.extract().joint1_placement for cm in self.cms]  # closure frames in the plate-end joints
         self.leg_v = [np.asarray(v) for v in mm.leg_v]
         # (joint whose subtree is the plate side, joint carrying the point, z offset) per leg and section
-        self.sec = [[(j if z == 0.0 else j + 1, j, z) for j, z in (mm.sections[i][s] for s in SECTIONS)]
-                    for i in range(4)]
+        sec = [(j if z == 0.0 else j + 1, j, z) for i in range(4) for j, z in (mm.sections[i][s] for s in SECTIONS)]
+        joints = sorted({j for t in sec for j in t[:2]})
+        self._sec_joints = (joints, [t[0] for t in sec])
+        self._sec_sub = np.array([joints.index(t[0]) for t in sec])
+        self._sec_j = np.array([joints.index(t[1]) for t in sec])
+        self._sec_z = np.array([t[2] for t in sec])
         self.alpha_m = (2 * rho_inf - 1) / (rho_inf + 1)
         self.alpha_f = rho_inf / (rho_inf + 1)
         self.gamma = 0.5 + self.alpha_f - self.alpha_m
         self.beta = 0.25 * (self.gamma + 0.5) ** 2
         self.rho_inf = float(rho_inf)
         self._placed = np.full(4, np.nan)
+        self._placed_key = b""
+        self._closure_key: bytes | None = None  # the q (bytes) of ``_closure`` (B, Phi), None: stale
+        self._closure: tuple = ()
+        self._lower = np.tri(self.nv, k=-1, dtype=bool)
         self._k = np.zeros(len(sp))
         stem0 = mm.pose_values(mm.pose_m).stem_lengths_m
         self._place(stem0)
@@ -177,9 +195,12 @@ class FlexibleMachine:
     # --- model -----------------------------------------------------------------------------------
     def _place(self, stem_lengths_m: np.ndarray) -> None:
         """Stem placements and the pose-dependent stiffnesses (actuator, stem) for stem lengths (4,), m."""
-        if np.array_equal(stem_lengths_m, self._placed):
+        key = np.asarray(stem_lengths_m, dtype=float).tobytes()
+        if key == self._placed_key:
             return
+        self._placed_key = key
         self.mm.place_stem(self.model, stem_lengths_m)
+        self._closure_key = None
         self._k = self.mm.spring_stiffness(stem_lengths_m + self.machine.cylinder.length_m)
         self._placed = np.array(stem_lengths_m, dtype=float)
 
@@ -204,17 +225,24 @@ class FlexibleMachine:
         return f, kt
 
     def _jacobian(self, q: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
-        """Closure Jacobian B (24, nv) and error Phi (24,) at q (placements left in ``self.data``)."""
+        """Closure Jacobian B (24, nv) and error Phi (24,) at q; the last q's are kept (a step's end state is
+        asked for them again by the closure error, the section loads and the next step's rigid velocity)."""
+        key = q.tobytes()
+        if key == self._closure_key:
+            return self._closure
         pin.computeJointJacobians(self.model, self.data, q)
         for cm, cd in zip(self.cms, self.cds):
             cm.calc(self.model, self.data, cd)
         b = np.array(pin.getConstraintsJacobian(self.model, self.data, self.cms, self.cds))
-        phi = np.concatenate([np.asarray(cd.extract().constraint_position_error) for cd in self.cds])
+        phi = np.concatenate([cd.extract().constraint_position_error for cd in self.cds])
+        self._closure, self._closure_key = (b, phi), key
         return b, phi
 
     def _mass(self, q: np.ndarray) -> np.ndarray:
-        m = np.array(pin.crba(self.model, self.data, q))
-        return np.triu(m) + np.triu(m, 1).T
+        """M(q) (nv, nv), kg and kg m^2 (``crba`` fills the upper triangle)."""
+        m = np.array(pin.crba(self.model, self.data, q, pin.Convention.WORLD))
+        np.copyto(m, m.T, where=self._lower)
+        return m
 
     def _modes(self, q: np.ndarray, count: int) -> _Modes:
         """The lowest modes at q with the drives holding their lengths (the model's actuator springs)."""
@@ -338,31 +366,35 @@ class FlexibleMachine:
         q_n, v_n, acc_n, a_n = state.q, state.v, state.acceleration, state.pseudo_acceleration
         base_dq = h * v_n + h * h * (0.5 - b) * a_n
         base_v = v_n + h * (1 - g) * a_n
-        me = self._mass(q_n) if self.damping.alpha_per_s else None
         v_r = self._rigid_velocity(q_n, rates) if np.any(rates) else np.zeros(self.nv)
         key = (h, drive_input.kind, self._placed.tobytes())
         fresh = False
         if self._factor is None or self._factor_key[:2] != key[:2]:
-            self._refresh(q_n, k, drive_input, rest, h, me)
+            self._refresh(q_n, k, drive_input, rest, h)
             fresh = True
         tau_ext = self._external(q_n, wrench, drive_input)
         acc, lam = acc_n.copy(), state.multipliers.copy()
-        nv, last, it = self.nv, np.inf, 0
-        scale = 1.0 / (h * h * b * ca)
+        nv, sv, last, it = self.nv, self.sv, np.inf, 0
+        scale, c_acc, c_old = 1.0 / (h * h * b * ca), (1 - af) / (1 - am), (af * acc_n - am * a_n) / (1 - am)
+        rhs = np.empty(nv + 24)
+        alpha, beta = self.damping.alpha_per_s, self.damping.beta_s
         while True:
-            a_ps = ((1 - af) * acc + af * acc_n - am * a_n) / (1 - am)
+            a_ps = c_acc * acc + c_old
             q = pin.integrate(self.model, q_n, base_dq + h * h * b * a_ps)
             v = base_v + h * g * a_ps
             bj, phi = self._jacobian(q)
-            r = np.array(pin.rnea(self.model, self.data, q, v, acc)) + bj.T @ lam - tau_ext
-            f, kt = self._springs(q, rest, k, drive_input)
-            r[self.sv] += f
-            fd = self._damping_terms(v, v_r, kt, me)
-            r += fd
-            dx = lu_solve(self._factor, -np.concatenate([r, phi]), check_finite=False)
-            size = float(np.max(np.abs(dx[:nv])))
-            acc += scale * dx[:nv]
-            lam += dx[nv:]
+            rel = v - v_r  # M (acc + alpha rel) + h: the inertia and the mass-proportional damping in one rnea
+            r = pin.rnea(self.model, self.data, q, v, acc + alpha * rel) + bj.T @ lam - tau_ext
+            if self.nonlinear:
+                f, kt = self._springs(q, rest, k, drive_input)
+                r[sv] += f + beta * kt * rel[sv]
+            else:  # linear springs (force drives: k is 0 on the actuators)
+                r[sv] += k * (q[self.sq] - rest + beta * rel[sv])
+            rhs[:nv], rhs[nv:] = r, phi
+            dx = self._solve(rhs)
+            size = float(np.abs(dx[:nv]).max())
+            acc -= scale * dx[:nv]
+            lam -= dx[nv:]
             it += 1
             if not math.isfinite(size):
                 raise ConvergenceError(f"flexible step at t = {state.time_s + h:.6g} s (Newton diverged)", size,
@@ -370,7 +402,7 @@ class FlexibleMachine:
             if size <= NEWTON_TOL:
                 break
             if size > REFRESH_RATIO * last and not fresh:
-                self._refresh(q, k, drive_input, rest, h, me)
+                self._refresh(q, k, drive_input, rest, h)
                 fresh, last = True, np.inf
                 continue
             if it >= MAX_ITERATIONS and fresh:
@@ -382,8 +414,29 @@ class FlexibleMachine:
         a_ps = ((1 - af) * acc + af * acc_n - am * a_n) / (1 - am)
         q = pin.integrate(self.model, q_n, base_dq + h * h * b * a_ps)
         v = base_v + h * g * a_ps
-        work = float(fd @ pin.difference(self.model, q_n, q))
+        work = float(self._damping_force(q, v - v_r, rest, k, drive_input) @ pin.difference(self.model, q_n, q))
         return FlexibleState(state.time_s + h, q, v, acc, a_ps, lam, drive_input, self._placed.copy(), it, work)
+
+    def _damping_force(self, q: np.ndarray, rel: np.ndarray, rest: np.ndarray, k: np.ndarray,
+                       drive_input: DriveInput) -> np.ndarray:
+        """The Rayleigh force alpha M (v - v_r) + beta K (v - v_r) (nv,) at the end of a step (``rel`` = v - v_r),
+        for the damping's work over the step: M rel by Pinocchio's rnea at zero velocity less the gravity term."""
+        alpha, beta = self.damping.alpha_per_s, self.damping.beta_s
+        force = np.zeros(self.nv)
+        if alpha:
+            force += alpha * (pin.rnea(self.model, self.data, q, np.zeros(self.nv), rel)
+                              - pin.computeGeneralizedGravity(self.model, self.data, q))
+        if beta:
+            kt = self._springs(q, rest, k, drive_input)[1] if self.nonlinear else k
+            force[self.sv] += beta * kt * rel[self.sv]
+        return force
+
+    def _solve(self, rhs: np.ndarray) -> np.ndarray:
+        """The iteration matrix's factor applied to rhs (LAPACK getrs, without scipy's per-call checks)."""
+        x, info = _getrs(*self._factor, rhs)
+        if info:
+            raise PressfitError(f"iteration-matrix solve failed (LAPACK getrs info {info})")
+        return x
 
     def _damping_terms(self, v: np.ndarray, v_r: np.ndarray, kt: np.ndarray, mass: np.ndarray | None
                        ) -> np.ndarray:
@@ -401,23 +454,23 @@ class FlexibleMachine:
         br = b[:, self.rigid]  # full column rank: with fixed lengths the rigid machine has no mechanism
         v = np.zeros(self.nv)
         v[self.act_v] = rates
-        v[self.rigid] = -np.linalg.solve(br.T @ br, br.T @ (b[:, self.act_v] @ rates))
+        c, x, info = _posv(br.T @ br, br.T @ (b[:, self.act_v] @ rates))
+        if info:
+            raise PressfitError(f"the rigid machine's closure Jacobian is rank deficient (LAPACK posv info {info})")
+        v[self.rigid] = -x
         return v
 
-    def _refresh(self, q: np.ndarray, k: np.ndarray, drive: DriveInput, rest: np.ndarray, h: float,
-                 me: np.ndarray | None) -> None:
+    def _refresh(self, q: np.ndarray, k: np.ndarray, drive: DriveInput, rest: np.ndarray, h: float) -> None:
         """Factor the iteration matrix (module doc) at q."""
         nv, b, g = self.nv, self.beta, self.gamma
         ca = (1 - self.alpha_f) / (1 - self.alpha_m)
         bj, _ = self._jacobian(q)
         _, kt = self._springs(q, rest, k, drive)
         s = np.zeros((nv + 24, nv + 24))
-        s[:nv, :nv] = self._mass(q) / (b * ca * h * h)
+        s[:nv, :nv] = (1 / (b * ca * h * h) + g / (b * h) * self.damping.alpha_per_s) * self._mass(q)
         s[self.sv, self.sv] += (1 + g / (b * h) * self.damping.beta_s) * kt
-        if me is not None:
-            s[:nv, :nv] += g / (b * h) * self.damping.alpha_per_s * me
         s[:nv, nv:], s[nv:, :nv] = bj.T, bj
-        self._factor = lu_factor(s, check_finite=False)
+        self._factor = lu_factor(s, check_finite=False, overwrite_a=True)
         self.refreshes += 1
         self._factor_key = (h, drive.kind, self._placed.tobytes())
 
@@ -459,45 +512,69 @@ class FlexibleMachine:
         """(4, 6) the world wrench (force N, moment about the world origin N m) the plate exerts on each leg's
         last body through its closure (module doc)."""
         self._place(state.stem_lengths_m)
-        b, _ = self._jacobian(state.q)
-        gen = -(b.T @ state.multipliers)
-        jac = self.data.J
-        out = np.empty((4, 6))
-        for i, lv in enumerate(self.leg_v):
-            s = np.asarray(jac)[:, lv]
-            out[i] = np.linalg.lstsq(s.T, gen[lv], rcond=None)[0]
-        return out
+        self._jacobian(state.q)  # the closure frames c1 at q
+        lam = state.multipliers.reshape(4, 6)
+        return np.array([cd.extract().oMc1.act(pin.Force(lam[i])).vector for i, cd in enumerate(self.cds)])
 
-    def section_loads(self, state: FlexibleState) -> SectionLoads:
-        """Leg section resultants at the three sections (module doc, :mod:`.base`)."""
-        w = self.closure_wrenches(state)
+    def section_state(self, state: FlexibleState) -> tuple[np.ndarray, np.ndarray]:
+        """What the section resultants need of a state (the Pinocchio part; :meth:`section_wrenches_from` the
+        rest, batched): the placements (n, 3, 4) (rotation | translation, m) of the joints involved and the
+        wrench (12, 6) (force N, moment N m; local) each section's plate-side subtree receives from its parent."""
+        self._place(state.stem_lengths_m)
         if self._fext is None:  # external forces per joint: zero but on the plate ends (set below)
             self._fext = pin.StdVec_Force()
             for _ in range(self.model.njoints):
                 self._fext.append(pin.Force.Zero())
-        fext, omi, f_sub = self._fext, self.data.oMi, self.data.f
-        for i, j in enumerate(self.plate_end):
-            fext[j] = omi[j].actInv(pin.Force(w[i, :3], w[i, 3:]))
+        fext, lam = self._fext, state.multipliers.reshape(4, 6)
+        for i, (j, c1) in enumerate(zip(self.plate_end, self._c1)):  # the closure force, in joint j's frame
+            fext[j] = c1.act(pin.Force(lam[i]))
+        pin.forwardKinematics(self.model, self.data, state.q)  # oMi: Pinocchio's rnea leaves them as they were
         pin.rnea(self.model, self.data, state.q, state.v, state.acceleration, fext)
-        pts, force, moment = np.empty((4, 3, 3)), np.empty((4, 3, 3)), np.empty((4, 3, 3))
-        for i in range(4):
-            for s, (sub, j, z) in enumerate(self.sec[i]):
-                o = omi[j]
-                pts[i, s] = o.translation + o.rotation[:, 2] * z
-                f = omi[sub].act(f_sub[sub])
-                force[i, s], moment[i, s] = f.linear, f.angular
-        force, moment = -force, -moment
-        ez = pts[:, 2] - pts[:, 0]
-        ez /= np.sqrt((ez * ez).sum(axis=1))[:, None]
-        axes = self.machine.cardan_axes
-        ex = axes - (axes * ez).sum(axis=1)[:, None] * ez
-        ex /= np.sqrt((ex * ex).sum(axis=1))[:, None]
-        frames = np.stack([ex, np.cross(ez, ex), ez], axis=2)  # (leg, xyz, column)
-        mp = moment - np.cross(pts, force)  # moments about the section points
-        fl = np.einsum("lji,lsj->lsi", frames, force)  # in the leg frames
-        ml = np.einsum("lji,lsj->lsi", frames, mp)
-        out = np.concatenate([fl[..., 2:3], fl[..., 0:2], ml], axis=2)
-        return SectionLoads(out, frames)
+        omi, f_sub = self.data.oMi, self.data.f
+        joints, subs = self._sec_joints
+        return (np.array([omi[j].homogeneous[:3] for j in joints]), np.array([f_sub[j].vector for j in subs]))
+
+    def section_wrenches_from(self, placements: np.ndarray, wrenches: np.ndarray) -> np.ndarray:
+        """(..., 4, 3, 9) per leg and section (module doc): the section point (m), the force (N) and the moment
+        about the point (N m) of the plate side on the base side, world axes, from :meth:`section_state`'s
+        arrays (..., n, 3, 4) and (..., 12, 6); batched."""
+        hj, hs = placements[..., self._sec_j, :, :], placements[..., self._sec_sub, :, :]
+        pts = hj[..., :, 3] + hj[..., :, 2] * self._sec_z[:, None]  # the section points
+        force = -np.einsum("...sij,...sj->...si", hs[..., :3], wrenches[..., :3])  # plate side on base side
+        moment = _cross(hs[..., :, 3] - pts, force) - np.einsum("...sij,...sj->...si", hs[..., :3], wrenches[..., 3:])
+        out = np.concatenate([pts, force, moment], axis=-1)
+        return out.reshape(*out.shape[:-2], 4, 3, 9)
+
+    def section_wrenches(self, state: FlexibleState) -> np.ndarray:
+        """(4, 3, 9) the section wrenches of one state (:meth:`section_wrenches_from`); :func:`leg_frame_loads`
+        writes them in the leg frames."""
+        return self.section_wrenches_from(*self.section_state(state))
+
+    def section_loads(self, state: FlexibleState) -> SectionLoads:
+        """Leg section resultants at the three sections (module doc, :mod:`.base`)."""
+        values, frames = leg_frame_loads(self.section_wrenches(state), self.machine.cardan_axes)
+        return SectionLoads(values, frames)
+
+
+def leg_frame_loads(wrenches: np.ndarray, cardan_axes: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    """Section resultants (..., 4, 3, 6) (N, V_x, V_y in N; M_x, M_y, T in N m) in the deformed leg frames,
+    and the frames (..., 4, 3, 3) (columns e_x, e_y, e_z; :mod:`.base`), from the world section wrenches
+    (..., 4, 3, 9) of :meth:`FlexibleMachine.section_wrenches` and the cardan axes a_i (4, 3); batched."""
+    pts, force, moment = wrenches[..., :3], wrenches[..., 3:6], wrenches[..., 6:]
+    ez = pts[..., 2, :] - pts[..., 0, :]
+    ez = ez / np.sqrt((ez * ez).sum(axis=-1))[..., None]
+    ex = cardan_axes - (cardan_axes * ez).sum(axis=-1)[..., None] * ez
+    ex = ex / np.sqrt((ex * ex).sum(axis=-1))[..., None]
+    frames = np.stack([ex, _cross(ez, ex), ez], axis=-1)  # (..., leg, xyz, column)
+    fl = np.einsum("...lji,...lsj->...lsi", frames, force)  # in the leg frames
+    ml = np.einsum("...lji,...lsj->...lsi", frames, moment)
+    return np.concatenate([fl[..., 2:3], fl[..., 0:2], ml], axis=-1), frames
+
+
+def _cross(a: np.ndarray, b: np.ndarray) -> np.ndarray:
+    """a x b over the last axis (3,) (np.cross's overhead dominates at this size)."""
+    return np.stack([a[..., 1] * b[..., 2] - a[..., 2] * b[..., 1], a[..., 2] * b[..., 0] - a[..., 0] * b[..., 2],
+                     a[..., 0] * b[..., 1] - a[..., 1] * b[..., 0]], axis=-1)
 
 
 def _wrench(plate_wrench: np.ndarray | None) -> np.ndarray:

@@ -1,0 +1,137 @@
+"""What one step of the flexible machine (pressfit.dynamics.machine.flexible) costs in Pinocchio evaluations, and
+that the shortcuts behind that count give the answers of the direct computations they replace."""
+
+import numpy as np
+import pinocchio as pin
+import pytest
+
+from pressfit.dynamics.machine.base import DriveInput
+from pressfit.dynamics.machine.flexible import FlexibleMachine
+
+OFF_CENTRE = np.array([0.05, 0.65, -0.08])
+WRENCH = np.array([40.0, -250.0, 25.0, 6.0, -4.0, 3.0])
+H = 1e-3
+
+
+def _counting(monkeypatch, names):
+    counts = dict.fromkeys(names, 0)
+    for name in names:
+        original = getattr(pin, name)
+
+        def counted(*args, _original=original, _name=name, **kwargs):
+            counts[_name] += 1
+            return _original(*args, **kwargs)
+
+        monkeypatch.setattr(pin, name, counted)
+    return counts
+
+
+def test_a_step_evaluates_the_closures_once_per_iteration_and_once_at_its_end(machine, monkeypatch):
+    """Position drives ramping the lengths by 2 um per step (so the rigid velocity is needed every step and the
+    stems are re-placed every few steps) under a plate wrench, with the insertion's per-step reads (closure error,
+    section loads): the closure Jacobian (computeJointJacobians) is evaluated once per Newton iteration, once at
+    each step's end state (shared by the closure error and the next step's rigid velocity) and once after each
+    re-placement of the stems; the mass matrix (crba) only when the iteration matrix is refactored. The code
+    before this count evaluated the Jacobian three more times per step and crba every step."""
+    fm = FlexibleMachine(machine, OFF_CENTRE)
+    s = fm.rest_state()
+    placements = []
+    place = fm.mm.place_stem
+    monkeypatch.setattr(fm.mm, "place_stem", lambda model, stems: (placements.append(1), place(model, stems)))
+    counts = _counting(monkeypatch, ["computeJointJacobians", "crba"])
+    refreshes, iterations, steps = fm.refreshes, 0, 40
+    lengths = s.drive.values.copy()
+    for _ in range(steps):
+        lengths = lengths + 2e-6
+        s = fm.step(s, DriveInput.positions(lengths), WRENCH, H)
+        iterations += s.iterations
+        assert fm.closure_error(s)[0] < 1e-12
+        fm.section_loads(s)
+    assert len(placements) > 2  # the re-placement path is exercised
+    assert counts["computeJointJacobians"] == iterations + steps + len(placements)
+    assert counts["crba"] == fm.refreshes - refreshes
+
+
+def _opened(fm, state, seed=0, size=1e-2):
+    """``state`` moved off its closures by a random configuration change (m, rad) and given a velocity and an
+    acceleration, the multipliers kept: a state the section-load shortcuts must handle exactly as well."""
+    rng = np.random.default_rng(seed)
+    q = pin.integrate(fm.model, state.q, size * rng.standard_normal(fm.nv))
+    return type(state)(state.time_s, q, 0.1 * rng.standard_normal(fm.nv), rng.standard_normal(fm.nv),
+                       state.pseudo_acceleration, state.multipliers, state.drive, state.stem_lengths_m, 0)
+
+
+def test_closure_wrenches_equal_the_least_squares_over_the_leg_twists(machine):
+    """The closure wrench on leg i's last body is the constraint force lambda_i in the closure frame c1, carried to
+    the world: it equals the direct answer, the world wrench W whose generalised forces S_k . W on the leg's joints
+    are -(B^T lambda) there (least squares over the leg's twists S_k, Pinocchio's joint Jacobians), to 1e-12 of
+    the largest component (achieved 5e-16), on a state whose closures are 1e-2 m / rad open."""
+    fm = FlexibleMachine(machine, OFF_CENTRE)
+    s = _opened(fm, fm.rest_state(WRENCH))
+    model, data = fm.model, fm.model.createData()
+    pin.computeJointJacobians(model, data, s.q)
+    for cm, cd in zip(fm.cms, fm.cds):
+        cm.calc(model, data, cd)
+    b = np.array(pin.getConstraintsJacobian(model, data, fm.cms, fm.cds))
+    assert np.abs(np.concatenate([cd.extract().constraint_position_error for cd in fm.cds])).max() > 1e-3
+    gen = -(b.T @ s.multipliers)
+    direct = np.array([np.linalg.lstsq(np.asarray(data.J)[:, lv].T, gen[lv], rcond=None)[0] for lv in fm.leg_v])
+    got = fm.closure_wrenches(s)
+    np.testing.assert_allclose(got, direct, rtol=0, atol=1e-12 * np.abs(direct).max())
+
+
+def test_section_loads_do_not_depend_on_what_the_model_evaluated_before(machine):
+    """Pinocchio's rnea leaves the joint placements (oMi) as they were: section_loads computes them itself, so the
+    loads of a state are the same (bit for bit) on a fresh machine and after the machine stepped and evaluated
+    other states (a version reading the placements left by an earlier call was off by 0.08 N of 143 N)."""
+    fresh, used = FlexibleMachine(machine, OFF_CENTRE), FlexibleMachine(machine, OFF_CENTRE)
+    s = _opened(fresh, fresh.rest_state(WRENCH), size=1e-3)
+    expected = fresh.section_loads(s).values
+    other = used.rest_state()
+    for _ in range(3):
+        other = used.step(other, other.drive, -WRENCH, H)
+    used.closure_error(other)
+    used._mass(other.q)
+    got = used.section_loads(s).values
+    assert np.array_equal(got, expected)
+    assert np.abs(expected).max() > 100.0
+
+
+@pytest.mark.parametrize("drive", ["position", "force"])
+def test_batched_leg_frame_loads_equal_the_per_state_loads(machine, drive):
+    """section_wrenches_from and leg_frame_loads over a stack of section_state arrays (the insertion converts its
+    whole run at once) equal section_loads state by state, exactly."""
+    from pressfit.dynamics.machine.flexible import leg_frame_loads
+
+    fm = FlexibleMachine(machine, OFF_CENTRE)
+    s = fm.rest_state(WRENCH)
+    tension = fm.section_loads(s).axial_n("actuator")
+    states = []
+    for n in range(5):
+        d = s.drive if drive == "position" else DriveInput.forces(tension * (1 + 0.01 * n))
+        s = fm.step(s, d, WRENCH, H)
+        states.append(s)
+    placements, subtrees = (np.array(a) for a in zip(*(fm.section_state(x) for x in states)))
+    batched = leg_frame_loads(fm.section_wrenches_from(placements, subtrees), machine.cardan_axes)
+    for k, x in enumerate(states):
+        loads = fm.section_loads(x)
+        assert np.array_equal(batched[0][k], loads.values) and np.array_equal(batched[1][k], loads.frames)
+
+
+def test_the_flexible_run_keeps_blas_on_one_thread(monkeypatch):
+    """OpenBLAS starts one thread per core; on the flexible step's small matrices (146 x 146) they only spin
+    (the shipped scenario took 3.6 times the CPU time with them on the shared 2-core machine). The flexible run
+    holds every BLAS library to one thread, and gives the caller's setting back afterwards."""
+    import scipy.linalg  # noqa: F401 (loads scipy's OpenBLAS beside numpy's)
+    from threadpoolctl import threadpool_info, threadpool_limits
+
+    from pressfit.dynamics import insertion
+
+    def blas_threads():
+        return [i["num_threads"] for i in threadpool_info() if i["user_api"] == "blas"]
+
+    monkeypatch.setattr(insertion, "_flexible_steps", lambda *args: blas_threads())
+    with threadpool_limits(limits=2, user_api="blas"):
+        assert blas_threads() and set(blas_threads()) == {2}
+        assert set(insertion._run_flexible(None, None, None, None, True, False)) == {1}
+        assert set(blas_threads()) == {2}
