@@ -46,7 +46,7 @@ import numpy as np
 
 from pressfit.description.machine import HydraulicDrive as HydraulicTable
 from pressfit.description.machine import Machine
-from pressfit.dynamics.drives.base import minus_3db_hz, require_step
+from pressfit.dynamics.drives.base import DrivePort, minus_3db_hz, require_step
 from pressfit.errors import DriveStepError
 
 SUBSTEP_S = 1e-4  # largest pressure substep, s (accuracy, not stability: module docstring)
@@ -195,3 +195,39 @@ class HydraulicDrive:
     def axial_stiffness_n_per_m(self, lengths_m: np.ndarray) -> np.ndarray:
         """The oil column with the valve closed, beta A^2 (1/V_a + 1/V_b), N/m."""
         return self.machine.drive_stiffness_n_per_m(lengths_m)
+
+    def linear_port(self, length_m: float, tension_n: float) -> DrivePort:
+        r"""Chambers and valve linearised at rest delivering ``tension_n`` (p_a,b = null +- N / 2A), states
+        (dp_a, dp_b, x_v), v = l_dot:
+
+            dp_a' = beta / V_a (K_qa x_v - K_ca dp_a + A v - C_L (dp_a - dp_b)),
+            dp_b' = beta / V_b (-K_qb x_v - K_cb dp_b - A v + C_L (dp_a - dp_b)),
+            x_v' = w_v (g (dN_cmd / A - (dp_a - dp_b)) - x_v),   dN = A (dp_a - dp_b).
+
+        K_q = dQ/dx_v of each chamber's pair of lands, the mean of the opening (x_v > 0) and closing side
+        (the critically lapped spool rests near its null, x_v0 = C_L (p_a - p_b) / (K_v sqrt(drop)) ~ 1e-4,
+        where the two sides meet; at p_a = p_b both are K_v sqrt((p_s - p_t) / 2), the docstring's K_q);
+        K_c = -dQ/dp at x_v0 (the land's flow-pressure coefficient, K_v |x_v0| / (2 sqrt(drop))). Blocked
+        (v = 0) at p_a = p_b this is :meth:`closed_loop`; with the spool held (x_v = 0) and no leakage, the
+        chambers on a mass m ring at sqrt(k_h / m) (k_h = :meth:`axial_stiffness_n_per_m`)."""
+        t, area = self.table, self.area_m2
+        ps, pt, cl = t.supply_pressure_pa, t.tank_pressure_pa, t.leakage_m3_per_s_pa
+        kv = t.valve_flow_gain_m3_per_s_sqrt_pa
+        dp0 = float(np.clip(tension_n, -self.force_limit_n, self.force_limit_n)) / area
+        pa, pb = self.null_pressure_pa + dp0 / 2, self.null_pressure_pa - dp0 / 2
+        floor = self.laminar_pa
+        drops_a = np.maximum([ps - pa, pa - pt], floor)  # opening side (supply to a), closing side (a to tank)
+        drops_b = np.maximum([pb - pt, ps - pb], floor)
+        kqa, kqb = kv * np.mean(np.sqrt(drops_a)), kv * np.mean(np.sqrt(drops_b))
+        side = 0 if dp0 >= 0 else 1
+        xv0 = abs(cl * dp0) / (kv * math.sqrt(drops_a[side]))
+        kca, kcb = kv * xv0 / (2 * math.sqrt(drops_a[side])), kv * xv0 / (2 * math.sqrt(drops_b[side]))
+        v_a, v_b = (float(v) for v in self.volumes_m3(np.array(length_m)))
+        ga, gb = t.bulk_modulus_pa / v_a, t.bulk_modulus_pa / v_b
+        wv, g = 1.0 / self.valve_time_constant_s, t.pressure_loop_gain_per_pa
+        a = np.array([[-ga * (kca + cl), ga * cl, ga * kqa],
+                      [gb * cl, -gb * (kcb + cl), -gb * kqb],
+                      [-wv * g, wv * g, -wv]])
+        return DrivePort(states=("pressure_a_pa", "pressure_b_pa", "spool"), a=a,
+                         b_command=np.array([0.0, 0.0, wv * g / area]), b_rate=np.array([ga * area, -gb * area, 0.0]),
+                         c=np.array([area, -area, 0.0]))
