@@ -12,8 +12,11 @@ reverse, each land an orifice Q = K_v x_v sqrt(dp) (signed, so that the flow rev
 below dp_lam = ``LAMINAR_FRACTION`` (p_s - p_t) the orifice is laminar, Q = K_v x_v dp / sqrt(dp_lam) (the
 usual regularisation: it keeps dQ/dp finite at a closed land; 0.1% of the supply drop). The spool follows
 its command with a first-order lag of ``valve_bandwidth_hz``. Pressure (force) loop, analog in the valve
-amplifier: x_v,cmd = sat(g (dp_cmd - (p_a - p_b))), dp_cmd = sat(N_cmd) / A, with N_cmd saturated at the
-drive's force limit A (p_s - p_t). Linearised about the null (p_a = p_b = (p_s + p_t) / 2, blocked piston),
+amplifier: x_v,cmd = sat(g (dp_cmd - (p_a - p_b)) - f_v A l_dot / K_q), dp_cmd = sat(N_cmd) / A, with N_cmd
+saturated at the drive's force limit A (p_s - p_t); f_v = ``flow_feedforward`` feeds the leg's flow A l_dot
+forward from the measured rate (without it the proportional loop must open the spool by a pressure error,
+a drag of A^2 / (g K_q) N s/m per leg: = k_h / w_p, the oil column over the pressure loop's bandwidth).
+Linearised about the null (p_a = p_b = (p_s + p_t) / 2, blocked piston),
 with K_q = K_v sqrt((p_s - p_t) / 2) and c = beta (1/V_a + 1/V_b):
 
     dp / dp_cmd = g c K_q w_v / ((s + c C_L)(s + w_v) + g c K_q w_v),   w_v = 2 pi f_v,
@@ -75,6 +78,9 @@ class HydraulicDrive:
         self.area_m2 = t.area_m2
         self.laminar_pa = LAMINAR_FRACTION * (t.supply_pressure_pa - t.tank_pressure_pa)
         self.valve_time_constant_s = 1.0 / (2.0 * math.pi * t.valve_bandwidth_hz)
+        self.null_flow_gain = t.valve_flow_gain_m3_per_s_sqrt_pa * math.sqrt(0.5 * (t.supply_pressure_pa -
+                                                                                   t.tank_pressure_pa))
+        self.feedforward_per_rate = t.flow_feedforward * self.area_m2 / self.null_flow_gain  # spool per m/s
 
     @classmethod
     def of(cls, machine: Machine) -> HydraulicDrive:
@@ -160,8 +166,9 @@ class HydraulicDrive:
         dp_cmd = np.clip(np.asarray(command_n, dtype=float), -self.force_limit_n, self.force_limit_n) / self.area_m2
         decay = math.exp(-h / self.valve_time_constant_s)
         pa, pb, xv = state.pressure_a_pa, state.pressure_b_pa, state.spool
+        feedforward = self.feedforward_per_rate * rate
         for k in range(n):
-            x_cmd = np.clip(t.pressure_loop_gain_per_pa * (dp_cmd - (pa - pb)), -1.0, 1.0)
+            x_cmd = np.clip(t.pressure_loop_gain_per_pa * (dp_cmd - (pa - pb)) - feedforward, -1.0, 1.0)
             xv = x_cmd + (xv - x_cmd) * decay
             v_a, v_b = self.volumes_m3(length + rate * (k + 0.5) * h)
             fa, fb, jaa, jab, jba, jbb = self._rates(pa, pb, xv, v_a, v_b, rate)
@@ -202,7 +209,7 @@ class HydraulicDrive:
 
             dp_a' = beta / V_a (K_qa x_v - K_ca dp_a + A v - C_L (dp_a - dp_b)),
             dp_b' = beta / V_b (-K_qb x_v - K_cb dp_b - A v + C_L (dp_a - dp_b)),
-            x_v' = w_v (g (dN_cmd / A - (dp_a - dp_b)) - x_v),   dN = A (dp_a - dp_b).
+            x_v' = w_v (g (dN_cmd / A - (dp_a - dp_b)) - f_v A v / K_q - x_v),   dN = A (dp_a - dp_b).
 
         K_q = dQ/dx_v of each chamber's pair of lands, the mean of the opening (x_v > 0) and closing side
         (the critically lapped spool rests near its null, x_v0 = C_L (p_a - p_b) / (K_v sqrt(drop)) ~ 1e-4,
@@ -229,5 +236,6 @@ class HydraulicDrive:
                       [gb * cl, -gb * (kcb + cl), -gb * kqb],
                       [-wv * g, wv * g, -wv]])
         return DrivePort(states=("pressure_a_pa", "pressure_b_pa", "spool"), a=a,
-                         b_command=np.array([0.0, 0.0, wv * g / area]), b_rate=np.array([ga * area, -gb * area, 0.0]),
+                         b_command=np.array([0.0, 0.0, wv * g / area]),
+                         b_rate=np.array([ga * area, -gb * area, -wv * self.feedforward_per_rate]),
                          c=np.array([area, -area, 0.0]))
