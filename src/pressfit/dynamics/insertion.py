@@ -38,6 +38,7 @@ from pressfit.description.machine import Machine
 from pressfit.dynamics import drives as drive_kinds
 from pressfit.dynamics.contact import ContactState, contact_force_n, solve_contact
 from pressfit.dynamics.control import ForceLimitedController, PoseCache, Trajectory, estimate_pose
+from pressfit.dynamics.drives.steps import hydraulic_step_refusal
 from pressfit.dynamics.machine.base import SECTION_COMPONENTS, SECTIONS, DriveInput
 from pressfit.dynamics.machine.flexible import MAX_STEP_FRACTION, FlexibleMachine
 from pressfit.dynamics.multibody import RigidLegModel, rigid_leg_model
@@ -224,6 +225,9 @@ def plan_scenario(case: Case, machine: Machine | None = None, preload_key: str =
                       f"commands {abs(a4) * vp:.4g} N from the preload alone")
     rigid = rigid_leg_model(machine, np.asarray(sim.start_m, float), sim.baumgarte_rad_per_s)
     _check_steps(case, rigid, trajectory)
+    oil_column = hydraulic_step_refusal(machine, trajectory.waypoints_m, path, sim.model, dt)  # drives/steps.py
+    if oil_column:
+        raise _refuse(case, "[simulation] time_step_s", oil_column)
     if steps > WARN_STEPS:
         warnings.append(f"{steps} time steps (time_step_s = {dt:g} s over {trajectory.duration_s:g} s): expect about "
                         f"{steps * 8e-4 / 60:.0f} min per run")

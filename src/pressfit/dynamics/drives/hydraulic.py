@@ -239,3 +239,39 @@ class HydraulicDrive:
                          b_command=np.array([0.0, 0.0, wv * g / area]),
                          b_rate=np.array([ga * area, -gb * area, -wv * self.feedforward_per_rate]),
                          c=np.array([area, -area, 0.0]))
+
+
+STEP_FRACTION = 0.5  # the multibody step is refused beyond this fraction of the oil column's stability limit
+
+
+def oil_column_step_index(stiffness_n_per_m: np.ndarray, mass_kg: np.ndarray, dt_s: float) -> np.ndarray:
+    r"""omega_h dt / 2 for the oil column k_h on a mass m, omega_h = sqrt(k_h / m): the step is stable below 1.
+
+    Derived: the simulation couples drive and mechanics explicitly. Over a step the drive holds the leg rate v_n
+    (its pressures then change the force by -k_h v_n dt: the chambers' A l_dot term through beta / V), and the
+    mechanics then advance the velocity with the new force (semi-implicit Euler), so on the oil column alone
+    F_{n+1} = F_n - k_h dt v_n, v_{n+1} = v_n + dt F_{n+1} / m: the update matrix [[1, -k_h dt], [dt / m,
+    1 - a]], a = (omega_h dt)^2, has determinant 1 and trace 2 - a, so its eigenvalues stay on the unit circle
+    iff a < 4, i.e. omega_h dt < 2 (beyond, one grows as |z| > 1 every step: the pressures run away)."""
+    omega = np.sqrt(np.asarray(stiffness_n_per_m, dtype=float) / np.asarray(mass_kg, dtype=float))
+    return 0.5 * omega * dt_s
+
+
+def refuse_step(machine: Machine, lengths_m: np.ndarray, mass_kg: np.ndarray, dt_s: float) -> str | None:
+    """The reason (one clause naming the key and the limit) a hydraulic machine's time step ``dt_s`` cannot
+    integrate the oil column k_h(l) on the mass ``mass_kg`` (m, kg: per leg, at the lengths ``lengths_m`` (n, 4)
+    of the planned poses), or None; refused beyond ``STEP_FRACTION`` of :func:`oil_column_step_index`."""
+    lengths = np.atleast_2d(np.asarray(lengths_m, dtype=float))
+    k_h = machine.drive_stiffness_n_per_m(lengths)
+    index = oil_column_step_index(k_h, np.broadcast_to(mass_kg, k_h.shape), dt_s)
+    pose, leg = np.unravel_index(int(np.argmax(index)), index.shape)
+    worst = float(index[pose, leg])
+    if worst <= STEP_FRACTION:
+        return None
+    mass = float(np.broadcast_to(mass_kg, k_h.shape)[pose, leg])
+    f_h = math.sqrt(k_h[pose, leg] / mass) / (2 * math.pi)
+    bound = 2.0 * STEP_FRACTION / (2 * math.pi * f_h)
+    return (f"at most {bound:.3g} s against the hydraulic oil column of leg {leg + 1} (omega_h dt / 2 = "
+            f"{worst:.3g} > {STEP_FRACTION:g}; the explicit drive-mechanics coupling is stable below 1): "
+            f"k_h = {k_h[pose, leg]:.4g} N/m at leg length {lengths[pose, leg]:.4g} m on {mass:.4g} kg, "
+            f"f_h = {f_h:.4g} Hz")
