@@ -14,7 +14,13 @@ and f the contact force on the tool (N, +y). ``model = "rigid"``: the rigid-leg 
 position, M_h h'' = -A F + e_y f, M_h the apparent Cartesian mass (Pinocchio's constraint dynamics, unit plate
 forces, gravity off), S = A^T (equation 2: dl = A^T dh). In contact (the pin pose) the case's contact spring
 k_c (and damping b_c) acts at the tool: K += k_c p_y^T p_y, C += b_c p_y^T p_y, contact force = -k_c y - b_c y'.
-Drives (:mod:`pressfit.dynamics.actuators`): tau F' = F_cmd - F, tau = 1 / (2 pi f_bw). Outputs: the four
+Drives (``[actuator] kind``, :class:`pressfit.dynamics.drives.base.DrivePort`): each leg's drive linearised at
+its operating tension (:func:`static_tensions_n`: gravity feed-forward and preload), x_d' = a x_d + b N_cmd +
+r v, N = c x_d, v the rate of the coordinate it pushes: force, tau N' = N_cmd - N; electric, the PI current
+loop with the back-EMF (whose integral makes it an added mass k_f K_t (2 pi / lead) / k_i below k_i / k_p),
+the rotor's reflected mass on its own coordinate u joined to the leg by the screw, nut and bearing in series
+(k (l - u)), the encoder reading u; hydraulic, the spool's lag, the chambers with K_q, K_c, leakage and the
+oil column (beta / V_a,b, A l_dot), the pressure loop and the flow feed-forward. Outputs: the four
 measured lengths l = S z (the actuator joint coordinates), their rates, the tool position (3) and the contact
 force.
 
@@ -35,9 +41,10 @@ and the observability are the same vector), and the share of the mode's strain e
 springs, sum_i k_i (S phi_k)_i^2 / phi_k^T K phi_k (= / omega_k^2, phi mass-normalised), is that measure normalised
 by the mode itself: about 1 for the axial leg modes (97% at pose A's 441 Hz mode), 1-2% for the rocking pair (the
 plate sways and tilts about the legs' concurrency point, where a rigid rotation changes no leg length; what is left
-is the legs' bending), exactly 0 for the plate twist; a warning when a loop pole (a closed-loop pole the feedback
-moved by more than ``MOVED_RELATIVE`` from every open-loop pole) lies within ``WARNING_RATIO`` of a structural
-mode's frequency.
+is the legs' bending), exactly 0 for the plate twist; one warning line per (pose, mode) when a loop pole (a
+closed-loop pole the feedback moved by more than ``MOVED_RELATIVE`` from every open-loop pole) lies within
+``WARNING_RATIO`` of a structural mode's frequency and the drives hold at least ``DRIVE_SHARE_THRESHOLD`` of that
+mode's strain energy (below it the loop neither excites nor damps the mode).
 """
 
 from __future__ import annotations
@@ -62,7 +69,8 @@ from pressfit.dynamics.modes import closure_jacobian, elastic_stiffness, mass_ma
 from pressfit.dynamics.multibody import rigid_leg_model
 from pressfit.errors import PressfitError
 
-WARNING_RATIO = 0.2  # a loop pole within 20% of a structural mode's frequency is reported
+WARNING_RATIO = 0.2  # a loop pole within 20% of a structural mode's frequency is reported ...
+DRIVE_SHARE_THRESHOLD = 0.1  # ... when the drives hold at least this share of the mode's strain energy
 MOVED_RELATIVE = 1e-3  # a closed-loop pole farther than this (relative) from every open-loop pole is a loop pole
 MODE_COUNT = 6
 FREQUENCY_POINTS = 300  # log-spaced over 0.01-1000 Hz: Bode data and margins (~30 ms a point at 200 states)
@@ -381,10 +389,33 @@ def structural_modes(machine: Machine, pose_m: np.ndarray, count: int = MODE_COU
                  for f, d, t in zip(modes.frequencies_hz, drive, total, strict=True))
 
 
+def proximity_warnings(poles: np.ndarray, loop_poles: np.ndarray, modes: tuple[StructuralMode, ...],
+                       pose: str) -> tuple[str, ...]:
+    """One line per structural mode that a loop pole (``loop_poles``: moved by the feedback) comes within
+    ``WARNING_RATIO`` of in frequency, reported only when the drives see and move that mode: their share of its
+    strain energy at least ``DRIVE_SHARE_THRESHOLD`` (below it the loop can neither excite nor damp the mode:
+    the rocking pair's 1-2%, the twist's 0)."""
+    freq = np.abs(poles) / (2 * math.pi)
+    near = loop_poles & (poles.imag >= 0)
+    lines = []
+    for k, m in enumerate(modes):
+        if m.drive_energy_fraction < DRIVE_SHARE_THRESHOLD:
+            continue
+        close = np.flatnonzero(near & (np.abs(freq - m.frequency_hz) <= WARNING_RATIO * m.frequency_hz))
+        if close.size:
+            p = close[np.argmin(np.abs(freq[close] - m.frequency_hz))]
+            lines.append(f"{pose}: structural mode {k + 1} at {m.frequency_hz:.4g} Hz (drive energy share "
+                         f"{m.drive_energy_fraction:.2g} >= {DRIVE_SHARE_THRESHOLD:g}) has {close.size} loop "
+                         f"pole(s) within {100 * WARNING_RATIO:g}%, nearest {freq[p]:.4g} Hz (damping "
+                         f"{-poles[p].real / abs(poles[p]):.3g})")
+    return tuple(lines)
+
+
 def design_at(machine: Machine, gains: Controller, pose_m: np.ndarray, name: str, contact: Contact | None,
-              model: Model = "flexible", frequencies_hz: np.ndarray | None = None) -> PoseDesign:
-    """The loop at one pose (module doc)."""
-    plant = linear_plant(machine, pose_m, contact, model)
+              model: Model = "flexible", frequencies_hz: np.ndarray | None = None,
+              tensions_n: np.ndarray | None = None) -> PoseDesign:
+    """The loop at one pose (module doc); ``tensions_n``: the drives' operating point (:func:`linear_plant`)."""
+    plant = linear_plant(machine, pose_m, contact, model, tensions_n)
     loop = close_loop(plant, gains)
     poles = np.linalg.eigvals(loop.a)
     open_poles = np.concatenate([np.linalg.eigvals(plant.a), np.zeros(3)])
@@ -399,16 +430,7 @@ def design_at(machine: Machine, gains: Controller, pose_m: np.ndarray, name: str
     bode_ol = np.array([np.asarray(r.complex).reshape(-1) for r in responses])
     bode_ref = np.array([np.asarray(ct.frequency_response(s, w).complex).reshape(-1) for s in (ref_y, ref_x)])
     modes = structural_modes(machine, pose_m)
-    warnings = []
-    freq = np.abs(poles) / (2 * math.pi)
-    mode_hz = np.array([m.frequency_hz for m in modes])
-    for p in np.flatnonzero(moved & (poles.imag >= 0)):
-        k = int(np.argmin(np.abs(mode_hz - freq[p])))
-        m = modes[k]
-        if abs(freq[p] - m.frequency_hz) <= WARNING_RATIO * m.frequency_hz:
-            warnings.append(f"loop pole at {freq[p]:.4g} Hz (damping {-poles[p].real / abs(poles[p]):.3g}) within "
-                            f"{100 * WARNING_RATIO:g}% of structural mode {k + 1} at {m.frequency_hz:.4g} Hz "
-                            f"(drive energy share {m.drive_energy_fraction:.2g})")
+    warnings = list(proximity_warnings(poles, moved, modes, name))
     if not stable:
         worst = poles[np.argmax(poles.real)]
         warnings.insert(0, f"the closed loop is UNSTABLE: pole {worst.real:.4g} {worst.imag:+.4g}j 1/s "
@@ -430,6 +452,7 @@ class ControlDesign:
 
     def to_dict(self) -> dict[str, Any]:
         return {"case": self.case, "model": self.model, "warning_ratio": WARNING_RATIO,
+                "warning_drive_share": DRIVE_SHARE_THRESHOLD,
                 "poses": [p.to_dict() for p in self.poses]}
 
 
@@ -446,4 +469,6 @@ def control_design(case: Case, model: Model = "flexible") -> ControlDesign:
     poses = [("pin", pin_pose, c), ("start", np.array(sim.start_m), None), ("approach", approach, None),
              ("end", np.array(sim.end_m), None)]
     return ControlDesign(case=case.name, model=model,
-                         poses=tuple(design_at(machine, sim.controller, p, n, con, model) for n, p, con in poses))
+                         poses=tuple(design_at(machine, sim.controller, p, n, con, model,
+                                               tensions_n=static_tensions_n(machine, p, case.preload.a4_n))
+                                     for n, p, con in poses))
