@@ -157,11 +157,25 @@ def test_electric_reflected_inertia_is_on_both_models():
     assert np.all(force_rigid.model.armature == 0.0)
 
 
-def test_a_drive_refusing_its_step_stops_the_run_in_one_line(tmp_path):
-    """The hydraulic case on the flexible model at the 1 ms step: the oil column on the light stem is too fast for
-    the held leg rate and a chamber pressure leaves the drive's range early in the first move: exit 2, one line
-    naming the drive, the leg, the quantity, the limit and the time (no traceback, no partial output)."""
-    path = drive_case(tmp_path, "hydraulic", {"model": "flexible", **SHORT})
-    line = refused(path, "the hydraulic drive of leg", "pressure_", "breaks [-300000, 3e+07] Pa", "at t = ",
+def test_a_drive_refusing_its_step_stops_the_run_in_one_line(tmp_path, monkeypatch):
+    """A drive refusing a step during the run (its own check: a chamber pressure out of range, here forced on
+    the 50th step of the hydraulic case on the rigid model) stops it: exit 2, one line naming the drive, the
+    leg, the quantity, the limit and the time (no traceback, no partial output). (The flexible model at 1 ms,
+    which used to break a chamber pressure in the run, is now refused before it: tests/dynamics/
+    test_drive_steps.py.)"""
+    from pressfit.dynamics.drives.hydraulic import HydraulicDrive
+    from pressfit.errors import DriveStepError
+    calls, step = [0], HydraulicDrive.step
+
+    def failing(self, *args, **kwargs):
+        calls[0] += 1
+        if calls[0] == 50:
+            raise DriveStepError(self.kind, 2, "pressure_a_pa", -4.0e5, "[-300000, 3e+07] Pa (no relief valve or "
+                                 "cavitation modelled)")
+        return step(self, *args, **kwargs)
+
+    monkeypatch.setattr(HydraulicDrive, "step", failing)
+    path = drive_case(tmp_path, "hydraulic", {"model": "rigid", **SHORT})
+    line = refused(path, "the hydraulic drive of leg 2", "pressure_a_pa", "breaks [-300000, 3e+07] Pa", "at t = ",
                    "[actuator.hydraulic]")
-    assert float(line.split("at t = ")[1].split(" s")[0]) < SHORT["move_time_s"]
+    assert float(line.split("at t = ")[1].split(" s")[0]) == pytest.approx(0.05, abs=1.5e-3)

@@ -201,7 +201,9 @@ class HydraulicDrive(StrictModel):
     both sides). The working leg travel sits centred in the stroke: piston position
     x = l - l_min + (s - (l_max - l_min)) / 2 from the base-side end. Chamber a's pressure pulls the leg
     shorter (tension), chamber b's pushes it longer. Valve: Q = K_v x_v sqrt(dp), spool x_v in [-1, 1]
-    with a first-order response; pressure loop x_v,cmd = g (dp_cmd - dp), dp = p_a - p_b."""
+    with a first-order response; pressure loop x_v,cmd = g (dp_cmd - dp) - f_v A l_dot / K_q, dp = p_a - p_b,
+    f_v = ``flow_feedforward`` (0..1) the fraction of the leg's flow A l_dot fed forward from the measured leg
+    rate through the null flow gain K_q = K_v sqrt((p_s - p_t) / 2)."""
 
     piston_area_m2: Positive | None = None
     bore_diameter_m: Positive | None = None
@@ -216,6 +218,7 @@ class HydraulicDrive(StrictModel):
     valve_bandwidth_hz: Positive
     leakage_m3_per_s_pa: NonNegative = 0.0
     pressure_loop_gain_per_pa: Positive
+    flow_feedforward: Annotated[float, Field(ge=0, le=1, allow_inf_nan=False)] = 0.0
 
     @model_validator(mode="after")
     def _area(self) -> HydraulicDrive:

@@ -59,6 +59,7 @@ from pressfit.dynamics.insertion import (
     _check_steps,
     _path,
     _require_reachable,
+    check_oil_column,
     check_preload,
     drive_limit,
     plate_mobility,
@@ -276,6 +277,8 @@ def plan_cycle(case: Case, machine: Machine | None = None, model: str | None = N
     except ModelFileError as exc:  # it names [simulation]'s keys: here they are [cycle]'s (the same meaning)
         raise ModelFileError(case.path, exc.key.replace("[simulation", "[cycle"),
                              exc.expected.replace("[simulation", "[cycle")) from None
+    check_oil_column(case, machine, sim, np.array([cycle.start_m, *points[1::4], cycle.end_m]), path,
+                     "[cycle] time_step_s")
     limits = np.array([pins[s.pin - 1].force_limit_n for s in segments])
     warnings = (run_time_warning(steps, dt, trajectory.duration_s),) if steps > WARN_STEPS else ()
     scenario = ScenarioPlan(trajectory, steps, path, warnings, rigid, sim, limits)

@@ -46,6 +46,7 @@ from pressfit.dynamics.control import (
     estimate_pose,
     static_deflection_columns,
 )
+from pressfit.dynamics.drives.steps import hydraulic_step_refusal
 from pressfit.dynamics.machine.base import SECTION_COMPONENTS, SECTIONS, DriveInput, Energy
 from pressfit.dynamics.machine.flexible import MAX_STEP_FRACTION, FlexibleMachine, leg_frame_loads
 from pressfit.dynamics.multibody import RigidLegModel, rigid_leg_model
@@ -241,6 +242,7 @@ def plan_scenario(case: Case, machine: Machine | None = None, preload_key: str =
     check_preload(case, machine, drive_kinds.of(machine), path, preload_key)
     rigid = rigid_leg_model(machine, np.asarray(sim.start_m, float), sim.baumgarte_rad_per_s)
     _check_steps(case, sim, rigid, trajectory.waypoints_m[[0, 1, 5]])
+    check_oil_column(case, machine, sim, trajectory.waypoints_m, path, "[simulation] time_step_s")
     if steps > WARN_STEPS:
         warnings.append(run_time_warning(steps, dt, trajectory.duration_s))
     return ScenarioPlan(trajectory, steps, path, tuple(warnings), rigid, sim,
@@ -257,6 +259,15 @@ def require_force_preload(case: Case) -> None:
     if case.preload.mode != "force":
         raise PressfitError(f"{case.path}: [preload] mode must be \"force\" (a4_n, N) for the force-controlled "
                             f"drives of the simulation, got \"{case.preload.mode}\"")
+
+
+def check_oil_column(case: Case, machine: Machine, sim: Simulation, waypoints_m: np.ndarray, path_m: np.ndarray,
+                     key: str) -> None:
+    """A hydraulic drive's oil column must be integrable at the time step over the planned path
+    (:func:`pressfit.dynamics.drives.steps.hydraulic_step_refusal`; nothing to check for other drives)."""
+    reason = hydraulic_step_refusal(machine, waypoints_m, path_m, sim.model, sim.time_step_s)
+    if reason:
+        raise _refuse(case, key, reason)
 
 
 def check_preload(case: Case, machine: Machine, drives: drive_kinds.Drive, path_m: np.ndarray, key: str) -> None:

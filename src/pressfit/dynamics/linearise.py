@@ -14,7 +14,13 @@ and f the contact force on the tool (N, +y). ``model = "rigid"``: the rigid-leg 
 position, M_h h'' = -A F + e_y f, M_h the apparent Cartesian mass (Pinocchio's constraint dynamics, unit plate
 forces, gravity off), S = A^T (equation 2: dl = A^T dh). In contact (the pin pose) the case's contact spring
 k_c (and damping b_c) acts at the tool: K += k_c p_y^T p_y, C += b_c p_y^T p_y, contact force = -k_c y - b_c y'.
-Drives (:mod:`pressfit.dynamics.actuators`): tau F' = F_cmd - F, tau = 1 / (2 pi f_bw). Outputs: the four
+Drives (``[actuator] kind``, :class:`pressfit.dynamics.drives.base.DrivePort`): each leg's drive linearised at
+its operating tension (:func:`static_tensions_n`: gravity feed-forward and preload), x_d' = a x_d + b N_cmd +
+r v, N = c x_d, v the rate of the coordinate it pushes: force, tau N' = N_cmd - N; electric, the PI current
+loop with the back-EMF (whose integral makes it an added mass k_f K_t (2 pi / lead) / k_i below k_i / k_p),
+the rotor's reflected mass on its own coordinate u joined to the leg by the screw, nut and bearing in series
+(k (l - u)), the encoder reading u; hydraulic, the spool's lag, the chambers with K_q, K_c, leakage and the
+oil column (beta / V_a,b, A l_dot), the pressure loop and the flow feed-forward. Outputs: the four
 measured lengths l = S z (the actuator joint coordinates), their rates, the tool position (3) and the contact
 force.
 
@@ -35,9 +41,10 @@ and the observability are the same vector), and the share of the mode's strain e
 springs, sum_i k_i (S phi_k)_i^2 / phi_k^T K phi_k (= / omega_k^2, phi mass-normalised), is that measure normalised
 by the mode itself: about 1 for the axial leg modes (97% at pose A's 441 Hz mode), 1-2% for the rocking pair (the
 plate sways and tilts about the legs' concurrency point, where a rigid rotation changes no leg length; what is left
-is the legs' bending), exactly 0 for the plate twist; a warning when a loop pole (a closed-loop pole the feedback
-moved by more than ``MOVED_RELATIVE`` from every open-loop pole) lies within ``WARNING_RATIO`` of a structural
-mode's frequency.
+is the legs' bending), exactly 0 for the plate twist; one warning line per (pose, mode) when a loop pole (a
+closed-loop pole the feedback moved by more than ``MOVED_RELATIVE`` from every open-loop pole) lies within
+``WARNING_RATIO`` of a structural mode's frequency and the drives hold at least ``DRIVE_SHARE_THRESHOLD`` of that
+mode's strain energy (below it the loop neither excites nor damps the mode).
 """
 
 from __future__ import annotations
@@ -53,13 +60,17 @@ import pinocchio as pin
 from pressfit import kinematics
 from pressfit.description.cases import Case, Contact, Controller
 from pressfit.description.machine import Machine
-from pressfit.dynamics.actuators import ForceActuators, distribution
+from pressfit.dynamics import drives as drive_kinds
+from pressfit.dynamics.actuators import distribution
+from pressfit.dynamics.control import gravity_feedforward_n
+from pressfit.dynamics.drives.base import DrivePort
 from pressfit.dynamics.machine.flexible import FlexibleMachine
 from pressfit.dynamics.modes import closure_jacobian, elastic_stiffness, mass_matrix, natural_modes, reduced_system
 from pressfit.dynamics.multibody import rigid_leg_model
 from pressfit.errors import PressfitError
 
-WARNING_RATIO = 0.2  # a loop pole within 20% of a structural mode's frequency is reported
+WARNING_RATIO = 0.2  # a loop pole within 20% of a structural mode's frequency is reported ...
+DRIVE_SHARE_THRESHOLD = 0.1  # ... when the drives hold at least this share of the mode's strain energy
 MOVED_RELATIVE = 1e-3  # a closed-loop pole farther than this (relative) from every open-loop pole is a loop pole
 MODE_COUNT = 6
 FREQUENCY_POINTS = 300  # log-spaced over 0.01-1000 Hz: Bode data and margins (~30 ms a point at 200 states)
@@ -85,6 +96,8 @@ class Plant:
     c_contact: np.ndarray
     pinv: np.ndarray
     vertical_mass_kg: float  # 1 / (e_y^T M_h^-1 e_y) of the rigid model: the apparent vertical mass
+    drive_kind: str = "force"
+    tensions_n: np.ndarray | None = None  # (4,) the drives' operating tensions, N
 
     def system(self) -> ct.StateSpace:
         """python-control state space, inputs n_cmd1..4, f_contact; outputs l1..4, tool_x..z, f_contact."""
@@ -94,22 +107,59 @@ class Plant:
                      outputs=[f"l{i}" for i in range(1, 5)] + ["tool_x", "tool_y", "tool_z", "f_contact"])
 
 
-def _second_order(mass: np.ndarray, damping: np.ndarray, stiffness: np.ndarray, forcing: np.ndarray,
-                  tau_s: float) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
-    """[z, z', F] state matrix and input matrices (commands, contact) of M z'' + C z' + K z = forcing[:, :4] F +
-    forcing[:, 4] f with tau F' = F_cmd - F."""
+def _assemble(mass: np.ndarray, damping: np.ndarray, stiffness: np.ndarray, drive_on: np.ndarray,
+              contact_on: np.ndarray, ports: list[DrivePort]) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    """State matrix and input matrices (commands (n, 4), contact (n,)) over x = [q, q', drive states] of
+    M q'' + C q' + K q = -drive_on^T N + contact_on f, N_i = c_i x_i, x_i' = a_i x_i + b_i N_cmd,i + r_i v_i with
+    v = drive_on q' (the rate of the coordinate each drive pushes on)."""
     r = mass.shape[0]
-    minv = np.linalg.solve(mass, np.column_stack([stiffness, damping, forcing]))
-    a = np.zeros((2 * r + 4, 2 * r + 4))
+    sizes = [p.a.shape[0] for p in ports]
+    nd = sum(sizes)
+    n = 2 * r + nd
+    a = np.zeros((n, n))
+    b = np.zeros((n, 4))
+    c_force = np.zeros((4, nd))
+    off = 2 * r
+    for i, p in enumerate(ports):
+        sl = slice(off, off + sizes[i])
+        a[sl, sl] = p.a
+        b[sl, i] = p.b_command
+        a[sl, r:2 * r] = np.outer(p.b_rate, drive_on[i])
+        c_force[i, sl.start - 2 * r:sl.stop - 2 * r] = p.c
+        off += sizes[i]
+    minv = np.linalg.solve(mass, np.column_stack([stiffness, damping, -drive_on.T @ c_force, contact_on]))
     a[:r, r:2 * r] = np.eye(r)
     a[r:2 * r, :r], a[r:2 * r, r:2 * r] = -minv[:, :r], -minv[:, r:2 * r]
-    a[r:2 * r, 2 * r:] = minv[:, 2 * r:2 * r + 4]
-    a[2 * r:, 2 * r:] = -np.eye(4) / tau_s
-    b = np.zeros((2 * r + 4, 4))
-    b[2 * r:] = np.eye(4) / tau_s
-    bf = np.zeros(2 * r + 4)
+    a[r:2 * r, 2 * r:] = minv[:, 2 * r:2 * r + nd]
+    bf = np.zeros(n)
     bf[r:2 * r] = minv[:, -1]
     return a, b, bf
+
+
+def _with_series(mass: np.ndarray, damping: np.ndarray, stiffness: np.ndarray, s: np.ndarray, plate: np.ndarray,
+                 ports: list[DrivePort]) -> tuple[np.ndarray, ...]:
+    """Add each drive's own coordinate u_i (its reflected mass, joined to the leg length l_i = s_i q by the
+    series spring k_i) where the port has one: the reflected mass moves off the leg (it was its armature),
+    K gains k_i (s_i q - u_i)^2 / 2; returns mass, damping, stiffness, drive_on (4, n) (where the drives push),
+    the measured lengths (4, n) (the drive's own coordinate: a motor encoder reads u through the lead) and the
+    tool rows (3, n)."""
+    k = np.array([p.series_stiffness_n_per_m for p in ports])
+    if np.all(np.isinf(k)):
+        return mass, damping, stiffness, s, s, plate
+    m_r = np.array([p.reflected_mass_kg for p in ports])
+    r = mass.shape[0]
+    big_m = np.zeros((r + 4, r + 4))
+    big_m[:r, :r] = mass - s.T @ np.diag(m_r) @ s
+    big_m[r:, r:] = np.diag(m_r)
+    big_c = np.zeros((r + 4, r + 4))
+    big_c[:r, :r] = damping
+    coupling = np.hstack([s, -np.eye(4)])  # l - u, (4, r + 4)
+    big_k = np.zeros((r + 4, r + 4))
+    big_k[:r, :r] = stiffness
+    big_k += coupling.T @ np.diag(k) @ coupling
+    drive_on = np.hstack([np.zeros((4, r)), np.eye(4)])
+    pad = np.zeros((4, 4)), np.zeros((plate.shape[0], 4))
+    return big_m, big_c, big_k, drive_on, drive_on, np.hstack([plate, pad[1]])
 
 
 def _apparent_vertical_mass(machine: Machine, pose_m: np.ndarray) -> tuple[np.ndarray, float]:
@@ -127,25 +177,37 @@ def _apparent_vertical_mass(machine: Machine, pose_m: np.ndarray) -> tuple[np.nd
     return np.linalg.inv(inv), 1.0 / inv[1, 1]
 
 
+def static_tensions_n(machine: Machine, pose_m: np.ndarray, preload_n: float = 0.0) -> np.ndarray:
+    """The drives' tensions (4,), N, holding the pose at rest as the controller commands them: -A^+ G + a4 v_p
+    (G the gravity feed-forward, a4 = ``preload_n``)."""
+    pose = np.asarray(pose_m, dtype=float)
+    pinv, null = distribution(kinematics.inverse_kinematics(machine, pose).unit_vectors)
+    gravity = gravity_feedforward_n(rigid_leg_model(machine, pose), pose)
+    return -pinv @ gravity + preload_n * null
+
+
 def linear_plant(machine: Machine, pose_m: np.ndarray, contact: Contact | None = None,
-                 model: Model = "flexible") -> Plant:
-    """:class:`Plant` at the reachable pose ``pose_m`` (m); ``contact``: the contact spring engaged at the tool."""
+                 model: Model = "flexible", tensions_n: np.ndarray | None = None) -> Plant:
+    """:class:`Plant` at the reachable pose ``pose_m`` (m); ``contact``: the contact spring engaged at the tool;
+    ``tensions_n`` (4,), N: the drives' operating point (default :func:`static_tensions_n` without preload)."""
     if model not in ("flexible", "rigid"):
         raise PressfitError(f"model must be 'flexible' or 'rigid', got {model!r}")
     pose = kinematics.require_reachable(machine, np.asarray(pose_m, dtype=float))
-    tau_s = ForceActuators.of(machine).time_constant_s
-    pinv, _ = distribution(kinematics.inverse_kinematics(machine, pose).unit_vectors)
+    legs = kinematics.inverse_kinematics(machine, pose)
+    pinv, _ = distribution(legs.unit_vectors)
+    tensions = static_tensions_n(machine, pose) if tensions_n is None else np.asarray(tensions_n, dtype=float)
+    drive = drive_kinds.of(machine)
+    ports = [drive.linear_port(float(length), float(n)) for length, n in zip(legs.lengths_m, tensions, strict=True)]
     m_h, m_y = _apparent_vertical_mass(machine, pose)
     if model == "rigid":
-        s = kinematics.inverse_kinematics(machine, pose).unit_vectors  # (4, 3): dl = A^T dh
+        s = legs.unit_vectors  # (4, 3): dl = A^T dh
         mass, damping, stiffness = m_h, np.zeros((3, 3)), np.zeros((3, 3))
         plate = np.eye(3)
-        forcing = np.column_stack([-s.T, plate[1]])
     else:
         rs = reduced_system(machine, pose)
         act = np.array([sp.idx_v for sp in rs.mm.springs if sp.name == "actuator"])
         k_full = elastic_stiffness(rs.mm, rs.q)
-        k_full[act, act] = 0.0  # force drives: no actuator spring
+        k_full[act, act] = 0.0  # the drives' own stiffness is their port (and an electric drive's series spring)
         basis = rs.basis
         stiffness = basis.T @ k_full @ basis
         s = basis[act]  # (4, r)
@@ -162,14 +224,15 @@ def linear_plant(machine: Machine, pose_m: np.ndarray, contact: Contact | None =
             full_mass = mass_matrix(rs.model, rs.data, rs.q)
             damping = damping + ray.alpha_per_s * basis.T @ full_mass @ (basis - v_r @ s)
         mass = rs.mass_kg
-        forcing = np.column_stack([-s.T, plate[1]])
-    c_contact_z = np.zeros((2, mass.shape[0]))
     if contact is not None:
         py = plate[1]
         stiffness = stiffness + contact.stiffness_n_per_m * np.outer(py, py)
         damping = damping + contact.damping_n_s_per_m * np.outer(py, py)
-        c_contact_z = np.vstack([-contact.stiffness_n_per_m * py, -contact.damping_n_s_per_m * py])
-    a, b, bf = _second_order(mass, damping, stiffness, forcing, tau_s)
+    mass, damping, stiffness, drive_on, s, plate = _with_series(mass, damping, stiffness, s, plate, ports)
+    c_contact_z = np.zeros((2, mass.shape[0]))
+    if contact is not None:
+        c_contact_z = np.vstack([-contact.stiffness_n_per_m * plate[1], -contact.damping_n_s_per_m * plate[1]])
+    a, b, bf = _assemble(mass, damping, stiffness, drive_on, plate[1], ports)
     r = mass.shape[0]
     n = a.shape[0]
 
@@ -181,7 +244,7 @@ def linear_plant(machine: Machine, pose_m: np.ndarray, contact: Contact | None =
     c_contact = (pad(c_contact_z[:1], 0) + pad(c_contact_z[1:], r))[0]
     return Plant(model=model, pose_m=pose, in_contact=contact is not None, a=a, b_command=b, b_contact=bf,
                  c_lengths=pad(s, 0), c_rates=pad(s, r), c_tool=pad(plate, 0), c_contact=c_contact, pinv=pinv,
-                 vertical_mass_kg=float(m_y))
+                 vertical_mass_kg=float(m_y), drive_kind=getattr(drive, "kind", "force"), tensions_n=tensions)
 
 
 @dataclass(frozen=True)
@@ -326,10 +389,33 @@ def structural_modes(machine: Machine, pose_m: np.ndarray, count: int = MODE_COU
                  for f, d, t in zip(modes.frequencies_hz, drive, total, strict=True))
 
 
+def proximity_warnings(poles: np.ndarray, loop_poles: np.ndarray, modes: tuple[StructuralMode, ...],
+                       pose: str) -> tuple[str, ...]:
+    """One line per structural mode that a loop pole (``loop_poles``: moved by the feedback) comes within
+    ``WARNING_RATIO`` of in frequency, reported only when the drives see and move that mode: their share of its
+    strain energy at least ``DRIVE_SHARE_THRESHOLD`` (below it the loop can neither excite nor damp the mode:
+    the rocking pair's 1-2%, the twist's 0)."""
+    freq = np.abs(poles) / (2 * math.pi)
+    near = loop_poles & (poles.imag >= 0)
+    lines = []
+    for k, m in enumerate(modes):
+        if m.drive_energy_fraction < DRIVE_SHARE_THRESHOLD:
+            continue
+        close = np.flatnonzero(near & (np.abs(freq - m.frequency_hz) <= WARNING_RATIO * m.frequency_hz))
+        if close.size:
+            p = close[np.argmin(np.abs(freq[close] - m.frequency_hz))]
+            lines.append(f"{pose}: structural mode {k + 1} at {m.frequency_hz:.4g} Hz (drive energy share "
+                         f"{m.drive_energy_fraction:.2g} >= {DRIVE_SHARE_THRESHOLD:g}) has {close.size} loop "
+                         f"pole(s) within {100 * WARNING_RATIO:g}%, nearest {freq[p]:.4g} Hz (damping "
+                         f"{-poles[p].real / abs(poles[p]):.3g})")
+    return tuple(lines)
+
+
 def design_at(machine: Machine, gains: Controller, pose_m: np.ndarray, name: str, contact: Contact | None,
-              model: Model = "flexible", frequencies_hz: np.ndarray | None = None) -> PoseDesign:
-    """The loop at one pose (module doc)."""
-    plant = linear_plant(machine, pose_m, contact, model)
+              model: Model = "flexible", frequencies_hz: np.ndarray | None = None,
+              tensions_n: np.ndarray | None = None) -> PoseDesign:
+    """The loop at one pose (module doc); ``tensions_n``: the drives' operating point (:func:`linear_plant`)."""
+    plant = linear_plant(machine, pose_m, contact, model, tensions_n)
     loop = close_loop(plant, gains)
     poles = np.linalg.eigvals(loop.a)
     open_poles = np.concatenate([np.linalg.eigvals(plant.a), np.zeros(3)])
@@ -344,16 +430,7 @@ def design_at(machine: Machine, gains: Controller, pose_m: np.ndarray, name: str
     bode_ol = np.array([np.asarray(r.complex).reshape(-1) for r in responses])
     bode_ref = np.array([np.asarray(ct.frequency_response(s, w).complex).reshape(-1) for s in (ref_y, ref_x)])
     modes = structural_modes(machine, pose_m)
-    warnings = []
-    freq = np.abs(poles) / (2 * math.pi)
-    mode_hz = np.array([m.frequency_hz for m in modes])
-    for p in np.flatnonzero(moved & (poles.imag >= 0)):
-        k = int(np.argmin(np.abs(mode_hz - freq[p])))
-        m = modes[k]
-        if abs(freq[p] - m.frequency_hz) <= WARNING_RATIO * m.frequency_hz:
-            warnings.append(f"loop pole at {freq[p]:.4g} Hz (damping {-poles[p].real / abs(poles[p]):.3g}) within "
-                            f"{100 * WARNING_RATIO:g}% of structural mode {k + 1} at {m.frequency_hz:.4g} Hz "
-                            f"(drive energy share {m.drive_energy_fraction:.2g})")
+    warnings = list(proximity_warnings(poles, moved, modes, name))
     if not stable:
         worst = poles[np.argmax(poles.real)]
         warnings.insert(0, f"the closed loop is UNSTABLE: pole {worst.real:.4g} {worst.imag:+.4g}j 1/s "
@@ -375,6 +452,7 @@ class ControlDesign:
 
     def to_dict(self) -> dict[str, Any]:
         return {"case": self.case, "model": self.model, "warning_ratio": WARNING_RATIO,
+                "warning_drive_share": DRIVE_SHARE_THRESHOLD,
                 "poses": [p.to_dict() for p in self.poses]}
 
 
@@ -391,4 +469,6 @@ def control_design(case: Case, model: Model = "flexible") -> ControlDesign:
     poses = [("pin", pin_pose, c), ("start", np.array(sim.start_m), None), ("approach", approach, None),
              ("end", np.array(sim.end_m), None)]
     return ControlDesign(case=case.name, model=model,
-                         poses=tuple(design_at(machine, sim.controller, p, n, con, model) for n, p, con in poses))
+                         poses=tuple(design_at(machine, sim.controller, p, n, con, model,
+                                               tensions_n=static_tensions_n(machine, p, case.preload.a4_n))
+                                     for n, p, con in poses))

@@ -17,19 +17,45 @@ serves several runs.
 * ``reflected_mass_kg``: rotating inertia reflected along the leg, which the multibody model carries as the
   prismatic joint's armature (:mod:`pressfit.dynamics.inertia`); the delivered force is therefore the drive's
   force before that inertia, never minus it (no double count);
-* ``bandwidth_hz``: the -3 dB frequency of its force loop (small signal, blocked leg).
+* ``bandwidth_hz``: the -3 dB frequency of its force loop (small signal, blocked leg);
+* ``linear_port(length_m, tension_n)``: the drive linearised about rest at one leg's length and tension
+  (:class:`DrivePort`), for the control design (:mod:`pressfit.dynamics.linearise`).
 """
 
 from __future__ import annotations
 
 import math
 from collections.abc import Callable
+from dataclasses import dataclass
 from typing import Any, Protocol
 
 import numpy as np
 from scipy.optimize import brentq
 
 from pressfit.errors import PressfitError
+
+
+@dataclass(frozen=True)
+class DrivePort:
+    r"""One leg's drive linearised about rest (deviations): x' = a x + b_command dN_cmd + b_rate v,
+    dN = c x (N, tension), v (m/s) the rate of the coordinate the drive pushes on (the leg length, or for an
+    electric drive the motor side of the screw). ``series_stiffness_n_per_m``: a spring between the drive's own
+    coordinate (carrying ``reflected_mass_kg``) and the leg length (inf: the drive acts on the leg directly);
+    ``states``: the names of x."""
+
+    states: tuple[str, ...]
+    a: np.ndarray  # (n, n)
+    b_command: np.ndarray  # (n,) per N of command
+    b_rate: np.ndarray  # (n,) per m/s
+    c: np.ndarray  # (n,) N per unit state
+    reflected_mass_kg: float = 0.0
+    series_stiffness_n_per_m: float = math.inf
+
+    def force_response(self, frequency_hz: np.ndarray) -> np.ndarray:
+        """dN / dN_cmd with the coordinate held (v = 0) at frequencies (Hz), complex."""
+        s = 2j * math.pi * np.atleast_1d(np.asarray(frequency_hz, dtype=float))
+        eye = np.eye(self.a.shape[0])
+        return np.array([self.c @ np.linalg.solve(w * eye - self.a, self.b_command) for w in s])
 
 
 class Drive(Protocol):
@@ -55,6 +81,8 @@ class Drive(Protocol):
     def saturated(self, command_n: np.ndarray) -> np.ndarray: ...
 
     def axial_stiffness_n_per_m(self, lengths_m: np.ndarray) -> np.ndarray: ...
+
+    def linear_port(self, length_m: float, tension_n: float) -> DrivePort: ...
 
 
 def require_step(dt_s: float) -> float:

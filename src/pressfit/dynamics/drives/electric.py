@@ -33,7 +33,7 @@ from scipy.linalg import expm
 
 from pressfit.description.machine import ElectricDrive as ElectricTable
 from pressfit.description.machine import Machine
-from pressfit.dynamics.drives.base import minus_3db_hz, require_step
+from pressfit.dynamics.drives.base import DrivePort, minus_3db_hz, require_step
 
 
 @dataclass(frozen=True)
@@ -144,3 +144,17 @@ class ElectricDrive:
         r = self.table.winding_resistance_ohm or 0.0
         return r * state.current_a**2
 
+
+    def linear_port(self, length_m: float, tension_n: float) -> DrivePort:
+        r"""The current loop (module docstring) with i_ref = dN_cmd / k_f and the back-EMF K_t omega,
+        omega = -2 pi v / lead, v the motor side's rate; dN = k_f i. The rotor (``reflected_mass_kg``) sits on
+        the motor side of the screw, nut and bearing in series (``axial_stiffness_n_per_m`` at the length)."""
+        n = 1 if self.table.current_loop_bandwidth_hz is not None else 2
+        a, b = self._a[:n, :n], self._b[:n]
+        emf_per_rate = -self.table.torque_constant_nm_per_a * 2.0 * math.pi / self.table.lead_m
+        c = np.zeros(n)
+        c[0] = self.force_per_current_n_per_a
+        return DrivePort(states=("current_a", "integral_a_s")[:n], a=a.copy(),
+                         b_command=b[:, 0] / self.force_per_current_n_per_a, b_rate=b[:, 1] * emf_per_rate, c=c,
+                         reflected_mass_kg=self.reflected_mass_kg,
+                         series_stiffness_n_per_m=float(self.axial_stiffness_n_per_m(np.array(length_m))))

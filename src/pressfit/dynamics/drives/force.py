@@ -15,6 +15,7 @@ import numpy as np
 
 from pressfit.description.machine import Machine
 from pressfit.dynamics.actuators import ForceActuators
+from pressfit.dynamics.drives.base import DrivePort
 
 
 @dataclass(frozen=True)
@@ -64,3 +65,9 @@ class ForceDrive:
 
     def axial_stiffness_n_per_m(self, lengths_m: np.ndarray) -> np.ndarray:
         return np.full_like(np.asarray(lengths_m, dtype=float), self._stiffness)
+
+    def linear_port(self, length_m: float, tension_n: float) -> DrivePort:
+        """tau dN' = dN_cmd - dN (the same at every length and tension)."""
+        w = 1.0 / self.time_constant_s
+        return DrivePort(states=("force_n",), a=np.array([[-w]]), b_command=np.array([w]), b_rate=np.zeros(1),
+                         c=np.ones(1))

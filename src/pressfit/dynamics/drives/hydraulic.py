@@ -12,8 +12,11 @@ reverse, each land an orifice Q = K_v x_v sqrt(dp) (signed, so that the flow rev
 below dp_lam = ``LAMINAR_FRACTION`` (p_s - p_t) the orifice is laminar, Q = K_v x_v dp / sqrt(dp_lam) (the
 usual regularisation: it keeps dQ/dp finite at a closed land; 0.1% of the supply drop). The spool follows
 its command with a first-order lag of ``valve_bandwidth_hz``. Pressure (force) loop, analog in the valve
-amplifier: x_v,cmd = sat(g (dp_cmd - (p_a - p_b))), dp_cmd = sat(N_cmd) / A, with N_cmd saturated at the
-drive's force limit A (p_s - p_t). Linearised about the null (p_a = p_b = (p_s + p_t) / 2, blocked piston),
+amplifier: x_v,cmd = sat(g (dp_cmd - (p_a - p_b)) - f_v A l_dot / K_q), dp_cmd = sat(N_cmd) / A, with N_cmd
+saturated at the drive's force limit A (p_s - p_t); f_v = ``flow_feedforward`` feeds the leg's flow A l_dot
+forward from the measured rate (without it the proportional loop must open the spool by a pressure error,
+a drag of A^2 / (g K_q) N s/m per leg: = k_h / w_p, the oil column over the pressure loop's bandwidth).
+Linearised about the null (p_a = p_b = (p_s + p_t) / 2, blocked piston),
 with K_q = K_v sqrt((p_s - p_t) / 2) and c = beta (1/V_a + 1/V_b):
 
     dp / dp_cmd = g c K_q w_v / ((s + c C_L)(s + w_v) + g c K_q w_v),   w_v = 2 pi f_v,
@@ -46,7 +49,7 @@ import numpy as np
 
 from pressfit.description.machine import HydraulicDrive as HydraulicTable
 from pressfit.description.machine import Machine
-from pressfit.dynamics.drives.base import minus_3db_hz, require_step
+from pressfit.dynamics.drives.base import DrivePort, minus_3db_hz, require_step
 from pressfit.errors import DriveStepError
 
 SUBSTEP_S = 1e-4  # largest pressure substep, s (accuracy, not stability: module docstring)
@@ -75,6 +78,9 @@ class HydraulicDrive:
         self.area_m2 = t.area_m2
         self.laminar_pa = LAMINAR_FRACTION * (t.supply_pressure_pa - t.tank_pressure_pa)
         self.valve_time_constant_s = 1.0 / (2.0 * math.pi * t.valve_bandwidth_hz)
+        self.null_flow_gain = t.valve_flow_gain_m3_per_s_sqrt_pa * math.sqrt(0.5 * (t.supply_pressure_pa -
+                                                                                   t.tank_pressure_pa))
+        self.feedforward_per_rate = t.flow_feedforward * self.area_m2 / self.null_flow_gain  # spool per m/s
 
     @classmethod
     def of(cls, machine: Machine) -> HydraulicDrive:
@@ -160,8 +166,9 @@ class HydraulicDrive:
         dp_cmd = np.clip(np.asarray(command_n, dtype=float), -self.force_limit_n, self.force_limit_n) / self.area_m2
         decay = math.exp(-h / self.valve_time_constant_s)
         pa, pb, xv = state.pressure_a_pa, state.pressure_b_pa, state.spool
+        feedforward = self.feedforward_per_rate * rate
         for k in range(n):
-            x_cmd = np.clip(t.pressure_loop_gain_per_pa * (dp_cmd - (pa - pb)), -1.0, 1.0)
+            x_cmd = np.clip(t.pressure_loop_gain_per_pa * (dp_cmd - (pa - pb)) - feedforward, -1.0, 1.0)
             xv = x_cmd + (xv - x_cmd) * decay
             v_a, v_b = self.volumes_m3(length + rate * (k + 0.5) * h)
             fa, fb, jaa, jab, jba, jbb = self._rates(pa, pb, xv, v_a, v_b, rate)
@@ -195,3 +202,76 @@ class HydraulicDrive:
     def axial_stiffness_n_per_m(self, lengths_m: np.ndarray) -> np.ndarray:
         """The oil column with the valve closed, beta A^2 (1/V_a + 1/V_b), N/m."""
         return self.machine.drive_stiffness_n_per_m(lengths_m)
+
+    def linear_port(self, length_m: float, tension_n: float) -> DrivePort:
+        r"""Chambers and valve linearised at rest delivering ``tension_n`` (p_a,b = null +- N / 2A), states
+        (dp_a, dp_b, x_v), v = l_dot:
+
+            dp_a' = beta / V_a (K_qa x_v - K_ca dp_a + A v - C_L (dp_a - dp_b)),
+            dp_b' = beta / V_b (-K_qb x_v - K_cb dp_b - A v + C_L (dp_a - dp_b)),
+            x_v' = w_v (g (dN_cmd / A - (dp_a - dp_b)) - f_v A v / K_q - x_v),   dN = A (dp_a - dp_b).
+
+        K_q = dQ/dx_v of each chamber's pair of lands, the mean of the opening (x_v > 0) and closing side
+        (the critically lapped spool rests near its null, x_v0 = C_L (p_a - p_b) / (K_v sqrt(drop)) ~ 1e-4,
+        where the two sides meet; at p_a = p_b both are K_v sqrt((p_s - p_t) / 2), the docstring's K_q);
+        K_c = -dQ/dp at x_v0 (the land's flow-pressure coefficient, K_v |x_v0| / (2 sqrt(drop))). Blocked
+        (v = 0) at p_a = p_b this is :meth:`closed_loop`; with the spool held (x_v = 0) and no leakage, the
+        chambers on a mass m ring at sqrt(k_h / m) (k_h = :meth:`axial_stiffness_n_per_m`)."""
+        t, area = self.table, self.area_m2
+        ps, pt, cl = t.supply_pressure_pa, t.tank_pressure_pa, t.leakage_m3_per_s_pa
+        kv = t.valve_flow_gain_m3_per_s_sqrt_pa
+        dp0 = float(np.clip(tension_n, -self.force_limit_n, self.force_limit_n)) / area
+        pa, pb = self.null_pressure_pa + dp0 / 2, self.null_pressure_pa - dp0 / 2
+        floor = self.laminar_pa
+        drops_a = np.maximum([ps - pa, pa - pt], floor)  # opening side (supply to a), closing side (a to tank)
+        drops_b = np.maximum([pb - pt, ps - pb], floor)
+        kqa, kqb = kv * np.mean(np.sqrt(drops_a)), kv * np.mean(np.sqrt(drops_b))
+        side = 0 if dp0 >= 0 else 1
+        xv0 = abs(cl * dp0) / (kv * math.sqrt(drops_a[side]))
+        kca, kcb = kv * xv0 / (2 * math.sqrt(drops_a[side])), kv * xv0 / (2 * math.sqrt(drops_b[side]))
+        v_a, v_b = (float(v) for v in self.volumes_m3(np.array(length_m)))
+        ga, gb = t.bulk_modulus_pa / v_a, t.bulk_modulus_pa / v_b
+        wv, g = 1.0 / self.valve_time_constant_s, t.pressure_loop_gain_per_pa
+        a = np.array([[-ga * (kca + cl), ga * cl, ga * kqa],
+                      [gb * cl, -gb * (kcb + cl), -gb * kqb],
+                      [-wv * g, wv * g, -wv]])
+        return DrivePort(states=("pressure_a_pa", "pressure_b_pa", "spool"), a=a,
+                         b_command=np.array([0.0, 0.0, wv * g / area]),
+                         b_rate=np.array([ga * area, -gb * area, -wv * self.feedforward_per_rate]),
+                         c=np.array([area, -area, 0.0]))
+
+
+STEP_FRACTION = 0.5  # the multibody step is refused beyond this fraction of the oil column's stability limit
+
+
+def oil_column_step_index(stiffness_n_per_m: np.ndarray, mass_kg: np.ndarray, dt_s: float) -> np.ndarray:
+    r"""omega_h dt / 2 for the oil column k_h on a mass m, omega_h = sqrt(k_h / m): the step is stable below 1.
+
+    Derived: the simulation couples drive and mechanics explicitly. Over a step the drive holds the leg rate v_n
+    (its pressures then change the force by -k_h v_n dt: the chambers' A l_dot term through beta / V), and the
+    mechanics then advance the velocity with the new force (semi-implicit Euler), so on the oil column alone
+    F_{n+1} = F_n - k_h dt v_n, v_{n+1} = v_n + dt F_{n+1} / m: the update matrix [[1, -k_h dt], [dt / m,
+    1 - a]], a = (omega_h dt)^2, has determinant 1 and trace 2 - a, so its eigenvalues stay on the unit circle
+    iff a < 4, i.e. omega_h dt < 2 (beyond, one grows as |z| > 1 every step: the pressures run away)."""
+    omega = np.sqrt(np.asarray(stiffness_n_per_m, dtype=float) / np.asarray(mass_kg, dtype=float))
+    return 0.5 * omega * dt_s
+
+
+def refuse_step(machine: Machine, lengths_m: np.ndarray, mass_kg: np.ndarray, dt_s: float) -> str | None:
+    """The reason (one clause naming the key and the limit) a hydraulic machine's time step ``dt_s`` cannot
+    integrate the oil column k_h(l) on the mass ``mass_kg`` (m, kg: per leg, at the lengths ``lengths_m`` (n, 4)
+    of the planned poses), or None; refused beyond ``STEP_FRACTION`` of :func:`oil_column_step_index`."""
+    lengths = np.atleast_2d(np.asarray(lengths_m, dtype=float))
+    k_h = machine.drive_stiffness_n_per_m(lengths)
+    index = oil_column_step_index(k_h, np.broadcast_to(mass_kg, k_h.shape), dt_s)
+    pose, leg = np.unravel_index(int(np.argmax(index)), index.shape)
+    worst = float(index[pose, leg])
+    if worst <= STEP_FRACTION:
+        return None
+    mass = float(np.broadcast_to(mass_kg, k_h.shape)[pose, leg])
+    f_h = math.sqrt(k_h[pose, leg] / mass) / (2 * math.pi)
+    bound = 2.0 * STEP_FRACTION / (2 * math.pi * f_h)
+    return (f"at most {bound:.3g} s against the hydraulic oil column of leg {leg + 1} (omega_h dt / 2 = "
+            f"{worst:.3g} > {STEP_FRACTION:g}; the explicit drive-mechanics coupling is stable below 1): "
+            f"k_h = {k_h[pose, leg]:.4g} N/m at leg length {lengths[pose, leg]:.4g} m on {mass:.4g} kg, "
+            f"f_h = {f_h:.4g} Hz")
