@@ -15,7 +15,8 @@ from click.testing import CliRunner
 from pressfit.cli import main
 from pressfit.description.cases import load_case
 from pressfit.dynamics.actuators import ForceActuators
-from pressfit.dynamics.insertion import SERIES_COLUMNS, InsertionResult, simulate_insertion, summarise
+from pressfit.dynamics.control import static_deflection_columns
+from pressfit.dynamics.insertion import SERIES_COLUMNS, InsertionResult, plan_scenario, simulate_insertion, summarise
 from pressfit.mechanics.condensed import condensed_plate_compliance
 from pressfit.studies.limit_check import SIMULATION_LIMITS, simulation_lines
 
@@ -25,9 +26,11 @@ BOTTOM = np.array([0.10, 0.60, -0.05])  # the pin on the board face of the shipp
 
 
 def case_file(tmp_path: Path, limits: dict, name: str = "sim.toml") -> Path:
-    """The shipped scenario checked without the limiter, with the given [simulation.limits] only."""
+    """The shipped scenario checked without the limiter, with the given [simulation.limits] only, on the paper's
+    loop (no deflection compensation: the closed forms below are those of the structure in series)."""
     data = tomllib.loads(SHIPPED.read_text())
     data["simulation"]["limits"] = {"limiter": False, **limits}
+    data["simulation"]["controller"]["deflection_compensation"] = False
     path = tmp_path / name
     path.write_text(tomli_w.dumps(data))
     return path
@@ -40,14 +43,17 @@ def free_run(tmp_path_factory):
 
 
 def _closed_form(case) -> tuple[float, np.ndarray]:
-    """Series springs (closed form): the PID holds the rigid plate 2 mm below the board face, so the steady
-    contact force is k i / (1 + k C_yy); the tool then sits off the pin laterally by (C_xy, C_zy) F (C the
-    condensed plate compliance, :mod:`pressfit.mechanics.condensed`)."""
+    """Series springs (closed form): the PID holds the rigid plate 2 mm below the board face, the structure
+    deflects by C e_y F under the contact force and by s under the weight (C the condensed plate compliance,
+    :mod:`pressfit.mechanics.condensed`; s = :func:`pressfit.dynamics.control.static_deflection_columns`'s weight
+    column with the run's rigid model), so the steady contact force is k (i - s_y) / (1 + k C_yy) and the tool sits
+    off the pin by C e_y F + s."""
     sim = case.simulation
     column = condensed_plate_compliance(case.machine(), BOTTOM)[:3, 1]
+    sag = static_deflection_columns(case.machine(), plan_scenario(case).rigid, BOTTOM)[:, 1]
     k = sim.contact.stiffness_n_per_m
-    force = k * sim.interference_m / (1 + k * column[1])
-    return force, column * force
+    force = k * (sim.interference_m - sag[1]) / (1 + k * column[1])
+    return force, column * force + sag
 
 
 def _verdicts(key: str, true_value: float, summary: dict, margin: float) -> tuple[bool, bool]:
@@ -68,15 +74,18 @@ def test_contact_force_and_overshoot_limits_against_the_series_spring_closed_for
 
 
 def test_positioning_error_limit_against_the_plate_compliance(free_run):
-    """The tool's lateral error at the pin is the plate's lateral deflection under the contact force,
-    |(C_xy, C_zy)| F (32.8 um; the final error, 2 um, is smaller, so it is the positioning error). Achieved
-    -1.4%: the rigid plate's residual lateral offset from the integrator and the closure drift (0.5 um), so
-    the limits are 5% either side."""
+    """The positioning error is the larger of the lateral error at the pin, |(C e_y F + s)_xz| (37.6 um: the
+    100 N contact force pushes the sag back), and the final error, the weight's sag at end_m, |s(end_m)| (145.7 um,
+    the loop holds the plate there): the final one. Achieved -0.8% (the plate's residual offset after the 0.5 s
+    settle), so the limits are 5% either side."""
     case, run = free_run
     _, deflection = _closed_form(case)
-    assert run.summary["tool_final_error_m"] < 0.2 * np.hypot(deflection[0], deflection[2])
-    assert _verdicts("max_positioning_error_m", float(np.hypot(deflection[0], deflection[2])), run.summary,
-                     0.05) == (False, True)
+    end = np.asarray(case.simulation.end_m)
+    final = float(np.linalg.norm(static_deflection_columns(case.machine(), plan_scenario(case).rigid, end)[:, 1]))
+    assert run.summary["tool_lateral_error_at_insertion_m"] == pytest.approx(np.hypot(deflection[0], deflection[2]),
+                                                                              rel=0.05)
+    assert final > 3 * np.hypot(deflection[0], deflection[2])
+    assert _verdicts("max_positioning_error_m", final, run.summary, 0.05) == (False, True)
 
 
 def synthetic(case, tmp_tau_s: float = 0.05) -> tuple[InsertionResult, dict[str, float]]:
