@@ -36,7 +36,8 @@ from pressfit import kinematics
 from pressfit.description.cases import Case, Simulation
 from pressfit.description.machine import Machine
 from pressfit.dynamics import drives as drive_kinds
-from pressfit.dynamics.contact import ContactState, contact_force_n, solve_contact
+from pressfit.dynamics import kernels
+from pressfit.dynamics.contact import NO_TABLE, contact_force_n, contact_parameters
 from pressfit.dynamics.control import ForceLimitedController, PoseCache, Trajectory, estimate_pose
 from pressfit.dynamics.machine.base import SECTION_COMPONENTS, SECTIONS, DriveInput
 from pressfit.dynamics.machine.flexible import MAX_STEP_FRACTION, FlexibleMachine
@@ -98,16 +99,21 @@ class InsertionResult:
 
 
 def _deflection(machine: Machine, case: Case, sim: Simulation, pin_pose: np.ndarray) -> Callable[
-        [np.ndarray], Callable[[float], np.ndarray]]:
-    """pose -> (F -> u): the tool's deflection u (3,), m, under the contact force F (N, +y) at the rigid pose."""
+        [np.ndarray], tuple[np.ndarray, tuple[np.ndarray, np.ndarray]]]:
+    """pose -> the tool's deflection under the contact force F (N, +y) at the rigid pose, as
+    :func:`pressfit.dynamics.contact.solve_contact` takes it: u = column F (m/N, (3,)), or, with the cardans'
+    clearance, the load-deflection table (loads (n,), N; displacements (n, 3), m) at the pin."""
     if not sim.clearance:  # C varies by 3.4% over 5 mm at the pin: 0.07% error at the 0.1 mm update distance
-        compliance = PoseCache(lambda pose: condensed_plate_compliance(machine, pose)[:3, 1], COMPLIANCE_UPDATE_M)
-        return lambda pose: (lambda force, column=compliance(pose): column * force)  # noqa: B008 (bound per pose)
+        compliance = PoseCache(lambda pose: np.ascontiguousarray(condensed_plate_compliance(machine, pose)[:3, 1]),
+                               COMPLIANCE_UPDATE_M)
+        return lambda pose: (compliance(pose), NO_TABLE)
     limit = max(4.0 * sim.controller.force_limit_n, sim.contact.stiffness_n_per_m * sim.interference_m)
     curve = load_deflection(machine, pin_pose, [0.0, 1.0, 0.0], np.linspace(0.0, limit, _CURVE_POINTS),
                             clearance_from_case(case, machine), case.preload.a4_n, unload=False)
-    loads, disp = curve.loads_n, curve.loading.displacement_m - curve.loading.displacement_m[0]
-    return lambda pose: lambda force: np.array([np.interp(force, loads, disp[:, k]) for k in range(3)])
+    table = (np.ascontiguousarray(curve.loads_n, dtype=float),
+             np.ascontiguousarray(curve.loading.displacement_m - curve.loading.displacement_m[0], dtype=float))
+    zero = np.zeros(3)
+    return lambda pose: (zero, table)
 
 
 @dataclass(frozen=True)
@@ -311,6 +317,12 @@ class _Series:
             self.chunks.append(np.empty((min(self.steps - k, _CHUNK_ROWS), len(SERIES_COLUMNS))))
         self.chunks[-1][k % _CHUNK_ROWS] = (*row, *self.kinematic, *lengths, *rates)
 
+    def row(self, k: int) -> np.ndarray:
+        """Row k (the rows are filled in order) to fill in place; the kinematic pose is the caller's."""
+        if k // _CHUNK_ROWS == len(self.chunks):
+            self.chunks.append(np.empty((min(self.steps - k, _CHUNK_ROWS), len(SERIES_COLUMNS))))
+        return self.chunks[-1][k % _CHUNK_ROWS]
+
     def rows(self) -> np.ndarray:
         return np.concatenate(self.chunks)
 
@@ -339,46 +351,60 @@ def _drift_error(case: Case, drift: float, t: float) -> PressfitError:
 
 def _run_rigid(case: Case, machine: Machine, plan: ScenarioPlan, drives: drive_kinds.Drive, limiter: bool,
                progress: bool) -> tuple[np.ndarray, np.ndarray, None]:
-    """The rigid-leg model, the compliance in series at the tool (module docstring)."""
+    """The rigid-leg model, the compliance in series at the tool (module docstring). Per step: the controller at
+    the estimate, the drives, one Pinocchio step, then one compiled kernel
+    (:func:`pressfit.dynamics.kernels.rigid_post_step`) for the contact, the axial forces, the pose estimate of the
+    new lengths (the next step's controller estimate and, continued to ``KINEMATIC_ITERATIONS``, the row's
+    kinematic pose) and the row."""
     sim, trajectory, steps, rigid = case.simulation, plan.trajectory, plan.steps, plan.rigid
     deflection = _deflection(machine, case, sim, trajectory.waypoints_m[2])
-    ctrl = ForceLimitedController(machine, rigid, sim.controller, limiter, np.asarray(sim.start_m, float).copy())
     q, v, dt, a4 = rigid.reference_q.copy(), np.zeros(rigid.model.nv), sim.time_step_s, case.preload.a4_n
-    force = ctrl.command(q[rigid.actuator_q], v[rigid.actuator_v], trajectory.at(0.0), 0.0, 0.0)
-    tension = -ctrl.pinv @ force + a4 * ctrl.null
-    drive = drives.initial_state(tension, q[rigid.actuator_q])
-    contact = ContactState(0.0, sim.contact.board_height_m - q[1], np.zeros(3))
-    series, phases = _Series(machine, steps, sim.start_m), np.empty(steps, dtype=int)
-    tau = np.zeros(rigid.model.nv)
+    ctrl = ForceLimitedController(machine, rigid, sim.controller, limiter, np.asarray(sim.start_m, float).copy(), a4)
+    act_q, act_v = rigid.actuator_q, rigid.actuator_v
+    ctrl.command(q[act_q], v[act_v], trajectory.at(0.0), 0.0, 0.0)
+    drive = drives.initial_state(ctrl.tension_n.copy(), q[act_q])
+    ctrl.observe(q[act_q])  # the first step's estimate (later ones: rigid_post_step's)
+    times = dt * np.arange(1, steps + 1)
+    ref_position, ref_velocity = trajectory.sample(times)
+    phases = trajectory.segments(times - 1e-12)
+    params, board = contact_parameters(sim.contact), sim.contact.board_height_m
+    iterations = ctrl.gains.estimator_iterations
+    post = np.array([SERIES_COLUMNS.index(c) for c in ("plate_x_m", "tool_x_m", "contact_force_n", "depth_m",
+                                                       "axial_n1", "kinematic_x_m", "length_m1", "rate_m_per_s1")])
+    pre = np.array([SERIES_COLUMNS.index(c) for c in ("time_s", "ref_x_m", "est_x_m", "cmd_n1", "act_n1",
+                                                      "reference_lift_m", "internal_force_n")])
+    drift_column = SERIES_COLUMNS.index("closure_drift_m")
+    series = _Series(machine, steps, sim.start_m)
+    tau, contact_tau, force, depth = np.zeros(rigid.model.nv), np.zeros(3), 0.0, board - q[1]
+    column, table = np.zeros(3), NO_TABLE
+    lengths, rates = q[act_q], v[act_v]
     for k in tqdm(range(steps), desc="simulate", unit="step", disable=not progress, mininterval=0.5):
-        t = (k + 1) * dt
-        reference = trajectory.at(t)
+        t = float(times[k])
         try:
-            force = ctrl.command(q[rigid.actuator_q], v[rigid.actuator_v], reference, contact.force_n, dt)
-            command = -ctrl.pinv @ force + a4 * ctrl.null  # equation 5 at the estimate, plus the preload
-            drive, tension = drives.step(drive, command, q[rigid.actuator_q], v[rigid.actuator_v], dt)
-            tau[rigid.actuator_v] = -tension
-            tau[0:3] = pin.Quaternion(q[3:7]).matrix().T @ np.array([0.0, contact.force_n, 0.0])  # local frame
+            ctrl.command_at_estimate(rates, (ref_position[k], ref_velocity[k]), force, dt)
+            command = ctrl.tension_n.copy()  # equation 5 at the estimate, plus the preload
+            drive, tension = drives.step(drive, command, lengths, rates, dt)
+            row = series.row(k)
+            kernels.rigid_pre_step(row, t, ref_position[k], ctrl.lift_m, ctrl.estimate_m, command, tension, ctrl.null,
+                                   tau, act_v, contact_tau, pre)
+            previous = q
             q, v = rigid.step(q, v, tau, dt)
-            if not (np.all(np.isfinite(q)) and np.all(np.isfinite(v))):
+            if board - q[1] > 0.0:
+                column, table = deflection(q[0:3])
+            finite, force, depth, ctrl.estimate_residual_m = kernels.rigid_post_step(
+                row, previous, q, v, rigid.data.lambda_c, act_q, act_v, params, depth, dt, column, *table,
+                ctrl.offsets_m, ctrl.estimate_m, ctrl.units, iterations, KINEMATIC_ITERATIONS, contact_tau, post,
+                lengths, rates)
+            if not finite:
                 raise _diverged(case, t, "the state is not finite")
-            drift = rigid.closure_error_m()
+            row[drift_column] = drift = rigid.closure_error_m()
             if drift > MAX_CLOSURE_DRIFT_M:
                 raise _drift_error(case, drift, t)
-            axial = rigid.axial_forces_n()  # at the start of the step, where the accelerations were computed
-            pose = q[0:3].copy()
-            _check_pose(case, machine, k, steps, t, pose)
-            depth = sim.contact.board_height_m - pose[1]
-            contact = (solve_contact(sim.contact, pose, deflection(pose), contact.depth_m, dt) if depth > 0.0
-                       else ContactState(0.0, depth, np.zeros(3)))
-            series.add(k, (t, *reference[0] + [0.0, ctrl.lift_m, 0.0], *ctrl.estimate_m, *pose,
-                           *(pose + contact.deflection_m), contact.force_n, contact.depth_m, *command, *tension,
-                           ctrl.lift_m, drift, *axial, ctrl.null @ tension), q[rigid.actuator_q], v[rigid.actuator_v])
+            _check_pose(case, machine, k, steps, t, q[0:3])
         except UnreachablePoseError as exc:  # the estimate (feed-forward, compliance) left the workspace
             raise _diverged(case, t, f"the pose estimate left the reachable set: {exc}") from None
         except DriveStepError as exc:
             raise _drive_failed(case, t, exc) from None
-        phases[k] = trajectory.segment(t - 1e-12)
     return series.rows(), phases, None
 
 
