@@ -9,8 +9,9 @@ Distribution: a commanded Cartesian force W (N, on the plate) and a commanded pr
 
 A^+ = A^T (A A^T)^-1 the Moore-Penrose inverse and v_p the unit null vector of A with v_1 < 0 (equations
 9-10): -A N = W exactly and the preload changes no plate force. At one pose both come in closed form from the
-3 x 3 normal matrix A A^T (:func:`distribution`, compiled: about a microsecond; the batched closed forms of
-:mod:`pressfit.kinematics` and numpy's SVD are the independent references of the tests).
+3 x 3 normal matrix A A^T (:func:`distribution`, compiled: about a microsecond; accurate to cond(A)^2 eps, and
+cond(A) <= 3.6 over the reachable workspace; the batched closed forms of :mod:`pressfit.kinematics` and numpy's
+SVD are the independent references of the tests).
 
 Drive: each actuator tracks its command with a first-order force response of bandwidth f_bw (Hz),
 tau dN/dt = sat(N_cmd) - N, tau = 1 / (2 pi f_bw), the command saturated at +-``force_limit_n`` (the drive
@@ -97,4 +98,4 @@ class ForceActuators:
             shape = force.shape
         out = np.empty(force.size)
         kernels.first_order(force, command, float(self.force_limit_n), math.exp(-dt_s / self.time_constant_s), out)
-        return out.reshape(shape)
+        return out if out.shape == shape else out.reshape(shape)

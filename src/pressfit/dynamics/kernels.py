@@ -10,6 +10,7 @@ quantity; the Python functions of :mod:`pressfit.dynamics.control`, :mod:`pressf
   from the normal matrix N = E^T E = A A^T, and A's smallest singular value sqrt(lambda_min(N)) (the closed-form
   eigenvalues of a symmetric 3 x 3 matrix);
 * :func:`control`: Figure 12's PID with the force limiter (:mod:`pressfit.dynamics.control`);
+* :func:`moved`: the pose caches' test (:class:`pressfit.dynamics.multibody.PoseCache`);
 * :func:`first_order`: the ideal force drive's step (:mod:`pressfit.dynamics.actuators`);
 * :func:`contact_law`, :func:`solve_contact`: the contact law and the bisection of the series compliance
   (:mod:`pressfit.dynamics.contact`);
@@ -19,7 +20,7 @@ quantity; the Python functions of :mod:`pressfit.dynamics.control`, :mod:`pressf
 Compiled with ``error_model="numpy"`` (a division by zero gives inf or nan, which the callers' finiteness
 checks refuse, rather than an exception from inside a kernel) and ``cache=True``: the first call in a fresh
 install compiles (a few seconds, once; numba keeps the result beside this file, or in the user's cache
-directory when the install is read-only).
+directory when the install is read-only; with neither writable, each process compiles, :func:`_compiled`).
 """
 
 from __future__ import annotations
@@ -28,6 +29,16 @@ import math
 
 import numpy as np
 from numba import njit
+
+
+def _compiled(function):
+    """``njit`` with the cache (module docstring); without it where numba finds no writable place for it (a
+    read-only install and a read-only home: numba refuses ``cache=True`` there), compiled in each process."""
+    try:
+        return njit(cache=True, error_model="numpy")(function)
+    except RuntimeError:  # numba: "cannot cache function ...: no locator available"
+        return njit(error_model="numpy")(function)
+
 
 # contact laws (contact_law's ``law``): elastic, press fit with a linear or a saturating (tanh) fit force
 ELASTIC, FIT_LINEAR, FIT_TANH = 0, 1, 2
@@ -43,7 +54,7 @@ ROW_PLATE, ROW_TOOL, ROW_FORCE, ROW_DEPTH, ROW_AXIAL, ROW_KINEMATIC, ROW_LENGTHS
 ROW_TIME, ROW_REFERENCE, ROW_ESTIMATE, ROW_COMMAND, ROW_TENSION, ROW_LIFT, ROW_INTERNAL = range(7)
 
 
-@njit(cache=True, error_model="numpy")
+@_compiled
 def _legs(offsets, lengths, hx, hy, hz, units, residuals):
     """Unit vectors e_i (4, 3) and length residuals l_i(h) - l_i (4,) at h (equation 1: u_i = h + d_i - B_i)."""
     for i in range(4):
@@ -53,7 +64,7 @@ def _legs(offsets, lengths, hx, hy, hz, units, residuals):
         residuals[i] = n - lengths[i]
 
 
-@njit(cache=True, error_model="numpy")
+@_compiled
 def gauss_newton(offsets, lengths, pose, iterations, units):
     """Gauss-Newton on the four lengths (m) from ``pose`` (3,), m, updated in place; fills ``units`` (4, 3) with
     the leg unit vectors at the result and returns the largest |length residual| there (m)."""
@@ -84,12 +95,14 @@ def gauss_newton(offsets, lengths, pose, iterations, units):
     return max(abs(r[0]), abs(r[1]), abs(r[2]), abs(r[3]))
 
 
-@njit(cache=True, error_model="numpy")
+@_compiled
 def distribution(units, pinv, null):
     """A^+ (4, 3) into ``pinv`` and v_p (4,) into ``null`` (v_1 < 0) from the leg unit vectors ``units`` (4, 3)
     (rows e_i: A = E^T); returns A's smallest singular value. A^+ = A^T (A A^T)^-1 = E N^-1, N = E^T E by the
     adjugate; v_p is the generalised cross product of A's three rows, (v_p)_j = (-1)^j det(A without column j),
-    normalised; lambda_min(N) by the trigonometric closed form of a symmetric 3 x 3 eigenproblem."""
+    normalised; lambda_min(N) by the trigonometric closed form of a symmetric 3 x 3 eigenproblem (accurate to
+    ~1e-16 absolute near a singular A, where lambda_min is far from the others; to ~1e-11 where two eigenvalues
+    nearly coincide, far from the 1e-12 of the singularity test)."""
     a00 = a01 = a02 = a11 = a12 = a22 = 0.0
     for i in range(4):
         ex, ey, ez = units[i, 0], units[i, 1], units[i, 2]
@@ -131,7 +144,7 @@ def distribution(units, pinv, null):
     return math.sqrt(max(smallest, 0.0))
 
 
-@njit(cache=True, error_model="numpy")
+@_compiled
 def control(params, estimate, units, rates, target, target_velocity, contact_force, dt, integral, lift,
             gravity_pose, gravity, pinv, null, force, tension):
     """Figure 12's loop at the estimate (m) with leg unit vectors ``units`` (:mod:`pressfit.dynamics.control`):
@@ -171,7 +184,16 @@ def control(params, estimate, units, rates, target, target_velocity, contact_for
     return 0, lift, clamped, sigma
 
 
-@njit(cache=True, error_model="numpy")
+@_compiled
+def moved(pose, reference, tolerance):
+    """True when ``pose`` moved more than ``tolerance`` from ``reference`` (infinity norm; same units)."""
+    for k in range(pose.size):  # noqa: SIM110 (numba compiles the loop, not a generator in any())
+        if abs(pose[k] - reference[k]) > tolerance:
+            return True
+    return False
+
+
+@_compiled
 def first_order(force, command, limit, decay, out):
     """The saturated first-order drive's zero-order-hold step (:class:`pressfit.dynamics.actuators.ForceActuators`):
     out = s + (force - s) decay, s = the command clipped to +-limit (N), decay = exp(-dt / tau)."""
@@ -180,7 +202,7 @@ def first_order(force, command, limit, decay, out):
         out[i] = target + (force[i] - target) * decay
 
 
-@njit(cache=True, error_model="numpy")
+@_compiled
 def contact_law(contact, depth, rate):
     """F(d, d_dot) (N, >= 0) of :func:`pressfit.dynamics.contact.contact_force_n` (``contact`` as in
     :func:`solve_contact`)."""
@@ -194,7 +216,7 @@ def contact_law(contact, depth, rate):
     return max(force, 0.0)
 
 
-@njit(cache=True, error_model="numpy")
+@_compiled
 def _deflect(force, column, loads, disp, u):
     if loads.size == 0:
         for k in range(3):
@@ -204,7 +226,7 @@ def _deflect(force, column, loads, disp, u):
             u[k] = np.interp(force, loads, disp[:, k])
 
 
-@njit(cache=True, error_model="numpy")
+@_compiled
 def solve_contact(contact, rigid_depth, previous_depth, dt, column, loads, disp, u):
     """The contact force F (N) with the structure's deflection u(F) in series (:mod:`pressfit.dynamics.contact`):
     u = ``column`` F, or, when ``loads`` is not empty, interpolated in the table ``loads`` (n,), N -> ``disp``
@@ -229,7 +251,7 @@ def solve_contact(contact, rigid_depth, previous_depth, dt, column, loads, disp,
     return hi, rigid_depth - u[1]
 
 
-@njit(cache=True, error_model="numpy")
+@_compiled
 def axial_forces(closure_forces, q, actuator_q, out):
     """Axial force N_i (N, > 0 tension) of each leg at its plate cardan into ``out`` (4,): the closure force f
     (the first three of each leg's six in ``closure_forces``, in the frame of the leg's last body) along the leg
@@ -242,7 +264,7 @@ def axial_forces(closure_forces, q, actuator_q, out):
         out[i] = -fx * math.sin(c) + (fy * math.sin(d) + fz * math.cos(d)) * math.cos(c)
 
 
-@njit(cache=True, error_model="numpy")
+@_compiled
 def rigid_pre_step(row, t, reference, lift, estimate, command, tension, null, tau, actuator_v, contact_tau, layout):
     """Before one rigid-leg step: the step's row at the columns ``layout`` names (ROW_TIME ...): time (s), the
     reference with its lift (m), the estimate (m), the commanded and delivered tensions (N), the lift (m) and the
@@ -261,7 +283,7 @@ def rigid_pre_step(row, t, reference, lift, estimate, command, tension, null, ta
     row[layout[ROW_INTERNAL]] = internal
 
 
-@njit(cache=True, error_model="numpy")
+@_compiled
 def rigid_post_step(row, previous_q, q, v, closure_forces, actuator_q, actuator_v, contact, previous_depth, dt,
                     column, loads, disp, offsets, estimate, units, iterations, kinematic_iterations, tau, layout,
                     lengths, rates):

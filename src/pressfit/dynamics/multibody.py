@@ -66,7 +66,7 @@ class PoseCache:
     value: np.ndarray | None = None
 
     def __call__(self, pose_m: np.ndarray) -> np.ndarray:
-        if self.value is None or np.max(np.abs(pose_m - self.pose_m)) > self.tolerance_m:
+        if self.value is None or kernels.moved(pose_m, self.pose_m, self.tolerance_m):
             self.pose_m, self.value = np.array(pose_m, dtype=float), self.function(pose_m)
         return self.value
 
@@ -120,8 +120,8 @@ class RigidLegModel:
         datas = self.constraint_datas
         if self._datas is None or self._datas[0] is not datas:  # held element references: 2x faster
             self._datas = (datas, [datas[i] for i in range(len(datas))])
-        return math.sqrt(max(x * x + y * y + z * z for x, y, z in
-                             (cd.contact_placement_error.linear.tolist() for cd in self._datas[1])))
+        errors = [cd.contact_placement_error.linear.tolist() for cd in self._datas[1]]
+        return math.sqrt(max([x * x + y * y + z * z for x, y, z in errors]))
 
     def leg_loads(self) -> np.ndarray:
         """(4, 3): axial force N (N, > 0 tension), torsion T (N m) and bending |M_b| (N m) of each leg at its
