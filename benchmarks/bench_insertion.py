@@ -5,7 +5,9 @@ one line per model naming it (``[simulation] model``; issue 19's goals: rigid at
 with and without the limiter on the rigid model, and the bare closed-loop rigid-leg step
 (:meth:`pressfit.dynamics.multibody.RigidLegModel.step`, passive, no controller or contact) in steps per
 second, and the wall time of ``pressfit response`` (:func:`pressfit.dynamics.response.tool_response`, median of
-three). Not a test: timings depend on the machine.
+three). Steady state: the rigid model runs once untimed first, its line reporting that first run (numba loading
+the compiled kernels of :mod:`pressfit.dynamics.kernels` from its cache, or compiling them in a fresh install).
+Not a test: timings depend on the machine.
 """
 
 from __future__ import annotations
@@ -26,18 +28,23 @@ from pressfit.dynamics.response import tool_response
 from pressfit.shipped import cases_dir
 
 
-def _timed(label: str, case: object, limiter: bool = True) -> None:
-    """One insertion run: simulated seconds per wall-clock second and steps per second."""
+def _timed(label: str, case: object, limiter: bool = True) -> float:
+    """One insertion run: simulated seconds per wall-clock second and steps per second; returns the wall time."""
     t0 = time.perf_counter()
     result = simulate_insertion(case, limiter)
     wall = time.perf_counter() - t0
     simulated = result.summary["simulated_time_s"]
     print(f"{label}: {simulated:g} s simulated in {wall:.2f} s wall, {simulated / wall:.2f} simulated s per s, "
           f"{len(result.series) / wall:.0f} steps/s")
+    return wall
 
 
 def main() -> None:
     case = load_case(cases_dir() / "paper" / "insertion.toml")
+    rigid_case = case.model_copy(update={"simulation": case.simulation.model_copy(update={"model": "rigid"})})
+    t0 = time.perf_counter()
+    simulate_insertion(rigid_case)
+    print(f"first rigid run in this process (the kernels loaded or compiled): {time.perf_counter() - t0:.2f} s wall")
     for model in ("rigid", "flexible"):
         _timed(model, case.model_copy(update={"simulation": case.simulation.model_copy(update={"model": model})}))
     for limiter in (True, False):

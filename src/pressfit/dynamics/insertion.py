@@ -304,8 +304,9 @@ def simulate_insertion(case: Case, limiter: bool = True, progress: bool = False)
 
 
 class _Series:
-    """The series' rows, grown in chunks, and the kinematic pose (forward kinematics of the actuator lengths,
-    Gauss-Newton from the last row's, :func:`pressfit.dynamics.control.estimate_pose`)."""
+    """The series' rows, grown in chunks; :meth:`add` appends a row with the kinematic pose (forward kinematics of
+    the actuator lengths, Gauss-Newton from the last row's, :func:`pressfit.dynamics.control.estimate_pose`; the
+    rigid loop fills :meth:`row` in place, its kinematic pose from its controller's estimate)."""
 
     def __init__(self, machine: Machine, steps: int, start_m: np.ndarray) -> None:
         self.machine, self.steps, self.kinematic = machine, steps, np.asarray(start_m, float).copy()
