@@ -19,7 +19,7 @@ quantity; the Python functions of :mod:`pressfit.dynamics.control`, :mod:`pressf
 
 Compiled with ``error_model="numpy"`` (a division by zero gives inf or nan, which the callers' finiteness
 checks refuse, rather than an exception from inside a kernel) and ``cache=True``: the first call in a fresh
-install compiles (a few seconds, once; numba keeps the result beside this file, or in the user's cache
+install compiles (about 10 s of CPU, once; numba keeps the result beside this file, or in the user's cache
 directory when the install is read-only; with neither writable, each process compiles, :func:`_compiled`).
 """
 
@@ -145,6 +145,15 @@ def distribution(units, pinv, null):
 
 
 @_compiled
+def moved(pose, reference, tolerance):
+    """True when ``pose`` moved more than ``tolerance`` from ``reference`` (infinity norm; same units)."""
+    for k in range(pose.size):  # noqa: SIM110 (numba compiles the loop, not a generator in any())
+        if abs(pose[k] - reference[k]) > tolerance:
+            return True
+    return False
+
+
+@_compiled
 def control(params, estimate, units, rates, target, target_velocity, contact_force, dt, integral, lift,
             gravity_pose, gravity, pinv, null, force, tension):
     """Figure 12's loop at the estimate (m) with leg unit vectors ``units`` (:mod:`pressfit.dynamics.control`):
@@ -152,9 +161,8 @@ def control(params, estimate, units, rates, target, target_velocity, contact_for
     -A^+ W + a4 v_p (4,), N, into ``tension``; updates ``integral`` (m s) in place. Returns (status, lift m,
     clamped, smallest singular value of A): status 1 when the gravity feed-forward ``gravity`` (computed at
     ``gravity_pose``) is stale (the estimate moved more than params[GRAVITY_TOL] from it; nothing else is done,
-    the caller refreshes it and calls again), 2 when A is singular (below ``sigma_min``: nothing else done)."""
-    if params[GRAVITY] != 0.0 and max(abs(estimate[0] - gravity_pose[0]), abs(estimate[1] - gravity_pose[1]),
-                                      abs(estimate[2] - gravity_pose[2])) > params[GRAVITY_TOL]:
+    the caller refreshes it and calls again), 2 when A is singular (below SINGULAR_SIGMA: nothing else done)."""
+    if params[GRAVITY] != 0.0 and moved(estimate, gravity_pose, params[GRAVITY_TOL]):
         return 1, lift, False, 0.0
     sigma = distribution(units, pinv, null)
     if sigma < SINGULAR_SIGMA:
@@ -182,15 +190,6 @@ def control(params, estimate, units, rates, target, target_velocity, contact_for
         tension[i] = -(pinv[i, 0] * force[0] + pinv[i, 1] * force[1] + pinv[i, 2] * force[2]) \
             + params[PRELOAD] * null[i]
     return 0, lift, clamped, sigma
-
-
-@_compiled
-def moved(pose, reference, tolerance):
-    """True when ``pose`` moved more than ``tolerance`` from ``reference`` (infinity norm; same units)."""
-    for k in range(pose.size):  # noqa: SIM110 (numba compiles the loop, not a generator in any())
-        if abs(pose[k] - reference[k]) > tolerance:
-            return True
-    return False
 
 
 @_compiled
