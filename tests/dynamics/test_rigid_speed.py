@@ -12,7 +12,7 @@ from pressfit.dynamics.multibody import rigid_leg_model
 from pressfit.shipped import cases_dir
 
 # The goal of 10 simulated s per s is 100 us per step: 3.2 passive steps at a quiet core's 31 us per passive step
-# (docs/benchmarks.md; achieved 2.1-3.1, 10.6-16.6 before the compiled kernels).
+# (docs/benchmarks.md; achieved 2.0-3.2, 10.0-16.6 before the compiled kernels).
 MAX_PASSIVE_STEPS_PER_STEP = 3.2
 
 
@@ -27,8 +27,8 @@ def _passive_cpu_s(rigid, steps: int) -> float:
 
 def test_rigid_insertion_costs_a_few_passive_steps_per_step():
     """The best of three ratios (run CPU time / CPU time of as many passive steps, measured just before it):
-    at most MAX_PASSIVE_STEPS_PER_STEP (achieved 2.1-3.1 under a load average of 7-11; the code before the
-    kernels: 10.6-16.6, and 11.9 in this test: refused)."""
+    at most MAX_PASSIVE_STEPS_PER_STEP (achieved 2.0-3.2 under a load average of 5-11; the code before the
+    kernels: 10.0-16.6, and 11.9 in this test: refused)."""
     case = load_case(cases_dir() / "paper" / "insertion.toml")
     case = case.model_copy(update={"simulation": case.simulation.model_copy(update={"model": "rigid"})})
     first = simulate_insertion(case)  # the kernels loaded (or compiled) outside the timing
