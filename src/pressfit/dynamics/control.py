@@ -183,7 +183,8 @@ class ForceLimitedController:
     units: np.ndarray = field(init=False)  # e_i (n, 3) at the estimate
     tension_n: np.ndarray = field(init=False)  # -A^+ W + a4 v_p (n,), N
     gravity: PoseCache = field(init=False)
-    deflection: PoseCache = field(init=False)
+    deflection: PoseCache = field(init=False)  # (2, 3) rows c0 (m/N), c1 (m): with deflection_compensation the
+    # error is taken against the estimate + c0 F + c1 (kernels.control)
     force_limit_n: float = field(init=False)  # the insertion limit in force (N): the gains' unless a run sets it
     offsets_m: np.ndarray = field(init=False)  # d_i - B_i (n, 3), m
     _params: np.ndarray = field(init=False, repr=False)
@@ -204,15 +205,6 @@ class ForceLimitedController:
                                  float(self.limiter), float(g.gravity_compensation), GRAVITY_UPDATE_M, self.preload_n,
                                  float(g.deflection_compensation), DEFLECTION_UPDATE_M)
         self._params, self._force = params, np.zeros(3)
-
-    def tool_estimate_m(self, contact_force_n: float) -> np.ndarray:
-        """The position the loop acts on (3,), m: the pose estimate, plus with ``deflection_compensation`` the
-        structure's predicted static deflection under the weight and the measured contact force (N, +y) (the
-        kernel's, :func:`pressfit.dynamics.kernels.control`, computes the same from the same cache)."""
-        if not self.gains.deflection_compensation:
-            return self.estimate_m
-        columns = self.deflection(self.estimate_m)
-        return self.estimate_m + columns[0] * contact_force_n + columns[1]
 
     def command(self, lengths_m: np.ndarray, rates_m_per_s: np.ndarray, reference: tuple[np.ndarray, np.ndarray],
                 contact_force_n: float, dt_s: float) -> np.ndarray:
