@@ -23,26 +23,32 @@ the tool below the rigid depth.
 
 from __future__ import annotations
 
-import math
 from collections.abc import Callable
 from dataclasses import dataclass
 
 import numpy as np
 
 from pressfit.description.cases import Contact
+from pressfit.dynamics import kernels
 
-_BISECTIONS = 60
+_LAWS = {("elastic", "linear"): kernels.ELASTIC, ("elastic", "saturating"): kernels.ELASTIC,
+         ("press_fit", "linear"): kernels.FIT_LINEAR, ("press_fit", "saturating"): kernels.FIT_TANH}
+
+
+def contact_parameters(contact: Contact) -> np.ndarray:
+    """The contact as the compiled kernels take it (:func:`pressfit.dynamics.kernels.solve_contact`)."""
+    values = np.zeros(7)
+    values[[kernels.BOARD, kernels.STIFFNESS, kernels.DAMPING, kernels.LAW]] = (
+        contact.board_height_m, contact.stiffness_n_per_m, contact.damping_n_s_per_m, _LAWS[contact.law, contact.fit])
+    if contact.law == "press_fit":
+        values[[kernels.FIT_STIFFNESS, kernels.FIT_FORCE, kernels.FIT_DEPTH]] = (
+            contact.fit_stiffness_n_per_m, contact.fit_force_n, contact.fit_depth_m)
+    return values
 
 
 def contact_force_n(contact: Contact, depth_m: float, depth_rate_m_per_s: float = 0.0) -> float:
     """The contact law F(d, d_dot) (N, >= 0) at interference ``depth_m`` (m) and its rate (m/s)."""
-    if depth_m <= 0.0:
-        return 0.0
-    force = contact.stiffness_n_per_m * depth_m + contact.damping_n_s_per_m * depth_rate_m_per_s
-    if contact.law == "press_fit":
-        force += (contact.fit_stiffness_n_per_m * depth_m if contact.fit == "linear"
-                  else contact.fit_force_n * math.tanh(depth_m / contact.fit_depth_m))
-    return max(force, 0.0)
+    return float(kernels.contact_law(contact_parameters(contact), float(depth_m), float(depth_rate_m_per_s)))
 
 
 @dataclass(frozen=True)
@@ -54,9 +60,14 @@ class ContactState:
     deflection_m: np.ndarray
 
 
+NO_TABLE = (np.zeros(0), np.zeros((0, 3)))  # kernels.solve_contact's (loads, disp) for a linear compliance
+
+
 def solve_contact(contact: Contact, rigid_tip_m: np.ndarray, deflection: Callable[[float], np.ndarray],
                   previous_depth_m: float, dt_s: float) -> ContactState:
-    """The contact force with the structure's deflection ``deflection(F)`` (m, (3,)) in series (module doc)."""
+    """The contact force with the structure's deflection ``deflection(F)`` (m, (3,)) in series (module doc), for
+    any deflection function; the insertion loop's linear or tabulated compliance takes the compiled
+    :func:`pressfit.dynamics.kernels.solve_contact`, the same bisection (tested against this one)."""
     rigid_depth = contact.board_height_m - float(rigid_tip_m[1])
 
     def residual(force: float) -> tuple[float, float, np.ndarray]:
@@ -69,7 +80,7 @@ def solve_contact(contact: Contact, rigid_tip_m: np.ndarray, deflection: Callabl
         return ContactState(0.0, d0, u0)
     # the deflection grows with the force (compliance >= 0), so the depth at zero force bounds the force
     lo, hi = 0.0, contact_force_n(contact, d0, max(d0 - previous_depth_m, 0.0) / dt_s)
-    for _ in range(_BISECTIONS):
+    for _ in range(kernels.BISECTIONS):
         mid = 0.5 * (lo + hi)
         if residual(mid)[0] < 0.0:
             lo = mid

@@ -31,7 +31,6 @@ Figure 12:
 
 from __future__ import annotations
 
-import math
 from dataclasses import dataclass, field
 from typing import Protocol
 
@@ -41,7 +40,8 @@ import pinocchio as pin
 from pressfit import kinematics
 from pressfit.description.cases import Controller, Simulation
 from pressfit.description.machine import Machine
-from pressfit.dynamics.actuators import distribution
+from pressfit.dynamics import kernels
+from pressfit.dynamics.actuators import singular_error
 from pressfit.dynamics.multibody import PoseCache, RigidLegModel
 from pressfit.kinematics.profiles import quintic as _quintic
 from pressfit.mechanics.condensed import condensed_plate_compliance
@@ -57,44 +57,19 @@ def _legs(machine: Machine, pose_m: np.ndarray) -> tuple[np.ndarray, np.ndarray]
 def estimate_pose(machine: Machine, lengths_m: np.ndarray, guess_m: np.ndarray,
                   iterations: int = 2) -> tuple[np.ndarray, np.ndarray, float]:
     """Plate position (3,), m, whose leg lengths best fit ``lengths_m`` (4,), m (Gauss-Newton from
-    ``guess_m``), the leg unit vectors there (4, 3) (rows of dl/dh) and the largest length residual (m).
-    In Python floats (the 3 x 3 normal equations by the adjugate): at this size numpy's per-call overhead
-    costs more than the arithmetic; the normal matrix is well conditioned wherever A is (singular poses are
-    refused by :func:`pressfit.dynamics.actuators.distribution`)."""
-    offsets = (machine.plate_offsets_m - machine.base_points_m).tolist()  # u_i = h + d_i - B_i (equation 1)
-    measured = [float(x) for x in lengths_m]
-    hx, hy, hz = (float(x) for x in guess_m)
+    ``guess_m``), the leg unit vectors there (4, 3) (rows of dl/dh) and the largest length residual (m)
+    (:func:`pressfit.dynamics.kernels.gauss_newton`: the 3 x 3 normal equations by the adjugate; the normal
+    matrix is well conditioned wherever A is, singular poses are refused by
+    :func:`pressfit.dynamics.actuators.distribution`)."""
+    pose, units = np.array(guess_m, dtype=float), np.empty((4, 3))
+    residual = kernels.gauss_newton(_offsets(machine), np.asarray(lengths_m, dtype=float), pose, int(iterations),
+                                    units)
+    return pose, units, residual
 
-    def legs() -> tuple[list, list]:
-        rows, residuals = [], []
-        for (dx, dy, dz), lm in zip(offsets, measured, strict=True):
-            ux, uy, uz = hx + dx, hy + dy, hz + dz
-            n = math.sqrt(ux * ux + uy * uy + uz * uz)
-            rows.append((ux / n, uy / n, uz / n))
-            residuals.append(n - lm)
-        return rows, residuals
 
-    e, r = legs()
-    for _ in range(iterations):
-        a00 = a01 = a02 = a11 = a12 = a22 = b0 = b1 = b2 = 0.0
-        for (ex, ey, ez), ri in zip(e, r, strict=True):  # e^T e and e^T r
-            a00 += ex * ex
-            a01 += ex * ey
-            a02 += ex * ez
-            a11 += ey * ey
-            a12 += ey * ez
-            a22 += ez * ez
-            b0 += ex * ri
-            b1 += ey * ri
-            b2 += ez * ri
-        c00, c01, c02 = a11 * a22 - a12 * a12, a02 * a12 - a01 * a22, a01 * a12 - a02 * a11
-        c11, c12, c22 = a00 * a22 - a02 * a02, a02 * a01 - a00 * a12, a00 * a11 - a01 * a01
-        det = a00 * c00 + a01 * c01 + a02 * c02
-        hx -= (c00 * b0 + c01 * b1 + c02 * b2) / det
-        hy -= (c01 * b0 + c11 * b1 + c12 * b2) / det
-        hz -= (c02 * b0 + c12 * b1 + c22 * b2) / det
-        e, r = legs()
-    return np.array([hx, hy, hz]), np.array(e), max(abs(x) for x in r)
+def _offsets(machine: Machine) -> np.ndarray:
+    """d_i - B_i (4, 3), m: u_i = h + d_i - B_i (equation 1)."""
+    return np.ascontiguousarray(machine.plate_offsets_m - machine.base_points_m, dtype=float)
 
 
 def gravity_feedforward_n(rigid: RigidLegModel, pose_m: np.ndarray) -> np.ndarray:
@@ -160,75 +135,121 @@ class Trajectory:
 
     def segment(self, t_s: float) -> int:
         """Index of the segment running at time ``t_s`` (the last one after the end)."""
-        return min(int(np.searchsorted(self.ends_s, t_s, side="right")), len(self.durations_s) - 1)
+        return int(self.segments(np.array([t_s]))[0])
+
+    def segments(self, times_s: np.ndarray) -> np.ndarray:
+        """:meth:`segment` at each of ``times_s`` (n,), s."""
+        return np.minimum(np.searchsorted(self.ends_s, times_s, side="right"), len(self.durations_s) - 1)
 
     def at(self, t_s: float) -> tuple[np.ndarray, np.ndarray]:
         """Reference position (m) and velocity (m/s) at ``t_s`` (s)."""
-        k = self.segment(t_s)
-        t0 = float(self.ends_s[k - 1]) if k else 0.0
+        position, velocity = self.sample(np.array([t_s]))
+        return position[0], velocity[0]
+
+    def sample(self, times_s: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+        """Reference positions (n, 3), m, and velocities (n, 3), m/s, at ``times_s`` (n,), s: the quintic on
+        each segment, or the segment's shape (its ``fraction`` at each time from the segment's start)."""
+        times_s = np.asarray(times_s, dtype=float)
+        k = self.segments(times_s)
+        local = times_s - np.where(k > 0, self.ends_s[k - 1], 0.0)
+        profile, rate = _quintic(local / self.durations_s[k])
+        rate = rate / self.durations_s[k]
+        for j, shape in enumerate(self.shapes or ()):
+            if shape is not None:
+                for i in np.flatnonzero(k == j):
+                    profile[i], rate[i] = shape.fraction(float(local[i]))
         delta = self.waypoints_m[k + 1] - self.waypoints_m[k]
-        shape = self.shapes[k] if self.shapes is not None else None
-        if shape is not None:
-            s, rate = shape.fraction(t_s - t0)
-            return self.waypoints_m[k] + s * delta, rate * delta
-        s, ds = _quintic((t_s - t0) / self.durations_s[k])
-        return self.waypoints_m[k] + s * delta, ds / self.durations_s[k] * delta
+        return self.waypoints_m[k] + profile[:, None] * delta, rate[:, None] * delta
 
 
 @dataclass
 class ForceLimitedController:
-    """Figure 12's controller (module docstring); state: estimate, integral, reference lift delta."""
+    """Figure 12's controller (module docstring); state: estimate, integral, reference lift delta. Each
+    :meth:`command` also leaves A^+ and v_p at the estimate (``pinv``, ``null``) and the tensions
+    -A^+ W + a4 v_p (``tension_n``, N, a4 = ``preload_n``) that distribute its force W."""
 
     machine: Machine
     rigid: RigidLegModel
     gains: Controller
     limiter: bool
     estimate_m: np.ndarray
+    preload_n: float = 0.0
     integral_m_s: np.ndarray = field(default_factory=lambda: np.zeros(3))
     lift_m: float = 0.0
     clamped: bool = False
     estimate_residual_m: float = 0.0
-    pinv: np.ndarray = field(default_factory=lambda: np.zeros((4, 3)))  # A^+ at the estimate
-    null: np.ndarray = field(default_factory=lambda: np.zeros(4))  # v_p at the estimate
+    pinv: np.ndarray = field(init=False)  # A^+ (n, 3) at the estimate (n legs)
+    null: np.ndarray = field(init=False)  # v_p (n,) at the estimate
+    units: np.ndarray = field(init=False)  # e_i (n, 3) at the estimate
+    tension_n: np.ndarray = field(init=False)  # -A^+ W + a4 v_p (n,), N
     gravity: PoseCache = field(init=False)
-    deflection: PoseCache = field(init=False)
+    deflection: PoseCache = field(init=False)  # (2, 3) rows c0 (m/N), c1 (m): with deflection_compensation the
+    # error is taken against the estimate + c0 F + c1 (kernels.control)
     force_limit_n: float = field(init=False)  # the insertion limit in force (N): the gains' unless a run sets it
+    offsets_m: np.ndarray = field(init=False)  # d_i - B_i (n, 3), m
+    _params: np.ndarray = field(init=False, repr=False)
+    _force: np.ndarray = field(init=False, repr=False)
 
     def __post_init__(self) -> None:
         self.force_limit_n = self.gains.force_limit_n
         self.gravity = PoseCache(lambda pose: gravity_feedforward_n(self.rigid, pose), GRAVITY_UPDATE_M)
-        self.deflection = PoseCache(lambda pose: static_deflection_columns(self.machine, self.rigid, pose),
-                                    DEFLECTION_UPDATE_M)
-
-    def tool_estimate_m(self, contact_force_n: float) -> np.ndarray:
-        """The position the loop acts on (3,), m: the pose estimate, plus with ``deflection_compensation`` the
-        structure's predicted static deflection under the weight and the measured contact force (N, +y)."""
-        if not self.gains.deflection_compensation:
-            return self.estimate_m
-        columns = self.deflection(self.estimate_m)
-        return self.estimate_m + columns[:, 0] * contact_force_n + columns[:, 1]
+        self.deflection = PoseCache(lambda pose: np.ascontiguousarray(
+            static_deflection_columns(self.machine, self.rigid, pose).T), DEFLECTION_UPDATE_M)  # rows: c0, c1
+        self.estimate_m = np.array(self.estimate_m, dtype=float)
+        self.offsets_m = _offsets(self.machine)
+        self.units, self.pinv = np.zeros_like(self.offsets_m), np.zeros_like(self.offsets_m)
+        self.null, self.tension_n = np.zeros(len(self.offsets_m)), np.zeros(len(self.offsets_m))
+        g = self.gains
+        params = np.zeros(len(_PARAMS))
+        params[list(_PARAMS)] = (g.kp_n_per_m, g.kd_n_s_per_m, g.ki_n_per_m_s, g.force_limit_n, g.backoff_m_per_s_n,
+                                 float(self.limiter), float(g.gravity_compensation), GRAVITY_UPDATE_M, self.preload_n,
+                                 float(g.deflection_compensation), DEFLECTION_UPDATE_M)
+        self._params, self._force = params, np.zeros(3)
 
     def command(self, lengths_m: np.ndarray, rates_m_per_s: np.ndarray, reference: tuple[np.ndarray, np.ndarray],
                 contact_force_n: float, dt_s: float) -> np.ndarray:
         """The Cartesian force W (3,), N, from the measured lengths (m) and rates (m/s), the reference
         (position m, velocity m/s) and the measured contact force (N); advances the loop states by dt_s."""
-        g = self.gains
-        self.estimate_m, jac, self.estimate_residual_m = estimate_pose(self.machine, lengths_m, self.estimate_m,
-                                                                       g.estimator_iterations)
-        self.pinv, self.null = distribution(jac)
-        velocity = self.pinv.T @ rates_m_per_s  # J^+ = (A^+)^T, J = dl/dh = A^T
-        target, target_velocity = reference
-        target = target + np.array([0.0, self.lift_m, 0.0])
-        error = target - self.tool_estimate_m(contact_force_n)
-        pid = g.kp_n_per_m * error + g.kd_n_s_per_m * target_velocity + g.ki_n_per_m_s * self.integral_m_s
-        self.clamped = self.limiter and contact_force_n > 0.0 and pid[1] < -self.force_limit_n
-        if self.clamped:
-            pid[1] = -self.force_limit_n
-            error[1] = 0.0  # anti-windup: the vertical integrator holds while clamped
-        pid -= g.kd_n_s_per_m * velocity  # damping acts outside the clamp: a clamped contact stays damped
-        self.integral_m_s = self.integral_m_s + dt_s * error
-        if self.limiter and (contact_force_n > self.force_limit_n or self.lift_m > 0.0):
-            self.lift_m = max(0.0, self.lift_m + dt_s * g.backoff_m_per_s_n * (contact_force_n - self.force_limit_n))
-        if g.gravity_compensation:
-            pid = pid + self.gravity(self.estimate_m)
-        return pid
+        self.observe(lengths_m)
+        return self.command_at_estimate(rates_m_per_s, reference, contact_force_n, dt_s)
+
+    def observe(self, lengths_m: np.ndarray) -> None:
+        """The pose estimate from the measured lengths (m): ``estimate_m``, ``units``, ``estimate_residual_m``."""
+        self.estimate_residual_m = kernels.gauss_newton(self.offsets_m, np.asarray(lengths_m, dtype=float),
+                                                        self.estimate_m, self.gains.estimator_iterations, self.units)
+
+    def command_at_estimate(self, rates_m_per_s: np.ndarray, reference: tuple[np.ndarray, np.ndarray],
+                            contact_force_n: float, dt_s: float) -> np.ndarray:
+        """:meth:`command` with the estimate (``estimate_m``, ``units``) already taken from the lengths
+        (:meth:`observe`, or :func:`pressfit.dynamics.kernels.rigid_post_step`)."""
+        self._params[kernels.FORCE_LIMIT] = self.force_limit_n  # a run may set it per segment
+        gravity, deflection = self.gravity, self.deflection
+        if self.gains.gravity_compensation and gravity.value is None:
+            gravity(self.estimate_m)
+        if self.gains.deflection_compensation and deflection.value is None:
+            deflection(self.estimate_m)
+        while True:
+            status, self.lift_m, self.clamped, sigma = kernels.control(
+                self._params, self.estimate_m, self.units, rates_m_per_s, reference[0], reference[1],
+                float(contact_force_n), float(dt_s), self.integral_m_s, float(self.lift_m),
+                *_held(gravity, _ZERO3), *_held(deflection, _ZERO23), self.pinv, self.null, self._force,
+                self.tension_n)
+            if status == 1:  # the estimate moved past GRAVITY_UPDATE_M: refresh the feed-forward
+                gravity(self.estimate_m)
+            elif status == 3:  # past DEFLECTION_UPDATE_M: refresh the static deflection
+                deflection(self.estimate_m)
+            else:
+                break
+        if status == 2:
+            raise singular_error(sigma)
+        return self._force.copy()
+
+
+def _held(cache: PoseCache, empty: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    """A cache's pose and value as the kernel takes them (``empty`` for both before its first value: unused)."""
+    return (cache.pose_m, cache.value) if cache.value is not None else (_ZERO3, empty)
+
+
+_PARAMS = (kernels.KP, kernels.KD, kernels.KI, kernels.FORCE_LIMIT, kernels.BACKOFF, kernels.LIMITER, kernels.GRAVITY,
+           kernels.GRAVITY_TOL, kernels.PRELOAD, kernels.DEFLECTION, kernels.DEFLECTION_TOL)
+_ZERO3, _ZERO23 = np.zeros(3), np.zeros((2, 3))

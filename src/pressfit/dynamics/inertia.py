@@ -59,13 +59,24 @@ def _chain(mm: MachineModel, leg: int, first: int, segment: str) -> list[int]:
     return [first] + [mm.model.getJointId(name) for name in names]
 
 
+def joint_placements(model: pin.Model, q: np.ndarray) -> list[pin.SE3]:
+    """The joints' world placements at ``q`` (``data.oMi`` of ``pin.forwardKinematics``), walking the tree with
+    each joint's own calc: creating a Data of the elastic model (122 velocities) costs 0.2 s, this 1.5 ms."""
+    placements = [pin.SE3.Identity()]
+    for j in range(1, model.njoints):
+        joint = model.joints[j]
+        jd = joint.createData()
+        joint.calc(jd, q)
+        placements.append(placements[model.parents[j]] * model.jointPlacements[j] * jd.M)
+    return placements
+
+
 def inertial_model(mm: MachineModel, mass_scale: float = 1.0) -> pin.Model:
     """A copy of ``mm.model`` with the machine's masses (all multiplied by ``mass_scale``) and gravity on."""
     machine, mass = mm.machine, mm.machine.mass
     model = pin.Model(mm.model)
     model.gravity = pin.Motion(np.array([0.0, -GRAVITY_M_PER_S2, 0.0, 0.0, 0.0, 0.0]))
-    data = model.createData()
-    pin.forwardKinematics(model, data, mm.q0)
+    placements = joint_placements(model, mm.q0)
     n, lc = mm.springs_per_segment, machine.cylinder.length_m
     r_cyl = (machine.cylinder.outer_diameter_m / 2, machine.cylinder.outer_diameter_m / 2
              - machine.cylinder.wall_thickness_m)
@@ -83,20 +94,20 @@ def inertial_model(mm: MachineModel, mass_scale: float = 1.0) -> pin.Model:
             bounds = start + span * np.concatenate([[0.0], (np.arange(n) + 0.5) / n, [1.0]])
             for j, s0, s1 in zip(joints, bounds[:-1], bounds[1:], strict=True):
                 m = mu * (s1 - s0)
-                _add(model, data.oMi[j], j, m, base + axis * (s0 + s1) / 2, _tube(m, s1 - s0, r_out, r_in, axis))
+                _add(model, placements[j], j, m, base + axis * (s0 + s1) / 2, _tube(m, s1 - s0, r_out, r_in, axis))
         m_half = mass_scale * mass.cardan_spider_mass_kg / 2
         sphere = 0.4 * m_half * (machine.stem.diameter_m / 2) ** 2 * np.eye(3)
         points = ((ids["actuator"], lc, mass_scale * mass.actuator_moving_mass_kg, np.zeros((3, 3))),
                   (ids["base_cardan"], 0.0, m_half, sphere), (ids["cylinder"], 0.0, m_half, sphere),
                   (ids["plate_cardan"], length, m_half, sphere), (ids["plate_end"], length, m_half, sphere))
         for j, s, m, inertia in points:
-            _add(model, data.oMi[j], j, m, base + axis * s, inertia)
+            _add(model, placements[j], j, m, base + axis * s, inertia)
     plate = mm.plate_joint_id
     side, t = 2 * machine.geometry.plate_half_side_m, machine.collision.plate_thickness_m
     m_plate = mass_scale * mass.plate_mass_kg
     box = m_plate / 12 * np.diag([side**2 + t**2, 2 * side**2, side**2 + t**2])
-    _add(model, data.oMi[plate], plate, m_plate, mm.pose_m, box)
-    _add(model, data.oMi[plate], plate, mass_scale * mass.tool_mass_kg, mm.pose_m, np.zeros((3, 3)))
+    _add(model, placements[plate], plate, m_plate, mm.pose_m, box)
+    _add(model, placements[plate], plate, mass_scale * mass.tool_mass_kg, mm.pose_m, np.zeros((3, 3)))
     for ids in mm.leg_joint_ids:
         model.armature[model.joints[ids["actuator"]].idx_v] += mass_scale * machine.drive_reflected_mass_kg
     return model

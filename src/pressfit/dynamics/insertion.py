@@ -37,7 +37,8 @@ from pressfit import kinematics
 from pressfit.description.cases import Case, Simulation
 from pressfit.description.machine import Machine
 from pressfit.dynamics import drives as drive_kinds
-from pressfit.dynamics.contact import contact_force_n, solve_contact
+from pressfit.dynamics import kernels
+from pressfit.dynamics.contact import NO_TABLE, contact_force_n, contact_parameters
 from pressfit.dynamics.control import (
     DEFLECTION_UPDATE_M,
     ForceLimitedController,
@@ -110,20 +111,24 @@ class InsertionResult:
 
 
 def _deflection(machine: Machine, case: Case, sim: Simulation, pin_pose: np.ndarray, rigid: RigidLegModel
-                ) -> Callable[[np.ndarray], Callable[[float], np.ndarray]]:
-    """pose -> (F -> u): the tool's quasi-static deflection u (3,), m, at the rigid pose under the contact force F
-    (N, +y) and the moving parts' weight (:func:`pressfit.dynamics.control.static_deflection_columns`); with
-    ``clearance`` the contact force's part follows the clearance model's load-deflection curve at the pin."""
+                ) -> Callable[[np.ndarray], tuple[np.ndarray, np.ndarray, tuple[np.ndarray, np.ndarray]]]:
+    """pose -> the tool's quasi-static deflection at the rigid pose as
+    :func:`pressfit.dynamics.kernels.solve_contact` takes it: u = column F + sag under the contact force F (N, +y)
+    and the moving parts' weight (column m/N and sag m, (3,) each:
+    :func:`pressfit.dynamics.control.static_deflection_columns`), or, with ``clearance``, sag + the clearance
+    model's load-deflection table at the pin (loads (n,), N; displacements (n, 3), m) for the contact force."""
     # C varies by 3.4% over 5 mm at the pin: 0.07% error at the 0.1 mm update distance
-    columns = PoseCache(lambda pose: static_deflection_columns(machine, rigid, pose), DEFLECTION_UPDATE_M)
+    columns = PoseCache(lambda pose: np.ascontiguousarray(static_deflection_columns(machine, rigid, pose).T),
+                        DEFLECTION_UPDATE_M)  # rows: per newton, sag
     if not sim.clearance:
-        return lambda pose: (lambda force, c=columns(pose): c[:, 0] * force + c[:, 1])  # noqa: B008 (bound per pose)
+        return lambda pose: (*columns(pose), NO_TABLE)
     limit = max(4.0 * sim.controller.force_limit_n, sim.contact.stiffness_n_per_m * sim.interference_m)
     curve = load_deflection(machine, pin_pose, [0.0, 1.0, 0.0], np.linspace(0.0, limit, _CURVE_POINTS),
                             clearance_from_case(case, machine), case.preload.a4_n, unload=False)
-    loads, disp = curve.loads_n, curve.loading.displacement_m - curve.loading.displacement_m[0]
-    return lambda pose: (lambda force, sag=columns(pose)[:, 1]: sag + np.array(  # noqa: B008 (bound per pose)
-        [np.interp(force, loads, disp[:, k]) for k in range(3)]))
+    table = (np.ascontiguousarray(curve.loads_n, dtype=float),
+             np.ascontiguousarray(curve.loading.displacement_m - curve.loading.displacement_m[0], dtype=float))
+    zero = np.zeros(3)
+    return lambda pose: (zero, columns(pose)[1], table)
 
 
 @dataclass(frozen=True)
@@ -354,8 +359,9 @@ def run_plan(case: Case, machine: Machine, plan: ScenarioPlan, drives: drive_kin
 
 
 class _Series:
-    """The series' rows, grown in chunks, and the kinematic pose (forward kinematics of the actuator lengths,
-    Gauss-Newton from the last row's, :func:`pressfit.dynamics.control.estimate_pose`)."""
+    """The series' rows, grown in chunks; :meth:`add` appends a row with the kinematic pose (forward kinematics of
+    the actuator lengths, Gauss-Newton from the last row's, :func:`pressfit.dynamics.control.estimate_pose`; the
+    rigid loop fills :meth:`row` in place, its kinematic pose from its controller's estimate)."""
 
     def __init__(self, machine: Machine, steps: int, start_m: np.ndarray) -> None:
         self.machine, self.steps, self.kinematic = machine, steps, np.asarray(start_m, float).copy()
@@ -366,6 +372,12 @@ class _Series:
         if k // _CHUNK_ROWS == len(self.chunks):
             self.chunks.append(np.empty((min(self.steps - k, _CHUNK_ROWS), len(SERIES_COLUMNS))))
         self.chunks[-1][k % _CHUNK_ROWS] = (*row, *self.kinematic, *lengths, *rates, *energy)
+
+    def row(self, k: int) -> np.ndarray:
+        """Row k (the rows are filled in order) to fill in place; the kinematic pose is the caller's."""
+        if k // _CHUNK_ROWS == len(self.chunks):
+            self.chunks.append(np.empty((min(self.steps - k, _CHUNK_ROWS), len(SERIES_COLUMNS))))
+        return self.chunks[-1][k % _CHUNK_ROWS]
 
     def rows(self) -> np.ndarray:
         return np.concatenate(self.chunks)
@@ -395,46 +407,65 @@ def _drift_error(case: Case, drift: float, t: float) -> PressfitError:
 
 def _run_rigid(case: Case, machine: Machine, plan: ScenarioPlan, drives: drive_kinds.Drive, limiter: bool,
                progress: bool) -> tuple[np.ndarray, np.ndarray, None]:
-    """The rigid-leg model, the compliance in series at the tool (module docstring)."""
+    """The rigid-leg model, the compliance in series at the tool (module docstring). Per step: the controller at
+    the estimate, the drives, one Pinocchio step, then one compiled kernel
+    (:func:`pressfit.dynamics.kernels.rigid_post_step`) for the contact, the axial forces, the pose estimate of the
+    new lengths (the next step's controller estimate and, continued to ``KINEMATIC_ITERATIONS``, the row's
+    kinematic pose) and the row; the energies (``ENERGY_COLUMNS``) from the rigid model."""
     sim, trajectory, steps, rigid = plan.simulation, plan.trajectory, plan.steps, plan.rigid
     deflection = _deflection(machine, case, sim, trajectory.waypoints_m[2], rigid)
-    ctrl = ForceLimitedController(machine, rigid, sim.controller, limiter, np.asarray(sim.start_m, float).copy())
     q, v, dt, a4 = rigid.reference_q.copy(), np.zeros(rigid.model.nv), sim.time_step_s, case.preload.a4_n
-    force = ctrl.command(q[rigid.actuator_q], v[rigid.actuator_v], trajectory.at(0.0), 0.0, 0.0)
-    tension = -ctrl.pinv @ force + a4 * ctrl.null
-    drive = drives.initial_state(tension, q[rigid.actuator_q])
-    contact = solve_contact(sim.contact, q[0:3], deflection(q[0:3]), 0.0, dt)
-    series, phases = _Series(machine, steps, sim.start_m), np.empty(steps, dtype=int)
-    tau = np.zeros(rigid.model.nv)
+    ctrl = ForceLimitedController(machine, rigid, sim.controller, limiter, np.asarray(sim.start_m, float).copy(), a4)
+    act_q, act_v = rigid.actuator_q, rigid.actuator_v
+    ctrl.command(q[act_q], v[act_v], trajectory.at(0.0), 0.0, 0.0)
+    drive = drives.initial_state(ctrl.tension_n.copy(), q[act_q])
+    ctrl.observe(q[act_q])  # the first step's estimate (later ones: rigid_post_step's)
+    times = dt * np.arange(1, steps + 1)
+    ref_position, ref_velocity = trajectory.sample(times)
+    limits = plan.force_limits_n[trajectory.segments(times)]  # the running segment's insertion limit
+    phases = trajectory.segments(times - 1e-12)
+    params = contact_parameters(sim.contact)
+    iterations = ctrl.gains.estimator_iterations
+    post = np.array([SERIES_COLUMNS.index(c) for c in ("plate_x_m", "tool_x_m", "contact_force_n", "depth_m",
+                                                       "axial_n1", "kinematic_x_m", "length_m1", "rate_m_per_s1")])
+    pre = np.array([SERIES_COLUMNS.index(c) for c in ("time_s", "ref_x_m", "est_x_m", "cmd_n1", "act_n1",
+                                                      "reference_lift_m", "internal_force_n")])
+    drift_column = SERIES_COLUMNS.index("closure_drift_m")
+    energy = slice(SERIES_COLUMNS.index(ENERGY_COLUMNS[0]), SERIES_COLUMNS.index(ENERGY_COLUMNS[-1]) + 1)
+    series = _Series(machine, steps, sim.start_m)
+    tau, contact_tau, u = np.zeros(rigid.model.nv), np.zeros(3), np.empty(3)
+    column, sag, table = deflection(q[0:3])
+    force, depth = kernels.solve_contact(params, sim.contact.board_height_m - q[1], 0.0, dt, column, sag, *table, u)
+    contact_tau[:] = pin.Quaternion(q[3:7]).matrix().T @ np.array([0.0, force, 0.0])  # the plate's local frame
+    lengths, rates = q[act_q], v[act_v]
     for k in tqdm(range(steps), desc="simulate", unit="step", disable=not progress, mininterval=0.5):
-        t = (k + 1) * dt
-        reference = trajectory.at(t)
-        ctrl.force_limit_n = plan.force_limits_n[trajectory.segment(t)]
+        t = float(times[k])
+        ctrl.force_limit_n = float(limits[k])
         try:
-            force = ctrl.command(q[rigid.actuator_q], v[rigid.actuator_v], reference, contact.force_n, dt)
-            command = -ctrl.pinv @ force + a4 * ctrl.null  # equation 5 at the estimate, plus the preload
-            drive, tension = drives.step(drive, command, q[rigid.actuator_q], v[rigid.actuator_v], dt)
-            tau[rigid.actuator_v] = -tension
-            tau[0:3] = pin.Quaternion(q[3:7]).matrix().T @ np.array([0.0, contact.force_n, 0.0])  # local frame
+            ctrl.command_at_estimate(rates, (ref_position[k], ref_velocity[k]), force, dt)
+            command = ctrl.tension_n.copy()  # equation 5 at the estimate, plus the preload
+            drive, tension = drives.step(drive, command, lengths, rates, dt)
+            row = series.row(k)
+            kernels.rigid_pre_step(row, t, ref_position[k], ctrl.lift_m, ctrl.estimate_m, command, tension, ctrl.null,
+                                   tau, act_v, contact_tau, pre)
+            previous = q
             q, v = rigid.step(q, v, tau, dt)
-            if not (np.all(np.isfinite(q)) and np.all(np.isfinite(v))):
+            column, sag, table = deflection(q[0:3])
+            finite, force, depth, ctrl.estimate_residual_m = kernels.rigid_post_step(
+                row, previous, q, v, rigid.data.lambda_c, act_q, act_v, params, depth, dt, column, sag, *table,
+                ctrl.offsets_m, ctrl.estimate_m, ctrl.units, iterations, KINEMATIC_ITERATIONS, contact_tau, post,
+                lengths, rates)
+            if not finite:
                 raise _diverged(case, t, "the state is not finite")
-            drift = rigid.closure_error_m()
+            row[drift_column] = drift = rigid.closure_error_m()
             if drift > MAX_CLOSURE_DRIFT_M:
                 raise _drift_error(case, drift, t)
-            axial = rigid.axial_forces_n()  # at the start of the step, where the accelerations were computed
-            pose = q[0:3].copy()
-            _check_pose(case, machine, k, steps, t, pose)
-            contact = solve_contact(sim.contact, pose, deflection(pose), contact.depth_m, dt)
-            series.add(k, (t, *reference[0] + [0.0, ctrl.lift_m, 0.0], *ctrl.estimate_m, *pose,
-                           *(pose + contact.deflection_m), contact.force_n, contact.depth_m, *command, *tension,
-                           ctrl.lift_m, drift, *axial, ctrl.null @ tension), q[rigid.actuator_q], v[rigid.actuator_v],
-                       (*rigid.energy_j(q, v), 0.0, 0.0))
+            _check_pose(case, machine, k, steps, t, q[0:3])
+            row[energy] = (*rigid.energy_j(q, v), 0.0, 0.0)
         except UnreachablePoseError as exc:  # the estimate (feed-forward, compliance) left the workspace
             raise _diverged(case, t, f"the pose estimate left the reachable set: {exc}") from None
         except DriveStepError as exc:
             raise _drive_failed(case, t, exc) from None
-        phases[k] = trajectory.segment(t - 1e-12)
     return series.rows(), phases, None
 
 

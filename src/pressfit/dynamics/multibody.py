@@ -35,6 +35,7 @@ stiff in torsion. s is recomputed when the plate moved 1 mm (``SELF_STRESS_UPDAT
 
 from __future__ import annotations
 
+import math
 from collections.abc import Callable
 from dataclasses import dataclass, field
 
@@ -43,7 +44,8 @@ import pinocchio as pin
 
 from pressfit import kinematics
 from pressfit.description.machine import Machine
-from pressfit.dynamics.inertia import inertial_model
+from pressfit.dynamics import kernels
+from pressfit.dynamics.inertia import inertial_model, joint_placements
 from pressfit.errors import PressfitError
 from pressfit.mechanics.model import build_model
 
@@ -64,7 +66,7 @@ class PoseCache:
     value: np.ndarray | None = None
 
     def __call__(self, pose_m: np.ndarray) -> np.ndarray:
-        if self.value is None or np.max(np.abs(pose_m - self.pose_m)) > self.tolerance_m:
+        if self.value is None or kernels.moved(pose_m, self.pose_m, self.tolerance_m):
             self.pose_m, self.value = np.array(pose_m, dtype=float), self.function(pose_m)
         return self.value
 
@@ -86,6 +88,7 @@ class RigidLegModel:
     baumgarte_rad_per_s: float
     end_joints: tuple[int, ...] = ()  # the last joint of each leg (plate cardan a): joint1 of its closure
     self_stress: PoseCache = field(init=False)
+    _datas: tuple | None = field(default=None, init=False, repr=False)  # (constraint_datas, its elements)
 
     def __post_init__(self) -> None:
         self.self_stress = PoseCache(self._self_stress, SELF_STRESS_UPDATE_M)
@@ -96,8 +99,9 @@ class RigidLegModel:
 
     def configuration_at(self, pose_m: np.ndarray) -> np.ndarray:
         """Closed rigid configuration (nq,) at a reachable pose (m), from equation 1 (closed form)."""
-        h = kinematics.require_reachable(self.machine, pose_m)
+        h = np.asarray(pose_m, dtype=float).reshape(3)
         ik = kinematics.inverse_kinematics(self.machine, h)
+        h = kinematics.require_reachable(self.machine, h, ik)
         sigma = self.sigma
         q = np.zeros(self.model.nq)
         q[0:3], q[6] = h, 1.0
@@ -113,8 +117,11 @@ class RigidLegModel:
 
     def closure_error_m(self) -> float:
         """Largest loop-closure translation error (m) at the last :meth:`accelerations` call."""
-        errors = np.array([cd.contact_placement_error.np[:3] for cd in self.constraint_datas])
-        return float(np.sqrt(np.einsum("ij,ij->i", errors, errors).max()))
+        datas = self.constraint_datas
+        if self._datas is None or self._datas[0] is not datas:  # held element references: 2x faster
+            self._datas = (datas, [datas[i] for i in range(len(datas))])
+        errors = [cd.contact_placement_error.linear.tolist() for cd in self._datas[1]]
+        return math.sqrt(max([x * x + y * y + z * z for x, y, z in errors]))
 
     def leg_loads(self) -> np.ndarray:
         """(4, 3): axial force N (N, > 0 tension), torsion T (N m) and bending |M_b| (N m) of each leg at its
@@ -130,15 +137,14 @@ class RigidLegModel:
         bent = world[:, 1] - axial[:, 1:] * axes
         return np.column_stack([axial, np.sqrt(np.einsum("li,li->l", bent, bent))])
 
-    def axial_forces_n(self) -> np.ndarray:
+    def axial_forces_n(self, q: np.ndarray) -> np.ndarray:
         """(4,): the axial force N (N, > 0 tension) of each leg at its plate cardan from the closure forces of the
-        last :meth:`accelerations` call (the first column of :meth:`leg_loads`, without the couples' split: the
-        self-stress is made of couples and leaves the forces alone)."""
-        lam = np.asarray(self.data.lambda_c).reshape(4, 2, 3)[:, 0]
-        placements = [self.data.oMi[j] for j in self.end_joints]
-        world = np.einsum("lij,lj->li", np.array([m.rotation for m in placements]), lam)
-        axes = np.array([m.translation for m in placements]) - self.machine.base_points_m
-        return np.einsum("li,li->l", world, axes) / np.sqrt(np.einsum("li,li->l", axes, axes))
+        last :meth:`accelerations` call, made at ``q`` (the first column of :meth:`leg_loads`, without the couples'
+        split: the self-stress is made of couples and leaves the forces alone; closed form from the plate cardan
+        angles, :func:`pressfit.dynamics.kernels.axial_forces`)."""
+        out = np.empty(4)
+        kernels.axial_forces(np.asarray(self.data.lambda_c), np.asarray(q, dtype=float), self.actuator_q, out)
+        return out
 
     def energy_j(self, q: np.ndarray, v: np.ndarray) -> tuple[float, float]:
         """Kinetic and gravitational potential energy (J) at (q, v)."""
@@ -178,8 +184,7 @@ def rigid_leg_model(machine: Machine, pose_m: np.ndarray, baumgarte_rad_per_s: f
                             "cardan tilts (legs.*_cardan_tilt_rad), with which rigid legs cannot close the loops")
     mm = build_model(machine, pose_m)
     full = inertial_model(mm)
-    full_data = full.createData()
-    pin.forwardKinematics(full, full_data, mm.q0)
+    full_placements = joint_placements(full, mm.q0)
     model = pin.Model()
     model.gravity = full.gravity
     plate = model.addJoint(0, pin.JointModelFreeFlyer(), pin.SE3.Identity(), "plate")
@@ -203,7 +208,7 @@ def rigid_leg_model(machine: Machine, pose_m: np.ndarray, baumgarte_rad_per_s: f
     data = model.createData()
     pin.forwardKinematics(model, data, rigid.reference_q)
     for j, body in owner.items():
-        model.inertias[body] = model.inertias[body] + data.oMi[body].actInv(full_data.oMi[j].act(full.inertias[j]))
+        model.inertias[body] = model.inertias[body] + data.oMi[body].actInv(full_placements[j].act(full.inertias[j]))
     for i, ids in enumerate(mm.leg_joint_ids):  # an electric drive's reflected inertia (dynamics/inertia.py)
         model.armature[rigid.actuator_v[i]] = full.armature[full.joints[ids["actuator"]].idx_v]
     gains = pin.BaumgarteCorrectorParameters(baumgarte_rad_per_s**2, 2 * baumgarte_rad_per_s)

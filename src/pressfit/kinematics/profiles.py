@@ -132,9 +132,10 @@ def s_curve(distance_m: float, speed_m_per_s: float, acceleration_m_per_s2: floa
     return SCurve(d, v, a, j, tj, tc, tv, tuple(knots))
 
 
-def quintic(s: float) -> tuple[float, float]:
-    """The minimum-jerk (quintic) profile 10 s^3 - 15 s^4 + 6 s^5 and its derivative on s in [0, 1] (clamped)."""
-    s = min(max(s, 0.0), 1.0)
+def quintic(s: np.ndarray | float) -> tuple[np.ndarray, np.ndarray]:
+    """The minimum-jerk (quintic) profile 10 s^3 - 15 s^4 + 6 s^5 and its derivative on s in [0, 1] (clamped;
+    elementwise on an array)."""
+    s = np.clip(s, 0.0, 1.0)
     return s**3 * (10 - 15 * s + 6 * s * s), 30 * s * s * (1 - s) ** 2
 
 
@@ -165,7 +166,7 @@ class Quintic:
         if self.duration_s <= 0.0:
             return 0.0, 0.0
         s, ds = quintic(t_s / self.duration_s)
-        return s, ds / self.duration_s
+        return float(s), float(ds) / self.duration_s
 
 
 def quintic_move(distance_m: float, speed_m_per_s: float, acceleration_m_per_s2: float,

@@ -1,0 +1,341 @@
+r"""The per-step arithmetic of the insertion loop, compiled (numba ``njit``): at the loop's sizes (3- and
+4-vectors) numpy's per-call overhead of about a microsecond costs more than the arithmetic, and the rigid-leg
+step itself (Pinocchio's constraint dynamics) takes about 30 us. Each kernel is the one implementation of its
+quantity; the Python functions of :mod:`pressfit.dynamics.control`, :mod:`pressfit.dynamics.actuators`,
+:mod:`pressfit.dynamics.contact` and :mod:`pressfit.dynamics.multibody` call them.
+
+* :func:`gauss_newton`: the pose estimate (equation 1, Gauss-Newton on the four lengths, the 3 x 3 normal
+  equations by the adjugate);
+* :func:`distribution`: A^+ = E N^-1 and the unit null vector v_p of A = E^T (equations 5, 9-10) in closed form
+  from the normal matrix N = E^T E = A A^T, and A's smallest singular value sqrt(lambda_min(N)) (the closed-form
+  eigenvalues of a symmetric 3 x 3 matrix);
+* :func:`control`: Figure 12's PID with the force limiter (:mod:`pressfit.dynamics.control`);
+* :func:`moved`: the pose caches' test (:class:`pressfit.dynamics.multibody.PoseCache`);
+* :func:`first_order`: the ideal force drive's step (:mod:`pressfit.dynamics.actuators`);
+* :func:`contact_law`, :func:`solve_contact`: the contact law and the bisection of the series compliance
+  (:mod:`pressfit.dynamics.contact`);
+* :func:`axial_forces`: the legs' axial forces from the closure forces and the plate cardan angles;
+* :func:`rigid_post_step`: after one rigid-leg step, all of the above that the step's row needs.
+
+Compiled with ``error_model="numpy"`` (a division by zero gives inf or nan, which the callers' finiteness
+checks refuse, rather than an exception from inside a kernel) and ``cache=True``: the first call in a fresh
+install compiles (about 10 s of CPU, once; numba keeps the result beside this file, or in the user's cache
+directory when the install is read-only; with neither writable, each process compiles, :func:`_compiled`).
+"""
+
+from __future__ import annotations
+
+import math
+
+import numpy as np
+from numba import njit
+
+
+def _compiled(function):
+    """``njit`` with the cache (module docstring); without it where numba finds no writable place for it (a
+    read-only install and a read-only home: numba refuses ``cache=True`` there), compiled in each process."""
+    try:
+        return njit(cache=True, error_model="numpy")(function)
+    except RuntimeError:  # numba: "cannot cache function ...: no locator available"
+        return njit(error_model="numpy")(function)
+
+
+# contact laws (contact_law's ``law``): elastic, press fit with a linear or a saturating (tanh) fit force
+ELASTIC, FIT_LINEAR, FIT_TANH = 0, 1, 2
+# the controller's parameter vector (control's ``params``)
+KP, KD, KI, FORCE_LIMIT, BACKOFF, LIMITER, GRAVITY, GRAVITY_TOL, PRELOAD, DEFLECTION, DEFLECTION_TOL = range(11)
+SINGULAR_SIGMA = 1e-6  # A is singular below this smallest singular value (entries O(1))
+BISECTIONS = 60  # bisection steps of the contact solve (to 1e-9 of the bracket, module docstring of contact)
+# the contact's parameter vector (solve_contact's ``contact``)
+BOARD, STIFFNESS, DAMPING, LAW, FIT_STIFFNESS, FIT_FORCE, FIT_DEPTH = range(7)
+# rigid_post_step's ``layout``: the first column of each quantity it writes into the row
+ROW_PLATE, ROW_TOOL, ROW_FORCE, ROW_DEPTH, ROW_AXIAL, ROW_KINEMATIC, ROW_LENGTHS, ROW_RATES = range(8)
+# rigid_pre_step's ``layout``
+ROW_TIME, ROW_REFERENCE, ROW_ESTIMATE, ROW_COMMAND, ROW_TENSION, ROW_LIFT, ROW_INTERNAL = range(7)
+
+
+@_compiled
+def _legs(offsets, lengths, hx, hy, hz, units, residuals):
+    """Unit vectors e_i (n, 3) and length residuals l_i(h) - l_i (n,) at h (equation 1: u_i = h + d_i - B_i)."""
+    for i in range(offsets.shape[0]):
+        ux, uy, uz = hx + offsets[i, 0], hy + offsets[i, 1], hz + offsets[i, 2]
+        n = math.sqrt(ux * ux + uy * uy + uz * uz)
+        units[i, 0], units[i, 1], units[i, 2] = ux / n, uy / n, uz / n
+        residuals[i] = n - lengths[i]
+
+
+@_compiled
+def gauss_newton(offsets, lengths, pose, iterations, units):
+    """Gauss-Newton on the four lengths (m) from ``pose`` (3,), m, updated in place; fills ``units`` (4, 3) with
+    the leg unit vectors at the result and returns the largest |length residual| there (m)."""
+    hx, hy, hz = pose[0], pose[1], pose[2]
+    legs = offsets.shape[0]
+    r = np.empty(legs)
+    _legs(offsets, lengths, hx, hy, hz, units, r)
+    for _ in range(iterations):
+        a00 = a01 = a02 = a11 = a12 = a22 = b0 = b1 = b2 = 0.0
+        for i in range(legs):  # e^T e and e^T r
+            ex, ey, ez, ri = units[i, 0], units[i, 1], units[i, 2], r[i]
+            a00 += ex * ex
+            a01 += ex * ey
+            a02 += ex * ez
+            a11 += ey * ey
+            a12 += ey * ez
+            a22 += ez * ez
+            b0 += ex * ri
+            b1 += ey * ri
+            b2 += ez * ri
+        c00, c01, c02 = a11 * a22 - a12 * a12, a02 * a12 - a01 * a22, a01 * a12 - a02 * a11
+        c11, c12, c22 = a00 * a22 - a02 * a02, a02 * a01 - a00 * a12, a00 * a11 - a01 * a01
+        det = a00 * c00 + a01 * c01 + a02 * c02
+        hx -= (c00 * b0 + c01 * b1 + c02 * b2) / det
+        hy -= (c01 * b0 + c11 * b1 + c12 * b2) / det
+        hz -= (c02 * b0 + c12 * b1 + c22 * b2) / det
+        _legs(offsets, lengths, hx, hy, hz, units, r)
+    pose[0], pose[1], pose[2] = hx, hy, hz
+    return np.max(np.abs(r))
+
+
+@_compiled
+def distribution(units, pinv, null):
+    """A^+ (4, 3) into ``pinv`` and v_p (4,) into ``null`` (v_1 < 0) from the leg unit vectors ``units`` (4, 3)
+    (rows e_i: A = E^T); returns A's smallest singular value. A^+ = A^T (A A^T)^-1 = E N^-1, N = E^T E by the
+    adjugate; v_p is the generalised cross product of A's three rows, (v_p)_j = (-1)^j det(A without column j),
+    normalised; lambda_min(N) by the trigonometric closed form of a symmetric 3 x 3 eigenproblem (accurate to
+    ~1e-16 absolute near a singular A, where lambda_min is far from the others; to ~1e-11 where two eigenvalues
+    nearly coincide, far from the 1e-12 of the singularity test)."""
+    legs = units.shape[0]
+    a00 = a01 = a02 = a11 = a12 = a22 = 0.0
+    for i in range(legs):
+        ex, ey, ez = units[i, 0], units[i, 1], units[i, 2]
+        a00 += ex * ex
+        a01 += ex * ey
+        a02 += ex * ez
+        a11 += ey * ey
+        a12 += ey * ez
+        a22 += ez * ez
+    c00, c01, c02 = a11 * a22 - a12 * a12, a02 * a12 - a01 * a22, a01 * a12 - a02 * a11
+    c11, c12, c22 = a00 * a22 - a02 * a02, a02 * a01 - a00 * a12, a00 * a11 - a01 * a01
+    det = a00 * c00 + a01 * c01 + a02 * c02
+    for i in range(legs):
+        ex, ey, ez = units[i, 0], units[i, 1], units[i, 2]
+        pinv[i, 0] = (ex * c00 + ey * c01 + ez * c02) / det
+        pinv[i, 1] = (ex * c01 + ey * c11 + ez * c12) / det
+        pinv[i, 2] = (ex * c02 + ey * c12 + ez * c22) / det
+    norm = 0.0
+    # the null vector of a 3 x 4 A (one redundant leg, as the machine has: units.shape[0] == 4)
+    for j in range(legs):  # det of the 3 x 3 of rows e_k (k != j): A's columns without j, transposed
+        i0, i1, i2 = (1, 2, 3) if j == 0 else (0, 2, 3) if j == 1 else (0, 1, 3) if j == 2 else (0, 1, 2)
+        m = (units[i0, 0] * (units[i1, 1] * units[i2, 2] - units[i1, 2] * units[i2, 1])
+             - units[i0, 1] * (units[i1, 0] * units[i2, 2] - units[i1, 2] * units[i2, 0])
+             + units[i0, 2] * (units[i1, 0] * units[i2, 1] - units[i1, 1] * units[i2, 0]))
+        null[j] = -m if j % 2 else m
+        norm += null[j] * null[j]
+    scale = (-1.0 if null[0] >= 0.0 else 1.0) / math.sqrt(norm)
+    for j in range(legs):
+        null[j] *= scale
+    q = (a00 + a11 + a22) / 3.0
+    off = a01 * a01 + a02 * a02 + a12 * a12
+    p = math.sqrt(((a00 - q) ** 2 + (a11 - q) ** 2 + (a22 - q) ** 2 + 2.0 * off) / 6.0)
+    if p == 0.0:
+        return math.sqrt(q)
+    b00, b11, b22 = (a00 - q) / p, (a11 - q) / p, (a22 - q) / p
+    b01, b02, b12 = a01 / p, a02 / p, a12 / p
+    half_det = 0.5 * (b00 * (b11 * b22 - b12 * b12) - b01 * (b01 * b22 - b12 * b02) + b02 * (b01 * b12 - b11 * b02))
+    phi = math.acos(min(1.0, max(-1.0, half_det))) / 3.0
+    smallest = q + 2.0 * p * math.cos(phi + 2.0 * math.pi / 3.0)
+    return math.sqrt(max(smallest, 0.0))
+
+
+@_compiled
+def moved(pose, reference, tolerance):
+    """True when ``pose`` moved more than ``tolerance`` from ``reference`` (infinity norm; same units)."""
+    for k in range(pose.size):  # noqa: SIM110 (numba compiles the loop, not a generator in any())
+        if abs(pose[k] - reference[k]) > tolerance:
+            return True
+    return False
+
+
+@_compiled
+def control(params, estimate, units, rates, target, target_velocity, contact_force, dt, integral, lift,
+            gravity_pose, gravity, deflection_pose, deflection, pinv, null, force, tension):
+    """Figure 12's loop at the estimate (m) with leg unit vectors ``units`` (:mod:`pressfit.dynamics.control`):
+    fills ``pinv``, ``null`` (:func:`distribution`), the Cartesian force W (3,), N, into ``force`` and the tensions
+    -A^+ W + a4 v_p (n,), N, into ``tension``; updates ``integral`` (m s) in place. With params[DEFLECTION] the
+    error is taken against the estimate plus the predicted static deflection ``deflection`` (2, 3): row 0 per
+    newton of ``contact_force`` (m/N), row 1 the weight's sag (m), computed at ``deflection_pose``. Returns
+    (status, lift m, clamped, smallest singular value of A): status 1 when the gravity feed-forward ``gravity``
+    (computed at ``gravity_pose``) is stale (the estimate moved more than params[GRAVITY_TOL] from it; nothing else
+    is done, the caller refreshes it and calls again), 3 when the deflection is stale (params[DEFLECTION_TOL]:
+    likewise), 2 when A is singular (below SINGULAR_SIGMA: nothing else done)."""
+    if params[GRAVITY] != 0.0 and moved(estimate, gravity_pose, params[GRAVITY_TOL]):
+        return 1, lift, False, 0.0
+    compensate = params[DEFLECTION] != 0.0
+    if compensate and moved(estimate, deflection_pose, params[DEFLECTION_TOL]):
+        return 3, lift, False, 0.0
+    sigma = distribution(units, pinv, null)
+    if sigma < SINGULAR_SIGMA:
+        return 2, lift, False, sigma
+    kp, kd, ki, limit = params[KP], params[KD], params[KI], params[FORCE_LIMIT]
+    limiter = params[LIMITER] != 0.0
+    error = np.empty(3)
+    for j in range(3):
+        velocity = 0.0
+        for i in range(units.shape[0]):
+            velocity += pinv[i, j] * rates[i]
+        tool = estimate[j] + deflection[0, j] * contact_force + deflection[1, j] if compensate else estimate[j]
+        error[j] = (target[j] + (lift if j == 1 else 0.0)) - tool
+        force[j] = kp * error[j] + kd * target_velocity[j] + ki * integral[j]
+        if j == 1:
+            clamped = limiter and contact_force > 0.0 and force[1] < -limit
+            if clamped:
+                force[1] = -limit
+                error[1] = 0.0  # anti-windup: the vertical integrator holds while clamped
+        force[j] -= kd * velocity  # damping acts outside the clamp
+        integral[j] = integral[j] + dt * error[j]
+    if limiter and (contact_force > limit or lift > 0.0):
+        lift = max(0.0, lift + dt * params[BACKOFF] * (contact_force - limit))
+    if params[GRAVITY] != 0.0:
+        for j in range(3):
+            force[j] = force[j] + gravity[j]
+    for i in range(units.shape[0]):
+        tension[i] = -(pinv[i, 0] * force[0] + pinv[i, 1] * force[1] + pinv[i, 2] * force[2]) \
+            + params[PRELOAD] * null[i]
+    return 0, lift, clamped, sigma
+
+
+@_compiled
+def first_order(force, command, limit, decay, out):
+    """The saturated first-order drive's zero-order-hold step (:class:`pressfit.dynamics.actuators.ForceActuators`):
+    out = s + (force - s) decay, s = the command clipped to +-limit (N), decay = exp(-dt / tau)."""
+    for i in range(force.size):
+        target = min(max(command[i], -limit), limit)
+        out[i] = target + (force[i] - target) * decay
+
+
+@_compiled
+def contact_law(contact, depth, rate):
+    """F(d, d_dot) (N, >= 0) of :func:`pressfit.dynamics.contact.contact_force_n` (``contact`` as in
+    :func:`solve_contact`)."""
+    if depth <= 0.0:
+        return 0.0
+    force = contact[STIFFNESS] * depth + contact[DAMPING] * rate
+    if contact[LAW] == FIT_LINEAR:
+        force += contact[FIT_STIFFNESS] * depth
+    elif contact[LAW] == FIT_TANH:
+        force += contact[FIT_FORCE] * math.tanh(depth / contact[FIT_DEPTH])
+    return max(force, 0.0)
+
+
+@_compiled
+def _deflect(force, column, sag, loads, disp, u):
+    if loads.size == 0:
+        for k in range(3):
+            u[k] = column[k] * force + sag[k]
+    else:
+        for k in range(3):
+            u[k] = sag[k] + np.interp(force, loads, disp[:, k])
+
+
+@_compiled
+def solve_contact(contact, rigid_depth, previous_depth, dt, column, sag, loads, disp, u):
+    """The contact force F (N) with the structure's deflection u(F) in series (:mod:`pressfit.dynamics.contact`):
+    u = ``column`` F + ``sag``, or, when ``loads`` is not empty, ``sag`` + the table ``loads`` (n,), N -> ``disp``
+    (n, 3), m, interpolated (m/N, m). ``contact`` = (board height m, k N/m, b N s/m, law, fit stiffness N/m, fit
+    force N, fit depth m). Writes u (3,), m, into ``u``; returns (F, interference m). The bracket's upper end is
+    the law at the depth at zero force d(0), which includes the sag (the deflection grows with the force)."""
+    _deflect(0.0, column, sag, loads, disp, u)
+    d0 = rigid_depth - u[1]
+    if 0.0 - contact_law(contact, d0, (d0 - previous_depth) / dt) >= 0.0:
+        return 0.0, d0
+    lo, hi = 0.0, contact_law(contact, d0, max(d0 - previous_depth, 0.0) / dt)
+    for _ in range(BISECTIONS):
+        mid = 0.5 * (lo + hi)
+        _deflect(mid, column, sag, loads, disp, u)
+        d = rigid_depth - u[1]
+        if mid - contact_law(contact, d, (d - previous_depth) / dt) < 0.0:
+            lo = mid
+        else:
+            hi = mid
+        if hi - lo <= 1e-9 * hi:
+            break
+    _deflect(hi, column, sag, loads, disp, u)
+    return hi, rigid_depth - u[1]
+
+
+@_compiled
+def axial_forces(closure_forces, q, actuator_q, out):
+    """Axial force N_i (N, > 0 tension) of each leg at its plate cardan into ``out`` (n,): the closure force f
+    (the first three of each leg's six in ``closure_forces``, in the frame of the leg's last body) along the leg
+    axis. The last body's frame is R_0 Rx(a) Ry(b) Ry(c) Rx(d) (base cardan a, b, plate cardan c, d: q at
+    ``actuator_q`` - 2, - 1, + 1, + 2) and the axis R_0 Rx(a) Ry(b) e_z, so N = f . (Ry(c) Rx(d))^T e_z =
+    -f_x sin c + f_y sin d cos c + f_z cos d cos c."""
+    for i in range(actuator_q.shape[0]):
+        c, d = q[actuator_q[i] + 1], q[actuator_q[i] + 2]
+        fx, fy, fz = closure_forces[6 * i], closure_forces[6 * i + 1], closure_forces[6 * i + 2]
+        out[i] = -fx * math.sin(c) + (fy * math.sin(d) + fz * math.cos(d)) * math.cos(c)
+
+
+@_compiled
+def rigid_pre_step(row, t, reference, lift, estimate, command, tension, null, tau, actuator_v, contact_tau, layout):
+    """Before one rigid-leg step: the step's row at the columns ``layout`` names (ROW_TIME ...): time (s), the
+    reference with its lift (m), the estimate (m), the commanded and delivered tensions (N), the lift (m) and the
+    internal force v_p . N (N); and the joint forces ``tau``: -N on the actuators, ``contact_tau`` (N, the last
+    step's contact force in the plate's local frame) on the plate."""
+    row[layout[ROW_TIME]], row[layout[ROW_LIFT]] = t, lift
+    for k in range(3):
+        row[layout[ROW_REFERENCE] + k] = reference[k] + (lift if k == 1 else 0.0)
+        row[layout[ROW_ESTIMATE] + k] = estimate[k]
+        tau[k] = contact_tau[k]
+    internal = 0.0
+    for i in range(actuator_v.shape[0]):
+        row[layout[ROW_COMMAND] + i], row[layout[ROW_TENSION] + i] = command[i], tension[i]
+        internal += null[i] * tension[i]
+        tau[actuator_v[i]] = -tension[i]
+    row[layout[ROW_INTERNAL]] = internal
+
+
+@_compiled
+def rigid_post_step(row, previous_q, q, v, closure_forces, actuator_q, actuator_v, contact, previous_depth, dt,
+                    column, sag, loads, disp, offsets, estimate, units, iterations, kinematic_iterations, tau, layout,
+                    lengths, rates):
+    """After one rigid-leg step from ``previous_q`` to (q, v): returns (False, ...) and does nothing else if the
+    state is not finite. Else fills the step's row at the columns ``layout`` names (ROW_*: the caller fills the
+    rest): the rigid pose and the tool tip (rigid + deflection) (m), the contact force (N) and interference (m) at
+    the new rigid tool position (:func:`solve_contact`, at every step: the sag can press the tool below the
+    board with the rigid tip above it), the axial forces (N) at ``previous_q``, where the
+    accelerations were computed (:func:`axial_forces`), the kinematic pose (m: the forward kinematics of the new
+    lengths, Gauss-Newton from ``estimate`` over ``iterations``, which becomes the next step's estimate, in
+    place, with its unit vectors in ``units``, then continued to ``kinematic_iterations`` in all), the lengths
+    (m) and rates (m/s), also into ``lengths`` and ``rates``; and the contact force for the next step into
+    ``tau`` (the plate's local frame, R^T (0, F, 0)). Returns (True, F, interference, the estimate's largest
+    length residual m)."""
+    for x in q:
+        if not math.isfinite(x):
+            return False, 0.0, 0.0, 0.0
+    for x in v:
+        if not math.isfinite(x):
+            return False, 0.0, 0.0, 0.0
+    u = np.empty(3)
+    force, depth = solve_contact(contact, contact[BOARD] - q[1], previous_depth, dt, column, sag, loads, disp, u)
+    for k in range(3):
+        row[layout[ROW_PLATE] + k] = q[k]
+        row[layout[ROW_TOOL] + k] = q[k] + u[k]
+    row[layout[ROW_FORCE]], row[layout[ROW_DEPTH]] = force, depth
+    legs = actuator_q.shape[0]
+    axial = np.empty(legs)
+    axial_forces(closure_forces, previous_q, actuator_q, axial)
+    for i in range(legs):
+        row[layout[ROW_AXIAL] + i] = axial[i]
+        lengths[i], rates[i] = q[actuator_q[i]], v[actuator_v[i]]
+        row[layout[ROW_LENGTHS] + i], row[layout[ROW_RATES] + i] = lengths[i], rates[i]
+    residual = gauss_newton(offsets, lengths, estimate, iterations, units)
+    kinematic = estimate.copy()
+    if kinematic_iterations > iterations:
+        gauss_newton(offsets, lengths, kinematic, kinematic_iterations - iterations, np.empty((legs, 3)))
+    for k in range(3):
+        row[layout[ROW_KINEMATIC] + k] = kinematic[k]
+    x, y, z, w = q[3], q[4], q[5], q[6]  # R^T e_y F: the second row of R(quaternion)
+    tau[0], tau[1], tau[2] = 2.0 * (x * y + z * w) * force, (1.0 - 2.0 * (x * x + z * z)) * force, \
+        2.0 * (y * z - x * w) * force
+    return True, force, depth, residual

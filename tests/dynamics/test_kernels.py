@@ -1,0 +1,194 @@
+"""The compiled per-step kernels of the insertion loop (pressfit.dynamics.kernels) against independent
+computations: numpy's SVD for the force distribution, Pinocchio's joint placements for the axial forces, the
+general (any deflection function) contact bisection, and a numpy transcription of Figure 12's controller as
+the module docstring of pressfit.dynamics.control states it."""
+
+import math
+
+import numpy as np
+import pinocchio as pin
+import pytest
+
+from pressfit import kinematics
+from pressfit.description.cases import Contact, Controller
+from pressfit.description.machine import load_machine
+from pressfit.dynamics import kernels
+from pressfit.dynamics.actuators import distribution
+from pressfit.dynamics.contact import contact_parameters, solve_contact
+from pressfit.dynamics.control import (
+    DEFLECTION_UPDATE_M,
+    GRAVITY_UPDATE_M,
+    ForceLimitedController,
+    gravity_feedforward_n,
+    static_deflection_columns,
+)
+from pressfit.dynamics.multibody import rigid_leg_model
+from pressfit.errors import SingularPoseError
+
+RNG = np.random.default_rng(19)
+POSES = RNG.uniform([-0.2, 0.5, -0.2], [0.2, 0.72, 0.2], (40, 3))
+
+
+@pytest.fixture(scope="module")
+def machine():
+    return load_machine()
+
+
+@pytest.fixture(scope="module")
+def rigid(machine):
+    return rigid_leg_model(machine, np.array([0.05, 0.65, -0.05]))
+
+
+def test_distribution_is_the_svd_pseudo_inverse_and_null_vector(machine):
+    """A^+ and v_p in closed form from the 3 x 3 normal matrix equal numpy's pinv and SVD null vector (sign: v_1
+    < 0) to 1e-13 (achieved: a few 1e-16 on entries of order 1), and A's smallest singular value to 3e-11 (the
+    trigonometric eigenvalue loses digits where two eigenvalues of A A^T nearly coincide: at most 8.5e-12 over
+    these poses and 2000 others, median 3e-15; it only decides the 1e-6 singularity test)."""
+    poses = POSES[kinematics.is_reachable(machine, POSES)]
+    assert len(poses) >= 20
+    for pose in poses:
+        units = kinematics.inverse_kinematics(machine, pose).unit_vectors
+        pinv, null = distribution(units)
+        a = units.T
+        _, s, vt = np.linalg.svd(a)
+        reference = vt[3] if vt[3, 0] < 0 else -vt[3]
+        assert np.abs(pinv - np.linalg.pinv(a)).max() < 1e-13
+        assert np.abs(null - reference).max() < 1e-13
+        assert np.abs(a @ null).max() < 1e-14 and null[0] < 0
+        assert kernels.distribution(units, np.empty((4, 3)), np.empty(4)) == pytest.approx(s[-1], abs=3e-11)
+
+
+@pytest.mark.parametrize(("sigma", "singular"), [(1.02e-6, False), (0.98e-6, True)])
+def test_distribution_refuses_a_singular_a_just_below_the_limit(sigma, singular):
+    """A built with singular values (1, 0.7, sigma): refused (SingularPoseError) just below 1e-6, accepted just
+    above (the closed-form lambda_min is accurate to ~1e-16 absolute: 1e-4 relative at sigma = 1e-6). Accepted,
+    A^+ from the normal matrix is as accurate as cond(A)^2 eps allows (1e12 x 2.2e-16 here; over the reachable
+    workspace cond(A) <= 3.6, so 3e-15: the first test)."""
+    u, _ = np.linalg.qr(RNG.normal(size=(3, 3)))
+    v, _ = np.linalg.qr(RNG.normal(size=(4, 4)))
+    a = u @ np.diag([1.0, 0.7, sigma]) @ v[:3]
+    if singular:
+        with pytest.raises(SingularPoseError, match="smallest singular value 9.8"):
+            distribution(a.T)
+    else:
+        pinv, null = distribution(a.T)
+        bound = 10 * (1.0 / sigma) ** 2 * np.finfo(float).eps
+        assert np.abs(a @ pinv - np.eye(3)).max() < bound
+        assert np.abs(a @ null).max() < 1e-11  # achieved 2.7e-12: the cofactors cancel to ~ sigma_1 sigma_2 sigma
+
+
+def test_axial_forces_are_the_closure_forces_along_the_leg_axes(rigid):
+    """The closed form N_i = f . (Ry(c) Rx(d))^T e_z from the plate cardan angles equals the closure force
+    rotated to the world by Pinocchio's placement of the leg's last body, along the leg axis (its placement
+    minus the base point), at moving, off-closure states: to 1e-12 N on forces of tens of N."""
+    machine = rigid.machine
+    for pose in POSES[kinematics.is_reachable(machine, POSES)][:10]:
+        q = pin.integrate(rigid.model, rigid.configuration_at(pose), RNG.normal(scale=1e-3, size=rigid.model.nv))
+        v = RNG.normal(scale=0.2, size=rigid.model.nv)
+        tau = RNG.normal(scale=50.0, size=rigid.model.nv)
+        rigid.accelerations(q, v, tau)
+        lam = np.asarray(rigid.data.lambda_c).reshape(4, 2, 3)[:, 0]
+        expected = []
+        for i, j in enumerate(rigid.end_joints):
+            placement = rigid.data.oMi[j]
+            axis = placement.translation - machine.base_points_m[i]
+            expected.append(placement.rotation @ lam[i] @ axis / np.linalg.norm(axis))
+        assert np.abs(np.abs(expected)).max() > 1.0
+        assert np.abs(rigid.axial_forces_n(q) - expected).max() < 1e-12
+
+
+@pytest.mark.parametrize("law", ["elastic", "linear", "saturating"])
+def test_compiled_contact_solve_is_the_general_bisection(law):
+    """The loop's compiled contact (linear compliance column, or a load-deflection table, each plus a sag) gives
+    the force, interference and deflection of the general bisection with the same deflection as a Python
+    function, to 1e-12 relative (the same arithmetic: achieved round-off), including a rigid tip above the board
+    that the sag presses below it (the bracket's upper end is the law at the depth at zero force)."""
+    fit = {} if law == "elastic" else {"law": "press_fit", "fit": law, "fit_stiffness_n_per_m": 3e4,
+                                       "fit_force_n": 20.0, "fit_depth_m": 1e-3}
+    contact = Contact(board_height_m=0.6, pin_position_m=[0.0, 0.0], stiffness_n_per_m=5e4,
+                      damping_n_s_per_m=40.0, **fit)
+    params = contact_parameters(contact)
+    loads = np.linspace(0.0, 500.0, 41)
+    disp = np.column_stack([1e-7 * loads, 3e-5 * np.sqrt(loads) + 1e-6 * loads, -2e-7 * loads])
+    above = 0
+    for _ in range(40):
+        tip = np.array([0.0, 0.6 - RNG.uniform(-3e-4, 1e-3), 0.0])
+        previous, column = RNG.uniform(-1e-3, 2e-3), np.array([1e-7, RNG.uniform(0.0, 4e-5), -3e-7])
+        sag = np.array([2e-6, -RNG.uniform(0.0, 4e-4), -1e-6])
+        tabulated = lambda f, s=sag: s + np.array([np.interp(f, loads, disp[:, k]) for k in range(3)])
+        linear = lambda f, c=column, s=sag: c * f + s
+        for table, function in (((np.zeros(0), np.zeros((0, 3))), linear), ((loads, disp), tabulated)):
+            reference = solve_contact(contact, tip, function, previous, 1e-3)
+            u = np.zeros(3)
+            force, depth = kernels.solve_contact(params, 0.6 - tip[1], previous, 1e-3, column, sag, *table, u)
+            above += tip[1] > 0.6 and force > 0.0
+            assert force == pytest.approx(reference.force_n, rel=1e-12, abs=1e-12)
+            assert depth == pytest.approx(reference.depth_m, rel=1e-12, abs=1e-15)
+            assert np.abs(u - reference.deflection_m).max() <= 1e-12 * max(1e-6, np.abs(u).max())
+    assert above > 2  # the sag pressed a tool whose rigid tip is above the board into it
+
+
+def _figure_12(gains, limit, limiter, state, estimate, units, rates, target, target_velocity, contact_force, dt,
+               gravity, deflection):
+    """A numpy transcription of the module docstring of pressfit.dynamics.control (W and the next state) with the
+    force limit ``limit`` (N) and the error against the estimate plus ``deflection`` (3, 2) @ (F, 1)."""
+    integral, lift = state
+    pinv = np.linalg.pinv(units.T)
+    velocity = pinv.T @ rates
+    error = target + [0.0, lift, 0.0] - (estimate + deflection @ [contact_force, 1.0])
+    pid = gains.kp_n_per_m * error + gains.kd_n_s_per_m * target_velocity + gains.ki_n_per_m_s * integral
+    clamped = limiter and contact_force > 0.0 and pid[1] < -limit
+    if clamped:
+        pid[1], error[1] = -limit, 0.0
+    pid = pid - gains.kd_n_s_per_m * velocity
+    if limiter and (contact_force > limit or lift > 0.0):
+        lift = max(0.0, lift + dt * gains.backoff_m_per_s_n * (contact_force - limit))
+    return pid + gravity, (integral + dt * error, lift), clamped
+
+
+@pytest.mark.parametrize(("limiter", "compensation"), [(True, False), (False, False), (True, True)])
+def test_compiled_controller_is_figure_12(machine, rigid, limiter, compensation):
+    """400 random steps of the compiled controller (estimate, distribution, PID, clamp, anti-windup, lift,
+    gravity feed-forward, tensions -A^+ W + a4 v_p; with ``deflection_compensation`` the error against the
+    estimate plus the predicted static deflection; the force limit a run sets per segment, changed every 40
+    steps) against the numpy transcription: W, the integral, the lift, the clamp and the tensions to 1e-9
+    (relative to forces of hundreds of N; achieved ~1e-13)."""
+    gains = Controller(deflection_compensation=compensation)
+    pose0 = np.array([0.1, 0.62, -0.05])
+    ctrl = ForceLimitedController(machine, rigid, gains, limiter, pose0.copy(), preload_n=40.0)
+    state, clamps, lifted = (np.zeros(3), 0.0), 0, 0
+    for k in range(400):
+        pose = pose0 + RNG.normal(scale=2e-4, size=3) + [0.0, -1e-5 * k, 1e-5 * k]  # 5.6 mm: 5 feed-forward updates
+        lengths = kinematics.inverse_kinematics(machine, pose).lengths_m
+        rates = RNG.normal(scale=0.05, size=4)
+        target = pose + RNG.normal(scale=1e-3, size=3) - [0.0, 3e-3 * (k > 50), 0.0]  # pressing: clamps
+        target_velocity = RNG.normal(scale=0.05, size=3)
+        contact_force = max(0.0, RNG.normal(150.0, 60.0)) if k > 50 else 0.0
+        ctrl.force_limit_n = gains.force_limit_n * (1.0 + 0.5 * ((k // 40) % 3 - 1))  # a segment's limit
+        force = ctrl.command(lengths, rates, (target, target_velocity), contact_force, 1e-3)
+        assert np.abs(ctrl.estimate_m - pose).max() < 1e-12
+        assert np.abs(ctrl.gravity.pose_m - ctrl.estimate_m).max() <= GRAVITY_UPDATE_M
+        gravity = gravity_feedforward_n(rigid, ctrl.gravity.pose_m)
+        deflection = np.zeros((3, 2))
+        if compensation:
+            assert np.abs(ctrl.deflection.pose_m - ctrl.estimate_m).max() <= DEFLECTION_UPDATE_M
+            deflection = static_deflection_columns(machine, rigid, ctrl.deflection.pose_m)
+            assert np.abs(deflection[:, 1]).max() > 1e-5  # the sag counts (tens of um)
+        expected, state, clamped = _figure_12(gains, ctrl.force_limit_n, limiter, state, ctrl.estimate_m, ctrl.units,
+                                              rates, target, target_velocity, contact_force, 1e-3, gravity,
+                                              deflection)
+        assert np.abs(force - expected).max() < 1e-9
+        assert np.abs(ctrl.integral_m_s - state[0]).max() < 1e-12 and ctrl.lift_m == pytest.approx(state[1], abs=1e-15)
+        assert ctrl.clamped == clamped
+        pinv, null = distribution(ctrl.units)
+        assert np.abs(ctrl.tension_n - (-pinv @ expected + 40.0 * null)).max() < 1e-9
+        clamps, lifted = clamps + clamped, lifted + (state[1] > 0.0)
+    assert (clamps > 10 and lifted > 100) if limiter else (clamps == 0 and lifted == 0)
+
+
+def test_first_order_drive_step_is_the_closed_form():
+    """The compiled drive step: s + (N - s) exp(-dt / tau), s the command clipped to +-limit."""
+    force, command, out = np.array([0.0, 10.0, -5.0, 300.0]), np.array([500.0, -20.0, -900.0, 100.0]), np.empty(4)
+    kernels.first_order(force, command, 300.0, math.exp(-0.25), out)
+    target = np.array([300.0, -20.0, -300.0, 100.0])
+    assert np.array_equal(out, target + (force - target) * math.exp(-0.25))
