@@ -86,15 +86,19 @@ GRAVITY_UPDATE_M = 1e-3  # the gravity feed-forward is recomputed when the estim
 DEFLECTION_UPDATE_M = 1e-4  # the static deflection's compliance is recomputed beyond this, m (3.4% over 5 mm)
 
 
-def static_deflection_columns(machine: Machine, rigid: RigidLegModel, pose_m: np.ndarray) -> np.ndarray:
+def static_deflection_columns(machine: Machine, rigid: RigidLegModel, pose_m: np.ndarray,
+                              gravity_n: np.ndarray | None = None) -> np.ndarray:
     """The structure's quasi-static tool deflection at a pose, (3, 2), m: column 0 per newton of contact force
     along +y, column 1 under the moving parts' weight (the condensed compliance,
     :func:`pressfit.mechanics.condensed.condensed_plate_compliance`, under -G, G the Cartesian force that holds
     them: :func:`gravity_feedforward_n`). The legs' own bending under their weight is not in a plate load: the
     weight column is 12-14% short of the elastic model's static sag at four poses over the workspace
-    (tests/dynamics/test_static_deflection.py); zero when the model has no gravity."""
+    (tests/dynamics/test_static_deflection.py); zero when the model has no gravity. ``gravity_n``: G (3,), N, if the
+    caller holds it (the controller's cache, within ``GRAVITY_UPDATE_M``: 0.06% of G, below the compliance's own
+    0.07% over ``DEFLECTION_UPDATE_M``)."""
     compliance = condensed_plate_compliance(machine, pose_m)[:3, :3]
-    return np.column_stack([compliance[:, 1], compliance @ -gravity_feedforward_n(rigid, pose_m)])
+    gravity = gravity_feedforward_n(rigid, pose_m) if gravity_n is None else gravity_n
+    return np.column_stack([compliance[:, 1], compliance @ -gravity])
 
 
 class Shape(Protocol):
@@ -193,8 +197,8 @@ class ForceLimitedController:
     def __post_init__(self) -> None:
         self.force_limit_n = self.gains.force_limit_n
         self.gravity = PoseCache(lambda pose: gravity_feedforward_n(self.rigid, pose), GRAVITY_UPDATE_M)
-        self.deflection = PoseCache(lambda pose: np.ascontiguousarray(
-            static_deflection_columns(self.machine, self.rigid, pose).T), DEFLECTION_UPDATE_M)  # rows: c0, c1
+        self.deflection = PoseCache(lambda pose: np.ascontiguousarray(static_deflection_columns(
+            self.machine, self.rigid, pose, self.gravity(pose)).T), DEFLECTION_UPDATE_M)  # rows: c0, c1
         self.estimate_m = np.array(self.estimate_m, dtype=float)
         self.offsets_m = _offsets(self.machine)
         self.units, self.pinv = np.zeros_like(self.offsets_m), np.zeros_like(self.offsets_m)

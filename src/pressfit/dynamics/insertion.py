@@ -40,12 +40,10 @@ from pressfit.dynamics import drives as drive_kinds
 from pressfit.dynamics import kernels
 from pressfit.dynamics.contact import NO_TABLE, contact_force_n, contact_parameters
 from pressfit.dynamics.control import (
-    DEFLECTION_UPDATE_M,
     ForceLimitedController,
     PoseCache,
     Trajectory,
     estimate_pose,
-    static_deflection_columns,
 )
 from pressfit.dynamics.drives.steps import hydraulic_step_refusal
 from pressfit.dynamics.machine.base import SECTION_COMPONENTS, SECTIONS, DriveInput, Energy
@@ -110,16 +108,16 @@ class InsertionResult:
         return self.series[:, SERIES_COLUMNS.index(name)]
 
 
-def _deflection(machine: Machine, case: Case, sim: Simulation, pin_pose: np.ndarray, rigid: RigidLegModel
+def _deflection(machine: Machine, case: Case, sim: Simulation, pin_pose: np.ndarray, columns: PoseCache
                 ) -> Callable[[np.ndarray], tuple[np.ndarray, np.ndarray, tuple[np.ndarray, np.ndarray]]]:
     """pose -> the tool's quasi-static deflection at the rigid pose as
     :func:`pressfit.dynamics.kernels.solve_contact` takes it: u = column F + sag under the contact force F (N, +y)
     and the moving parts' weight (column m/N and sag m, (3,) each:
     :func:`pressfit.dynamics.control.static_deflection_columns`), or, with ``clearance``, sag + the clearance
-    model's load-deflection table at the pin (loads (n,), N; displacements (n, 3), m) for the contact force."""
-    # C varies by 3.4% over 5 mm at the pin: 0.07% error at the 0.1 mm update distance
-    columns = PoseCache(lambda pose: np.ascontiguousarray(static_deflection_columns(machine, rigid, pose).T),
-                        DEFLECTION_UPDATE_M)  # rows: per newton, sag
+    model's load-deflection table at the pin (loads (n,), N; displacements (n, 3), m) for the contact force.
+    ``columns``: the controller's cache of the columns (``ForceLimitedController.deflection``, rows c0, c1,
+    updated every ``DEFLECTION_UPDATE_M``: C varies by 3.4% over 5 mm at the pin, 0.07% at 0.1 mm), shared: the
+    estimate and the rigid pose differ by the closure drift, so one update serves both each step."""
     if not sim.clearance:
         return lambda pose: (*columns(pose), NO_TABLE)
     limit = max(4.0 * sim.controller.force_limit_n, sim.contact.stiffness_n_per_m * sim.interference_m)
@@ -413,9 +411,9 @@ def _run_rigid(case: Case, machine: Machine, plan: ScenarioPlan, drives: drive_k
     new lengths (the next step's controller estimate and, continued to ``KINEMATIC_ITERATIONS``, the row's
     kinematic pose) and the row; the energies (``ENERGY_COLUMNS``) from the rigid model."""
     sim, trajectory, steps, rigid = plan.simulation, plan.trajectory, plan.steps, plan.rigid
-    deflection = _deflection(machine, case, sim, trajectory.waypoints_m[2], rigid)
     q, v, dt, a4 = rigid.reference_q.copy(), np.zeros(rigid.model.nv), sim.time_step_s, case.preload.a4_n
     ctrl = ForceLimitedController(machine, rigid, sim.controller, limiter, np.asarray(sim.start_m, float).copy(), a4)
+    deflection = _deflection(machine, case, sim, trajectory.waypoints_m[2], ctrl.deflection)
     act_q, act_v = rigid.actuator_q, rigid.actuator_v
     ctrl.command(q[act_q], v[act_v], trajectory.at(0.0), 0.0, 0.0)
     drive = drives.initial_state(ctrl.tension_n.copy(), q[act_q])
