@@ -298,12 +298,13 @@ class CycleResult:
         return self.series[:, CYCLE_COLUMNS.index(name)]
 
 
-def simulate_cycle(case: Case, model: str | None = None, progress: bool = False, sizing: bool = True) -> CycleResult:
+def simulate_cycle(case: Case, model: str | None = None, progress: bool = False, sizing: bool = True,
+                   preload_cost: bool = True) -> CycleResult:
     """Plan (:func:`plan_cycle`) and run the board with the force limiter on, and summarise it. With ``sizing``
     the drive sizing over the cycle (:func:`pressfit.dynamics.sizing.run_sizing`: ``drives``, ``energy_balance``,
     ``energy_balance_residual`` in the summary), the preload's cost from a second run of the same plan (the same
     reference and time grid) with ``[preload] a4_n`` = 0, and the energy balance enforced (ResidualError over
-    its tolerance)."""
+    its tolerance); ``preload_cost`` False skips the second run (no ``*_without_preload_*`` figures)."""
     machine = case.machine()
     plan = plan_cycle(case, machine, model)
     drives = drive_kinds.of(machine)
@@ -322,14 +323,15 @@ def simulate_cycle(case: Case, model: str | None = None, progress: bool = False,
     if sizing:
         a4 = case.preload.a4_n
         baseline = _Rows(series)
-        if a4 != 0.0:
+        if a4 != 0.0 and preload_cost:
             zero = plan.run_case.model_copy(update={"preload": case.preload.model_copy(update={"a4_n": 0.0})})
             try:
                 baseline = _Rows(run(zero)[0])
             except PressfitError as exc:
                 raise PressfitError(f"the preload's cost (the same board with [preload] a4_n = 0 instead of "
                                     f"{a4:g} N) could not be simulated: {exc}") from None
-        sized = run_sizing(_Rows(series), drives, plan.scenario.simulation.time_step_s, baseline)
+        sized = run_sizing(_Rows(series), drives, plan.scenario.simulation.time_step_s,
+                           baseline if preload_cost else None)
         sized.energy.require_closed(f"of the board of {case.path}")
         summary.update(sized.to_dict())
     return CycleResult(series, plan, summary, sections, sized)
