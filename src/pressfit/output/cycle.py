@@ -110,20 +110,20 @@ def operating_points_figure(result: CycleResult) -> plt.Figure:
     return fig
 
 
-def write_cycle(result: CycleResult, out_dir: Path | str) -> list[Path]:
+def write_cycle(result: CycleResult, out_dir: Path | str, overwrite: bool = False) -> list[Path]:
     """``cycle.csv`` (one row per time step, :data:`pressfit.dynamics.cycle.CYCLE_COLUMNS`), ``cycle.json``,
     ``cycle_path.png``, ``cycle_force.png`` (and with the drive sizing ``cycle_drives.png``,
     ``cycle_operating_points.png``) into a fresh directory (through :func:`io.write_directory`)."""
     out = Path(out_dir)
-    paths = [io.write_csv(out / "cycle.csv", CYCLE_COLUMNS, result.series),
-             io.write_json(out / "cycle.json", result.summary)]
+    paths = [io.write_csv(out / "cycle.csv", CYCLE_COLUMNS, result.series, overwrite),
+             io.write_json(out / "cycle.json", result.summary, overwrite)]
     figures = [("cycle_path.png", path_figure), ("cycle_force.png", force_figure)]
     if "drives" in result.summary:
         figures += [("cycle_drives.png", drives_figure), ("cycle_operating_points.png", operating_points_figure)]
     for name, build in figures:
         fig = build(result)
         try:
-            paths.append(io.save_figure(fig, out / name))
+            paths.append(io.save_figure(fig, out / name, overwrite))
         finally:
             plt.close(fig)
     return paths
