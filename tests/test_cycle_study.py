@@ -39,6 +39,22 @@ def test_pareto_front_of_a_known_set():
     assert sorted(pareto_front(o).tolist()) == [0, 1, 4]
 
 
+def test_summary_of_a_pin_never_touched_is_json(tmp_path):
+    """A front sample whose pin was never touched (alignment infinite) and a refused one (NaN) serialise: null."""
+    from pressfit.output.files import to_json
+    from pressfit.studies.cycle_study import CycleStudyResult
+
+    columns = {"speed_scale": np.array([1.0, 2.0]), "acceleration_scale": np.ones(2), "jerk_scale": np.ones(2),
+               "descent_scale": np.ones(2), "cycle_time_s": np.array([3.0, np.nan]),
+               "worst_alignment_error_m": np.array([np.inf, np.nan]), "worst_overshoot_n": np.array([0.0, np.nan]),
+               "pins_passed": np.array([0, 0]), "within_limits": np.array([False, False]),
+               "error": np.array(["", "refused"], dtype=object), "on_front": np.array([True, False])}
+    result = CycleStudyResult(load_case(study_case(tmp_path)), columns, np.array([0]), None, "rigid")
+    s = json.loads(to_json(result.summary()))
+    assert s["front"][0]["worst_alignment_error_m"] is None and s["failed"] == 1
+    assert s["fastest_within_limits"] is None
+
+
 def test_study_on_a_local_cluster_writes_the_front_and_a_fastest_case_that_passes(tmp_path):
     case = study_case(tmp_path)
     out = tmp_path / "out"

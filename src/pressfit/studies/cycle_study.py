@@ -118,10 +118,15 @@ class CycleStudyResult:
     model: str
 
     def summary(self) -> dict[str, Any]:
+        """JSON-ready: counts, the front's rows and the fastest row (non-finite figures as None)."""
         c = self.columns
 
+        def value(x: Any) -> Any:  # JSON: a NaN (refused sample) or an infinite alignment (a pin never touched)
+            x = x.item() if hasattr(x, "item") else x  # is null, as cycle.json's error of a pin never touched
+            return None if isinstance(x, float) and not math.isfinite(x) else x
+
         def row(i: int) -> dict[str, Any]:
-            return {"sample": i, **{k: (v[i].item() if hasattr(v[i], "item") else v[i]) for k, v in c.items()}}
+            return {"sample": i, **{k: value(v[i]) for k, v in c.items()}}
 
         return {"case": self.case.name, "model": self.model, "samples": len(c["cycle_time_s"]),
                 "failed": int(sum(bool(e) for e in c["error"])), "within_limits": int(c["within_limits"].sum()),
