@@ -24,10 +24,19 @@ ARGS = ["--headless", "--no-sandbox", "--disable-gpu", "--disable-quic", "--no-f
         "--disable-background-networking", "--disable-component-update", "--disable-sync"]
 
 
+# a throughput study's summary.json as `pressfit study cycle` writes it (two front samples, known values)
+STUDY_FRONT = [{"sample": 2, "speed_scale": 4.0, "acceleration_scale": 1.0, "jerk_scale": 1.0, "descent_scale": 10.0,
+                "cycle_time_s": 3.5, "worst_alignment_error_m": 4e-5, "worst_overshoot_n": 7.0, "within_limits": False},
+               {"sample": 0, "speed_scale": 4.0, "acceleration_scale": 1.0, "jerk_scale": 1.0, "descent_scale": 1.0,
+                "cycle_time_s": 6.25, "worst_alignment_error_m": 1e-6, "worst_overshoot_n": 0.5, "within_limits": True}]
+
+
 @pytest.fixture(scope="module")
 def report_dir(tmp_path_factory, machine):
     out = tmp_path_factory.mktemp("report")
-    write_report(machine, out, quick=True, progress=False)
+    study = tmp_path_factory.mktemp("study")
+    (study / "summary.json").write_text(json.dumps({"samples": 4, "front": STUDY_FRONT}))
+    write_report(machine, out, quick=True, progress=False, cycle_study=study)
     return out
 
 
@@ -208,3 +217,19 @@ def test_insertion_cells_equal_the_simulation_json(page, report_dir):
     _check_table(page, "insertion", [{"quantity": k, "with_limiter": js[k], "without_limiter": js["comparison"][k]}
                                      for k in keys])
     assert js["peak_contact_force_n"] < js["comparison"]["peak_contact_force_n"]  # the limiter limits
+
+
+def test_board_cells_equal_the_cycle_json(page, report_dir):
+    """Section 9 (issue 20 item 6): the shortened board's per-pin and drive sizing tables show cycle/cycle.json's
+    records, every drive's RMS force beside its value with a4 = 0; the study's front shows its summary.json."""
+    js = json.loads((report_dir / "cycle" / "cycle.json").read_text())
+    assert js["pin_count"] == 2 and len(js["drives"]) == 4
+    pin_keys = ("index", "x_m", "z_m", "first_contact_time_s", "peak_contact_force_n", "steady_insertion_force_n",
+                "overshoot_n", "tool_lateral_error_at_first_contact_m", "settling_time_s", "passed")
+    _check_table(page, "cycle-pins", [{k: p[k] for k in pin_keys} for p in js["pins"]])
+    drive_keys = ("leg", "peak_force_n", "rms_force_n", "rms_force_without_preload_n", "peak_speed_m_per_s",
+                  "peak_power_w", "positive_energy_j", "regenerative_energy_j")
+    _check_table(page, "cycle-drives", [{k: d[k] for k in drive_keys} for d in js["drives"]])
+    _check_table(page, "cycle-front", STUDY_FRONT)
+    md = (report_dir / "report.md").read_text()
+    assert "## 8. The shipped board's work cycle" in md and "first 2 pins" in md

@@ -260,8 +260,8 @@ def control_cmd(case_path: Path, plant_model: str, out_dir: Path | None, overwri
 @click.option("--model", "plant_model", type=click.Choice(["flexible", "rigid"]), default=None,
               help="The machine simulated (default: the case's [cycle] model).")
 @click.option("--out", "out_dir", type=click.Path(path_type=Path), default=None,
-              help="Directory for cycle.csv, cycle.json, cycle_path.png and cycle_force.png (nothing written "
-                   "without it).")
+              help="Directory for cycle.csv, cycle.json, cycle_path.png, cycle_force.png, cycle_drives.png and "
+                   "cycle_operating_points.png (nothing written without it).")
 @OVERWRITE_OPTION
 @click.option("--json", "as_json", is_flag=True, help="Print the summary as JSON.")
 @click.option("--progress/--no-progress", default=True, help="Show a progress bar over simulated time.")
@@ -269,7 +269,8 @@ def control_cmd(case_path: Path, plant_model: str, out_dir: Path | None, overwri
 def cycle_cmd(case_path: Path, plant_model: str | None, out_dir: Path | None, overwrite: bool, as_json: bool,
               progress: bool) -> None:
     """Simulate a whole board, the case file's [cycle] table: per pin the insertion figures and pass/fail, the
-    cycle time, pins per minute and what limits each segment (SI units). Exit 1 when a pin fails its limits."""
+    cycle time, pins per minute and what limits each segment, the drive sizing over the cycle with the preload's
+    cost (a second run with a4 = 0) and the run's energy balance (SI units). Exit 1 when a pin fails its limits."""
     from pressfit.output.cycle import run_cycle
 
     s, paths = run_cycle(case_path, plant_model, out_dir, overwrite, progress)
@@ -283,6 +284,8 @@ def cycle_cmd(case_path: Path, plant_model: str | None, out_dir: Path | None, ov
         slow = s["slowest_segment"]
         click.echo(f"slowest segment: {slow['phase']} of pin {slow['pin']}, {slow['duration_s']:.3f} s, limited by "
                    f"{slow['binding_limit']}")
+        if "drives" in s:
+            _echo_sizing(s)
         click.echo(" pin        x [m]      z [m]  contact [s]  peak [N]  steady [N]  overshoot [N]  lateral [um]  "
                    "settling [s]  result")
         for p in s["pins"]:

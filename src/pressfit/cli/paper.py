@@ -49,15 +49,18 @@ def tables_cmd(as_json: bool, out_dir: Path | None, overwrite: bool, cad: bool) 
 @OVERWRITE_OPTION
 @click.option("--quick", is_flag=True,
               help="A preview: coarse grids, no static PNG maps (report.html has them, interactive).")
+@click.option("--cycle-study", "cycle_study", type=click.Path(path_type=Path, exists=True, file_okay=False),
+              help="The --out directory of a `pressfit study cycle` run: its Pareto front in the board's section.")
 @MODEL_OPTION
 @user_errors
-def report_cmd(out_dir: Path, overwrite: bool, quick: bool, model_path: Path) -> None:
+def report_cmd(out_dir: Path, overwrite: bool, quick: bool, cycle_study: Path | None, model_path: Path) -> None:
     """Reproduce Tables 5 and 6 and write the full report (maps, envelope, stiffness, ...) as report.md and .html."""
     from pressfit.output.files import check_directory, write_directory
     from pressfit.output.report import write_report
 
     check_directory(out_dir, overwrite)
     machine = load_machine(model_path)
-    path, = write_directory(out_dir, overwrite, lambda tmp: [write_report(machine, tmp, quick=quick)])
+    path, = write_directory(out_dir, overwrite, lambda tmp: [write_report(machine, tmp, quick=quick,
+                                                                                 cycle_study=cycle_study)])
     click.echo((path.parent / "tables.md").read_text())  # the Tables 5-6 comparison the report just wrote
     click.echo(f"report written to {path} and {path.with_suffix('.html')}")

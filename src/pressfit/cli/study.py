@@ -26,7 +26,7 @@ from pressfit.output.files import check_directory, to_json, write_directory
 
 @click.group("study")
 def study_group() -> None:
-    """Parameter studies: ``pressfit study preload``, ``montecarlo``, ``design``, ``insertion``."""
+    """Parameter studies: ``pressfit study preload``, ``montecarlo``, ``design``, ``insertion``, ``cycle``."""
 
 
 @study_group.command("preload", context_settings={"ignore_unknown_options": True})  # negative numbers
@@ -179,3 +179,43 @@ def study_design_cmd(case_file: Path, trials: int | None, workers: int | None, s
     click.echo(f"{s['trials']} designs ({s['feasible']} feasible, {s['failed']} failed); Pareto front of "
                f"{', '.join(s['objectives'])}: {len(s['pareto'])} designs")  # type: ignore[arg-type]
     echo_written(run.written)
+
+
+@study_group.command("cycle")
+@click.argument("case_file", type=click.Path(path_type=Path))
+@click.option("--model", "plant_model", type=click.Choice(["flexible", "rigid"]), default=None,
+              help="The machine simulated (default: the case's [cycle] model).")
+@cluster_options
+@click.option("--out", "out_dir", type=click.Path(path_type=Path), default=Path("out/study_cycle"), show_default=True,
+              help="Directory for samples.parquet, summary.json, front.png and fastest.toml.")
+@OVERWRITE_OPTION
+@click.option("--json", "as_json", is_flag=True, help="Print the summary as JSON.")
+@click.option("--progress/--no-progress", default=True, help="Show a progress bar over the board runs.")
+@user_errors
+def study_cycle_cmd(case_file: Path, plant_model: str | None, workers: int | None, scheduler: str | None,
+                    dashboard: bool, out_dir: Path, overwrite: bool, as_json: bool, progress: bool) -> None:
+    """Throughput: the board's motion limits swept over the case's [cycle.study] grid on a Dask cluster (one board
+    run per sample); the Pareto front of cycle time against the worst alignment error and the worst overshoot,
+    and the fastest setting within every pin's limits, written as a case file (SI units)."""
+    from pressfit.output.cycle_study import run_cycle_study
+
+    if dashboard and scheduler is not None:
+        raise PressfitError("--dashboard starts the local cluster's dashboard: not with --scheduler")
+    result, written = run_cycle_study(case_file, plant_model, out_dir, overwrite, workers, scheduler, progress,
+                                      dashboard)
+    s = result.summary()
+    if as_json:
+        click.echo(to_json(s | {"outputs": [str(p) for p in written]}))
+        return
+    click.echo(f"{s['case']}: {s['samples']} samples (model {s['model']}), {s['failed']} refused or failed, "
+               f"{s['within_limits']} within every pin's limits; Pareto front of cycle time, worst alignment error, "
+               f"worst overshoot: {len(s['front'])} samples")
+    click.echo("  speed  accel   jerk  descent  cycle [s]  alignment [um]  overshoot [N]  within")
+    for r in s["front"]:
+        click.echo(f"{r['speed_scale']:>7.3g} {r['acceleration_scale']:>6.3g} {r['jerk_scale']:>6.3g} "
+                   f"{r['descent_scale']:>8.3g} {r['cycle_time_s']:>10.3f} {r['worst_alignment_error_m'] * 1e6:>15.3f}"
+                   f" {r['worst_overshoot_n']:>14.3f}  {'yes' if r['within_limits'] else 'no'}")
+    f = s["fastest_within_limits"]
+    click.echo("fastest within the limits: " + ("none" if f is None else
+               f"sample {f['sample']}, cycle time {f['cycle_time_s']:.3f} s (written as fastest.toml)"))
+    echo_written(written)

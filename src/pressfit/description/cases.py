@@ -524,6 +524,54 @@ class ResolvedPin(StrictModel):
     source: str  # where it is defined: "[cycle] pins[k]" or "[cycle.grid]"
 
 
+class CycleLimits(StrictModel):
+    """Limits ``pressfit check`` asserts on the simulated board (all optional; SI), one report line each: the
+    cycle time (s), every pin's overshoot over its insertion limit (N) and lateral alignment error at first
+    contact (m; a pin never touched fails), the worst pin named, the worst drive's RMS and peak force over the
+    cycle (N), and the energy per cycle: the drives' positive (motoring) mechanical energy summed over the
+    drives, regeneration not credited (J)."""
+
+    max_cycle_time_s: NonNegative | None = None
+    max_overshoot_n: NonNegative | None = None
+    max_alignment_error_m: NonNegative | None = None
+    max_rms_drive_force_n: NonNegative | None = None
+    max_peak_drive_force_n: NonNegative | None = None
+    max_energy_per_cycle_j: NonNegative | None = None
+
+
+MAX_CYCLE_STUDY_SAMPLES = 400  # board runs in one `pressfit study cycle` (each a whole board: minutes at most)
+ScaleFactors = Annotated[list[Annotated[float, Field(gt=0, le=100.0, allow_inf_nan=False)]],
+                         Field(min_length=1, max_length=50)]
+
+
+class CycleStudy(StrictModel):
+    """The grid of ``pressfit study cycle`` (:mod:`pressfit.studies.cycle_study`): scale factors (-) on
+    ``[cycle.motion]``'s speed, acceleration and jerk, and ``descent`` on all three of ``[cycle.descent]`` (or of
+    ``[cycle.motion]`` when the board has no descent table); every combination is one board run, at most
+    ``MAX_CYCLE_STUDY_SAMPLES``. Each scaled limit must stay within :class:`MotionLimits`' bounds."""
+
+    speed_scale: ScaleFactors = [1.0]
+    acceleration_scale: ScaleFactors = [1.0]
+    jerk_scale: ScaleFactors = [1.0]
+    descent_scale: ScaleFactors = [1.0]
+
+    @model_validator(mode="after")
+    def _grid(self) -> CycleStudy:
+        for key in ("speed_scale", "acceleration_scale", "jerk_scale", "descent_scale"):
+            values = getattr(self, key)
+            if len(set(values)) != len(values):
+                raise ValueError(f"{key}: the factors must be distinct, got {values}")
+        count = self.sample_count
+        if count > MAX_CYCLE_STUDY_SAMPLES:
+            raise ValueError(f"the grid has {count} samples (board runs), above the cap of "
+                             f"{MAX_CYCLE_STUDY_SAMPLES}")
+        return self
+
+    @property
+    def sample_count(self) -> int:
+        return len(self.speed_scale) * len(self.acceleration_scale) * len(self.jerk_scale) * len(self.descent_scale)
+
+
 class Cycle(StrictModel):
     """A whole board (``pressfit cycle``; :mod:`pressfit.dynamics.cycle`): the board face is the plane
     y = ``board_height_m``; the pins are ``pins`` (in their order) then the ``grid`` (row by row in z, each row
@@ -536,7 +584,9 @@ class Cycle(StrictModel):
     pin, ..., and after the last to ``end_m``, where it holds ``settle_s``; each move is the minimum-time S-curve
     under ``motion`` (lift and traverse) or ``descent`` (descent and retract; default ``motion``), scaled down
     where the drives' speed or force limit would bind. ``time_step_s``, ``baumgarte_rad_per_s``, ``model``,
-    ``contact`` (the law) and ``controller`` mean what they mean in ``[simulation]``."""
+    ``contact`` (the law) and ``controller`` mean what they mean in ``[simulation]``. ``limits``: what
+    ``pressfit check`` asserts on the board (:class:`CycleLimits`); ``study``: the grid of ``pressfit study
+    cycle`` (:class:`CycleStudy`)."""
 
     board_height_m: Positive
     start_m: Vector3
@@ -556,6 +606,8 @@ class Cycle(StrictModel):
     model: Literal["flexible", "rigid"] = "flexible"
     contact: ContactLaw = ContactLaw()
     controller: Controller = Controller()
+    limits: CycleLimits = CycleLimits()
+    study: CycleStudy | None = None
 
     @model_validator(mode="after")
     def _some_pins(self) -> Cycle:

@@ -69,6 +69,7 @@ from pressfit.dynamics.insertion import (
     settling_time_s,
 )
 from pressfit.dynamics.multibody import rigid_leg_model
+from pressfit.dynamics.sizing import RunSizing, run_sizing
 from pressfit.errors import ModelFileError, PressfitError
 from pressfit.kinematics.profiles import Quintic, SCurve, quintic_move, s_curve
 
@@ -294,24 +295,56 @@ class CycleResult:
     plan: CyclePlan
     summary: dict[str, Any]
     sections: np.ndarray | None = None
+    sizing: RunSizing | None = None
 
     def column(self, name: str) -> np.ndarray:
         return self.series[:, CYCLE_COLUMNS.index(name)]
 
 
-def simulate_cycle(case: Case, model: str | None = None, progress: bool = False) -> CycleResult:
-    """Plan (:func:`plan_cycle`) and run the board with the force limiter on, and summarise it."""
+def simulate_cycle(case: Case, model: str | None = None, progress: bool = False, sizing: bool = True,
+                   preload_cost: bool = True) -> CycleResult:
+    """Plan (:func:`plan_cycle`) and run the board with the force limiter on, and summarise it. With ``sizing``
+    the drive sizing over the cycle (:func:`pressfit.dynamics.sizing.run_sizing`: ``drives``, ``energy_balance``,
+    ``energy_balance_residual`` in the summary), the preload's cost from a second run of the same plan (the same
+    reference and time grid) with ``[preload] a4_n`` = 0, and the energy balance enforced (ResidualError over
+    its tolerance); ``preload_cost`` False skips the second run (no ``*_without_preload_*`` figures)."""
     machine = case.machine()
     plan = plan_cycle(case, machine, model)
     drives = drive_kinds.of(machine)
-    try:
-        rows, phases, sections = run_plan(plan.run_case, machine, plan.scenario, drives, True, progress)
-    except PressfitError as exc:  # the loops name [simulation]'s keys: here they are [cycle]'s (the same meaning)
-        raise PressfitError(str(exc).replace("[simulation", "[cycle")) from None
+
+    def run(run_case: Case) -> tuple[np.ndarray, np.ndarray, np.ndarray | None]:
+        try:
+            return run_plan(run_case, machine, plan.scenario, drives, True, progress)
+        except PressfitError as exc:  # the loops name [simulation]'s keys: here they are [cycle]'s (the same)
+            raise PressfitError(str(exc).replace("[simulation", "[cycle")) from None
+
+    rows, phases, sections = run(plan.run_case)
     pin = np.array([plan.segments[k].pin if plan.segments[k].phase in PIN_PHASES else 0 for k in phases])
     series = np.column_stack([rows, pin, phases])
     summary = summarise_cycle(series, plan, drives)
-    return CycleResult(series, plan, summary, sections)
+    sized = None
+    if sizing:
+        a4 = case.preload.a4_n
+        baseline = _Rows(series)
+        if a4 != 0.0 and preload_cost:
+            zero = plan.run_case.model_copy(update={"preload": case.preload.model_copy(update={"a4_n": 0.0})})
+            try:
+                baseline = _Rows(run(zero)[0])
+            except PressfitError as exc:
+                raise PressfitError(f"the preload's cost (the same board with [preload] a4_n = 0 instead of "
+                                    f"{a4:g} N) could not be simulated: {exc}") from None
+        sized = run_sizing(_Rows(series), drives, plan.scenario.simulation.time_step_s,
+                           baseline if preload_cost else None)
+        sized.energy.require_closed(f"of the board of {case.path}")
+        summary.update(sized.to_dict())
+    return CycleResult(series, plan, summary, sections, sized)
+
+
+@dataclass(frozen=True)
+class _Rows:
+    """Rows whose first columns are :data:`pressfit.dynamics.insertion.SERIES_COLUMNS` (what run_sizing reads)."""
+
+    series: np.ndarray
 
 
 def summarise_cycle(series: np.ndarray, plan: CyclePlan, drives: drive_kinds.Drive | None = None) -> dict[str, Any]:

@@ -26,6 +26,7 @@ from plotly.colors import qualitative
 from plotly.offline import get_plotlyjs
 
 from pressfit.description.machine import Machine
+from pressfit.dynamics.cycle import CycleResult
 from pressfit.dynamics.insertion import InsertionResult
 from pressfit.geometry.interference import SweepResult
 from pressfit.kinematics.workspace import PlaneMap, square_corners
@@ -71,6 +72,8 @@ class ReportContent:
     interference: SweepResult
     interference_table: list[Record]  # summary.json "interference", one record per pair kind
     insertion: tuple[InsertionResult, InsertionResult] | None = None  # the paper's scenario with / without limiter
+    cycle: CycleResult | None = None  # the shipped board (cycle/cycle.json)
+    cycle_front: Record | None = None  # a throughput study's summary.json (cycle/study_summary.json), if given
 
 
 def cell_text(value: object) -> str:
@@ -303,6 +306,61 @@ def _insertion_section(page: _Page, c: ReportContent) -> None:
     page.add(_links("insertion/simulation.json", "insertion/simulation.csv"))
 
 
+CYCLE_PIN_COLUMNS = (("index", "pin"), ("x_m", "x [m]"), ("z_m", "z [m]"), ("first_contact_time_s", "contact [s]"),
+                     ("peak_contact_force_n", "peak [N]"), ("steady_insertion_force_n", "steady [N]"),
+                     ("overshoot_n", "overshoot [N]"), ("tool_lateral_error_at_first_contact_m", "alignment [m]"),
+                     ("settling_time_s", "settling [s]"), ("passed", "passed"))
+CYCLE_DRIVE_COLUMNS = (("leg", "drive"), ("peak_force_n", "peak force [N]"), ("rms_force_n", "RMS force [N]"),
+                       ("rms_force_without_preload_n", "RMS force, a4 = 0 [N]"),
+                       ("peak_speed_m_per_s", "peak speed [m/s]"), ("peak_power_w", "peak power [W]"),
+                       ("positive_energy_j", "energy + [J]"), ("regenerative_energy_j", "energy - [J]"))
+CYCLE_FRONT_COLUMNS = (("sample", "sample"), ("speed_scale", "speed x"), ("acceleration_scale", "acceleration x"),
+                       ("jerk_scale", "jerk x"), ("descent_scale", "descent x"), ("cycle_time_s", "cycle time [s]"),
+                       ("worst_alignment_error_m", "worst alignment [m]"), ("worst_overshoot_n", "worst overshoot [N]"),
+                       ("within_limits", "within the limits"))
+
+
+def _cycle_section(page: _Page, c: ReportContent) -> None:
+    if c.cycle is None:
+        return
+    s = c.cycle.summary
+    page.section("cycle", "9. The shipped board's work cycle",
+                 f"cases/paper/board.toml (<code>pressfit cycle</code>, model {html.escape(str(s['model']))}, "
+                 f"{s['pin_count']} pins; <code>pressfit report --quick</code> runs its first pins only, with a short "
+                 f"dwell): cycle time {s['cycle_time_s']:.4g} s, {s['pins_per_minute']:.4g} pins per minute, "
+                 f"{s['pins_passed']} of {s['pin_count']} pins pass. The contact force of every pin over the cycle "
+                 "(dashed: the pins' force limits), the per-pin figures and the drive sizing over the cycle (with "
+                 f"a4 = 0 beside: the preload's cost); energy balance residual "
+                 f"{100 * s['energy_balance_residual']:.2g}% of the drives' gross work.")
+    t, force, pin = c.cycle.column("time_s"), c.cycle.column("contact_force_n"), c.cycle.column("pin")
+    fig = go.Figure()
+    for record in s["pins"]:
+        shown = np.where(pin == record["index"], force, np.nan)
+        fig.add_scatter(x=t, y=shown, mode="lines", name=f"pin {record['index']}", connectgaps=False)
+    for limit in sorted({p["force_limit_n"] for p in s["pins"]}):
+        fig.add_hline(y=limit, line={"dash": "dash", "color": "black"})
+    fig.update_layout(height=420, xaxis={"title": {"text": "time [s]"}}, yaxis={"title": {"text": "contact force [N]"}})
+    page.figure(fig)
+    page.add(_table("cycle-pins", CYCLE_PIN_COLUMNS, [{k: p[k] for k, _ in CYCLE_PIN_COLUMNS} for p in s["pins"]]))
+    page.add(_table("cycle-drives", CYCLE_DRIVE_COLUMNS,
+                    [{k: d.get(k) for k, _ in CYCLE_DRIVE_COLUMNS} for d in s["drives"]]))
+    page.add(_links("cycle/cycle.json", "cycle/cycle.csv"))
+    if c.cycle_front is not None:
+        f = c.cycle_front
+        fig = go.Figure()
+        rows = f["front"]
+        fig.add_scatter(x=[r["cycle_time_s"] for r in rows], y=[r["worst_alignment_error_m"] for r in rows],
+                        mode="markers", marker={"size": 10, "color": [r["worst_overshoot_n"] for r in rows],
+                                                "colorbar": {"title": {"text": "worst overshoot [N]"}}},
+                        name="Pareto front")
+        fig.update_layout(height=420, title={"text": f"throughput study: the Pareto front ({f['samples']} samples)"},
+                          xaxis={"title": {"text": "cycle time [s]"}},
+                          yaxis={"title": {"text": "worst alignment error [m]"}})
+        page.figure(fig)
+        page.add(_table("cycle-front", CYCLE_FRONT_COLUMNS, [{k: r[k] for k, _ in CYCLE_FRONT_COLUMNS} for r in rows]))
+        page.add(_links("cycle/study_summary.json"))
+
+
 def write_html_report(out_dir: Path | str, content: ReportContent, overwrite: bool = False) -> Path:
     """Write ``report.html`` and ``plotly.min.js`` (the offline plotly bundle) into out_dir; returns the page."""
     out = Path(out_dir)
@@ -311,7 +369,7 @@ def write_html_report(out_dir: Path | str, content: ReportContent, overwrite: bo
     page.add(f"<h1>pressfit report: {html.escape(m.name)}</h1><p>Machine file: <code>{html.escape(m.source)}</code>. "
              "SI units throughout. The same numbers as <a href=\"report.md\">report.md</a>, interactive.</p>")
     for section in (_scene_section, _tables_section, _kinematics_section, _envelope_section, _stiffness_section,
-                    _preload_section, _interference_section, _insertion_section):
+                    _preload_section, _interference_section, _insertion_section, _cycle_section):
         section(page, content)
     write_text(out / "plotly.min.js", get_plotlyjs(), overwrite)
     doc = (f"<!DOCTYPE html>\n<html lang=\"en\"><head><meta charset=\"utf-8\"><title>pressfit report: "

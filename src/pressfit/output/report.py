@@ -1,20 +1,23 @@
 """``pressfit report``: one Markdown report of everything pressfit computes for a machine.
 
 Sections: the paper's Tables 5-6 beside pressfit, the kinematic maps and workspace claims, the
-workspace load envelope (design loads), stiffness maps, the clearance-vs-preload study, and the leg
-interference summary. Every number comes from the same library functions the CLI and tests call.
+workspace load envelope (design loads), stiffness maps, the clearance-vs-preload study, the leg
+interference summary, the paper's insertion and the shipped board's work cycle (with a throughput study's front
+when given). Every number comes from the same library functions the CLI and tests call.
 """
 
 from __future__ import annotations
 
+import json
 from pathlib import Path
 
 import numpy as np
 from tqdm import tqdm
 
-from pressfit.description.cases import load_case
+from pressfit.description.cases import Case, Pin, load_case
 from pressfit.description.machine import Machine
 from pressfit.dynamics.insertion import simulate_insertion
+from pressfit.errors import PressfitError
 from pressfit.geometry import interference
 from pressfit.kinematics import workspace
 from pressfit.mechanics import condensed
@@ -36,21 +39,22 @@ def _md_table(header: list[str], rows: list[list[object]]) -> str:
 
 
 def write_report(machine: Machine, out_dir: Path | str, overwrite: bool = False, quick: bool = False,
-                 progress: bool = True) -> Path:
+                 progress: bool = True, cycle_study: Path | str | None = None) -> Path:
     """Compute every section and write ``report.md`` with its figures, CSV and JSON into ``out_dir``, and
     the interactive ``report.html`` (:mod:`pressfit.output.html_report`) beside it; returns report.md's path.
 
     ``quick`` (a preview, and the tests) uses coarser grids and writes no static PNG maps (report.html shows
-    the same maps interactively); the default grids are the design ones.
+    the same maps interactively); the default grids are the design ones. ``cycle_study``: the directory of a
+    ``pressfit study cycle`` run whose front the board's section shows.
     """
     out = Path(out_dir)
-    steps = tqdm(total=8, desc="report", disable=not progress, unit="section")
+    steps = tqdm(total=9, desc="report", disable=not progress, unit="section")
     md = [f"# pressfit report: {machine.name}", "",
           f"Machine file: `{machine.source}`. SI units throughout. Interactive version "
           "(3D view of the loaded machine, sortable tables, zoomable plots): [report.html](report.html).", ""]
     sections = (_tables_section, _kinematics_section, _envelope_section, _stiffness_section, _preload_section,
-                _interference_section, _insertion_section)
-    parts: dict[str, object] = {}
+                _interference_section, _insertion_section, _cycle_section)
+    parts: dict[str, object] = {"cycle_study_dir": cycle_study}
     for section in sections:
         md += section(machine, out, overwrite, quick, parts)
         steps.update()
@@ -63,7 +67,8 @@ def write_report(machine: Machine, out_dir: Path | str, overwrite: bool = False,
     write_html_report(out, ReportContent(
         machine, scene, [e.as_dict() for e in parts["entries"]], parts["plane_maps"], parts["envelope"],
         parts["envelope_table"], parts["stiffness"], parts["studies"], sweep,
-        [{"kind": k, **v} for k, v in sweep.kind_minima().items()], parts["insertion"]), overwrite)
+        [{"kind": k, **v} for k, v in sweep.kind_minima().items()], parts["insertion"], parts["cycle"],
+        parts["cycle_front"]), overwrite)
     steps.update()
     steps.close()
     return path
@@ -159,6 +164,63 @@ def _insertion_section(machine: Machine, out: Path, overwrite: bool, quick: bool
                       [[k, *("did not settle" if r.summary[k] is None else r.summary[k] for r in runs)]
                        for k in keys]), "",
             "![insertion](insertion/simulation.png)", ""]
+
+
+QUICK_BOARD_PINS = 2  # --quick: the shipped board's first pins only, 0.1 s dwell, 2 ms step (a preview)
+CYCLE_PIN_KEYS = ("index", "x_m", "z_m", "first_contact_time_s", "peak_contact_force_n", "steady_insertion_force_n",
+                  "overshoot_n", "tool_lateral_error_at_first_contact_m", "settling_time_s", "passed")
+CYCLE_DRIVE_KEYS = ("leg", "peak_force_n", "rms_force_n", "rms_force_without_preload_n", "peak_speed_m_per_s",
+                    "peak_power_w", "positive_energy_j", "regenerative_energy_j")
+
+
+def quick_board(case: Case) -> Case:
+    """The shipped board shortened for ``--quick``: its first ``QUICK_BOARD_PINS`` pins, 0.1 s dwell, 2 ms step."""
+    cycle = case.cycle
+    pins = [Pin(x_m=p.x_m, z_m=p.z_m) for p in cycle.resolved_pins()[:QUICK_BOARD_PINS]]
+    short = cycle.model_copy(update={"pins": pins, "grid": None, "dwell_s": 0.1, "time_step_s": 2e-3})
+    return case.model_copy(update={"cycle": short})
+
+
+def _cycle_section(machine: Machine, out: Path, overwrite: bool, quick: bool, parts: Parts) -> list[str]:
+    """The shipped board (``cases/paper/board.toml``, its own machine, on its [cycle] model; ``quick``: shortened,
+    :func:`quick_board`) with the drive sizing, and the front of a throughput study when one is given."""
+    from pressfit.dynamics.cycle import simulate_cycle
+    from pressfit.output.cycle import write_cycle
+
+    case = load_case(cases_dir() / "paper" / "board.toml")
+    if quick:
+        case = quick_board(case)
+    result = simulate_cycle(case)
+    parts["cycle"] = result
+    write_cycle(result, out / "cycle", overwrite)
+    front = None
+    if parts.get("cycle_study_dir") is not None:
+        summary = Path(parts["cycle_study_dir"]) / "summary.json"  # type: ignore[arg-type]
+        try:
+            front = json.loads(summary.read_text())
+        except (OSError, ValueError) as exc:
+            raise PressfitError(f"{summary}: the summary.json of a `pressfit study cycle` run: {exc}") from None
+        write_json(out / "cycle" / "study_summary.json", front, overwrite)
+    parts["cycle_front"] = front
+    s = result.summary
+    md = ["## 8. The shipped board's work cycle (issue 20)", "",
+          f"`{case.path}`" + (f", shortened for --quick to its first {QUICK_BOARD_PINS} pins, 0.1 s dwell, 2 ms step"
+                              if quick else "") + f" (`pressfit cycle`, model {s['model']}): cycle time "
+          f"{s['cycle_time_s']:.4g} s, {s['pins_per_minute']:.4g} pins per minute, {s['pins_passed']} of "
+          f"{s['pin_count']} pins pass; energy balance residual {100 * s['energy_balance_residual']:.2g}% of the "
+          "drives' gross work.", "",
+          _md_table(list(CYCLE_PIN_KEYS), [[p[k] for k in CYCLE_PIN_KEYS] for p in s["pins"]]), "",
+          _md_table(list(CYCLE_DRIVE_KEYS), [[d.get(k) for k in CYCLE_DRIVE_KEYS] for d in s["drives"]]), "",
+          "![board force](cycle/cycle_force.png)", "", "![drives](cycle/cycle_drives.png)", ""]
+    if front is not None:
+        md += [f"Throughput study ({front['samples']} samples): Pareto front of cycle time, worst alignment error and "
+               "worst overshoot:", "",
+               _md_table(["speed", "acceleration", "jerk", "descent", "cycle_time_s", "worst_alignment_error_m",
+                          "worst_overshoot_n", "within_limits"],
+                         [[r[k] for k in ("speed_scale", "acceleration_scale", "jerk_scale", "descent_scale",
+                                          "cycle_time_s", "worst_alignment_error_m", "worst_overshoot_n",
+                                          "within_limits")] for r in front["front"]]), ""]
+    return md
 
 
 def cad_fit_section(out: Path, overwrite: bool, quick: bool) -> list[str]:

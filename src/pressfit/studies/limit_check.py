@@ -10,11 +10,14 @@ re-evaluates the axial quantities, deflection and tilt at the refined poses with
 (lost motion adds to the deflection; a leg whose joints open sheds load to the others).
 
 A case whose ``[simulation]`` has ``[simulation.limits]`` also gets one line per simulation limit, from one
-run of its insertion scenario (:func:`evaluate_simulation`, lines keyed ``simulation.<limit>``).
+run of its insertion scenario (:func:`evaluate_simulation`, lines keyed ``simulation.<limit>``), and a case
+whose ``[cycle]`` has ``[cycle.limits]`` one per cycle limit from one run of its board (:func:`evaluate_cycle`,
+lines keyed ``cycle.<limit>``).
 """
 
 from __future__ import annotations
 
+import math
 from dataclasses import dataclass, field, replace
 from pathlib import Path
 from typing import Any
@@ -126,10 +129,11 @@ def check_files(paths: list[Path | str], progress: bool = False) -> CheckRun:
             cases.append(case)
         except PressfitError as exc:
             errors.append(FileError(str(f), str(exc)))
-    checked = [c for c in cases if c.envelope.model_dump(exclude_none=True) or _simulation_limits(c)]
+    checked = [c for c in cases if c.envelope.model_dump(exclude_none=True) or _simulation_limits(c)
+               or _cycle_limits(c)]
     if not checked and not errors:
-        raise PressfitError("no case among " + ", ".join(map(str, paths)) + " has an [envelope] or "
-                            "[simulation.limits] to check")
+        raise PressfitError("no case among " + ", ".join(map(str, paths)) + " has an [envelope], "
+                            "[simulation.limits] or [cycle.limits] to check")
     results = []
     for case in checked:
         try:
@@ -189,9 +193,11 @@ def _worst(values: np.ndarray, sense: str) -> tuple[float, int, int | None]:
 
 
 def evaluate_case(case: Case, progress: bool = False) -> CaseResult:
-    """Evaluate every ``[envelope]`` and ``[simulation.limits]`` limit of a case (module docstring)."""
+    """Evaluate every ``[envelope]``, ``[simulation.limits]`` and ``[cycle.limits]`` limit of a case (module
+    docstring)."""
     result = evaluate_envelope(case, progress)
-    return replace(result, limits=[*result.limits, *evaluate_simulation(case, progress)])
+    return replace(result, limits=[*result.limits, *evaluate_simulation(case, progress),
+                                   *evaluate_cycle(case, progress)])
 
 
 def evaluate_envelope(case: Case, progress: bool = False) -> CaseResult:
@@ -491,4 +497,64 @@ def simulation_lines(wanted: dict[str, float], summary: dict[str, Any], pin_xz_m
             method += f", at t = {float(time):.4g} s"
         lines.append(_line(f"simulation.{key}", spec, limit, value, leg, pin_pose if pose is None else
                            np.asarray(pose, float), None, method))
+    return lines
+
+
+# --- cycle limits --------------------------------------------------------------------------------------------
+CYCLE_LIMITS: dict[str, Limit] = {  # [cycle.limits] key -> its line (description.cases.CycleLimits)
+    "max_cycle_time_s": Limit("cycle time of the board", "s", "max"),
+    "max_overshoot_n": Limit("worst pin's contact force overshoot over its insertion limit", "N", "max"),
+    "max_alignment_error_m": Limit("worst pin's lateral alignment error at first contact", "m", "max"),
+    "max_rms_drive_force_n": Limit("worst drive's RMS force over the cycle", "N", "max"),
+    "max_peak_drive_force_n": Limit("worst drive's peak force over the cycle", "N", "max"),
+    "max_energy_per_cycle_j": Limit("drives' positive mechanical energy per cycle (regeneration not credited)",
+                                    "J", "max"),
+}
+CYCLE_DRIVE_LIMITS = ("max_rms_drive_force_n", "max_peak_drive_force_n", "max_energy_per_cycle_j")
+
+
+def _cycle_limits(case: Case) -> dict[str, float]:
+    return {} if case.cycle is None else case.cycle.limits.model_dump(exclude_none=True)
+
+
+def evaluate_cycle(case: Case, progress: bool = False) -> list[LimitResult]:
+    """Run the case's board once (:func:`pressfit.dynamics.cycle.simulate_cycle`; the drive sizing, its energy
+    balance enforced, only when a drive limit is asked; no preload-cost run) and evaluate its ``[cycle.limits]``
+    (:func:`cycle_lines`); no lines without limits."""
+    from pressfit.dynamics.cycle import simulate_cycle
+
+    wanted = _cycle_limits(case)
+    if not wanted:
+        return []
+    result = simulate_cycle(case, progress=progress, sizing=any(k in wanted for k in CYCLE_DRIVE_LIMITS),
+                            preload_cost=False)
+    return cycle_lines(wanted, result.summary, case.cycle.start_m, case.cycle.board_height_m)
+
+
+def cycle_lines(wanted: dict[str, float], summary: dict[str, Any], start_m: list[float], board_height_m: float
+                ) -> list[LimitResult]:
+    """One line per cycle limit from a board's summary (:func:`pressfit.dynamics.cycle.summarise_cycle`, with the
+    drive sizing for the drive limits): a pin limit names the worst pin (the line's pose: the pin on the board
+    face), a drive limit the worst leg; the other lines' pose is the start pose."""
+    how = f"board simulation ({summary['pin_count']} pins, model {summary['model']})"
+    lines = []
+    for key, limit in wanted.items():
+        spec, leg, pose, method = CYCLE_LIMITS[key], None, np.asarray(start_m, float), how
+        if key == "max_cycle_time_s":
+            value = summary["cycle_time_s"]
+        elif key in ("max_overshoot_n", "max_alignment_error_m"):
+            name = "overshoot_n" if key == "max_overshoot_n" else "tool_lateral_error_at_first_contact_m"
+            values = [math.inf if p[name] is None else p[name] for p in summary["pins"]]
+            worst = int(np.argmax(values))
+            pin = summary["pins"][worst]
+            value, pose = values[worst], np.array([pin["x_m"], board_height_m, pin["z_m"]])
+            method += f", worst pin {pin['index']} (x = {pin['x_m']:g} m, z = {pin['z_m']:g} m)" + \
+                (": it never touched" if values[worst] == math.inf else "")
+        elif key == "max_energy_per_cycle_j":
+            value = float(sum(d["positive_energy_j"] for d in summary["drives"]))
+        else:
+            values = [d["rms_force_n" if key == "max_rms_drive_force_n" else "peak_force_n"] for d in summary["drives"]]
+            leg = int(np.argmax(values)) + 1
+            value = float(values[leg - 1])
+        lines.append(_line(f"cycle.{key}", spec, limit, value, leg, pose, None, method))
     return lines

@@ -1,0 +1,166 @@
+"""Throughput study (``pressfit study cycle``, issue 20 item 5): the board's motion limits swept on Dask, the Pareto
+front of cycle time against the worst alignment error and the worst force overshoot, and the fastest setting that
+keeps every pin within its limits.
+
+The grid is the case's ``[cycle.study]`` (:class:`pressfit.description.cases.CycleStudy`): every combination of the
+scale factors on ``[cycle.motion]``'s speed, acceleration and jerk and on the descent's three limits. Each sample is
+one board run (:func:`pressfit.dynamics.cycle.simulate_cycle`, the case's model, without the drive sizing) and
+reports the planned cycle time (s), the worst pin's lateral alignment error at first contact (m; infinite for a
+pin never touched) and the worst overshoot over its insertion limit (N). A setting keeps every pin within its
+limits when every pin passes (insertion completed, the pin's ``max_overshoot_n`` and ``max_alignment_error_m``)
+and, when given, ``[cycle.limits]`` ``max_overshoot_n`` and ``max_alignment_error_m`` hold on the worst pin. A
+sample the planner refuses (a scaled move the drives cannot follow, ...) or whose run fails is recorded with its
+reason, not on the front. Every variant is validated before the cluster starts (the scaled limits must satisfy
+:class:`pressfit.description.cases.MotionLimits`; an error names ``[cycle.study]``, the factor and the file).
+"""
+
+from __future__ import annotations
+
+import itertools
+import math
+from dataclasses import dataclass
+from typing import Any
+
+import numpy as np
+from pydantic import ValidationError
+
+from pressfit.description.cases import Case, MotionLimits
+from pressfit.errors import ModelFileError, PressfitError
+
+FACTORS = ("speed_scale", "acceleration_scale", "jerk_scale", "descent_scale")
+FIGURES = ("cycle_time_s", "worst_alignment_error_m", "worst_overshoot_n", "pins_passed")
+
+
+def grid(case: Case) -> list[tuple[float, float, float, float]]:
+    """The study's samples (speed, acceleration, jerk, descent factors), the last varying fastest."""
+    if case.cycle is None or case.cycle.study is None:
+        raise PressfitError(f"{case.path}: the case has no [cycle.study] table (the grid of scale factors)")
+    s = case.cycle.study
+    return list(itertools.product(s.speed_scale, s.acceleration_scale, s.jerk_scale, s.descent_scale))
+
+
+def variant(case: Case, factors: tuple[float, float, float, float]) -> Case:
+    """The case with its motion limits scaled by ``factors`` (speed, acceleration, jerk on ``[cycle.motion]``;
+    the descent factor on all three of the descent's), validated; ModelFileError naming the factor otherwise."""
+    cycle = case.cycle
+    speed, acc, jerk, descent = factors
+    m, d = cycle.motion, cycle.descent or cycle.motion
+    try:
+        motion = MotionLimits(speed_m_per_s=m.speed_m_per_s * speed, jerk_m_per_s3=m.jerk_m_per_s3 * jerk,
+                              acceleration_m_per_s2=m.acceleration_m_per_s2 * acc, profile=m.profile)
+    except ValidationError as exc:
+        raise ModelFileError(case.path, "[cycle.study] speed_scale, acceleration_scale, jerk_scale",
+                             f"factors that keep [cycle.motion] within its bounds: ({speed:g}, {acc:g}, {jerk:g}) "
+                             f"gives {exc.errors()[0]['loc'][0]}: {exc.errors()[0]['msg']}") from None
+    try:
+        down = MotionLimits(speed_m_per_s=d.speed_m_per_s * descent, acceleration_m_per_s2=d.acceleration_m_per_s2
+                            * descent, jerk_m_per_s3=d.jerk_m_per_s3 * descent, profile=d.profile)
+    except ValidationError as exc:
+        raise ModelFileError(case.path, "[cycle.study] descent_scale", f"a factor that keeps the descent within "
+                             f"its bounds: {descent:g} gives {exc.errors()[0]['loc'][0]}: "
+                             f"{exc.errors()[0]['msg']}") from None
+    return case.model_copy(update={"cycle": cycle.model_copy(update={"motion": motion, "descent": down})})
+
+
+def within_limits(case: Case, summary: dict[str, Any]) -> bool:
+    """Every pin passes and ``[cycle.limits]``' pin limits hold on the worst pin (module docstring)."""
+    limits = case.cycle.limits
+    worst = _worst(summary)
+    return (summary["pins_passed"] == summary["pin_count"]
+            and (limits.max_overshoot_n is None or worst["worst_overshoot_n"] <= limits.max_overshoot_n)
+            and (limits.max_alignment_error_m is None
+                 or worst["worst_alignment_error_m"] <= limits.max_alignment_error_m))
+
+
+def _worst(summary: dict[str, Any]) -> dict[str, float]:
+    pins = summary["pins"]
+    align = [math.inf if p["tool_lateral_error_at_first_contact_m"] is None else
+             p["tool_lateral_error_at_first_contact_m"] for p in pins]
+    return {"worst_alignment_error_m": float(max(align)),
+            "worst_overshoot_n": float(max(p["overshoot_n"] for p in pins))}
+
+
+def run_sample(case: Case, model: str | None, factors: tuple[float, float, float, float]) -> dict[str, Any]:
+    """One board run (a Dask task): the figures (``FIGURES``), ``within_limits`` and ``error`` ("" when it ran)."""
+    from pressfit.dynamics.cycle import simulate_cycle
+
+    try:
+        varied = variant(case, factors)
+        s = simulate_cycle(varied, model, sizing=False).summary
+    except PressfitError as exc:
+        return {"cycle_time_s": math.nan, "worst_alignment_error_m": math.nan, "worst_overshoot_n": math.nan,
+                "pins_passed": 0, "within_limits": False, "error": " ".join(str(exc).split())}
+    return {"cycle_time_s": s["cycle_time_s"], **_worst(s), "pins_passed": s["pins_passed"],
+            "within_limits": within_limits(varied, s), "error": ""}
+
+
+def pareto_front(objectives: np.ndarray) -> np.ndarray:
+    """Indices of the non-dominated rows of (n, k) objectives, all minimised (a row with a NaN is never on it)."""
+    ok = np.flatnonzero(~np.any(np.isnan(objectives), axis=1))
+    front = []
+    for i in ok:
+        o = objectives[i]
+        dominated = np.any(np.all(objectives[ok] <= o, axis=1) & np.any(objectives[ok] < o, axis=1))
+        if not dominated:
+            front.append(int(i))
+    return np.array(front, dtype=int)
+
+
+@dataclass(frozen=True)
+class CycleStudyResult:
+    """Every sample (``columns``: the factors, ``FIGURES``, ``within_limits``, ``on_front``, ``error``), the front
+    (indices, by cycle time), and the fastest sample within the limits (None: none is)."""
+
+    case: Case
+    columns: dict[str, np.ndarray]
+    front: np.ndarray
+    fastest: int | None
+    model: str
+
+    def summary(self) -> dict[str, Any]:
+        """JSON-ready: counts, the front's rows and the fastest row (non-finite figures as None)."""
+        c = self.columns
+
+        def value(x: Any) -> Any:  # JSON: a NaN (refused sample) or an infinite alignment (a pin never touched)
+            x = x.item() if hasattr(x, "item") else x  # is null, as cycle.json's error of a pin never touched
+            return None if isinstance(x, float) and not math.isfinite(x) else x
+
+        def row(i: int) -> dict[str, Any]:
+            return {"sample": i, **{k: value(v[i]) for k, v in c.items()}}
+
+        return {"case": self.case.name, "model": self.model, "samples": len(c["cycle_time_s"]),
+                "failed": int(sum(bool(e) for e in c["error"])), "within_limits": int(c["within_limits"].sum()),
+                "front": [row(int(i)) for i in self.front],
+                "fastest_within_limits": None if self.fastest is None else row(self.fastest)}
+
+
+def cycle_study(case: Case, model: str | None = None, workers: int | None = None, scheduler: str | None = None,
+                progress: bool = True, dashboard: bool = False) -> CycleStudyResult:
+    """Run the grid on Dask (:func:`pressfit.studies.distributed.run_chunks`, one board per task) and rank it
+    (module docstring). Every variant is validated first."""
+    from pressfit.dynamics.cycle import plan_cycle
+    from pressfit.studies.distributed import run_chunks
+
+    samples = grid(case)
+    plan_cycle(variant(case, samples[0]), model=model)  # the board itself is valid (refused at once, not n times)
+    for f in samples:
+        variant(case, f)
+    results: dict[int, dict[str, Any]] = {}
+    run_chunks(run_sample, [(model, f) for f in samples], [1] * len(samples), results.__setitem__,
+               workers=workers, scheduler=scheduler, progress=progress, name="cycle study", shared=case,
+               dashboard=dashboard)
+    rows = [results[k] for k in range(len(samples))]
+    columns: dict[str, np.ndarray] = {k: np.array([f[j] for f in samples]) for j, k in enumerate(FACTORS)}
+    for k in FIGURES:
+        columns[k] = np.array([r[k] for r in rows], dtype=int if k == "pins_passed" else float)
+    columns["within_limits"] = np.array([r["within_limits"] for r in rows], dtype=bool)
+    columns["error"] = np.array([r["error"] for r in rows], dtype=object)
+    objectives = np.column_stack([columns[k] for k in FIGURES[:3]])
+    front = pareto_front(objectives)
+    front = front[np.argsort(columns["cycle_time_s"][front], kind="stable")]
+    on = np.zeros(len(samples), dtype=bool)
+    on[front] = True
+    columns["on_front"] = on
+    ok = np.flatnonzero(columns["within_limits"])
+    fastest = int(ok[np.argmin(columns["cycle_time_s"][ok])]) if ok.size else None
+    return CycleStudyResult(case, columns, front, fastest, model or case.cycle.model)

@@ -1,0 +1,112 @@
+"""``pressfit study cycle``: the board's motion limits swept on a local Dask cluster; the Pareto front, the fastest
+setting within every pin's limits written as a case file that loads and whose board passes; the grid strictly
+validated and a huge one refused before any cluster starts."""
+
+from __future__ import annotations
+
+import json
+import tomllib
+
+import numpy as np
+import pyarrow.parquet as pq
+import pytest
+import tomli_w
+from click.testing import CliRunner
+
+from pressfit.cli import main
+from pressfit.description.cases import MAX_CYCLE_STUDY_SAMPLES, load_case
+from pressfit.dynamics.cycle import simulate_cycle
+from pressfit.studies.cycle_study import pareto_front
+from tests.dynamics.test_cycle import board
+
+PINS = [{"x_m": 0.10, "z_m": -0.05}, {"x_m": 0.0, "z_m": 0.0}]
+# descent x 10 (7 mm at 0.1 m/s) overshoots the 30 N limit by ~7 N, beyond the 1 N allowed; x 1 by ~0.6 N
+GRID = {"speed_scale": [1.0, 4.0], "descent_scale": [1.0, 10.0]}
+
+
+def run(*args: object):
+    return CliRunner().invoke(main, [str(a) for a in args])
+
+
+def study_case(tmp, name="study.toml", **study):
+    return board(tmp, name, pins=PINS, dwell_s=0.1, settle_s=0.1, max_overshoot_n=1.0, study=study or GRID)
+
+
+def test_pareto_front_of_a_known_set():
+    """Minimising all three: (1, 5, 5) and (5, 1, 1) trade off, (2, 6, 6) is dominated by the first, a row with a
+    NaN (a refused sample) is never on the front, an infinite alignment (never touched) can be."""
+    o = np.array([[1, 5, 5], [5, 1, 1], [2, 6, 6], [np.nan, 0, 0], [0.5, np.inf, 9]], float)
+    assert sorted(pareto_front(o).tolist()) == [0, 1, 4]
+
+
+def test_summary_of_a_pin_never_touched_is_json(tmp_path):
+    """A front sample whose pin was never touched (alignment infinite) and a refused one (NaN) serialise: null."""
+    from pressfit.output.files import to_json
+    from pressfit.studies.cycle_study import CycleStudyResult
+
+    columns = {"speed_scale": np.array([1.0, 2.0]), "acceleration_scale": np.ones(2), "jerk_scale": np.ones(2),
+               "descent_scale": np.ones(2), "cycle_time_s": np.array([3.0, np.nan]),
+               "worst_alignment_error_m": np.array([np.inf, np.nan]), "worst_overshoot_n": np.array([0.0, np.nan]),
+               "pins_passed": np.array([0, 0]), "within_limits": np.array([False, False]),
+               "error": np.array(["", "refused"], dtype=object), "on_front": np.array([True, False])}
+    result = CycleStudyResult(load_case(study_case(tmp_path)), columns, np.array([0]), None, "rigid")
+    s = json.loads(to_json(result.summary()))
+    assert s["front"][0]["worst_alignment_error_m"] is None and s["failed"] == 1
+    assert s["fastest_within_limits"] is None
+
+
+def test_study_on_a_local_cluster_writes_the_front_and_a_fastest_case_that_passes(tmp_path):
+    case = study_case(tmp_path)
+    out = tmp_path / "out"
+    res = run("study", "cycle", case, "--workers", 2, "--out", out, "--json")
+    assert res.exit_code == 0, res.output
+    s = json.loads(res.output[res.output.index("{"):])
+    assert s["samples"] == 4 and s["failed"] == 0
+    table = pq.read_table(out / "samples.parquet").to_pydict()
+    assert len(table["cycle_time_s"]) == 4
+    assert sorted(zip(table["speed_scale"], table["descent_scale"], strict=True)) == \
+        [(1.0, 1.0), (1.0, 10.0), (4.0, 1.0), (4.0, 10.0)]
+    # the front recomputed here from the table's three objectives
+    objectives = np.column_stack([table[k] for k in ("cycle_time_s", "worst_alignment_error_m", "worst_overshoot_n")])
+    assert sorted(pareto_front(objectives).tolist()) == sorted(r["sample"] for r in s["front"])
+    assert table["on_front"] == [i in {r["sample"] for r in s["front"]} for i in range(4)]
+    # the fast descent overshoots beyond the pins' 1 N: the fastest within the limits is the fast traverse with the
+    # slow descent, and it is faster than the case's own setting
+    ok = [i for i in range(4) if table["within_limits"][i]]
+    assert all(table["descent_scale"][i] == 1.0 for i in ok) and ok
+    fastest = s["fastest_within_limits"]
+    assert (fastest["speed_scale"], fastest["descent_scale"]) == (4.0, 1.0)
+    assert fastest["cycle_time_s"] == min(table["cycle_time_s"][i] for i in ok)
+    assert (out / "front.png").stat().st_size > 10_000
+    written = load_case(out / "fastest.toml")  # loads, and its board passes when run again here
+    assert written.cycle.study is None
+    assert written.cycle.motion.speed_m_per_s == pytest.approx(4.0 * load_case(case).cycle.motion.speed_m_per_s)
+    again = simulate_cycle(written, sizing=False).summary
+    assert again["pins_passed"] == again["pin_count"] == len(PINS)
+    assert again["cycle_time_s"] == pytest.approx(fastest["cycle_time_s"], rel=1e-12)
+
+
+@pytest.mark.parametrize(("study", "fragment"), [
+    ({"speed_scale": [1.0, 1.0]}, "must be distinct"),
+    ({"speed_scale": [0.0]}, "greater than 0"),
+    ({"jerk_scale": []}, "at least 1 item"),
+    ({"speed_scale": [1.0], "sped_scale": [2.0]}, "unknown key"),
+    ({"speed_scale": [1.0 + k / 100 for k in range(21)], "descent_scale": [1.0 + k / 100 for k in range(20)]},
+     f"above the cap of {MAX_CYCLE_STUDY_SAMPLES}"),
+    ({"speed_scale": [30.0]}, "[cycle.study] speed_scale"),  # 0.5 m/s x 30 = 15 m/s > MotionLimits' 10 m/s
+])
+def test_bad_grid_is_refused_before_the_cluster(tmp_path, study, fragment):
+    case = study_case(tmp_path, **study)
+    res = run("study", "cycle", case, "--workers", 1, "--out", tmp_path / "out", "--no-progress")
+    lines = res.output.strip().splitlines()
+    assert res.exit_code == 2 and len(lines) == 1 and fragment in lines[0] and "study.toml" in lines[0], res.output
+    assert not (tmp_path / "out").exists()
+
+
+def test_no_study_table_is_refused(tmp_path):
+    data = tomllib.loads(study_case(tmp_path).read_text())
+    del data["cycle"]["study"]
+    path = tmp_path / "plain.toml"
+    path.write_text(tomli_w.dumps(data))
+    res = run("study", "cycle", path, "--workers", 1, "--out", tmp_path / "out")
+    assert res.exit_code == 2 and "[cycle.study]" in res.output, res.output
