@@ -104,3 +104,18 @@ def test_check_of_a_fifo_or_device_returns_at_once(tmp_path, name):
     res = subprocess.run([sys.executable, "-m", "pressfit", "check", str(path)], capture_output=True, text=True,
                          timeout=60)
     assert res.returncode == 2 and "regular file" in res.stderr and len(res.stderr.splitlines()) == 1
+
+
+def test_json_writes_a_non_finite_figure_as_null():
+    """An unbounded figure (the settling time of a force that never settled, reported as infinite beside its failed
+    verdict; a pin never touched) is JSON null, not an internal error (json's allow_nan=False raised ValueError)."""
+    import json
+
+    import numpy as np
+
+    from pressfit.output.files import to_json
+
+    data = {"settling_time_s": float("inf"), "alignment_m": np.float64("nan"), "rms_n": np.array([1.0, np.inf]),
+            "rows": [{"peak_n": -np.inf, "passed": False}], "count": 3}
+    assert json.loads(to_json(data)) == {"settling_time_s": None, "alignment_m": None, "rms_n": [1.0, None],
+                                         "rows": [{"peak_n": None, "passed": False}], "count": 3}

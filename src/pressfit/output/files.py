@@ -199,8 +199,22 @@ def _jsonable(obj: Any) -> Any:
     raise TypeError(f"not JSON serialisable: {type(obj).__name__}")
 
 
+def _finite(obj: Any) -> Any:
+    """``obj`` with every non-finite number as None (JSON null: an unbounded or undefined figure, e.g. the settling
+    time of a force that never settled or the alignment of a pin never touched, whose verdict says why)."""
+    if isinstance(obj, dict):
+        return {k: _finite(v) for k, v in obj.items()}
+    if isinstance(obj, (list, tuple)):
+        return [_finite(v) for v in obj]
+    if isinstance(obj, np.ndarray):
+        return _finite(obj.tolist())
+    if isinstance(obj, (float, np.floating)) and not np.isfinite(obj):
+        return None
+    return obj
+
+
 def to_json(data: Any) -> str:
-    return json.dumps(data, indent=2, default=_jsonable, allow_nan=False)
+    return json.dumps(_finite(data), indent=2, default=_jsonable, allow_nan=False)
 
 
 def write_json(path: Path | str, data: Any, overwrite: bool = False) -> Path:
