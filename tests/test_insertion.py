@@ -358,3 +358,10 @@ def test_readme_position_loop_frequency():
                 t = sum((e @ d) ** 2 * num / (m * tau_s * s**4 + m * s**3 + num) for m, e in zip(m_k, e_k.T))
                 return 20 * math.log10(abs(t)) + 3.0  # python-control's bandwidth: the -3 dB point (dbdrop)
             assert brentq(gain_db, 5.0, 60.0, xtol=1e-9) == pytest.approx(measured, rel=1e-6)
+
+
+def test_a_command_at_the_limit_is_not_saturated():
+    """Saturation means a command beyond the limit (the drives deliver it exactly at the limit): the boundary
+    belongs to the unsaturated side (a mutation > -> >= survived the tests above)."""
+    drives = ForceActuators(40.0, 500.0)
+    assert drives.saturated(np.array([500.0, -500.0, 500.0 * (1 + 1e-12)])).tolist() == [False, False, True]

@@ -55,7 +55,6 @@ from typing import Any, Literal
 
 import control as ct
 import numpy as np
-import pinocchio as pin
 
 from pressfit import kinematics
 from pressfit.description.cases import Case, Contact, Controller
@@ -66,7 +65,7 @@ from pressfit.dynamics.control import gravity_feedforward_n
 from pressfit.dynamics.drives.base import DrivePort
 from pressfit.dynamics.machine.flexible import FlexibleMachine
 from pressfit.dynamics.modes import closure_jacobian, elastic_stiffness, mass_matrix, natural_modes, reduced_system
-from pressfit.dynamics.multibody import rigid_leg_model
+from pressfit.dynamics.multibody import inverse_apparent_mass, rigid_leg_model
 from pressfit.errors import PressfitError
 
 WARNING_RATIO = 0.2  # a loop pole within 20% of a structural mode's frequency is reported ...
@@ -165,15 +164,7 @@ def _with_series(mass: np.ndarray, damping: np.ndarray, stiffness: np.ndarray, s
 def _apparent_vertical_mass(machine: Machine, pose_m: np.ndarray) -> tuple[np.ndarray, float]:
     """M_h (3, 3), kg, of the rigid-leg model at rest, gravity off (Pinocchio constraint dynamics), and
     1 / (M_h^-1)_yy."""
-    rigid = rigid_leg_model(machine, pose_m)
-    rigid.model.gravity = pin.Motion.Zero()
-    q = rigid.configuration_at(pose_m)
-    inv = np.empty((3, 3))
-    for k in range(3):
-        tau = np.zeros(rigid.model.nv)
-        tau[k] = 1.0  # N along the unrotated plate's axes = world axes
-        inv[:, k] = rigid.accelerations(q, np.zeros(rigid.model.nv), tau)[:3]
-    inv = 0.5 * (inv + inv.T)
+    inv = inverse_apparent_mass(machine, pose_m)
     return np.linalg.inv(inv), 1.0 / inv[1, 1]
 
 

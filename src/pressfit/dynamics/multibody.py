@@ -222,3 +222,17 @@ def rigid_leg_model(machine: Machine, pose_m: np.ndarray, baumgarte_rad_per_s: f
     rigid.data = model.createData()
     pin.initConstraintDynamics(model, rigid.data, rigid.constraint_models, rigid.constraint_datas)
     return rigid
+
+
+def inverse_apparent_mass(machine: Machine, pose_m: np.ndarray) -> np.ndarray:
+    """M_h^-1 (3, 3), 1/kg: the plate's acceleration (world axes) per unit plate force at rest at a reachable pose,
+    gravity off (the rigid-leg model's constraint dynamics, three unit forces; symmetrised)."""
+    rigid = rigid_leg_model(machine, pose_m)
+    rigid.model.gravity = pin.Motion.Zero()
+    q, rest = rigid.configuration_at(pose_m), np.zeros(rigid.model.nv)
+    inverse = np.empty((3, 3))
+    for k in range(3):
+        tau = np.zeros(rigid.model.nv)
+        tau[k] = 1.0  # N along the unrotated plate's axes = world axes
+        inverse[:, k] = rigid.accelerations(q, rest, tau)[:3]
+    return 0.5 * (inverse + inverse.T)

@@ -17,7 +17,7 @@ from pressfit import kinematics
 from pressfit.description.machine import Machine
 from pressfit.dynamics.drives.hydraulic import refuse_step
 from pressfit.dynamics.inertia import inertial_model
-from pressfit.dynamics.multibody import rigid_leg_model
+from pressfit.dynamics.multibody import inverse_apparent_mass
 from pressfit.mechanics.model import build_model
 
 
@@ -30,16 +30,9 @@ def leg_masses_kg(machine: Machine, pose_m: np.ndarray, model: str) -> np.ndarra
         mass = pin.crba(inertial, inertial.createData(), mm.q0)
         act = [inertial.joints[ids["actuator"]].idx_v for ids in mm.leg_joint_ids]
         return np.array([mass[k, k] for k in act])
-    rigid = rigid_leg_model(machine, pose)
-    rigid.model.gravity = pin.Motion.Zero()
-    q = rigid.configuration_at(pose)
-    inverse = np.empty((3, 3))
-    for k in range(3):
-        tau = np.zeros(rigid.model.nv)
-        tau[k] = 1.0  # N along the unrotated plate's axes = world axes
-        inverse[:, k] = rigid.accelerations(q, np.zeros(rigid.model.nv), tau)[:3]
+    inverse = inverse_apparent_mass(machine, pose)
     a = kinematics.inverse_kinematics(machine, pose).unit_vectors  # (4, 3)
-    return 1.0 / np.einsum("ij,jk,ik->i", a, 0.5 * (inverse + inverse.T), a)
+    return 1.0 / np.einsum("ij,jk,ik->i", a, inverse, a)
 
 
 def hydraulic_step_refusal(machine: Machine, waypoints_m: np.ndarray, path_m: np.ndarray, model: str,
