@@ -267,6 +267,12 @@ def test_pin_pass_fail_turns_at_its_limits_recomputed_from_the_csv(tmp_path):
             variant = load_case(board(tmp_path, "v.toml", pins=[{**PIN, **limits}], dwell_s=0.5, settle_s=0.1))
             pin = summarise_cycle(series, plan_cycle(variant))["pins"][0]
             assert pin["passed"] is passes, (limits, pin["checks"])
+    figures = summarise_cycle(series, plan_cycle(load_case(path)))["pins"][0]  # the same series, summarised again
+    lateral_figure = figures["tool_lateral_error_at_first_contact_m"]
+    for limits in ({"max_overshoot_n": figures["overshoot_n"], "max_alignment_error_m": 1.0},
+                   {"max_overshoot_n": 100.0, "max_alignment_error_m": lateral_figure}):
+        variant = load_case(board(tmp_path, "v.toml", pins=[{**PIN, **limits}], dwell_s=0.5, settle_s=0.1))
+        assert summarise_cycle(series, plan_cycle(variant))["pins"][0]["passed"], limits  # a limit met exactly holds
 
 
 def test_each_pin_is_pressed_at_its_own_force_limit(tmp_path):
