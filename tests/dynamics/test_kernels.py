@@ -172,9 +172,10 @@ def test_compiled_controller_is_figure_12(machine, rigid, limiter, compensation)
         deflection = np.zeros((3, 2))
         if compensation:
             assert np.abs(ctrl.deflection.pose_m - ctrl.estimate_m).max() <= DEFLECTION_UPDATE_M
-            deflection = ctrl.deflection.value.T  # the cached columns the kernel was given, (3, 2)
-            exact = static_deflection_columns(machine, rigid, ctrl.deflection.pose_m)  # G at the cached pose
-            # G from the controller's gravity cache (within GRAVITY_UPDATE_M): 0.06% of each column
+            deflection = ctrl.deflection.value.T  # the columns the kernel was given, (3, 2), at the estimate
+            exact = static_deflection_columns(machine, rigid, ctrl.estimate_m)  # G at the estimate
+            # extrapolated over <= DEFLECTION_UPDATE_M (1.5e-4 of C) with G from the controller's gravity cache
+            # (within GRAVITY_UPDATE_M: 0.06% of each column)
             assert np.all(np.abs(deflection - exact).max(axis=0) <= 1e-3 * np.abs(exact).max(axis=0))
             assert np.abs(deflection[:, 1]).max() > 1e-5  # the sag counts (tens of um)
         expected, state, clamped = _figure_12(gains, ctrl.force_limit_n, limiter, state, ctrl.estimate_m, ctrl.units,

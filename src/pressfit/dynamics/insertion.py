@@ -116,8 +116,8 @@ def _deflection(machine: Machine, case: Case, sim: Simulation, pin_pose: np.ndar
     :func:`pressfit.dynamics.control.static_deflection_columns`), or, with ``clearance``, sag + the clearance
     model's load-deflection table at the pin (loads (n,), N; displacements (n, 3), m) for the contact force.
     ``columns``: the controller's cache of the columns (``ForceLimitedController.deflection``, rows c0, c1,
-    updated every ``DEFLECTION_UPDATE_M``: C varies by 3.4% over 5 mm at the pin, 0.07% at 0.1 mm), shared: the
-    estimate and the rigid pose differ by the closure drift, so one update serves both each step."""
+    extrapolated to first order from the pose where they were last computed, within ``DEFLECTION_UPDATE_M``),
+    shared: the estimate and the rigid pose differ by the closure drift, so one update serves both."""
     if not sim.clearance:
         return lambda pose: (*columns(pose), NO_TABLE)
     limit = max(4.0 * sim.controller.force_limit_n, sim.contact.stiffness_n_per_m * sim.interference_m)
