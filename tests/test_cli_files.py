@@ -264,3 +264,21 @@ def test_a_directory_output_never_replaces_an_input_file(tmp_path):
     one_error_line(run("modes", "0", "0.72", "0", "--model", machine, "--out", out, "--overwrite"), "input file",
                    "modes.json")
     assert tree(tmp_path) == ["d", "d/modes.json"] and machine.read_text() == before
+
+
+@pytest.mark.parametrize(("summary", "fragment"), [
+    ('{"samples": 1, "front": [{"sample": 0, "speed_scale": 1.0}]}', "front[0].acceleration_scale"),  # older study
+    ('[1, 2]', "no front"),
+    ("{not json", "summary.json"),
+])
+def test_report_refuses_a_study_summary_it_cannot_show_before_computing(tmp_path, monkeypatch, summary, fragment):
+    """``report --cycle-study DIR`` with a summary.json lacking a key the front table shows (a study written before
+    the gains and the preload were in the grid, a list, broken JSON): exit 2 naming the file and the key, and
+    nothing computed (the sections are never called) or written."""
+    study = tmp_path / "study"
+    study.mkdir()
+    (study / "summary.json").write_text(summary)
+    monkeypatch.setattr(pressfit.output.report, "_tables_section", lambda *a: pytest.fail("computed"))
+    one_error_line(run("report", "--out", tmp_path / "rep", "--quick", "--cycle-study", study), "summary.json",
+                   fragment)
+    assert not (tmp_path / "rep").exists()

@@ -16,7 +16,7 @@ from click.testing import CliRunner
 from pressfit.cli import main
 from pressfit.description.cases import MAX_CYCLE_STUDY_SAMPLES, load_case
 from pressfit.dynamics.cycle import simulate_cycle
-from pressfit.studies.cycle_study import pareto_front
+from pressfit.studies.cycle_study import FACTORS, grid, pareto_front, variant
 from tests.dynamics.test_cycle import board
 
 PINS = [{"x_m": 0.10, "z_m": -0.05}, {"x_m": 0.0, "z_m": 0.0}]
@@ -37,6 +37,36 @@ def test_pareto_front_of_a_known_set():
     NaN (a refused sample) is never on the front, an infinite alignment (never touched) can be."""
     o = np.array([[1, 5, 5], [5, 1, 1], [2, 6, 6], [np.nan, 0, 0], [0.5, np.inf, 9]], float)
     assert sorted(pareto_front(o).tolist()) == [0, 1, 4]
+
+
+def test_gains_and_preload_in_the_grid_reach_the_run_and_the_fastest_case(tmp_path):
+    """``kp_scale``, ``kd_scale``, ``ki_scale`` scale [cycle.controller]'s gains and ``a4_n`` sets the commanded
+    preload: the grid holds every combination (2 x 2 = 4, the other factors at 1 and no ``a4_n``: the case's), a
+    variant carries exactly the scaled gains and the preload, and fastest.toml written for a sample with kp x 2 and
+    a4 = 0 loads with those values (not the case's 2e4 N/m and 100 N)."""
+    from pressfit.output.cycle_study import fastest_case_toml
+    from pressfit.studies.cycle_study import CycleStudyResult
+
+    case = load_case(study_case(tmp_path, kp_scale=[1.0, 2.0], a4_n=[0.0, 100.0]))
+    samples = grid(case)
+    assert len(samples) == 4 and {(s[FACTORS.index("kp_scale")], s[-1]) for s in samples} == \
+        {(1.0, 0.0), (1.0, 100.0), (2.0, 0.0), (2.0, 100.0)}
+    g = case.cycle.controller
+    varied = variant(case, (1.0, 1.0, 1.0, 1.0, 2.0, 3.0, 0.5, 0.0))
+    assert (varied.cycle.controller.kp_n_per_m, varied.cycle.controller.kd_n_s_per_m,
+            varied.cycle.controller.ki_n_per_m_s) == (2.0 * g.kp_n_per_m, 3.0 * g.kd_n_s_per_m, 0.5 * g.ki_n_per_m_s)
+    assert varied.preload.a4_n == 0.0 and case.preload.a4_n == 100.0
+    assert len(grid(load_case(study_case(tmp_path, "plain.toml", kp_scale=[1.0, 2.0])))) == 2  # a4: the case's
+    setting = dict(zip(FACTORS, (1.0, 1.0, 1.0, 1.0, 2.0, 1.0, 1.0, 0.0), strict=True))
+    columns = {k: np.array([v]) for k, v in setting.items()} | {
+        "cycle_time_s": np.array([3.0]), "worst_alignment_error_m": np.array([1e-6]),
+        "worst_overshoot_n": np.array([0.0]), "pins_passed": np.array([2]), "within_limits": np.array([True]),
+        "error": np.array([""], dtype=object), "on_front": np.array([True])}
+    text = fastest_case_toml(CycleStudyResult(case, columns, np.array([0]), 0, "rigid"))
+    (tmp_path / "fastest.toml").write_text(text)
+    written = load_case(tmp_path / "fastest.toml")
+    assert written.cycle.controller.kp_n_per_m == 2.0 * g.kp_n_per_m and written.preload.a4_n == 0.0
+    assert written.cycle.controller.kd_n_s_per_m == g.kd_n_s_per_m and written.cycle.study is None
 
 
 def test_summary_of_a_pin_never_touched_is_json(tmp_path):

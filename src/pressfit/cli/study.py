@@ -194,10 +194,12 @@ def study_design_cmd(case_file: Path, trials: int | None, workers: int | None, s
 @user_errors
 def study_cycle_cmd(case_file: Path, plant_model: str | None, workers: int | None, scheduler: str | None,
                     dashboard: bool, out_dir: Path, overwrite: bool, as_json: bool, progress: bool) -> None:
-    """Throughput: the board's motion limits swept over the case's [cycle.study] grid on a Dask cluster (one board
-    run per sample); the Pareto front of cycle time against the worst alignment error and the worst overshoot,
-    and the fastest setting within every pin's limits, written as a case file (SI units)."""
+    """Throughput: the board's motion limits (and optionally its controller gains and preload) swept over the case's
+    [cycle.study] grid on a Dask cluster (one board run per sample); the Pareto front of cycle time against the
+    worst alignment error and the worst overshoot, and the fastest setting within every pin's limits, written as a
+    case file (SI units)."""
     from pressfit.output.cycle_study import run_cycle_study
+    from pressfit.studies.cycle_study import FACTOR_LABELS, FACTORS
 
     if dashboard and scheduler is not None:
         raise PressfitError("--dashboard starts the local cluster's dashboard: not with --scheduler")
@@ -210,10 +212,13 @@ def study_cycle_cmd(case_file: Path, plant_model: str | None, workers: int | Non
     click.echo(f"{s['case']}: {s['samples']} samples (model {s['model']}), {s['failed']} refused or failed, "
                f"{s['within_limits']} within every pin's limits; Pareto front of cycle time, worst alignment error, "
                f"worst overshoot: {len(s['front'])} samples")
-    click.echo("  speed  accel   jerk  descent  cycle [s]  alignment [um]  overshoot [N]  within")
+    varied = [k for k in FACTORS if len({r[k] for r in s["front"]}) > 1] or list(FACTORS[:1])  # the ones that vary
+    click.echo("".join(f"{FACTOR_LABELS[k]:>15}" for k in varied)
+               + "  cycle [s]  alignment [um]  overshoot [N]  within")
     for r in s["front"]:
-        click.echo(f"{r['speed_scale']:>7.3g} {r['acceleration_scale']:>6.3g} {r['jerk_scale']:>6.3g} "
-                   f"{r['descent_scale']:>8.3g} {r['cycle_time_s']:>10.3f} {r['worst_alignment_error_m'] * 1e6:>15.3f}"
+        error = r["worst_alignment_error_m"]
+        alignment = "never touched" if error is None else f"{error * 1e6:.3f}"
+        click.echo("".join(f"{r[k]:>15.4g}" for k in varied) + f" {r['cycle_time_s']:>10.3f} {alignment:>15}"
                    f" {r['worst_overshoot_n']:>14.3f}  {'yes' if r['within_limits'] else 'no'}")
     f = s["fastest_within_limits"]
     click.echo("fastest within the limits: " + ("none" if f is None else

@@ -546,21 +546,28 @@ ScaleFactors = Annotated[list[Annotated[float, Field(gt=0, le=100.0, allow_inf_n
 
 class CycleStudy(StrictModel):
     """The grid of ``pressfit study cycle`` (:mod:`pressfit.studies.cycle_study`): scale factors (-) on
-    ``[cycle.motion]``'s speed, acceleration and jerk, and ``descent`` on all three of ``[cycle.descent]`` (or of
-    ``[cycle.motion]`` when the board has no descent table); every combination is one board run, at most
-    ``MAX_CYCLE_STUDY_SAMPLES``. Each scaled limit must stay within :class:`MotionLimits`' bounds."""
+    ``[cycle.motion]``'s speed, acceleration and jerk, ``descent`` on all three of ``[cycle.descent]`` (or of
+    ``[cycle.motion]`` when the board has no descent table), ``kp_scale``, ``kd_scale``, ``ki_scale`` on
+    ``[cycle.controller]``'s gains, and ``a4_n``: the commanded preloads (N, force mode; default the case's
+    ``[preload] a4_n``); every combination is one board run, at most ``MAX_CYCLE_STUDY_SAMPLES``. Each scaled
+    limit must stay within :class:`MotionLimits`' bounds."""
 
     speed_scale: ScaleFactors = [1.0]
     acceleration_scale: ScaleFactors = [1.0]
     jerk_scale: ScaleFactors = [1.0]
     descent_scale: ScaleFactors = [1.0]
+    kp_scale: ScaleFactors = [1.0]
+    kd_scale: ScaleFactors = [1.0]
+    ki_scale: ScaleFactors = [1.0]
+    a4_n: Annotated[list[Annotated[float, Field(le=MAX_FORCE_N, ge=-MAX_FORCE_N, allow_inf_nan=False)]],
+                    Field(min_length=1, max_length=50)] | None = None
 
     @model_validator(mode="after")
     def _grid(self) -> CycleStudy:
-        for key in ("speed_scale", "acceleration_scale", "jerk_scale", "descent_scale"):
+        for key in type(self).model_fields:
             values = getattr(self, key)
-            if len(set(values)) != len(values):
-                raise ValueError(f"{key}: the factors must be distinct, got {values}")
+            if values is not None and len(set(values)) != len(values):
+                raise ValueError(f"{key}: the values must be distinct, got {values}")
         count = self.sample_count
         if count > MAX_CYCLE_STUDY_SAMPLES:
             raise ValueError(f"the grid has {count} samples (board runs), above the cap of "
@@ -569,7 +576,7 @@ class CycleStudy(StrictModel):
 
     @property
     def sample_count(self) -> int:
-        return len(self.speed_scale) * len(self.acceleration_scale) * len(self.jerk_scale) * len(self.descent_scale)
+        return math.prod(len(getattr(self, key) or [None]) for key in type(self).model_fields)
 
 
 class Cycle(StrictModel):

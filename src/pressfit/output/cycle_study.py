@@ -1,8 +1,8 @@
 """Files of ``pressfit study cycle``: ``samples.parquet`` (every sample: the factors, the figures, ``within_limits``,
 ``on_front``, ``error``), ``summary.json``, ``front.png`` (cycle time against the worst alignment error and the worst
 overshoot, the front marked) and ``fastest.toml``: the case with the fastest setting within the limits (a case file
-that loads: its ``[cycle.motion]`` and ``[cycle.descent]`` scaled, ``[cycle.study]`` removed, ``model`` made
-absolute)."""
+that loads: its ``[cycle.motion]`` and ``[cycle.descent]`` scaled, the gains of ``[cycle.controller]`` and
+``[preload] a4_n`` set, ``[cycle.study]`` removed, ``model`` made absolute)."""
 
 from __future__ import annotations
 
@@ -15,7 +15,7 @@ from pressfit.description.cases import Case, load_case
 from pressfit.description.machine import read_toml
 from pressfit.output import files as io
 from pressfit.output.plots import plt
-from pressfit.studies.cycle_study import CycleStudyResult, cycle_study, variant
+from pressfit.studies.cycle_study import FACTOR_LABELS, FACTORS, CycleStudyResult, cycle_study, variant
 
 
 def front_figure(result: CycleStudyResult) -> plt.Figure:
@@ -47,20 +47,23 @@ def fastest_case_toml(result: CycleStudyResult) -> str | None:
         return None
     case = result.case
     data: dict[str, Any] = read_toml(case.path)
-    factors = tuple(float(result.columns[k][result.fastest]) for k in
-                    ("speed_scale", "acceleration_scale", "jerk_scale", "descent_scale"))
-    varied = variant(case, factors).cycle
+    setting = tuple(float(result.columns[k][result.fastest]) for k in FACTORS)
+    varied = variant(case, setting)
     cycle = data["cycle"]
     cycle.pop("study", None)
-    cycle["motion"] = varied.motion.model_dump()
-    cycle["descent"] = varied.descent.model_dump()
+    cycle["motion"] = varied.cycle.motion.model_dump()
+    cycle["descent"] = varied.cycle.descent.model_dump()
+    cycle.setdefault("controller", {}).update({k: getattr(varied.cycle.controller, k) for k in
+                                               ("kp_n_per_m", "kd_n_s_per_m", "ki_n_per_m_s")})
+    if varied.preload.a4_n != case.preload.a4_n:
+        data.setdefault("preload", {})["a4_n"] = varied.preload.a4_n
     if data.get("model"):
         data["model"] = str((Path(case.path).parent / data["model"]).resolve())
     data["name"] = f"{case.name}-fastest"
     time_s = result.columns["cycle_time_s"][result.fastest]
     data["description"] = (f"The fastest setting of `pressfit study cycle` on {case.path} within every pin's limits: "
-                           f"factors speed {factors[0]:g}, acceleration {factors[1]:g}, jerk {factors[2]:g}, "
-                           f"descent {factors[3]:g}; cycle time {time_s:.6g} s.")
+                           + ", ".join(f"{FACTOR_LABELS[k]} {v:g}" for k, v in zip(FACTORS, setting, strict=True))
+                           + f"; cycle time {time_s:.6g} s.")
     return tomli_w.dumps(data)
 
 

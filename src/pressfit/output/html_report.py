@@ -34,6 +34,7 @@ from pressfit.mechanics.condensed import StiffnessMaps
 from pressfit.output.files import write_text
 from pressfit.output.maps import kinematic_fields
 from pressfit.output.scene3d import SceneCase, scene_figure
+from pressfit.studies.cycle_study import FACTOR_LABELS
 from pressfit.studies.preload_study import PreloadStudy, format_answers
 from pressfit.studies.workspace_envelope import LEG_QUANTITIES, PLATE_QUANTITIES, LoadEnvelope
 
@@ -314,8 +315,7 @@ CYCLE_DRIVE_COLUMNS = (("leg", "drive"), ("peak_force_n", "peak force [N]"), ("r
                        ("rms_force_without_preload_n", "RMS force, a4 = 0 [N]"),
                        ("peak_speed_m_per_s", "peak speed [m/s]"), ("peak_power_w", "peak power [W]"),
                        ("positive_energy_j", "energy + [J]"), ("regenerative_energy_j", "energy - [J]"))
-CYCLE_FRONT_COLUMNS = (("sample", "sample"), ("speed_scale", "speed x"), ("acceleration_scale", "acceleration x"),
-                       ("jerk_scale", "jerk x"), ("descent_scale", "descent x"), ("cycle_time_s", "cycle time [s]"),
+CYCLE_FRONT_COLUMNS = (("sample", "sample"), *FACTOR_LABELS.items(), ("cycle_time_s", "cycle time [s]"),
                        ("worst_alignment_error_m", "worst alignment [m]"), ("worst_overshoot_n", "worst overshoot [N]"),
                        ("within_limits", "within the limits"))
 

@@ -30,6 +30,7 @@ from pressfit.output.simulation import write_simulation
 from pressfit.shipped import cases_dir
 from pressfit.studies import cad_fit, preload_study, workspace_envelope
 from pressfit.studies import paper_tables as tables
+from pressfit.studies.cycle_study import FACTORS, FRONT_FIGURES
 
 
 def _md_table(header: list[str], rows: list[list[object]]) -> str:
@@ -48,13 +49,14 @@ def write_report(machine: Machine, out_dir: Path | str, overwrite: bool = False,
     ``pressfit study cycle`` run whose front the board's section shows.
     """
     out = Path(out_dir)
+    study = None if cycle_study is None else read_cycle_study(cycle_study)  # checked before computing
     steps = tqdm(total=9, desc="report", disable=not progress, unit="section")
     md = [f"# pressfit report: {machine.name}", "",
           f"Machine file: `{machine.source}`. SI units throughout. Interactive version "
           "(3D view of the loaded machine, sortable tables, zoomable plots): [report.html](report.html).", ""]
     sections = (_tables_section, _kinematics_section, _envelope_section, _stiffness_section, _preload_section,
                 _interference_section, _insertion_section, _cycle_section)
-    parts: dict[str, object] = {"cycle_study_dir": cycle_study}
+    parts: dict[str, object] = {"cycle_study": study}
     for section in sections:
         md += section(machine, out, overwrite, quick, parts)
         steps.update()
@@ -181,6 +183,24 @@ def quick_board(case: Case) -> Case:
     return case.model_copy(update={"cycle": short})
 
 
+def read_cycle_study(directory: Path | str) -> dict:
+    """The summary.json of a ``pressfit study cycle`` run in ``directory``, its front rows checked for every key the
+    report shows (PressfitError naming the file and the first missing key)."""
+    summary = Path(directory) / "summary.json"
+    try:
+        front = json.loads(summary.read_text())
+    except (OSError, ValueError) as exc:
+        raise PressfitError(f"{summary}: the summary.json of a `pressfit study cycle` run: {exc}") from None
+    rows = front.get("front") if isinstance(front, dict) else None
+    missing = ("front" if not isinstance(rows, list) else
+               next((f"front[{i}].{k}" for i, r in enumerate(rows) for k in ("sample", *FACTORS, *FRONT_FIGURES)
+                     if not isinstance(r, dict) or k not in r), None))
+    if missing is not None:
+        raise PressfitError(f"{summary}: the summary.json of a `pressfit study cycle` run has no {missing} (a study "
+                            "of another pressfit version? run the study again)")
+    return front
+
+
 def _cycle_section(machine: Machine, out: Path, overwrite: bool, quick: bool, parts: Parts) -> list[str]:
     """The shipped board (``cases/paper/board.toml``, its own machine, on its [cycle] model; ``quick``: shortened,
     :func:`quick_board`) with the drive sizing, and the front of a throughput study when one is given."""
@@ -193,15 +213,9 @@ def _cycle_section(machine: Machine, out: Path, overwrite: bool, quick: bool, pa
     result = simulate_cycle(case)
     parts["cycle"] = result
     write_cycle(result, out / "cycle", overwrite)
-    front = None
-    if parts.get("cycle_study_dir") is not None:
-        summary = Path(parts["cycle_study_dir"]) / "summary.json"  # type: ignore[arg-type]
-        try:
-            front = json.loads(summary.read_text())
-        except (OSError, ValueError) as exc:
-            raise PressfitError(f"{summary}: the summary.json of a `pressfit study cycle` run: {exc}") from None
+    front = parts["cycle_front"] = parts["cycle_study"]
+    if front is not None:
         write_json(out / "cycle" / "study_summary.json", front, overwrite)
-    parts["cycle_front"] = front
     s = result.summary
     md = ["## 8. The shipped board's work cycle (issue 20)", "",
           f"`{case.path}`" + (f", shortened for --quick to its first {QUICK_BOARD_PINS} pins, 0.1 s dwell, 2 ms step"
@@ -215,11 +229,8 @@ def _cycle_section(machine: Machine, out: Path, overwrite: bool, quick: bool, pa
     if front is not None:
         md += [f"Throughput study ({front['samples']} samples): Pareto front of cycle time, worst alignment error and "
                "worst overshoot:", "",
-               _md_table(["speed", "acceleration", "jerk", "descent", "cycle_time_s", "worst_alignment_error_m",
-                          "worst_overshoot_n", "within_limits"],
-                         [[r[k] for k in ("speed_scale", "acceleration_scale", "jerk_scale", "descent_scale",
-                                          "cycle_time_s", "worst_alignment_error_m", "worst_overshoot_n",
-                                          "within_limits")] for r in front["front"]]), ""]
+               _md_table([*FACTORS, *FRONT_FIGURES], [[r[k] for k in (*FACTORS, *FRONT_FIGURES)]
+                                                        for r in front["front"]]), ""]
     return md
 
 

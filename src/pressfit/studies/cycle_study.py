@@ -3,7 +3,8 @@ front of cycle time against the worst alignment error and the worst force oversh
 keeps every pin within its limits.
 
 The grid is the case's ``[cycle.study]`` (:class:`pressfit.description.cases.CycleStudy`): every combination of the
-scale factors on ``[cycle.motion]``'s speed, acceleration and jerk and on the descent's three limits. Each sample is
+scale factors on ``[cycle.motion]``'s speed, acceleration and jerk, on the descent's three limits and on the
+controller's three gains, and of the commanded preloads. Each sample is
 one board run (:func:`pressfit.dynamics.cycle.simulate_cycle`, the case's model, without the drive sizing) and
 reports the planned cycle time (s), the worst pin's lateral alignment error at first contact (m; infinite for a
 pin never touched) and the worst overshoot over its insertion limit (N). A setting keeps every pin within its
@@ -27,39 +28,50 @@ from pydantic import ValidationError
 from pressfit.description.cases import Case, MotionLimits
 from pressfit.errors import ModelFileError, PressfitError
 
-FACTORS = ("speed_scale", "acceleration_scale", "jerk_scale", "descent_scale")
+FACTORS = ("speed_scale", "acceleration_scale", "jerk_scale", "descent_scale", "kp_scale", "kd_scale", "ki_scale",
+           "a4_n")  # a sample's setting, in this order
+FACTOR_LABELS = {"speed_scale": "speed x", "acceleration_scale": "acceleration x", "jerk_scale": "jerk x",
+                 "descent_scale": "descent x", "kp_scale": "kp x", "kd_scale": "kd x", "ki_scale": "ki x",
+                 "a4_n": "a4 [N]"}
 FIGURES = ("cycle_time_s", "worst_alignment_error_m", "worst_overshoot_n", "pins_passed")
+FRONT_FIGURES = ("cycle_time_s", "worst_alignment_error_m", "worst_overshoot_n", "within_limits")  # front tables
+Setting = tuple[float, ...]  # the values of FACTORS
 
 
-def grid(case: Case) -> list[tuple[float, float, float, float]]:
-    """The study's samples (speed, acceleration, jerk, descent factors), the last varying fastest."""
+def grid(case: Case) -> list[Setting]:
+    """The study's samples (the values of ``FACTORS``), the last varying fastest."""
     if case.cycle is None or case.cycle.study is None:
         raise PressfitError(f"{case.path}: the case has no [cycle.study] table (the grid of scale factors)")
     s = case.cycle.study
-    return list(itertools.product(s.speed_scale, s.acceleration_scale, s.jerk_scale, s.descent_scale))
+    values = [getattr(s, k) for k in FACTORS[:-1]] + [s.a4_n or [case.preload.a4_n]]
+    return list(itertools.product(*values))
 
 
-def variant(case: Case, factors: tuple[float, float, float, float]) -> Case:
-    """The case with its motion limits scaled by ``factors`` (speed, acceleration, jerk on ``[cycle.motion]``;
-    the descent factor on all three of the descent's), validated; ModelFileError naming the factor otherwise."""
-    cycle = case.cycle
-    speed, acc, jerk, descent = factors
-    m, d = cycle.motion, cycle.descent or cycle.motion
+def _scaled(case: Case, table: MotionLimits, factors: tuple[float, float, float], keys: str) -> MotionLimits:
+    """``table`` with its speed, acceleration and jerk scaled; ModelFileError naming ``keys`` otherwise."""
     try:
-        motion = MotionLimits(speed_m_per_s=m.speed_m_per_s * speed, jerk_m_per_s3=m.jerk_m_per_s3 * jerk,
-                              acceleration_m_per_s2=m.acceleration_m_per_s2 * acc, profile=m.profile)
+        return MotionLimits(speed_m_per_s=table.speed_m_per_s * factors[0], profile=table.profile,
+                            acceleration_m_per_s2=table.acceleration_m_per_s2 * factors[1],
+                            jerk_m_per_s3=table.jerk_m_per_s3 * factors[2])
     except ValidationError as exc:
-        raise ModelFileError(case.path, "[cycle.study] speed_scale, acceleration_scale, jerk_scale",
-                             f"factors that keep [cycle.motion] within its bounds: ({speed:g}, {acc:g}, {jerk:g}) "
-                             f"gives {exc.errors()[0]['loc'][0]}: {exc.errors()[0]['msg']}") from None
-    try:
-        down = MotionLimits(speed_m_per_s=d.speed_m_per_s * descent, acceleration_m_per_s2=d.acceleration_m_per_s2
-                            * descent, jerk_m_per_s3=d.jerk_m_per_s3 * descent, profile=d.profile)
-    except ValidationError as exc:
-        raise ModelFileError(case.path, "[cycle.study] descent_scale", f"a factor that keeps the descent within "
-                             f"its bounds: {descent:g} gives {exc.errors()[0]['loc'][0]}: "
+        raise ModelFileError(case.path, f"[cycle.study] {keys}", "factors that keep the limits within their bounds: "
+                             f"({', '.join(f'{f:g}' for f in factors)}) gives {exc.errors()[0]['loc'][0]}: "
                              f"{exc.errors()[0]['msg']}") from None
-    return case.model_copy(update={"cycle": cycle.model_copy(update={"motion": motion, "descent": down})})
+
+
+def variant(case: Case, setting: Setting) -> Case:
+    """The case with the sample's setting (``FACTORS``: motion and descent limits and gains scaled, the preload
+    set; a simulation's preload is in force mode), validated; ModelFileError naming the factor otherwise."""
+    cycle = case.cycle
+    speed, acc, jerk, descent, kp, kd, ki, a4 = setting
+    motion = _scaled(case, cycle.motion, (speed, acc, jerk), "speed_scale, acceleration_scale, jerk_scale")
+    down = _scaled(case, cycle.descent or cycle.motion, (descent,) * 3, "descent_scale")
+    g = cycle.controller
+    gains = g.model_copy(update={"kp_n_per_m": g.kp_n_per_m * kp, "kd_n_s_per_m": g.kd_n_s_per_m * kd,
+                                 "ki_n_per_m_s": g.ki_n_per_m_s * ki})
+    return case.model_copy(update={"cycle": cycle.model_copy(update={"motion": motion, "descent": down,
+                                                                     "controller": gains}),
+                                   "preload": case.preload.model_copy(update={"a4_n": float(a4)})})
 
 
 def within_limits(case: Case, summary: dict[str, Any]) -> bool:
@@ -80,7 +92,7 @@ def _worst(summary: dict[str, Any]) -> dict[str, float]:
             "worst_overshoot_n": float(max(p["overshoot_n"] for p in pins))}
 
 
-def run_sample(case: Case, model: str | None, factors: tuple[float, float, float, float]) -> dict[str, Any]:
+def run_sample(case: Case, model: str | None, factors: Setting) -> dict[str, Any]:
     """One board run (a Dask task): the figures (``FIGURES``), ``within_limits`` and ``error`` ("" when it ran)."""
     from pressfit.dynamics.cycle import simulate_cycle
 
