@@ -56,7 +56,8 @@ def test_gains_and_preload_in_the_grid_reach_the_run_and_the_fastest_case(tmp_pa
     assert (varied.cycle.controller.kp_n_per_m, varied.cycle.controller.kd_n_s_per_m,
             varied.cycle.controller.ki_n_per_m_s) == (2.0 * g.kp_n_per_m, 3.0 * g.kd_n_s_per_m, 0.5 * g.ki_n_per_m_s)
     assert varied.preload.a4_n == 0.0 and case.preload.a4_n == 100.0
-    assert len(grid(load_case(study_case(tmp_path, "plain.toml", kp_scale=[1.0, 2.0])))) == 2  # a4: the case's
+    plain = grid(load_case(study_case(tmp_path, "plain.toml", kp_scale=[1.0, 2.0])))
+    assert len(plain) == 2 and {s[-1] for s in plain} == {case.preload.a4_n}  # no a4_n: the case's preload
     setting = dict(zip(FACTORS, (1.0, 1.0, 1.0, 1.0, 2.0, 1.0, 1.0, 0.0), strict=True))
     columns = {k: np.array([v]) for k, v in setting.items()} | {
         "cycle_time_s": np.array([3.0]), "worst_alignment_error_m": np.array([1e-6]),
