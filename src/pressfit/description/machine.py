@@ -504,6 +504,17 @@ class Machine(StrictModel):
     collision: Collision
     source: str = ""
 
+    @field_validator("legs")
+    @classmethod
+    def _distinct_legs(cls, legs: list[LegLayout]) -> list[LegLayout]:
+        radial = np.array([leg.radial_direction for leg in legs])
+        close = np.abs(radial @ radial.T - 1.0) < 1e-9
+        np.fill_diagonal(close, False)
+        if close.any():
+            i, j = np.argwhere(close)[0]
+            raise ValueError(f"legs {i + 1} and {j + 1} have the same radial_direction (one joint for two legs)")
+        return legs
+
     @field_validator("stem")
     @classmethod
     def _stem_inside_bore(cls, stem: Stem, info: ValidationInfo) -> Stem:
@@ -525,15 +536,6 @@ class Machine(StrictModel):
                              f"leg_length_min_m = {travel:g} m (got {self.actuator.hydraulic.stroke_m!r})")
         return self
 
-    @model_validator(mode="after")
-    def _distinct_legs(self) -> Machine:
-        radial = np.array([leg.radial_direction for leg in self.legs])
-        close = np.abs(radial @ radial.T - 1.0) < 1e-9
-        np.fill_diagonal(close, False)
-        if close.any():
-            i, j = np.argwhere(close)[0]
-            raise ValueError(f"legs {i + 1} and {j + 1} have the same radial_direction (one joint for two legs)")
-        return self
 
     @property
     def redundancy(self) -> int:
