@@ -150,7 +150,8 @@ class Preload(StrictModel):
 
     @model_validator(mode="after")
     def _unit_matches_mode(self) -> Preload:
-        if self.amplitudes_n is not None and self.a4_n != 0.0 or self.amplitudes_m is not None and self.a4_m is not None:
+        if (self.amplitudes_n is not None and self.a4_n != 0.0) or (self.amplitudes_m is not None
+                                                                     and self.a4_m is not None):
             raise ValueError("give the preload as a4 or as amplitudes, not both")
         length = self.a4_m is not None or self.amplitudes_m is not None
         force = self.a4_n != 0.0 or self.amplitudes_n is not None
@@ -218,9 +219,10 @@ class Reference(StrictModel):
 
 class ClearanceSpec(StrictModel):
     """Axial plays of the 2 n cardans (:mod:`pressfit.clearance`): ``gaps_m`` (2 n values for n legs, checked
-    against the machine: leg 1 base, leg 1 plate, leg 2 base, ...) or ``random_m`` = [low, high] with ``seed``; default: the machine's uniform
-    clearance. ``geometry`` ("axial": +-g along the leg; "box": +-g on the joint's three translations in the
-    cardan's axes; "sphere": radius g) defaults to the machine's ``[joints] cardan_clearance_geometry``.
+    against the machine: leg 1 base, leg 1 plate, leg 2 base, ...) or ``random_m`` = [low, high] with ``seed``;
+    default: the machine's uniform clearance. ``geometry`` ("axial": +-g along the leg; "box": +-g on the joint's
+    three translations in the cardan's axes; "sphere": radius g) defaults to the machine's
+    ``[joints] cardan_clearance_geometry``.
     Contact stiffness N/m and smoothing width m default to the machine's and 1e-9 m."""
 
     gaps_m: Annotated[list[Annotated[float, Field(ge=0, le=1e-2, allow_inf_nan=False)]],

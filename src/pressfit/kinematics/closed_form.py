@@ -334,7 +334,8 @@ def frames_along(machine: Machine, ez: np.ndarray) -> np.ndarray:
 
 
 def concurrency_point(machine: Machine, pose_m: np.ndarray) -> np.ndarray:
-    """The point where every leg line meets (on a layout with d_i = (r / p) B_i, :attr:`Machine.legs_concurrent`), m: P* = (t x_h, h_b + t (y_h + h_p - h_b), t z_h) with
+    """The point where every leg line meets (on a layout with d_i = (r / p) B_i, :attr:`Machine.legs_concurrent`),
+    m: P* = (t x_h, h_b + t (y_h + h_p - h_b), t z_h) with
     t = p / (p - r), h_b and h_p the base and plate joint heights (P* = t h when both are zero)."""
     g = machine.geometry
     t = g.base_half_side_m / (g.base_half_side_m - g.plate_half_side_m)

@@ -506,7 +506,8 @@ class FastEquilibriumSolver:
     def _straight_legs(self, bk: _Block) -> dict[str, np.ndarray]:
         """Closed-form geometry of the straight legs at the assembled pose (module doc): leg frame rl, tip
         frame re, joint abscissae s (m) along e_z, free axes w (b, n, 4, 3) (the four cardan revolutes), closure c,
-        transmitted wrenches n_w (b, n, 6, 2) (world) and n_l (leg frame), and the dual-basis helpers of the cardan axes."""
+        transmitted wrenches n_w (b, n, 6, 2) (world) and n_l (leg frame), and the dual-basis helpers of the cardan
+        axes."""
         ch, q = self._chain, bk.q0leg
         a = ch.axis
         f0 = np.broadcast_to(ch.r0, q.shape[:2] + (3, 3))

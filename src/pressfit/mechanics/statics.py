@@ -54,7 +54,7 @@ from __future__ import annotations
 import math
 import threading
 from collections.abc import Callable
-from dataclasses import dataclass, field
+from dataclasses import dataclass
 from typing import Any
 
 import numpy as np
@@ -504,8 +504,9 @@ class EquilibriumSolver:
             w = self._local.worker = _Worker(model, model.createData(), _static(self.model))
         return w
 
-    def solve(self, pose_m: np.ndarray, plate_wrench: np.ndarray, *, preload: Amplitudes | ActuatorPreload | None = None,
-              preload_mode: str | None = None, linear: bool = False, tol: float = NEWTON_TOL, max_iter: int = 25,
+    def solve(self, pose_m: np.ndarray, plate_wrench: np.ndarray, *,
+              preload: Amplitudes | ActuatorPreload | None = None, preload_mode: str | None = None,
+              linear: bool = False, tol: float = NEWTON_TOL, max_iter: int = 25,
               start: Equilibrium | None = None, preload_offsets_m: np.ndarray | None = None,
               step_limit: StepLimit | None = None) -> Equilibrium:
         """Static equilibrium at a reachable pose (m) under a dead plate wrench (6,) (N, N m; world axes, at
