@@ -36,9 +36,9 @@ def test_five_leg_case_solved(tmp_path):
     legs = "".join(f"[[legs]]\nradial_direction = [{math.cos(t)!r}, 0.0, {math.sin(t)!r}]\n\n"
                    for t in (math.radians(-90.0 + 72.0 * i) for i in range(5)))
     (tmp_path / "five.toml").write_text(head + legs + tail)
-    (tmp_path / "case.toml").write_text('name = "five"\nmodel = "five.toml"\n'
-                                        "[poses]\npoints_m = [[0.05, 0.62, -0.05]]\n"
-                                        "[loads]\nforce_n = [0.0, 0.0, 0.0]\n[preload]\namplitudes_n = [300.0, -150.0]\n")
+    case_text = ('name = "five"\nmodel = "five.toml"\n[poses]\npoints_m = [[0.05, 0.62, -0.05]]\n'
+                 "[loads]\nforce_n = [0.0, 0.0, 0.0]\n[preload]\namplitudes_n = [300.0, -150.0]\n")
+    (tmp_path / "case.toml").write_text(case_text)
     case = load_case(tmp_path / "case.toml")
     (eq,) = statics.solve_case(case)
     v = kinematics.preload_basis(case.machine(), [0.05, 0.62, -0.05])
