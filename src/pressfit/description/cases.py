@@ -289,8 +289,8 @@ class MonteCarloInputs(StrictModel):
     base_point_error_m: Distribution | None = None  # per leg and world axis: base cardan centre error
     plate_point_error_m: Distribution | None = None  # per leg and world axis: plate cardan centre error
     load_tilt_rad: Distribution | None = None  # angle of the load force off its nominal direction (azimuth uniform)
-    cardan_clearance_m: Distribution | None = None  # per cardan (8): axial play, m (values must stay in [0, 1e-2])
-    # per cardan (8) and axis of its leg reference frame (x = +-a_i, y down, z inward): misalignment rotation, rad
+    cardan_clearance_m: Distribution | None = None  # per cardan (2 n): axial play, m (values must stay in [0, 1e-2])
+    # per cardan (2 n) and axis of its leg reference frame (x = +-a_i, y down, z inward): misalignment rotation, rad
     cardan_misalignment_rad: Distribution | None = None
 
     @model_validator(mode="after")
