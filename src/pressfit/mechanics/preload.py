@@ -68,11 +68,18 @@ class ActuatorPreload:
         return cls(amp[0] if len(amp) == 1 else tuple(amp), spec.mode)
 
 
-def preload_forces_n(machine: Machine, poses_m: np.ndarray, a4: Amplitudes) -> np.ndarray:
-    """Leg forces V a (..., n) of the preload amplitudes a (scalar or (n - 3,), any unit) at poses (..., 3) (m).
-    A zero preload is zero on any machine; otherwise :class:`PreloadError` for a 3-leg machine ("no
-    redundant actuation") or a number of amplitudes other than its redundancy n - 3."""
-    amp = ActuatorPreload(a4 if np.ndim(a4) == 0 else tuple(np.asarray(a4, dtype=float).tolist())).amplitudes
+def _preload(a4: Amplitudes, mode: str = "force") -> ActuatorPreload:
+    """The checked preload of a scalar a4 or an array of amplitudes."""
+    amp = float(a4) if np.ndim(a4) == 0 else tuple(np.asarray(a4, dtype=float).ravel().tolist())
+    return ActuatorPreload(amp, mode)  # type: ignore[arg-type]
+
+
+def self_stress_forces_n(machine: Machine, poses_m: np.ndarray, a4: Amplitudes) -> np.ndarray:
+    """Leg forces V a (..., n) of the preload amplitudes a (scalar for a redundancy-1 machine, else (n - 3,); N
+    in force mode, tension > 0) at poses (..., 3) (m). A zero preload is zero on any machine; otherwise
+    :class:`PreloadError` for a 3-leg machine ("no redundant actuation") or a number of amplitudes other than
+    its redundancy n - 3."""
+    amp = _preload(a4).amplitudes
     h = np.asarray(poses_m, dtype=float)
     if not amp.any():
         return np.zeros(h.shape[:-1] + (len(machine.legs),))
@@ -93,17 +100,12 @@ def rest_length_offsets(machine: Machine, pose_m: np.ndarray, a4: Amplitudes, mo
     ``clearance``: the cardans' plays (effective axial gaps at the pose), closed by the preload in force mode
     (None: rigid cardans).
     """
-    ActuatorPreload(0.0, mode)  # type: ignore[arg-type]  # checks the mode
-    v = preload_forces_n(machine, pose_m, a4)
-    if mode == "length":
+    pre = _preload(a4, mode)
+    v = self_stress_forces_n(machine, pose_m, pre.amplitudes)
+    if pre.mode == "length":
         return -v
     offsets = -v * machine.axial_compliance_m_per_n(kinematics.inverse_kinematics(machine, pose_m).lengths_m)
     return offsets if clearance is None else offsets - clearance.play_extension_m(machine, pose_m, v)
-
-
-def self_stress_forces_n(machine: Machine, poses_m: np.ndarray, a4_n: Amplitudes) -> np.ndarray:
-    """Leg forces V a (..., n), N (tension > 0): a force-mode preload of amplitudes a4_n (N) at each pose (m)."""
-    return preload_forces_n(machine, poses_m, a4_n)
 
 
 def with_axial_preload(result: CondensedResult, extra_forces_n: np.ndarray) -> CondensedResult:
