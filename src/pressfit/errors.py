@@ -83,13 +83,33 @@ class ResidualError(PressfitError):
                          f"tolerance {tolerance:.1e}; the solution is refused")
 
 
+class PreloadError(PressfitError):
+    """A preload that cannot be applied (unknown mode, non-finite amplitude, a machine without redundancy or
+    with another number of preload amplitudes): ``machine`` names the machine (or "" if unknown),
+    ``redundancy`` its degree n - 3 (None if unknown)."""
+
+    def __init__(self, message: str, machine: str = "", redundancy: int | None = None) -> None:
+        self.machine, self.redundancy = machine, redundancy
+        super().__init__(f"{machine}: {message}" if machine else message)
+
+
+class LegCountError(PressfitError):
+    """A layer that supports only some numbers of legs got a machine with another: ``machine`` its name,
+    ``legs`` its leg count, ``supported`` the counts the layer takes, ``layer`` the layer's name."""
+
+    def __init__(self, machine: str, legs: int, supported: tuple[int, ...], layer: str) -> None:
+        self.machine, self.legs, self.supported, self.layer = machine, legs, supported, layer
+        counts = " or ".join(str(n) for n in supported)
+        super().__init__(f"{machine}: {layer} supports {counts}-leg machines only so far; this machine has {legs} legs")
+
+
 class UnstableEquilibriumError(PressfitError):
     """The solution found is not a physical, stable state (a leg beyond buckling, a huge displacement)."""
 
 
 class DriveStepError(PressfitError):
     """A drive cannot integrate a step (:mod:`pressfit.dynamics.drives`); carries the drive kind, the leg
-    (1-4), the quantity, its value and the limit it breaks (SI)."""
+    (1-n), the quantity, its value and the limit it breaks (SI)."""
 
     def __init__(self, kind: str, leg: int, quantity: str, value: float, limit: str) -> None:
         self.kind, self.leg, self.quantity, self.value, self.limit = kind, leg, quantity, value, limit

@@ -42,10 +42,11 @@ def kinematics_cmd(x: float, y: float, z: float, as_json: bool, model_path: Path
         click.echo(to_json(out))
         return
     click.echo(f"pose h = ({x:g}, {y:g}, {z:g}) m: reachable")
-    click.echo("leg   l [m]     alpha [rad]  beta [rad]  v_p")
-    for i in range(4):
+    vp = out["preload_vector"]  # None unless the machine has one redundant leg (kinematics.pose_report)
+    click.echo("leg   l [m]     alpha [rad]  beta [rad]" + ("  v_p" if vp is not None else ""))
+    for i in range(len(out["leg_lengths_m"])):
         click.echo(f"{i + 1:>3}  {out['leg_lengths_m'][i]:.6f}  {out['alpha_rad'][i]:+.6f}    "
-                   f"{out['beta_rad'][i]:+.6f}   {out['preload_vector'][i]:+.4f}")
+                   f"{out['beta_rad'][i]:+.6f}" + (f"   {vp[i]:+.4f}" if vp is not None else ""))
     click.echo(f"dexterity n = {out['dexterity']:.4f}; force indices F_x, F_y, F_z = "
                + ", ".join(f"{v:.4f}" for v in out["force_indices"]))
 

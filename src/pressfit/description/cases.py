@@ -17,6 +17,7 @@ from pydantic import Field, ValidationError, model_validator
 from pressfit.description.machine import (
     DEFAULT_MODEL,
     MAX_CARDAN_TILT_RAD,
+    MAX_LEGS,
     Finite,
     Machine,
     NonNegative,
@@ -117,28 +118,62 @@ class Loads(StrictModel):
 
 
 class Preload(StrictModel):
-    """Actuator preload a_4 along v_p, applied before the load.
+    """Actuator preload in the preload space (the null space of the static matrix, dimension n - 3 for n legs;
+    :mod:`pressfit.mechanics.preload`), applied before the load.
 
     ``mode = "force"`` (force-controlled drives): ``a4_n`` (N), the actuator forces at no load are a4 v_p.
     ``mode = "length"`` (position-held drives): ``a4_m`` (m), actuator rest-length offsets -a4 v_p.
+    A machine with n - 3 != 1 takes the amplitudes as a list, ``amplitudes_n`` (N) or ``amplitudes_m`` (m),
+    one per preload basis vector (:func:`pressfit.kinematics.preload_basis`: amplitude k belongs to leg 3 + k);
+    a one-entry list is the same as a4 (and is stored as a4). Their count is checked against the machine
+    when the preload is applied.
     """
 
     a4_n: Annotated[float, Field(le=MAX_FORCE_N, ge=-MAX_FORCE_N, allow_inf_nan=False)] = 0.0
     a4_m: Annotated[float, Field(le=0.01, ge=-0.01, allow_inf_nan=False)] | None = None
+    amplitudes_n: Annotated[list[Annotated[float, Field(le=MAX_FORCE_N, ge=-MAX_FORCE_N, allow_inf_nan=False)]],
+                            Field(min_length=2, max_length=9)] | None = None
+    amplitudes_m: Annotated[list[Annotated[float, Field(le=0.01, ge=-0.01, allow_inf_nan=False)]],
+                            Field(min_length=2, max_length=9)] | None = None
     mode: Literal["force", "length"] = "force"
+
+    @model_validator(mode="before")
+    @classmethod
+    def _one_amplitude_is_a4(cls, data: Any) -> Any:
+        if isinstance(data, dict):
+            data = {k: v for k, v in data.items() if v is not None}  # a dumped model lists absent keys as None
+            for unit in ("n", "m"):
+                amp = data.get(f"amplitudes_{unit}")
+                if isinstance(amp, list) and len(amp) == 1 and f"a4_{unit}" not in data:
+                    data[f"a4_{unit}"] = data.pop(f"amplitudes_{unit}")[0]
+        return data
 
     @model_validator(mode="after")
     def _unit_matches_mode(self) -> Preload:
-        if self.mode == "length" and (self.a4_m is None or self.a4_n != 0.0):
-            raise ValueError('mode = "length" takes a4_m (m), not a4_n')
-        if self.mode == "force" and self.a4_m is not None:
-            raise ValueError('mode = "force" takes a4_n (N), not a4_m')
+        if (self.amplitudes_n is not None and self.a4_n != 0.0) or (self.amplitudes_m is not None
+                                                                     and self.a4_m is not None):
+            raise ValueError("give the preload as a4 or as amplitudes, not both")
+        length = self.a4_m is not None or self.amplitudes_m is not None
+        force = self.a4_n != 0.0 or self.amplitudes_n is not None
+        if self.mode == "length" and (not length or force):
+            raise ValueError('mode = "length" takes a4_m or amplitudes_m (m), not a4_n')
+        if self.mode == "force" and length:
+            raise ValueError('mode = "force" takes a4_n or amplitudes_n (N), not a4_m')
         return self
 
     @property
     def a4(self) -> float:
-        """The preload coordinate in the mode's unit (N or m)."""
-        return self.a4_m if self.mode == "length" else self.a4_n  # type: ignore[return-value]
+        """The preload coordinate in the mode's unit (N or m) of a redundancy-1 machine (0 when the preload
+        is given as two or more amplitudes: layers that read it support 4-leg machines only)."""
+        if self.mode == "length":
+            return self.a4_m if self.a4_m is not None else 0.0
+        return self.a4_n
+
+    @property
+    def amplitudes(self) -> tuple[float, ...]:
+        """Every preload amplitude in the mode's unit (N or m): (a4,) or the given list."""
+        amp = self.amplitudes_m if self.mode == "length" else self.amplitudes_n
+        return tuple(amp) if amp is not None else (self.a4,)
 
 
 class Solver(StrictModel):
@@ -167,21 +202,31 @@ class Reference(StrictModel):
     """A published table to compare with: values as printed, in the publication's leg order."""
 
     source: str
-    leg_order: Annotated[list[Annotated[int, Field(ge=1, le=4)]], Field(min_length=4, max_length=4)]
+    leg_order: Annotated[list[Annotated[int, Field(ge=1, le=MAX_LEGS)]], Field(min_length=3, max_length=MAX_LEGS)]
     axial_sign: Literal[1, -1] = 1
-    values: dict[str, Annotated[list[Finite], Field(min_length=4, max_length=4)]]
+    values: dict[str, Annotated[list[Finite], Field(min_length=3, max_length=MAX_LEGS)]]
+
+    @model_validator(mode="after")
+    def _one_value_per_leg(self) -> Reference:
+        if sorted(self.leg_order) != list(range(1, len(self.leg_order) + 1)):
+            raise ValueError(f"leg_order must list each leg 1..{len(self.leg_order)} once")
+        for key, v in self.values.items():
+            if len(v) != len(self.leg_order):
+                raise ValueError(f"values.{key} has {len(v)} entries for {len(self.leg_order)} legs")
+        return self
     note: str = ""
 
 
 class ClearanceSpec(StrictModel):
-    """Axial plays of the eight cardans (:mod:`pressfit.clearance`): ``gaps_m`` (8 values: leg 1 base, leg 1
-    plate, leg 2 base, ...) or ``random_m`` = [low, high] with ``seed``; default: the machine's uniform
-    clearance. ``geometry`` ("axial": +-g along the leg; "box": +-g on the joint's three translations in the
-    cardan's axes; "sphere": radius g) defaults to the machine's ``[joints] cardan_clearance_geometry``.
+    """Axial plays of the 2 n cardans (:mod:`pressfit.clearance`): ``gaps_m`` (2 n values for n legs, checked
+    against the machine: leg 1 base, leg 1 plate, leg 2 base, ...) or ``random_m`` = [low, high] with ``seed``;
+    default: the machine's uniform clearance. ``geometry`` ("axial": +-g along the leg; "box": +-g on the joint's
+    three translations in the cardan's axes; "sphere": radius g) defaults to the machine's
+    ``[joints] cardan_clearance_geometry``.
     Contact stiffness N/m and smoothing width m default to the machine's and 1e-9 m."""
 
     gaps_m: Annotated[list[Annotated[float, Field(ge=0, le=1e-2, allow_inf_nan=False)]],
-                      Field(min_length=8, max_length=8)] | None = None
+                      Field(min_length=6, max_length=2 * MAX_LEGS)] | None = None
     random_m: Annotated[list[Annotated[float, Field(ge=0, le=1e-2, allow_inf_nan=False)]],
                         Field(min_length=2, max_length=2)] | None = None
     seed: int = 0
@@ -244,8 +289,8 @@ class MonteCarloInputs(StrictModel):
     base_point_error_m: Distribution | None = None  # per leg and world axis: base cardan centre error
     plate_point_error_m: Distribution | None = None  # per leg and world axis: plate cardan centre error
     load_tilt_rad: Distribution | None = None  # angle of the load force off its nominal direction (azimuth uniform)
-    cardan_clearance_m: Distribution | None = None  # per cardan (8): axial play, m (values must stay in [0, 1e-2])
-    # per cardan (8) and axis of its leg reference frame (x = +-a_i, y down, z inward): misalignment rotation, rad
+    cardan_clearance_m: Distribution | None = None  # per cardan (2 n): axial play, m (values must stay in [0, 1e-2])
+    # per cardan (2 n) and axis of its leg reference frame (x = +-a_i, y down, z inward): misalignment rotation, rad
     cardan_misalignment_rad: Distribution | None = None
 
     @model_validator(mode="after")

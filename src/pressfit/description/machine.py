@@ -17,7 +17,7 @@ import numpy as np
 from pydantic import BaseModel, ConfigDict, Field, ValidationError, ValidationInfo, field_validator, model_validator
 
 from pressfit.description import drive_stiffness
-from pressfit.errors import ModelFileError
+from pressfit.errors import LegCountError, ModelFileError
 from pressfit.shipped import default_model
 
 DEFAULT_MODEL = default_model()  # the paper's machine, shipped inside the package
@@ -36,7 +36,7 @@ class StrictModel(BaseModel):
 
 class Geometry(StrictModel):
     """Joint layout: p, r (Table 3) and optional heights of the cardan centres above the base plane (base)
-    and above the plate centre (plate), the same for all four legs; m."""
+    and above the plate centre (plate), the same for every leg; m."""
 
     base_half_side_m: Positive
     plate_half_side_m: Positive
@@ -50,13 +50,22 @@ class Geometry(StrictModel):
         return self
 
 
+MAX_LEGS = 12  # a schema bound (a machine file is a few legs, not a data set)
 MAX_CARDAN_TILT_RAD = 0.05  # largest accepted cardan misalignment (a manufacturing error, not a redesign)
 
 
 class LegLayout(StrictModel):
-    """One leg's direction and cardan axes; ``base_point_error_m`` and ``plate_point_error_m`` (m, world
-    axes, default 0) move its base cardan centre B_i and its plate cardan centre d_i off the nominal
-    square (manufacturing errors; the leg lines then no longer meet at one point).
+    """One leg's direction and cardan axes. ``radial_direction``: the horizontal unit vector n_i from the base
+    centre toward the leg's base cardan (a leg at angle theta about y: (cos theta, 0, sin theta)), so that
+    B_i = p n_i and d_i = r n_i. ``cardan_axis``: the base cardan's first axis a_i, horizontal and normal to
+    n_i (default n_i x y); ``plate_cardan_axis`` the plate cardan's first axis (default a_i), which Tsai's
+    condition requires parallel to a_i (checked: a deviation is a misalignment, given as
+    ``plate_cardan_tilt_rad``). ``beta_axis``: +-a_i, the direction s_i with sin(beta_i) = s_i . u_i / l_i
+    (equation 1; default a_i; the paper's leg 4 uses +z against the default -z, docs/conventions.md).
+
+    ``base_point_error_m`` and ``plate_point_error_m`` (m, world axes, default 0) move its base cardan centre
+    B_i and its plate cardan centre d_i off the nominal layout (manufacturing errors; the leg lines then no
+    longer meet at one point).
 
     ``base_cardan_tilt_rad`` and ``plate_cardan_tilt_rad`` (rad, default 0, norm at most
     MAX_CARDAN_TILT_RAD): misalignments of the base and plate cardans' axes, each a small rotation vector
@@ -65,8 +74,9 @@ class LegLayout(StrictModel):
     parallel to the base cardan's): the machine is then no longer a pure translator."""
 
     radial_direction: Vector3
-    cardan_axis: Vector3
-    beta_axis: Vector3
+    cardan_axis: Vector3 | None = None
+    plate_cardan_axis: Vector3 | None = None
+    beta_axis: Vector3 | None = None
     base_point_error_m: Vector3 = [0.0, 0.0, 0.0]
     plate_point_error_m: Vector3 = [0.0, 0.0, 0.0]
     base_cardan_tilt_rad: Vector3 = [0.0, 0.0, 0.0]
@@ -79,12 +89,33 @@ class LegLayout(StrictModel):
             raise ValueError(f"a cardan misalignment must have an angle of at most {MAX_CARDAN_TILT_RAD} rad")
         return v
 
-    @field_validator("radial_direction", "cardan_axis", "beta_axis")
+    @field_validator("radial_direction", "cardan_axis", "plate_cardan_axis", "beta_axis")
     @classmethod
-    def _unit(cls, v: list[float]) -> list[float]:
-        if abs(math.sqrt(sum(c * c for c in v)) - 1.0) > 1e-9:
+    def _unit(cls, v: list[float] | None) -> list[float] | None:
+        if v is not None and abs(math.sqrt(sum(c * c for c in v)) - 1.0) > 1e-9:
             raise ValueError("must be a unit vector")
         return v
+
+    @field_validator("radial_direction", "cardan_axis", "plate_cardan_axis")
+    @classmethod
+    def _horizontal(cls, v: list[float] | None) -> list[float] | None:
+        if v is not None and abs(v[1]) > 1e-9:
+            raise ValueError("must be horizontal (y component 0): the base and plate planes are y = const")
+        return v
+
+    @model_validator(mode="before")
+    @classmethod
+    def _default_axes(cls, data: Any) -> Any:
+        if not isinstance(data, dict) or not isinstance(data.get("radial_direction"), list):
+            return data
+        data = {k: v for k, v in data.items() if v is not None}  # a dumped model lists absent keys as None
+        n = data["radial_direction"]
+        if len(n) == 3 and all(isinstance(c, int | float) and not isinstance(c, bool) for c in n):
+            data.setdefault("cardan_axis", [-float(n[2]), 0.0, float(n[0])])  # n x y
+        if isinstance(data.get("cardan_axis"), list):
+            data.setdefault("plate_cardan_axis", data["cardan_axis"])
+            data.setdefault("beta_axis", data["cardan_axis"])
+        return data
 
     @model_validator(mode="after")
     def _axes_perpendicular(self) -> LegLayout:
@@ -92,6 +123,10 @@ class LegLayout(StrictModel):
             raise ValueError("cardan_axis must be perpendicular to radial_direction")
         if abs(abs(float(np.dot(self.beta_axis, self.cardan_axis))) - 1.0) > 1e-9:
             raise ValueError("beta_axis must be +/- cardan_axis")
+        if abs(abs(float(np.dot(self.plate_cardan_axis, self.cardan_axis))) - 1.0) > 1e-9:
+            raise ValueError("plate_cardan_axis must be parallel to cardan_axis (Tsai's condition: the plate "
+                             "cardan's axes parallel to the base cardan's); give a small misalignment as "
+                             f"plate_cardan_tilt_rad (at most {MAX_CARDAN_TILT_RAD} rad)")
         return self
 
 
@@ -414,7 +449,7 @@ class ExtraBody(StrictModel):
 class Collision(StrictModel):
     """Interference shapes (capsules for the legs, boxes for plate and base) and pair overrides.
 
-    Pairs are named 'body_a|body_b' with bodies leg1.cylinder ... leg4.stem, plate, base and the
+    Pairs are named 'body_a|body_b' with bodies leg1.cylinder ... leg<n>.stem, plate, base and the
     extra bodies' names (see :mod:`pressfit.interference`).
     """
 
@@ -449,12 +484,13 @@ class Section(BaseModel):
 
 
 class Machine(StrictModel):
-    """A validated 4-UPU machine description. Lengths m, angles rad, forces N, stiffness SI."""
+    """A validated n-UPU machine description (n >= 3 legs; the paper's machine has 4). Lengths m, angles rad,
+    forces N, stiffness SI. Per-leg arrays have the leg count n = len(legs) as their first axis."""
 
     name: str
     description: str = ""
     geometry: Geometry
-    legs: Annotated[list[LegLayout], Field(min_length=4, max_length=4)]
+    legs: Annotated[list[LegLayout], Field(min_length=3, max_length=MAX_LEGS)]
     limits: Limits
     workspace: Workspace
     material: Material
@@ -467,6 +503,17 @@ class Machine(StrictModel):
     model: ModelOptions = ModelOptions()
     collision: Collision
     source: str = ""
+
+    @field_validator("legs")
+    @classmethod
+    def _distinct_legs(cls, legs: list[LegLayout]) -> list[LegLayout]:
+        radial = np.array([leg.radial_direction for leg in legs])
+        close = np.abs(radial @ radial.T - 1.0) < 1e-9
+        np.fill_diagonal(close, False)
+        if close.any():
+            i, j = np.argwhere(close)[0]
+            raise ValueError(f"legs {i + 1} and {j + 1} have the same radial_direction (one joint for two legs)")
+        return legs
 
     @field_validator("stem")
     @classmethod
@@ -489,10 +536,22 @@ class Machine(StrictModel):
                              f"leg_length_min_m = {travel:g} m (got {self.actuator.hydraulic.stroke_m!r})")
         return self
 
+
+    @property
+    def redundancy(self) -> int:
+        """Degree of actuation redundancy n - 3 (n legs, 3 translations): the dimension of the preload space."""
+        return len(self.legs) - 3
+
+    def require_legs(self, layer: str, *supported: int) -> None:
+        """Refuse this machine up front in a layer that supports only ``supported`` leg counts
+        (:class:`LegCountError` naming the layer)."""
+        if len(self.legs) not in supported:
+            raise LegCountError(self.name, len(self.legs), supported, layer)
+
     # --- derived geometry (arrays, SI) -------------------------------------------------------
     @cached_property
     def base_points_m(self) -> np.ndarray:
-        """(4, 3) base cardan centres B_i = p n_i + h_b y + e_i in the world frame, m (n_i radial, h_b the
+        """(n, 3) base cardan centres B_i = p n_i + h_b y + e_i in the world frame, m (n_i radial, h_b the
         joint height, e_i the leg's position error)."""
         radial = np.array([leg.radial_direction for leg in self.legs])
         return (self.geometry.base_half_side_m * radial + [0.0, self.geometry.base_joint_height_m, 0.0]
@@ -500,7 +559,7 @@ class Machine(StrictModel):
 
     @cached_property
     def plate_offsets_m(self) -> np.ndarray:
-        """(4, 3) plate cardan centres relative to the plate centre, d_i = r n_i + h_p y + e_i, m."""
+        """(n, 3) plate cardan centres relative to the plate centre, d_i = r n_i + h_p y + e_i, m."""
         radial = np.array([leg.radial_direction for leg in self.legs])
         return (self.geometry.plate_half_side_m * radial + [0.0, self.geometry.plate_joint_height_m, 0.0]
                 + np.array([leg.plate_point_error_m for leg in self.legs]))
@@ -518,7 +577,7 @@ class Machine(StrictModel):
 
     @cached_property
     def cardan_tilts_rad(self) -> np.ndarray:
-        """(4, 2, 3) cardan misalignment rotation vectors per leg, (base, plate), in the leg reference frame, rad."""
+        """(n, 2, 3) cardan misalignment rotation vectors per leg, (base, plate), in the leg reference frame, rad."""
         return np.array([[leg.base_cardan_tilt_rad, leg.plate_cardan_tilt_rad] for leg in self.legs], dtype=float)
 
     @cached_property
@@ -528,17 +587,17 @@ class Machine(StrictModel):
 
     @cached_property
     def cardan_axes(self) -> np.ndarray:
-        """(4, 3) unit first axes a_i of the cardans."""
+        """(n, 3) unit first axes a_i of the cardans."""
         return np.array([leg.cardan_axis for leg in self.legs], dtype=float)
 
     @cached_property
     def beta_axes(self) -> np.ndarray:
-        """(4, 3) unit axes s_i with sin(beta_i) = s_i . u_i / l_i (equation 1)."""
+        """(n, 3) unit axes s_i with sin(beta_i) = s_i . u_i / l_i (equation 1)."""
         return np.array([leg.beta_axis for leg in self.legs], dtype=float)
 
     @cached_property
     def inward_directions(self) -> np.ndarray:
-        """(4, 3) horizontal unit vectors from B_i toward the base centre."""
+        """(n, 3) horizontal unit vectors from B_i toward the base centre."""
         return -np.array([leg.radial_direction for leg in self.legs], dtype=float)
 
     @cached_property

@@ -177,6 +177,7 @@ class RigidLegModel:
 
 def rigid_leg_model(machine: Machine, pose_m: np.ndarray, baumgarte_rad_per_s: float = 200.0) -> RigidLegModel:
     """The rigid-leg model with the machine's masses at a reachable pose (m); Baumgarte rate omega_b (rad/s)."""
+    machine.require_legs("the rigid-leg dynamics (pressfit.dynamics: insertion, cycle, sizing, MJCF)", 4)
     if not (np.isfinite(baumgarte_rad_per_s) and baumgarte_rad_per_s > 0):
         raise PressfitError(f"baumgarte_rad_per_s must be positive, got {baumgarte_rad_per_s!r}")
     if machine.has_cardan_tilts:

@@ -125,6 +125,7 @@ class ClosedFormRig:
 def make_rig(machine: Machine, rig: str = "auto") -> Rig:
     """'closed-form' (:class:`ClosedFormRig`), 'model' (:func:`pressfit.mechanics.model.build_model`) or 'auto' (the
     latter when importable, else the former)."""
+    machine.require_legs("the interference check (pressfit.geometry)", 4)
     if rig not in ("auto", "closed-form", "model"):
         raise InterferenceError(f"rig must be 'auto', 'closed-form' or 'model' (got {rig!r})")
     if rig != "closed-form":

@@ -1,7 +1,12 @@
-"""Closed-form kinematics of the 4-UPU manipulator (paper equations 1-10), vectorised over poses.
+"""Closed-form kinematics of an n-UPU translational manipulator (paper equations 1-10 for its 4-UPU),
+vectorised over poses.
 
 A pose is the plate-centre position h = (x_h, y_h, z_h) in m; arrays of poses have shape (..., 3).
-Leg i runs from its base cardan B_i to its plate cardan h + d_i; u_i = h + d_i - B_i, l_i = |u_i|.
+Leg i (of n = len(machine.legs)) runs from its base cardan B_i to its plate cardan h + d_i;
+u_i = h + d_i - B_i, l_i = |u_i|. Equation 1 holds leg by leg for any layout (alpha_i about the cardan axis,
+from the inward direction w_i; beta_i from the beta axis s_i), so the paper's formulas are the general
+UPU inverse kinematics written for its four legs. The static matrix A (equation 5) is 3 x n; its null space,
+of dimension n - 3 (the machine's redundancy), is the preload space (:func:`preload_basis`).
 """
 
 from __future__ import annotations
@@ -11,7 +16,7 @@ from dataclasses import dataclass
 import numpy as np
 
 from pressfit.description.machine import Machine
-from pressfit.errors import SingularPoseError, UnreachablePoseError, format_violation
+from pressfit.errors import PreloadError, SingularPoseError, UnreachablePoseError, format_violation
 from pressfit.spatial import cross
 
 Y_AXIS = np.array([0.0, 1.0, 0.0])
@@ -19,7 +24,7 @@ Y_AXIS = np.array([0.0, 1.0, 0.0])
 
 @dataclass(frozen=True)
 class LegKinematics:
-    """Inverse kinematics of every leg at an array of poses (shapes (..., 4) and (..., 4, 3))."""
+    """Inverse kinematics of every leg at an array of poses (shapes (..., n) and (..., n, 3))."""
 
     vectors_m: np.ndarray  # u_i, base cardan -> plate cardan, m
     lengths_m: np.ndarray  # l_i, m
@@ -38,7 +43,7 @@ def reference_pose_m(machine: Machine) -> np.ndarray:
 
 
 def leg_vectors(machine: Machine, pose_m: np.ndarray) -> np.ndarray:
-    """u_i = h + d_i - B_i, shape (..., 4, 3), m."""
+    """u_i = h + d_i - B_i, shape (..., n, 3), m."""
     h = np.asarray(pose_m, dtype=float)
     return h[..., None, :] + (machine.plate_offsets_m - machine.base_points_m)
 
@@ -62,7 +67,7 @@ def _bound_text(value: float, bound: float) -> str:
 
 def violations(machine: Machine, pose_m: np.ndarray, ik: LegKinematics | None = None
                ) -> list[tuple[int, str, float, str]]:
-    """Joint-limit violations of one pose (m) as (leg 1..4, quantity, value, broken limit), the one check
+    """Joint-limit violations of one pose (m) as (leg 1..n, quantity, value, broken limit), the one check
     of Table 3's limits (``ik``: the pose's inverse kinematics, if already computed). The texts are
     printed by :func:`pressfit.errors.format_violation`."""
     ik = ik or inverse_kinematics(machine, np.asarray(pose_m, dtype=float).reshape(3))
@@ -92,7 +97,7 @@ def unreachable_reason(machine: Machine, pose_m: np.ndarray) -> str:
 
 
 def limit_margins(machine: Machine, pose_m: np.ndarray) -> dict[str, np.ndarray]:
-    """Distance to the nearest limit per leg, shape (..., 4); negative = violated (m and rad)."""
+    """Distance to the nearest limit per leg, shape (..., n); negative = violated (m and rad)."""
     ik = inverse_kinematics(machine, pose_m)
     lim = machine.limits
     return {
@@ -125,7 +130,7 @@ def require_reachable(machine: Machine, pose_m: np.ndarray, ik: LegKinematics | 
 
 
 def static_matrix(machine: Machine, pose_m: np.ndarray) -> np.ndarray:
-    """Equation 5's A, shape (..., 3, 4): columns are the leg unit vectors e_i (A = J^T).
+    """Equation 5's A, shape (..., 3, n): columns are the leg unit vectors e_i (A = J^T).
 
     With N_i the leg tension (N, positive = tension), the plate is in equilibrium under an external
     force W (N) when A N = W. The printed A lacks A_14 = cos(beta_4) cos(alpha_4); this one is complete.
@@ -134,15 +139,15 @@ def static_matrix(machine: Machine, pose_m: np.ndarray) -> np.ndarray:
 
 
 def jacobian(machine: Machine, pose_m: np.ndarray) -> np.ndarray:
-    """Velocity Jacobian dl/dh (equations 2-3 in closed form), shape (..., 4, 3), dimensionless."""
+    """Velocity Jacobian dl/dh (equations 2-3 in closed form), shape (..., n, 3), dimensionless."""
     return inverse_kinematics(machine, pose_m).unit_vectors
 
 
 # --- shared core of equations 4-10: one pass computes A, (A A^T)^-1 and everything built on them ----
-# Quantities are kept per component ("structure of arrays"): e[k] has shape (4, m) for the world axis k,
+# Quantities are kept per component ("structure of arrays"): e[k] has shape (n, m) for the world axis k,
 # so every step is an elementwise numpy operation on contiguous rows (this is what makes >1e6 poses/s).
 
-_SINGULAR_DET = 1e-12  # det(A A^T) below this: A has rank < 3 (A A^T has trace 4, entries O(1))
+_SINGULAR_DET = 1e-12  # det(A A^T) below this: A has rank < 3 (A A^T has trace n, entries O(1))
 _CHUNK = 4096  # poses per block: the working set stays in the CPU cache
 
 
@@ -152,15 +157,22 @@ class Indices:
 
     dexterity: np.ndarray  # n = sigma_min / sigma_max of dl/dh (eq. 4), (...,)
     force_indices: np.ndarray  # (F_x, F_y, F_z) (eqs. 6-8), N per N, (..., 3)
-    preload_vector: np.ndarray  # v_p, unit null vector of A with v_1 < 0 (eqs. 9-10, Table 4), (..., 4)
+    preload_basis: np.ndarray  # the null space of A (:func:`preload_basis`), (..., n, n - 3)
     singular: np.ndarray  # det(A A^T) < 1e-12, (...,)
+
+    @property
+    def preload_vector(self) -> np.ndarray:
+        """v_p (eqs. 9-10, Table 4), (..., n): the one preload basis vector of a machine with redundancy 1."""
+        if self.preload_basis.shape[-1] != 1:
+            raise PreloadError(_no_single_vector(self.preload_basis.shape[-1]), redundancy=self.preload_basis.shape[-1])
+        return self.preload_basis[..., 0]
 
 
 @dataclass(frozen=True)
 class _Core:
-    e: np.ndarray  # leg unit vectors = columns of A = rows of dl/dh, (3, 4, m)
+    e: np.ndarray  # leg unit vectors = columns of A = rows of dl/dh, (3, n, m)
     det: np.ndarray  # det(A A^T), (m,)
-    pinv: np.ndarray  # A^+ = A^T (A A^T)^-1 per plate-force axis j: pinv[j] = column j, (3, 4, m)
+    pinv: np.ndarray  # A^+ = A^T (A A^T)^-1 per plate-force axis j: pinv[j] = column j, (3, n, m)
     gram: tuple[np.ndarray, ...]  # A A^T as (g00, g01, g02, g11, g12, g22), each (m,)
 
 
@@ -196,17 +208,36 @@ def _dexterity(gram: tuple[np.ndarray, ...]) -> np.ndarray:
     return np.sqrt(np.clip(lam_min, 0.0, None) / lam_max)
 
 
-def _preload(e: np.ndarray) -> np.ndarray:
-    """Null vector of A by cofactors, v_k = (-1)^k det(A without column k), unit, v_1 < 0, (4, m)."""
-    c23 = (e[1, 2] * e[2, 3] - e[2, 2] * e[1, 3], e[2, 2] * e[0, 3] - e[0, 2] * e[2, 3],
-           e[0, 2] * e[1, 3] - e[1, 2] * e[0, 3])  # e_3 x e_4 (legs numbered from 1)
-    c01 = (e[1, 0] * e[2, 1] - e[2, 0] * e[1, 1], e[2, 0] * e[0, 1] - e[0, 0] * e[2, 1],
-           e[0, 0] * e[1, 1] - e[1, 0] * e[0, 1])  # e_1 x e_2
-    v = np.stack([sum(e[k, 1] * c23[k] for k in range(3)), -sum(e[k, 0] * c23[k] for k in range(3)),
-                  sum(e[k, 3] * c01[k] for k in range(3)), -sum(e[k, 2] * c01[k] for k in range(3))])
+def _triple(x: np.ndarray, y: np.ndarray, z: np.ndarray) -> np.ndarray:
+    """det(x, y, z) = x . (y x z) of SoA vectors (3, ...)."""
+    return (x[0] * (y[1] * z[2] - y[2] * z[1]) + x[1] * (y[2] * z[0] - y[0] * z[2])
+            + x[2] * (y[0] * z[1] - y[1] * z[0]))
+
+
+def _null_basis(e: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    """The preload basis (n, n - 3, m) of A = [e_1 ... e_n] (:func:`preload_basis`) by cofactors, and
+    D = det(e_1, e_2, e_3) (m,). Vector k is the generalised cross product of the columns 1, 2, 3 and 3 + k,
+    (-det(e_j, e_2, e_3), -det(e_1, e_j, e_3), -det(e_1, e_2, e_j), 0 ..., D at j, 0 ...) with j = 3 + k
+    (Cramer's rule for A_123 x = -e_j, times D), made unit with its component j positive. For the paper's
+    4-UPU it is proportional to (-l_1, l_2, -l_3, l_4) (Table 4's v_p, v_1 < 0)."""
+    n, m = e.shape[1], e.shape[2]
+    e1, e2, e3 = e[:, 0], e[:, 1], e[:, 2]
+    d = _triple(e1, e2, e3)
+    v = np.zeros((n, n - 3, m))
+    for k, j in enumerate(range(3, n)):
+        ej = e[:, j]
+        v[0, k], v[1, k], v[2, k] = -_triple(ej, e2, e3), -_triple(e1, ej, e3), -_triple(e1, e2, ej)
+        v[j, k] = d
     with np.errstate(invalid="ignore", divide="ignore"):  # singular A: 0/0 -> NaN, flagged by the caller
-        v /= np.where(v[0] > 0, -1.0, 1.0) * np.sqrt((v * v).sum(0))
-    return v
+        v /= np.where(d < 0, -1.0, 1.0) * np.sqrt((v * v).sum(0))
+    return v, d
+
+
+def _no_single_vector(redundancy: int) -> str:
+    if redundancy == 0:
+        return "a 3-leg machine has no redundant actuation: no internal preload"
+    return (f"a {redundancy + 3}-leg machine has a {redundancy}-dimensional preload space: give {redundancy} "
+            "preload amplitudes (kinematics.preload_basis), not one preload vector")
 
 
 def indices(machine: Machine, pose_m: np.ndarray) -> Indices:
@@ -217,17 +248,22 @@ def indices(machine: Machine, pose_m: np.ndarray) -> Indices:
     """
     h = np.asarray(pose_m, dtype=float)
     flat = h.reshape(-1, 3)
-    m = flat.shape[0]
-    n, f, v, sing = np.empty(m), np.empty((3, m)), np.empty((4, m)), np.empty(m, dtype=bool)
+    m, nl = flat.shape[0], len(machine.legs)
+    n, f, sing = np.empty(m), np.empty((3, m)), np.empty(m, dtype=bool)
+    v = np.empty((nl, nl - 3, m))
     for s in range(0, m, _CHUNK):
         c = _core(machine, flat[s:s + _CHUNK])
         t = slice(s, s + _CHUNK)
+        basis, d123 = _null_basis(c.e)
         n[t], sing[t] = _dexterity(c.gram), c.det < _SINGULAR_DET
+        if nl > 4:  # several basis vectors need legs 1-3 to span (module doc of _null_basis)
+            sing[t] |= np.abs(d123) < _SINGULAR_DET
         f[:, t] = np.abs(c.pinv).max(axis=1)
-        v[:, t] = _preload(c.e)
-        v[:, t][:, sing[t]] = np.nan
+        v[:, :, t] = basis
+        v[:, :, t][:, :, sing[t]] = np.nan
     shape = h.shape[:-1]
-    return Indices(n.reshape(shape), f.T.reshape(*shape, 3), v.T.reshape(*shape, 4), sing.reshape(shape))
+    return Indices(n.reshape(shape), f.T.reshape(*shape, 3), np.moveaxis(v, -1, 0).reshape(*shape, nl, nl - 3),
+                   sing.reshape(shape))
 
 
 def dexterity(machine: Machine, pose_m: np.ndarray) -> np.ndarray:
@@ -236,12 +272,12 @@ def dexterity(machine: Machine, pose_m: np.ndarray) -> np.ndarray:
 
 
 def pseudo_inverse(machine: Machine, pose_m: np.ndarray) -> np.ndarray:
-    """Moore-Penrose inverse A^+ = A^T (A A^T)^-1 of equation 5, shape (..., 4, 3), 1/1 (N per N)."""
+    """Moore-Penrose inverse A^+ = A^T (A A^T)^-1 of equation 5, shape (..., n, 3), 1/1 (N per N)."""
     h = np.asarray(pose_m, dtype=float)
     c = _core(machine, h.reshape(-1, 3))
     if np.any(c.det < _SINGULAR_DET):
         raise SingularPoseError("the static matrix A is singular (legs cannot balance every force)")
-    return np.moveaxis(c.pinv, (0, 1, 2), (2, 1, 0)).reshape(*h.shape[:-1], 4, 3)
+    return np.moveaxis(c.pinv, (0, 1, 2), (2, 1, 0)).reshape(*h.shape[:-1], len(machine.legs), 3)
 
 
 def actuator_forces_min_norm(machine: Machine, pose_m: np.ndarray, plate_force_n: np.ndarray) -> np.ndarray:
@@ -263,23 +299,33 @@ def force_indices(machine: Machine, pose_m: np.ndarray) -> np.ndarray:
     return out.force_indices
 
 
-def preload_vector(machine: Machine, pose_m: np.ndarray) -> np.ndarray:
-    """v_p (equations 9-10, Table 4): unit null vector of A with v_1 < 0, shape (..., 4).
+def preload_basis(machine: Machine, pose_m: np.ndarray) -> np.ndarray:
+    """The preload space, shape (..., n, n - 3): a basis of the null space of A (equation 5), whose leg
+    forces load the plate with nothing. Basis vector k (k = 1 .. n - 3) is the unit self-stress in which leg
+    3 + k pulls (component > 0), the other legs beyond the third carry nothing and legs 1-3 balance it
+    (cofactors, :func:`_null_basis`); so a preload amplitude a_k belongs to leg 3 + k. For the paper's 4-UPU
+    the one vector is v_p (Table 4). Empty (n - 3 = 0 columns) for a 3-leg machine. NaN where A is singular
+    (or, with two or more vectors, where legs 1-3 do not span space)."""
+    return indices(machine, pose_m).preload_basis
 
-    Computed as the generalised cross product of A's columns (cofactors); for this machine it is
-    proportional to (-l_1, l_2, -l_3, l_4). NaN where A is singular.
-    """
-    return indices(machine, pose_m).preload_vector
+
+def preload_vector(machine: Machine, pose_m: np.ndarray) -> np.ndarray:
+    """v_p (equations 9-10, Table 4): unit null vector of A, shape (..., n), for a machine with redundancy 1
+    (:func:`preload_basis`'s one vector; for the paper's machine proportional to (-l_1, l_2, -l_3, l_4),
+    v_1 < 0). NaN where A is singular. Raises :class:`PreloadError` for any other redundancy."""
+    if machine.redundancy != 1:
+        raise PreloadError(_no_single_vector(machine.redundancy), machine.name, machine.redundancy)
+    return indices(machine, pose_m).preload_basis[..., 0]
 
 
 def leg_frames(machine: Machine, pose_m: np.ndarray) -> np.ndarray:
-    """Leg frames (..., 4, 3, 3), columns (e_x, e_y, e_z): e_z along the leg base -> plate,
+    """Leg frames (..., n, 3, 3), columns (e_x, e_y, e_z): e_z along the leg base -> plate,
     e_x = the base cardan axis a_i made normal to e_z, e_y = e_z x e_x (docs/conventions.md conventions)."""
     return frames_along(machine, inverse_kinematics(machine, pose_m).unit_vectors)
 
 
 def frames_along(machine: Machine, ez: np.ndarray) -> np.ndarray:
-    """Leg frames (..., 4, 3, 3) for given unit leg directions ez (..., 4, 3) (e.g. of a displaced plate):
+    """Leg frames (..., n, 3, 3) for given unit leg directions ez (..., n, 3) (e.g. of a displaced plate):
     columns (e_x, e_y, e_z) with e_x = a_i made normal to e_z, e_y = e_z x e_x."""
     a = np.broadcast_to(machine.cardan_axes, ez.shape)
     ex = a - np.sum(a * ez, -1, keepdims=True) * ez
@@ -288,7 +334,8 @@ def frames_along(machine: Machine, ez: np.ndarray) -> np.ndarray:
 
 
 def concurrency_point(machine: Machine, pose_m: np.ndarray) -> np.ndarray:
-    """The point where all four leg lines meet, m: P* = (t x_h, h_b + t (y_h + h_p - h_b), t z_h) with
+    """The point where every leg line meets (on a layout with d_i = (r / p) B_i, :attr:`Machine.legs_concurrent`),
+    m: P* = (t x_h, h_b + t (y_h + h_p - h_b), t z_h) with
     t = p / (p - r), h_b and h_p the base and plate joint heights (P* = t h when both are zero)."""
     g = machine.geometry
     t = g.base_half_side_m / (g.base_half_side_m - g.plate_half_side_m)
@@ -300,7 +347,7 @@ def concurrency_point(machine: Machine, pose_m: np.ndarray) -> np.ndarray:
 def pose_report(machine: Machine, pose_m: np.ndarray) -> dict[str, object]:
     """Everything the closed-form kinematics says about one pose, as JSON-ready lists (SI)."""
     h = np.asarray(pose_m, dtype=float).reshape(3)
-    ik = inverse_kinematics(machine, h)
+    ik, ix = inverse_kinematics(machine, h), indices(machine, h)
     return {
         "pose_m": h.tolist(),
         "reachable": bool(is_reachable(machine, h)),
@@ -308,7 +355,8 @@ def pose_report(machine: Machine, pose_m: np.ndarray) -> dict[str, object]:
         "alpha_rad": ik.alpha_rad.tolist(),
         "beta_rad": ik.beta_rad.tolist(),
         "leg_unit_vectors": ik.unit_vectors.tolist(),
-        "preload_vector": preload_vector(machine, h).tolist(),
+        "preload_basis": ix.preload_basis.tolist(),
+        "preload_vector": ix.preload_basis[..., 0].tolist() if machine.redundancy == 1 else None,
         "dexterity": float(dexterity(machine, h)),
         "force_indices": force_indices(machine, h).tolist(),
         "concurrency_point_m": concurrency_point(machine, h).tolist(),

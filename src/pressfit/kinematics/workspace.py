@@ -1,4 +1,4 @@
-"""Workspace of the 4-UPU (paper section 4.1, Table 3, Figures 6-11): reachable set, the height range of
+"""Workspace of the n-UPU (paper section 4.1, Table 3, Figures 6-11): reachable set, the height range of
 the required square, maps of n, F_x, F_y, F_z and dl_i/dh on x-z planes, and their statistics.
 
 Lengths in m, angles of the square in degrees (about the vertical y axis), indices dimensionless (N/N).
@@ -179,7 +179,7 @@ class PlaneMap:
     reachable: np.ndarray  # (nz, nx) bool
     dexterity: np.ndarray  # n, eq. 4, (nz, nx)
     force_indices: np.ndarray  # F_x, F_y, F_z, eqs. 6-8, (nz, nx, 3)
-    leg_rates: np.ndarray  # dl_i/dh (eqs. 2-3), (nz, nx, 4, 3), m/m
+    leg_rates: np.ndarray  # dl_i/dh (eqs. 2-3), (nz, nx, n, 3), m/m
 
 
 def plane_map(machine: Machine, y_m: float, half_extent_m: float = MAP_HALF_EXTENT_M,
@@ -202,12 +202,13 @@ _AXES = "xyz"
 
 def map_rows(pm: PlaneMap) -> tuple[list[str], np.ndarray]:
     """CSV header and rows of a plane map: one row per grid point (x varies fastest)."""
+    legs = pm.leg_rates.shape[-2]
     header = ["x_m", "y_m", "z_m", "reachable", "dexterity", "F_x", "F_y", "F_z"] + [
-        f"dl{i + 1}_d{a}" for i in range(4) for a in _AXES]
+        f"dl{i + 1}_d{a}" for i in range(legs) for a in _AXES]
     gx, gz = np.meshgrid(pm.x_m, pm.z_m)
     cols = [gx.ravel(), np.full(gx.size, pm.y_m), gz.ravel(), pm.reachable.ravel().astype(float),
             pm.dexterity.ravel()] + [pm.force_indices[..., j].ravel() for j in range(3)] + [
-        pm.leg_rates[..., i, j].ravel() for i in range(4) for j in range(3)]
+        pm.leg_rates[..., i, j].ravel() for i in range(legs) for j in range(3)]
     return header, np.column_stack(cols)
 
 

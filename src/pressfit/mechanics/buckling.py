@@ -73,13 +73,13 @@ class BucklingResult:
     load_factors: np.ndarray  # (<= 12,) the smallest positive load factors, ascending (higher modes)
     mode_dq: np.ndarray  # (nv,) buckling mode in the model's velocity coordinates (rad, m), max |.| = 1
     plate_motion: np.ndarray  # (6,) the mode's plate translation (m) and rotation (rad), same scaling
-    leg_energy_share: np.ndarray  # (4,) fraction of the mode's elastic energy phi^T K_e phi stored in each leg
-    leg_euler_factors: np.ndarray  # (4,) per-leg pinned-pinned Euler load / linear compression (inf in tension)
-    axial_forces_n: np.ndarray  # (4,) linear actuator forces of the reference state, N, > 0 tension
+    leg_energy_share: np.ndarray  # (n,) fraction of the mode's elastic energy phi^T K_e phi stored in each leg
+    leg_euler_factors: np.ndarray  # (n,) per-leg pinned-pinned Euler load / linear compression (inf in tension)
+    axial_forces_n: np.ndarray  # (n,) linear actuator forces of the reference state, N, > 0 tension
 
     @property
     def dominant_leg(self) -> int:
-        """The leg (1..4) holding most of the mode's elastic energy."""
+        """The leg (1..n) holding most of the mode's elastic energy."""
         return int(np.argmax(self.leg_energy_share)) + 1
 
 
@@ -91,7 +91,7 @@ def machine_buckling(
     preload_offsets_m: np.ndarray | None = None,
 ) -> BucklingResult:
     r"""Linearised (eigenvalue) buckling of the whole machine at a pose (m) under a dead plate wrench (6,)
-    (N, N m, world axes at the plate centre), with optional actuator rest-length offsets (4,) (m; a preload,
+    (N, N m, world axes at the plate centre), with optional actuator rest-length offsets (n,) (m; a preload,
     :func:`pressfit.mechanics.preload.rest_length_offsets`), held fixed while the wrench is scaled.
 
     Reference state: the linear (small-displacement) solution at the assembled pose, split into the preload
@@ -106,9 +106,10 @@ def machine_buckling(
 
     pose = np.asarray(pose_m, dtype=float).reshape(3)
     wrench = np.asarray(plate_wrench, dtype=float).reshape(6)
-    offsets = np.zeros(4) if preload_offsets_m is None else np.asarray(preload_offsets_m, float).reshape(4)
     solver = system if isinstance(system, statics.EquilibriumSolver) else statics.EquilibriumSolver(
         system, **({} if isinstance(system, MachineModel) else {"pose_m": pose}))
+    legs = len(solver.machine.legs)
+    offsets = np.zeros(legs) if preload_offsets_m is None else np.asarray(preload_offsets_m, float).reshape(legs)
     pre = statics.reference_tangent(solver, pose, np.zeros(6), offsets)
     load = statics.reference_tangent(solver, pose, wrench, None)
     k_e, j = pre.elastic, pre.jacobian

@@ -153,12 +153,12 @@ def invert_law(force: np.ndarray, gap: np.ndarray, stiffness: float, width: floa
 # --- clearance description ---------------------------------------------------------------------------------
 @dataclass(frozen=True)
 class Clearance:
-    """Plays of the eight cardans and their contact law (SI).
+    """Plays of the 2 n cardans (n legs) and their contact law (SI).
 
-    ``gaps_m`` (4, 2): [leg 0..3, end 'base' | 'plate'], m: the play g of each cardan, in the shape
+    ``gaps_m`` (n, 2): [leg 0..n-1, end 'base' | 'plate'], m: the play g of each cardan, in the shape
     ``geometry`` gives it (module doc: "axial" +-g along the leg, "box" of half-side g in the cardan's axes,
-    "sphere" of radius g). ``rotation_gaps_rad`` (4, 2) or None (rigid): the play of the rotation about
-    c_i, rad, with ``rotation_stiffness_nm_per_rad``.
+    "sphere" of radius g). ``rotation_gaps_rad`` (n, 2) (or one value for all) or None (rigid): the play of
+    the rotation about c_i, rad, with ``rotation_stiffness_nm_per_rad``.
     """
 
     gaps_m: np.ndarray
@@ -173,14 +173,17 @@ class Clearance:
         if self.geometry not in get_args(Geometry):
             raise ClearanceError(f"clearance geometry must be one of {', '.join(get_args(Geometry))}, "
                                  f"got {self.geometry!r}")
-        g = np.broadcast_to(np.asarray(self.gaps_m, dtype=float), (4, 2)).copy()
+        g = np.array(self.gaps_m, dtype=float)
+        if g.ndim != 2 or g.shape[1] != 2 or len(g) < 3:
+            raise ClearanceError(f"clearances are given per leg and end, shape (legs, 2) with at least 3 legs, "
+                                 f"got shape {g.shape}")
         if not np.all(np.isfinite(g)) or np.any(g < 0) or np.any(g > 1e-2):
             raise ClearanceError(f"clearances must be in [0, 0.01] m, got {g.ravel().tolist()}")
         if not (self.contact_stiffness_n_per_m > 0 and self.smoothing_m > 0):
             raise ClearanceError("contact stiffness and smoothing width must be positive")
         object.__setattr__(self, "gaps_m", g)
         if self.rotation_gaps_rad is not None:
-            r = np.broadcast_to(np.asarray(self.rotation_gaps_rad, dtype=float), (4, 2)).copy()
+            r = np.broadcast_to(np.asarray(self.rotation_gaps_rad, dtype=float), g.shape).copy()
             if not np.all(np.isfinite(r)) or np.any(r < 0):
                 raise ClearanceError("rotation clearances must be non-negative")
             object.__setattr__(self, "rotation_gaps_rad", r)
@@ -191,16 +194,17 @@ class Clearance:
         g = machine.joints.cardan_axial_clearance_m if gap_m is None else gap_m
         kw.setdefault("contact_stiffness_n_per_m", machine.joints.cardan_contact_stiffness_n_per_m)
         kw.setdefault("geometry", machine.joints.cardan_clearance_geometry)
-        return cls(np.full((4, 2), float(g)), **kw)
+        return cls(np.full((len(machine.legs), 2), float(g)), **kw)
 
     @classmethod
     def per_joint(cls, machine: Machine, gaps_m: list[float], **kw: Any) -> Clearance:
-        """Eight plays ordered leg 1 base, leg 1 plate, leg 2 base, ..., m."""
-        if len(gaps_m) != 8:
-            raise ClearanceError(f"give 8 clearances (leg 1 base, leg 1 plate, ...), got {len(gaps_m)}")
+        """2 n plays (n legs) ordered leg 1 base, leg 1 plate, leg 2 base, ..., m."""
+        if len(gaps_m) != 2 * len(machine.legs):
+            raise ClearanceError(f"give {2 * len(machine.legs)} clearances (leg 1 base, leg 1 plate, ...) for "
+                                 f"{machine.name}'s {len(machine.legs)} legs, got {len(gaps_m)}")
         kw.setdefault("contact_stiffness_n_per_m", machine.joints.cardan_contact_stiffness_n_per_m)
         kw.setdefault("geometry", machine.joints.cardan_clearance_geometry)
-        return cls(np.asarray(gaps_m, dtype=float).reshape(4, 2), **kw)
+        return cls(np.asarray(gaps_m, dtype=float).reshape(-1, 2), **kw)
 
     @classmethod
     def random(cls, machine: Machine, low_m: float, high_m: float, seed: int, **kw: Any) -> Clearance:
@@ -209,11 +213,11 @@ class Clearance:
             raise ClearanceError(f"need 0 <= low_m <= high_m, got {low_m}, {high_m}")
         kw.setdefault("contact_stiffness_n_per_m", machine.joints.cardan_contact_stiffness_n_per_m)
         kw.setdefault("geometry", machine.joints.cardan_clearance_geometry)
-        return cls(np.random.default_rng(seed).uniform(low_m, high_m, (4, 2)), **kw)
+        return cls(np.random.default_rng(seed).uniform(low_m, high_m, (len(machine.legs), 2)), **kw)
 
     def with_gap(self, gap_m: float) -> Clearance:
         """The same contact law and geometry with every cardan's play g = gap_m (m)."""
-        return replace(self, gaps_m=np.full((4, 2), float(gap_m)))
+        return replace(self, gaps_m=np.full(self.gaps_m.shape, float(gap_m)))
 
     @property
     def description(self) -> str:
@@ -221,9 +225,12 @@ class Clearance:
         return GEOMETRY_DESCRIPTIONS[self.geometry]
 
     def effective_gaps_m(self, machine: Machine, pose_m: ArrayLike) -> np.ndarray:
-        """(4, 2) effective axial gaps, m: the support function of each play region along the leg direction
+        """(n, 2) effective axial gaps, m: the support function of each play region along the leg direction
         e_i at the pose (module doc): g (axial, sphere) or g (|e.a| + |e.b| + |e.c|) = g (|cos beta| +
         |sin beta|) (box; e.b = 0, e.c = sqrt(1 - (e.a)^2))."""
+        if len(self.gaps_m) != len(machine.legs):
+            raise ClearanceError(f"the clearance gives plays for {len(self.gaps_m)} legs; {machine.name} has "
+                                 f"{len(machine.legs)}")
         if self.geometry != "box":
             return self.gaps_m.copy()
         u = kinematics.leg_vectors(machine, np.asarray(pose_m, dtype=float).reshape(3))
@@ -256,11 +263,11 @@ class Clearance:
                                  "Clearance.at_pose(machine, pose) before building a model")
 
         return {(i, e): CardanCompliance(axial=self.law(i, j), rotation=self.rotation_law(i, j))
-                for i in range(4) for j, e in enumerate(ENDS)}
+                for i in range(len(self.gaps_m)) for j, e in enumerate(ENDS)}
 
     def play_extension_m(self, machine: Machine, pose_m: ArrayLike, axial_forces_n: np.ndarray) -> np.ndarray:
-        """The summed extension (4,), m, of each leg's two plays (effective axial gaps at the pose, m) under
-        its axial force (4,), N."""
+        """The summed extension (n,), m, of each leg's two plays (effective axial gaps at the pose, m) under
+        its axial force (n,), N."""
         return invert_law(np.repeat(np.asarray(axial_forces_n, float)[:, None], 2, 1),
                           self.effective_gaps_m(machine, pose_m),
                           self.contact_stiffness_n_per_m, self.smoothing_m).sum(1)
@@ -275,44 +282,45 @@ class Clearance:
 # --- small-displacement solver, batched --------------------------------------------------------------------
 @dataclass(frozen=True)
 class _Chain:
-    """One decoupled block: 4 legs with direction u_i (4, 3), spring k_i (4,) in series with two plays."""
+    """One decoupled block: n legs with direction u_i (n, 3), spring k_i (n,) in series with two plays."""
 
     u: np.ndarray
     k: np.ndarray
-    gaps: np.ndarray | None  # (B, 4, 2) or None (no play: linear block)
+    gaps: np.ndarray | None  # (B, n, 2) or None (no play: linear block)
     kc: float
     w: float
 
     def solve(self, load: np.ndarray, offsets: np.ndarray, z0: np.ndarray | None,
               tol: float = NEWTON_TOL, max_iter: int = 200) -> tuple[np.ndarray, np.ndarray, float]:
-        """Minimise sum k/2 (u.d - x_b - x_p - o)^2 + E(x) - load.d over (d (B, 3), x (B, 4, 2)).
+        """Minimise sum k/2 (u.d - x_b - x_p - o)^2 + E(x) - load.d over (d (B, 3), x (B, n, 2)).
 
-        Returns z = (d, x flattened) (B, 11), the spring forces (B, 4) and the worst relative residual.
+        Returns z = (d, x flattened) (B, 3 + 2 n), the spring forces (B, n) and the worst relative residual.
         """
-        b = load.shape[0]
+        b, nl = load.shape[0], len(self.k)
+        nz = 3 + 2 * nl
         kuu = np.einsum("i,ij,ik->jk", self.k, self.u, self.u)
         if self.gaps is None:
             d = np.linalg.solve(kuu, (load + np.einsum("bi,i,ij->bj", offsets, self.k, self.u)).T).T
             return d, self.k * (d @ self.u.T - offsets), 0.0
-        z = np.zeros((b, 11)) if z0 is None else z0.copy()
-        hess = np.zeros((b, 11, 11))
+        z = np.zeros((b, nz)) if z0 is None else z0.copy()
+        hess = np.zeros((b, nz, nz))
         hess[:, :3, :3] = kuu
-        ku = -(self.k[:, None] * self.u)  # (4, 3)
-        idx = np.arange(8)
+        ku = -(self.k[:, None] * self.u)  # (n, 3)
+        idx = np.arange(2 * nl)
         hess[:, :3, 3:] = np.repeat(ku, 2, 0).T
         hess[:, 3:, :3] = np.repeat(ku, 2, 0)
-        blk = np.kron(np.eye(4), np.ones((2, 2))) * np.repeat(self.k, 2)[:, None]
-        f_ref = np.maximum(np.linalg.norm(load, axis=1), np.abs(offsets) @ self.k / 4 + 1.0)
+        blk = np.kron(np.eye(nl), np.ones((2, 2))) * np.repeat(self.k, 2)[:, None]
+        f_ref = np.maximum(np.linalg.norm(load, axis=1), np.abs(offsets) @ self.k / nl + 1.0)
         radius = max(0.5 * float(self.gaps.max()), 100 * self.w)
 
         def parts(zz: np.ndarray) -> tuple[np.ndarray, ...]:
-            d, x = zz[:, :3], zz[:, 3:].reshape(b, 4, 2)
+            d, x = zz[:, :3], zz[:, 3:].reshape(b, nl, 2)
             stretch = d @ self.u.T - x.sum(2) - offsets
             n = self.k * stretch
             e, f, t = _laws_force(x, self.gaps, self.kc, self.w)
             energy = 0.5 * (n * stretch).sum(1) + e.sum((1, 2)) - (load * d).sum(1)
-            grad = np.concatenate([n @ self.u - load, (f - n[:, :, None]).reshape(b, 8)], 1)
-            return energy, grad, t.reshape(b, 8), n
+            grad = np.concatenate([n @ self.u - load, (f - n[:, :, None]).reshape(b, 2 * nl)], 1)
+            return energy, grad, t.reshape(b, 2 * nl), n
 
         energy, grad, t, n = parts(z)
         for _ in range(max_iter):
@@ -345,7 +353,7 @@ class _SmallModel:
     trans: _Chain
     rot: _Chain
     rho: np.ndarray  # h - P*, m
-    offsets: np.ndarray  # (B, 4) actuator rest-length offsets, m
+    offsets: np.ndarray  # (B, n) actuator rest-length offsets, m
 
     @classmethod
     def build(cls, machine: Machine, pose: np.ndarray, clearances: list[Clearance], offsets: np.ndarray) -> _SmallModel:
@@ -371,10 +379,10 @@ class _SmallModel:
                                      None if state is None else state[1])
         phi = zr[:, :3]
         disp = zt[:, :3] - np.cross(self.rho, phi)
-        nb = len(wrench)
+        nb, nz = len(wrench), 3 + 2 * len(n[0])
         out = {"displacement_m": disp, "rotation_rad": phi, "axial_forces_n": n, "couples_nm": cpl,
-               "joint_axial_m": zt[:, 3:].reshape(nb, 4, 2), "residual": np.full(nb, max(rt, rr))}
-        return out, (zt if zt.shape[1] == 11 else None, zr if zr.shape[1] == 11 else None)
+               "joint_axial_m": zt[:, 3:].reshape(nb, -1, 2), "residual": np.full(nb, max(rt, rr))}
+        return out, (zt if zt.shape[1] == nz else None, zr if zr.shape[1] == nz else None)
 
 
 # --- load-deflection ---------------------------------------------------------------------------------------
@@ -385,8 +393,8 @@ class Branch:
     loads_n: np.ndarray  # (n,) load magnitude along the direction, N
     displacement_m: np.ndarray  # (n, 3) plate-centre translation, world
     rotation_rad: np.ndarray  # (n, 3) plate rotation vector
-    axial_forces_n: np.ndarray  # (n, 4) leg/actuator forces, > 0 tension
-    joint_axial_m: np.ndarray  # (n, 4, 2) axial play coordinates [leg, base|plate], m
+    axial_forces_n: np.ndarray  # (steps, legs) leg/actuator forces, > 0 tension
+    joint_axial_m: np.ndarray  # (steps, legs, 2) axial play coordinates [leg, base|plate], m
     residual: np.ndarray  # (n,) relative residual of each solve
 
 
@@ -401,7 +409,7 @@ class LoadDeflection:
     preload_mode: str
     method: str  # 'small' | 'nonlinear'
     clearance: Clearance  # as given (its geometry named in the summary)
-    effective_gaps_m: np.ndarray  # (4, 2) the effective axial gaps at the pose (Clearance.effective_gaps_m), m
+    effective_gaps_m: np.ndarray  # (n, 2) the effective axial gaps at the pose (Clearance.effective_gaps_m), m
     loading: Branch
     unloading: Branch | None
 
@@ -416,7 +424,7 @@ class LoadDeflection:
         return d - d[0] if self.loads_n[0] == 0 else d
 
     def closed(self, branch: str = "loading") -> np.ndarray:
-        """(n, 4, 2) True where the joint is in contact (|x| >= effective gap)."""
+        """(steps, legs, 2) True where the joint is in contact (|x| >= effective gap)."""
         x = getattr(self, branch).joint_axial_m
         return np.abs(x) >= self.effective_gaps_m
 
@@ -443,7 +451,7 @@ class LoadDeflection:
 
     @property
     def opening_loads_n(self) -> np.ndarray:
-        """(4, 2) load at which each joint first opens on loading (|x| < g), N: 0 if open without load, NaN
+        """(n, 2) load at which each joint first opens on loading (|x| < g), N: 0 if open without load, NaN
         if it stays closed. Between the last closed step and the first open one, the joint force (linear in
         the load while closed) is extrapolated from the closed steps to the contact-edge force k_c w / 2."""
         cl, g = self.clearance, self.effective_gaps_m
@@ -451,8 +459,8 @@ class LoadDeflection:
         f = np.abs(_laws_force(x, g, cl.contact_stiffness_n_per_m, cl.smoothing_m)[1])
         edge = np.abs(_laws_force(g, g, cl.contact_stiffness_n_per_m, cl.smoothing_m)[1])
         is_open, ld = ~self.closed(), self.loads_n
-        out = np.full((4, 2), np.nan)
-        for i, j in np.ndindex(4, 2):
+        out = np.full(g.shape, np.nan)
+        for i, j in np.ndindex(*g.shape):
             k = np.flatnonzero(is_open[:, i, j])
             if not k.size:
                 continue
@@ -525,7 +533,7 @@ def _sweep_nonlinear(machine: Machine, pose: np.ndarray, direction: np.ndarray, 
 
     clearance = clearance.at_pose(machine, pose)
     solver = EquilibriumSolver(machine, cardan_compliance=clearance.cardan_compliance(), pose_m=pose)
-    idx = np.zeros((4, 2), dtype=int)
+    idx = np.zeros((len(machine.legs), 2), dtype=int)
     for s in solver.model.springs:
         if s.name.endswith("_cardan.axial"):
             idx[s.leg, ENDS.index(s.name.split("_")[0])] = s.idx_q

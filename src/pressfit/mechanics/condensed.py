@@ -1,4 +1,4 @@
-r"""Exact condensed linear-elastic statics of the 4-UPU plate, batched over poses (the fast path).
+r"""Exact condensed linear-elastic statics of the n-UPU plate, batched over poses (the fast path).
 
 Model: rigid, clearance-free cardans (free about their two axes), linear elastic legs, small
 displacements. A pose is the plate-centre position h (m), arrays of poses have shape (..., 3). Loads
@@ -40,10 +40,12 @@ cylinder and stem in series, :meth:`pressfit.machine.Machine.axial_compliance_m_
 The plate stiffness
 -------------------
 With w1_i = (e_i, r x e_i) (the leg's Plücker line, r a point of the line, moments about the reference
-point) and w2_i = (0, c_i), leg i adds k_a w1 w1^T + k_r w2 w2^T to the plate's 6x6 stiffness. All four
+point) and w2_i = (0, c_i), leg i adds k_a w1 w1^T + k_r w2 w2^T to the plate's 6x6 stiffness. On the
+homothetic layouts d_i = (r / p) B_i (any number and placement of legs, :attr:`Machine.legs_concurrent`) all
 leg lines meet at P* = h p / (p - r) (:func:`pressfit.kinematics.concurrency_point`); about P* the
 stiffness is block diagonal, K_t = sum k_a e e^T (translation) and K_r = sum k_r c c^T (rotation),
-so every solve is two closed-form 3x3 inverses. With rho = h - P*, a wrench (F, M) at h gives
+so every solve is two closed-form 3x3 inverses. A layout without one concurrency point is refused
+(:class:`CondensedModelError`). With rho = h - P*, a wrench (F, M) at h gives
 
     delta_P = K_t^-1 F,  phi = K_r^-1 (M + rho x F),  delta_h = delta_P - rho x phi,
     N_i = k_a e_i . delta_P,  C_i = k_r c_i . phi.
@@ -91,7 +93,7 @@ def rotational_compliances(machine: Machine, leg_length_m: np.ndarray | float) -
     return c_t, c_m
 
 
-# --- the per-pose core, "structure of arrays": a vector is (3, m), a per-leg vector (3, 4, m), a ----
+# --- the per-pose core, "structure of arrays": a vector is (3, m), a per-leg vector (3, n, m), a ----
 # symmetric 3x3 matrix the tuple (s00, s01, s02, s11, s12, s22) of (m,) arrays.
 Sym = tuple[np.ndarray, ...]
 
@@ -125,11 +127,11 @@ def _sym_full(s: Sym) -> np.ndarray:
 
 @dataclass(frozen=True)
 class _Core:
-    e: np.ndarray  # (3, 4, m) leg unit vectors, base -> plate
-    sin_beta: np.ndarray  # (4, m) e_i . a_i
-    c: np.ndarray  # (3, 4, m) couple directions
-    k_a: np.ndarray  # (4, m) axial stiffness, N/m
-    k_r: np.ndarray  # (4, m) couple stiffness along c, N m/rad
+    e: np.ndarray  # (3, n, m) leg unit vectors, base -> plate
+    sin_beta: np.ndarray  # (n, m) e_i . a_i
+    c: np.ndarray  # (3, n, m) couple directions
+    k_a: np.ndarray  # (n, m) axial stiffness, N/m
+    k_r: np.ndarray  # (n, m) couple stiffness along c, N m/rad
     rho: np.ndarray  # (3, m) h - P*, m
     kt: Sym  # translational stiffness about P*, N/m
     kr: Sym  # rotational stiffness about P*, N m/rad
@@ -230,28 +232,28 @@ class CondensedResult:
     plate_wrench: np.ndarray  # (..., 6) applied (F [N], M [N m]) at the plate centre
     plate_displacement_m: np.ndarray  # (..., 3) plate-centre translation
     plate_rotation_rad: np.ndarray  # (..., 3) plate small-rotation vector
-    axial_forces_n: np.ndarray  # (..., 4) N_i, positive = tension; the actuator carries the same force
-    couples_nm: np.ndarray  # (..., 4) C_i: the section moment is C_i c_i
-    couple_directions: np.ndarray  # (..., 4, 3) unit c_i (normal to a_i, c_i . e_i = cos(beta_i) > 0)
-    leg_unit_vectors: np.ndarray  # (..., 4, 3) e_i, base -> plate
-    leg_moments_nm: np.ndarray  # (..., 4, 3) (M_x, M_y, T) in the leg frame
+    axial_forces_n: np.ndarray  # (..., n) N_i, positive = tension; the actuator carries the same force
+    couples_nm: np.ndarray  # (..., n) C_i: the section moment is C_i c_i
+    couple_directions: np.ndarray  # (..., n, 3) unit c_i (normal to a_i, c_i . e_i = cos(beta_i) > 0)
+    leg_unit_vectors: np.ndarray  # (..., n, 3) e_i, base -> plate
+    leg_moments_nm: np.ndarray  # (..., n, 3) (M_x, M_y, T) in the leg frame
     force_residual_n: np.ndarray  # (..., 3) applied force + sum of the legs' forces on the plate
     moment_residual_nm: np.ndarray  # (..., 3) same for moments about the plate centre
-    plate_offsets_m: np.ndarray  # (4, 3) plate cardan centres relative to the plate centre, d_i
+    plate_offsets_m: np.ndarray  # (n, 3) plate cardan centres relative to the plate centre, d_i
 
     @property
     def actuator_forces_n(self) -> np.ndarray:
-        """Actuator forces (..., 4), N, positive = tension (each actuator is in series with its leg)."""
+        """Actuator forces (..., n), N, positive = tension (each actuator is in series with its leg)."""
         return self.axial_forces_n
 
     @property
     def couple_vectors_nm(self) -> np.ndarray:
-        """Section moments in world axes (..., 4, 3), N m."""
+        """Section moments in world axes (..., n, 3), N m."""
         return self.couples_nm[..., None] * self.couple_directions
 
     @property
     def bending_nm(self) -> np.ndarray:
-        """Bending moment magnitude hypot(M_x, M_y), (..., 4), N m."""
+        """Bending moment magnitude hypot(M_x, M_y), (..., n), N m."""
         return np.hypot(self.leg_moments_nm[..., 0], self.leg_moments_nm[..., 1])
 
     @property
@@ -314,13 +316,13 @@ def solve_linear(machine: Machine, poses_m: np.ndarray, plate_wrench: np.ndarray
     shape = np.broadcast_shapes(h.shape[:-1], w.shape[:-1])
     hf = np.broadcast_to(h, shape + (3,)).reshape(-1, 3)
     wf = None if w.ndim == 1 else np.broadcast_to(w, shape + (6,)).reshape(-1, 6)
-    m = hf.shape[0]
+    m, nl = hf.shape[0], len(machine.legs)
     # outputs in their final (pose, ...) layout: delta, phi, N, C, c, e, leg moments, residuals
-    out = [np.empty((m,) + t) for t in ((3,), (3,), (4,), (4,), (4, 3), (4, 3), (4, 3), (3,), (3,))]
+    out = [np.empty((m,) + t) for t in ((3,), (3,), (nl,), (nl,), (nl, 3), (nl, 3), (nl, 3), (3,), (3,))]
     for i in range(0, m, _CHUNK):
         wc = w[:, None] if wf is None else np.ascontiguousarray(wf[i:i + _CHUNK].T)
         for o, x in zip(out, _solve_core(machine, _core(machine, hf[i:i + _CHUNK]), wc), strict=True):
-            o[i:i + _CHUNK] = x.T  # (3, m) -> (m, 3); (4, m) -> (m, 4); (3, 4, m) -> (m, 4, 3)
+            o[i:i + _CHUNK] = x.T  # (3, m) -> (m, 3); (n, m) -> (m, n); (3, n, m) -> (m, n, 3)
     o = [x.reshape(shape + x.shape[1:]) for x in out]
     result = CondensedResult(np.broadcast_to(h, shape + (3,)), np.broadcast_to(w, shape + (6,)), *o,
                              machine.plate_offsets_m)

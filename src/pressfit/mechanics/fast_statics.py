@@ -5,7 +5,7 @@ Same model, same equations and same answers as :class:`pressfit.mechanics.static
 
 * Kinematics without Pinocchio: each leg is a serial chain of one-axis joints whose placements are
   translations along the parent's z (the first one (R0_i, B_i)). The chain is walked once per Newton
-  iteration for every pose and leg at once (arrays (poses, 4 legs, ...)): rotating two columns of the
+  iteration for every pose and leg at once (arrays (poses, n legs, ...)): rotating two columns of the
   frame per revolute, so each numpy call works on the whole batch. Pose-dependent stem placements and
   spring stiffnesses come from :meth:`MachineModel.stem_placements_z` and
   :meth:`MachineModel.spring_stiffness` (batched).
@@ -52,7 +52,7 @@ import numpy as np
 from pressfit.description.machine import Machine
 from pressfit.errors import ConvergenceError, PressfitError, SingularPoseError
 from pressfit.mechanics.model import MachineModel, build_model
-from pressfit.mechanics.preload import rest_length_offsets
+from pressfit.mechanics.preload import Amplitudes, rest_length_offsets
 from pressfit.mechanics.stability import Stability
 from pressfit.mechanics.statics import (
     NEWTON_TOL,
@@ -78,22 +78,22 @@ class FastSolverError(PressfitError):
 
 @dataclass(frozen=True)
 class _Chain:
-    """Pose-independent structure of the four (identical) leg chains, columns in chain order."""
+    """Pose-independent structure of the n (identical) leg chains, columns in chain order."""
 
     axis: np.ndarray  # (m,) local joint axis 0 x, 1 y, 2 z
     prismatic: np.ndarray  # (m,) bool
-    z: np.ndarray  # (4, m) placement translation along the parent's z, m (stem columns set per pose)
+    z: np.ndarray  # (n, m) placement translation along the parent's z, m (stem columns set per pose)
     stem_cols: np.ndarray  # (n + 1,) columns whose placement depends on the stem length
-    r0: np.ndarray  # (4, 3, 3) first placement's rotation
-    b: np.ndarray  # (4, 3) first placement's translation (base cardan centre), m
+    r0: np.ndarray  # (n, 3, 3) first placement's rotation
+    b: np.ndarray  # (n, 3) first placement's translation (base cardan centre), m
     spring_cols: np.ndarray  # (m_s,) columns carrying a spring
     free_cols: np.ndarray  # (m_f,) columns without one
-    spring_index: np.ndarray  # (4, m_s) index in mm.springs
+    spring_index: np.ndarray  # (n, m_s) index in mm.springs
     rigid_cols: np.ndarray  # (5,) columns of base a, base b, prismatic, plate b, plate a
     act_col: int
     sec: tuple[tuple[int, float], ...]  # per section: (column, z offset along that body's z), m
-    anchors: np.ndarray  # (4, 3) plate cardan centres in the plate frame, m
-    frames0: np.ndarray  # (4, 3, 3) anchor orientations in the plate frame
+    anchors: np.ndarray  # (n, 3) plate cardan centres in the plate frame, m
+    frames0: np.ndarray  # (n, 3, 3) anchor orientations in the plate frame
     force_rows: np.ndarray  # (m,) translation coordinate
 
 
@@ -109,7 +109,7 @@ def _chain(mm: MachineModel) -> _Chain:
     joints = [[jid[int(v)] for v in row] for row in legv]
     kinds = [[model.joints[j].shortname()[-2:] for j in row] for row in joints]
     if any(k != kinds[0] for k in kinds):
-        raise FastSolverError("the fast solver needs four identical leg chains (same virtual joints on every leg)")
+        raise FastSolverError("the fast solver needs identical leg chains (same virtual joints on every leg)")
     pl = model.jointPlacements
     z = np.array([[pl[j].translation[2] for j in row] for row in joints])
     z[:, 0] = 0.0
@@ -118,8 +118,9 @@ def _chain(mm: MachineModel) -> _Chain:
             if not (np.allclose(pl[j].rotation, np.eye(3)) and np.allclose(pl[j].translation[:2], 0)):
                 raise FastSolverError(f"joint {model.names[j]}: placement is not a translation along z")
     col = {int(v): c for row in legv for c, v in enumerate(row)}
-    spring_at = np.array([[col[s.idx_v] for s in mm.springs if s.leg == i] for i in range(4)])
-    spring_idx = np.array([[k for k, s in enumerate(mm.springs) if s.leg == i] for i in range(4)])
+    legs = range(len(legv))
+    spring_at = np.array([[col[s.idx_v] for s in mm.springs if s.leg == i] for i in legs])
+    spring_idx = np.array([[k for k, s in enumerate(mm.springs) if s.leg == i] for i in legs])
     if np.any(spring_at != spring_at[0]):
         raise FastSolverError("the fast solver needs the springs at the same place on every leg")
     order = np.argsort(spring_at[0])
@@ -189,24 +190,24 @@ def _dot(a: np.ndarray, b: np.ndarray) -> np.ndarray:
 
 @dataclass
 class _Kin:
-    """Kinematics of a block of poses (b poses, 4 legs, m columns)."""
+    """Kinematics of a block of poses (b poses, n legs, m columns)."""
 
-    w: np.ndarray  # (b, 4, m, 3) joint axes, world
-    p: np.ndarray  # (b, 4, m, 3) joint origins, world, m
-    sec: np.ndarray  # (b, 4, 3 sections, 3) section points, m
-    pe: np.ndarray  # (b, 4, 3) leg end (plate cardan centre), m
-    re: np.ndarray  # (b, 4, 3, 3) leg end orientation
+    w: np.ndarray  # (b, n, m, 3) joint axes, world
+    p: np.ndarray  # (b, n, m, 3) joint origins, world, m
+    sec: np.ndarray  # (b, n, 3 sections, 3) section points, m
+    pe: np.ndarray  # (b, n, 3) leg end (plate cardan centre), m
+    re: np.ndarray  # (b, n, 3, 3) leg end orientation
 
 
 def _kinematics(ch: _Chain, q: np.ndarray, z: np.ndarray) -> _Kin:
-    """Walk the chains for leg coordinates q (b, 4, m) and placements z (b, 4, m)."""
-    nb, _, m = q.shape
-    cols = [np.broadcast_to(ch.r0[:, :, k], (nb, 4, 3)).copy() for k in range(3)]
-    pos = np.broadcast_to(ch.b, (nb, 4, 3)).copy()
+    """Walk the chains for leg coordinates q (b, n, m) and placements z (b, n, m)."""
+    nb, nl, m = q.shape
+    cols = [np.broadcast_to(ch.r0[:, :, k], (nb, nl, 3)).copy() for k in range(3)]
+    pos = np.broadcast_to(ch.b, (nb, nl, 3)).copy()
     cq, sq = np.cos(q)[..., None], np.sin(q)[..., None]
-    w, p = np.empty((nb, 4, m, 3)), np.empty((nb, 4, m, 3))
+    w, p = np.empty((nb, nl, m, 3)), np.empty((nb, nl, m, 3))
     sec_col = {c: k for k, (c, _) in enumerate(ch.sec)}
-    sec = np.empty((nb, 4, 3, 3))
+    sec = np.empty((nb, nl, 3, 3))
     for c in range(m):
         if c:
             pos = pos + cols[2] * z[:, :, c, None]
@@ -249,19 +250,19 @@ class BatchEquilibrium:
 
     pose_m: np.ndarray  # (b, 3) nominal plate-centre poses
     load: np.ndarray  # (b, 6) plate wrench (N, N m), world, at the plate centre
-    actuator_forces_n: np.ndarray  # (b, 4), > 0 tension
-    sections: np.ndarray  # (b, 4, 3, 6) per leg and section (base, actuator, plate): N, V_x, V_y, M_x, M_y, T
-    frames: np.ndarray  # (b, 4, 3, 3) deformed leg frames (columns e_x, e_y, e_z)
+    actuator_forces_n: np.ndarray  # (b, n), > 0 tension
+    sections: np.ndarray  # (b, n, 3, 6) per leg and section (base, actuator, plate): N, V_x, V_y, M_x, M_y, T
+    frames: np.ndarray  # (b, n, 3, 3) deformed leg frames (columns e_x, e_y, e_z)
     plate_displacement_m: np.ndarray  # (b, 3)
     plate_rotation_rad: np.ndarray  # (b, 3) rotation vector, world
-    multipliers: np.ndarray  # (b, 4, 6) force (N), couple (N m) each leg exerts on the plate, world
+    multipliers: np.ndarray  # (b, n, 6) force (N), couple (N m) each leg exerts on the plate, world
     q: np.ndarray  # (b, nq) Pinocchio configuration of the reference model
     iterations: np.ndarray  # (b,) Newton iterations to convergence
     residuals: np.ndarray  # (b, 7) plate force, plate moment, machine force, machine moment, closure m, rad,
     #                        stationarity (relative, :class:`Residuals`)
     force_scale_n: np.ndarray  # (b,) F_ref
     length_scale_m: float
-    preload_offsets_m: np.ndarray  # (b, 4) actuator rest-length offsets
+    preload_offsets_m: np.ndarray  # (b, n) actuator rest-length offsets
     linear: bool
 
     def equilibrium(self, i: int, stability: Stability) -> Equilibrium:
@@ -269,7 +270,7 @@ class BatchEquilibrium:
         :meth:`FastEquilibriumSolver.equilibrium`)."""
         s = self.sections[i].tolist()
         legs = tuple(LegLoads({name: SectionWrench(*s[leg][k]) for k, name in enumerate(SECTIONS)}, self.frames[i, leg],
-                              float(self.actuator_forces_n[i, leg])) for leg in range(4))
+                              float(self.actuator_forces_n[i, leg])) for leg in range(self.actuator_forces_n.shape[1]))
         res = Residuals(*self.residuals[i].tolist(), float(self.force_scale_n[i]), self.length_scale_m)
         return Equilibrium(self.pose_m[i].copy(), self.load[i].copy(), legs, self.actuator_forces_n[i].copy(),
                            self.plate_displacement_m[i].copy(), self.plate_rotation_rad[i].copy(), self.q[i].copy(),
@@ -284,18 +285,18 @@ class _Block:
     pose: np.ndarray  # (b, 3), m
     load: np.ndarray  # (b, 6)
     q0: np.ndarray  # (b, nq)
-    q0leg: np.ndarray  # (b, 4, m)
-    z: np.ndarray  # (b, 4, m) placements, m
-    ks: np.ndarray  # (b, 4, m_s) spring stiffnesses
-    rest: np.ndarray  # (b, 4, m_s) spring rest offsets from q0 (the actuator preload offsets)
-    offsets: np.ndarray  # (b, 4), m
+    q0leg: np.ndarray  # (b, n, m)
+    z: np.ndarray  # (b, n, m) placements, m
+    ks: np.ndarray  # (b, n, m_s) spring stiffnesses
+    rest: np.ndarray  # (b, n, m_s) spring rest offsets from q0 (the actuator preload offsets)
+    offsets: np.ndarray  # (b, n), m
     f_ref: np.ndarray  # (b,), N
     row_scale: np.ndarray  # (b, 1, m) 1 / (F_ref or F_ref L_ref) per leg stationarity row
 
 
 def _plate_jacobian(r: np.ndarray) -> np.ndarray:
-    """P (b, 4, 6, 6): closure rows of the plate coordinates (centre translation, world rotation) for
-    anchor arms r = p_D - p_C (b, 4, 3)."""
+    """P (b, n, 6, 6): closure rows of the plate coordinates (centre translation, world rotation) for
+    anchor arms r = p_D - p_C (b, n, 3)."""
     p = np.zeros(r.shape[:-1] + (6, 6))
     p[..., :3, :3] = p[..., 3:, 3:] = -np.eye(3)
     p[..., :3, 3:] = skew(r)
@@ -334,7 +335,7 @@ class FastEquilibriumSolver:
     def machine(self) -> Machine:
         return self.model.machine
 
-    def solve(self, pose_m: np.ndarray, plate_wrench: np.ndarray, *, preload: float | None = None,
+    def solve(self, pose_m: np.ndarray, plate_wrench: np.ndarray, *, preload: Amplitudes | None = None,
               preload_mode: str = "force", linear: bool = False, tol: float = NEWTON_TOL,
               max_iter: int = 25) -> Equilibrium:
         """One pose (convenience over :meth:`solve_batch`; batches are where the speed is), with the
@@ -353,12 +354,13 @@ class FastEquilibriumSolver:
         _check_physical(self.machine, eq)
         return eq
 
-    def solve_batch(self, poses_m: np.ndarray, plate_wrenches: np.ndarray, *, preload: float | None = None,
+    def solve_batch(self, poses_m: np.ndarray, plate_wrenches: np.ndarray, *, preload: Amplitudes | None = None,
                     preload_mode: str = "force", preload_offsets_m: np.ndarray | None = None, linear: bool = False,
                     tol: float = NEWTON_TOL, max_iter: int = 25) -> BatchEquilibrium:
         """Equilibria at reachable poses (b, 3) (m) under plate wrenches (b, 6) or (6,) (N, N m; world, at
         the plate centre), after an actuator preload a4 along v_p (N in force mode, m in length mode;
-        :mod:`pressfit.mechanics.preload`) or explicit rest-length offsets (b, 4) (m). Geometrically
+        :mod:`pressfit.mechanics.preload`; n - 3 amplitudes unless the redundancy is 1) or explicit
+        rest-length offsets (b, n) (m). Geometrically
         nonlinear by default (``tol``: the reference's relative stationarity and closure); ``linear=True``:
         the small-displacement solve. Raises UnreachablePoseError, SingularPoseError, ConvergenceError, and
         ResidualError when a solution's relative residuals exceed statics.residual_tolerance(tol)."""
@@ -367,12 +369,13 @@ class FastEquilibriumSolver:
         w = np.broadcast_to(_wrench(w) if w.ndim == 1 else w, (len(h), 6))
         if not np.all(np.isfinite(w)):
             raise PressfitError("plate wrenches must be finite (F in N, then M in N m)")
+        nl = len(self.machine.legs)
         if preload_offsets_m is not None:
-            offsets = np.broadcast_to(np.asarray(preload_offsets_m, dtype=float), (len(h), 4))
-        elif preload:
-            offsets = rest_length_offsets(self.machine, h, float(preload), preload_mode)
+            offsets = np.broadcast_to(np.asarray(preload_offsets_m, dtype=float), (len(h), nl))
+        elif preload is not None and np.any(preload):
+            offsets = rest_length_offsets(self.machine, h, preload, preload_mode)
         else:
-            offsets = np.zeros((len(h), 4))
+            offsets = np.zeros((len(h), nl))
         parts = [self._solve_block(self._block(h[i:i + _CHUNK], w[i:i + _CHUNK], offsets[i:i + _CHUNK]), linear,
                                    tol, max_iter) for i in range(0, len(h), _CHUNK)]
         batch = BatchEquilibrium(*[np.concatenate([p[k] for p in parts]) for k in range(12)],
@@ -404,8 +407,8 @@ class FastEquilibriumSolver:
 
     def _evaluate(self, bk: _Block, d: np.ndarray, pc: np.ndarray, rp: np.ndarray
                   ) -> tuple[_Kin, np.ndarray, np.ndarray, np.ndarray]:
-        """Kinematics, closure residual c (b, 4, 6), leg Jacobian transposed A^T (b, 4, m, 6) and anchor
-        arms r = p_D - p_C (b, 4, 3) at leg offsets d from q0 and plate (pc, rp)."""
+        """Kinematics, closure residual c (b, n, 6), leg Jacobian transposed A^T (b, n, m, 6) and anchor
+        arms r = p_D - p_C (b, n, 3) at leg offsets d from q0 and plate (pc, rp)."""
         ch = self._chain
         kin = _kinematics(ch, bk.q0leg + d, bk.z)
         r = np.einsum("bij,lj->bli", rp, ch.anchors)
@@ -424,7 +427,7 @@ class FastEquilibriumSolver:
         return self._stationarity(bk, r_leg, r, lam), self._closure(c)
 
     def _stationarity(self, bk: _Block, r_leg: np.ndarray, r: np.ndarray, lam: np.ndarray) -> np.ndarray:
-        """Relative stationarity (b,) of leg rows r_leg (b, 4, m) (N or N m) and the plate."""
+        """Relative stationarity (b,) of leg rows r_leg (b, n, m) (N or N m) and the plate."""
         l_ref = self.machine.geometry.base_half_side_m
         lf = lam[..., :3]
         r_plate = np.concatenate(
@@ -434,7 +437,7 @@ class FastEquilibriumSolver:
                           np.maximum(np.abs(r_plate[:, :3]).max(1), np.abs(r_plate[:, 3:]).max(1) / l_ref) / bk.f_ref)
 
     def _closure(self, c: np.ndarray) -> np.ndarray:
-        """Relative closure (b,) of c (b, 4, 6) (m, rad)."""
+        """Relative closure (b,) of c (b, n, 6) (m, rad)."""
         return np.maximum(np.abs(c[..., :3]).max((1, 2)) / self.machine.geometry.base_half_side_m,
                           np.abs(c[..., 3:]).max((1, 2)))
 
@@ -470,7 +473,7 @@ class FastEquilibriumSolver:
             return self._solve_straight(bk)
         ch = self._chain
         nb = len(bk.pose)
-        d, lam = np.zeros(bk.q0leg.shape), np.zeros((nb, 4, 6))
+        d, lam = np.zeros(bk.q0leg.shape), np.zeros(bk.q0leg.shape[:2] + (6,))
         pc, rp = bk.pose.copy(), np.broadcast_to(np.eye(3), (nb, 3, 3)).copy()
         iters = np.full(nb, -1)
         for it in range(max_iter + 1):
@@ -502,8 +505,9 @@ class FastEquilibriumSolver:
 
     def _straight_legs(self, bk: _Block) -> dict[str, np.ndarray]:
         """Closed-form geometry of the straight legs at the assembled pose (module doc): leg frame rl, tip
-        frame re, joint abscissae s (m) along e_z, free axes w (b, 4, 4, 3), closure c, transmitted
-        wrenches n_w (b, 4, 6, 2) (world) and n_l (leg frame), and the dual-basis helpers of the cardan axes."""
+        frame re, joint abscissae s (m) along e_z, free axes w (b, n, 4, 3) (the four cardan revolutes), closure c,
+        transmitted wrenches n_w (b, n, 6, 2) (world) and n_l (leg frame), and the dual-basis helpers of the cardan
+        axes."""
         ch, q = self._chain, bk.q0leg
         a = ch.axis
         f0 = np.broadcast_to(ch.r0, q.shape[:2] + (3, 3))
@@ -541,8 +545,8 @@ class FastEquilibriumSolver:
         ch = self._chain
         g = self._straight_legs(bk)
         ln, n_w = g["ln"], g["n_w"]
-        lever = ln[..., None] - g["s"][..., ch.spring_cols]  # (b, 4, m_s), m
-        gm = self._spring_rows(g["n_l"].swapaxes(-1, -2), lever)  # (b, 4, 2, m_s): the two transmitted wrenches
+        lever = ln[..., None] - g["s"][..., ch.spring_cols]  # (b, n, m_s), m
+        gm = self._spring_rows(g["n_l"].swapaxes(-1, -2), lever)  # (b, n, 2, m_s): the two transmitted wrenches
         comp = 1.0 / bk.ks
         gc = gm * comp[..., None, :]
         sm = np.stack([_dot(gc[..., 0, :], gm[..., 0, :]), _dot(gc[..., 0, :], gm[..., 1, :]),
@@ -552,7 +556,7 @@ class FastEquilibriumSolver:
         x = -bk.rest
         r = np.broadcast_to(ch.anchors, bk.q0leg.shape[:2] + (3,))
         pj = _plate_jacobian(r)
-        qm = pj.swapaxes(-1, -2) @ n_w  # (b, 4, 6, 2)
+        qm = pj.swapaxes(-1, -2) @ n_w  # (b, n, 6, 2)
         nr0 = -(n_w.swapaxes(-1, -2) @ g["c"][..., None])[..., 0] + _dot(gm, x[..., None, :])
         qs = qm @ sinv
         try:
@@ -567,8 +571,8 @@ class FastEquilibriumSolver:
         return self._straight_finish(bk, g, lever, pj, dp, lam, dqs)
 
     def _spring_rows(self, wrench_l: np.ndarray, lever: np.ndarray) -> np.ndarray:
-        """A_s^T lambda (b, 4, [k,] m_s) for leg-frame wrenches (b, 4, [k,] 6) (N, N m at the tip) and the springs'
-        levers (b, 4, m_s) (m): each spring column's twist is base + lever * per-metre part (module doc)."""
+        """A_s^T lambda (b, n, [k,] m_s) for leg-frame wrenches (b, n, [k,] 6) (N, N m at the tip) and the springs'
+        levers (b, n, m_s) (m): each spring column's twist is base + lever * per-metre part (module doc)."""
         st = self._straight
         lever = lever.reshape(lever.shape[:2] + (1,) * (wrench_l.ndim - 3) + lever.shape[2:])
         return np.tensordot(wrench_l, st.base, ([-1], [1])) + lever * np.tensordot(wrench_l, st.lever, ([-1], [1]))
@@ -642,9 +646,9 @@ class FastEquilibriumSolver:
         base_m = mom[:, :, 0] + cross(pts[:, :, 0], force)
         mach = np.concatenate([f_load - force.sum(1), m_load + cross(pg, f_load) - base_m.sum(1)], 1)
         scale = np.array([1.0, l_ref])
-        fm = np.linalg.norm(np.stack([plate, mach], 1).reshape(-1, 2, 2, 3), axis=-1).reshape(-1, 4)
+        fm = np.linalg.norm(np.stack([plate, mach], 1).reshape(-1, 2, 2, 3), axis=-1).reshape(-1, 4)  # 4 balances
         fm /= bk.f_ref[:, None] * np.tile(scale, 2)
-        closure = np.linalg.norm(c.reshape(-1, 4, 2, 3), axis=-1).max(1)
+        closure = np.linalg.norm(c.reshape(len(c), -1, 2, 3), axis=-1).max(1)
         res = np.concatenate([fm, closure, stat[:, None]], 1)
         q = bk.q0.copy()
         q[:, self._legq] = bk.q0leg + d

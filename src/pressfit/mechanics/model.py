@@ -1,7 +1,7 @@
-r"""Pinocchio model of the 4-UPU machine with elastic virtual joints (VJM: Pashkevich, Klimchik, Chablat).
+r"""Pinocchio model of the n-UPU machine with elastic virtual joints (VJM: Pashkevich, Klimchik, Chablat).
 
 Topology (why: every leg is built identically, so the machine's two mirror planes hold exactly in the
-model, and the elastic problem splits into four independent leg chains coupled only through the plate):
+model, and the elastic problem splits into n independent leg chains coupled only through the plate):
 
 * joint 1: the plate, a free flyer (``JointModelFreeFlyer``) at the plate centre, world-aligned when
   unrotated: ``q[0:3]`` = h (m), ``q[3:7]`` = quaternion (x, y, z, w);
@@ -98,7 +98,7 @@ class Spring:
     """An elastic virtual joint: energy law(q[idx_q] - rest)."""
 
     name: str  # e.g. "cylinder[2].x", "actuator", "base_cardan.tx"
-    leg: int  # 0..3
+    leg: int  # 0..n-1
     idx_q: int
     idx_v: int
     law: SpringLaw
@@ -119,7 +119,7 @@ class ModelPose:
 
     pose_m: np.ndarray  # (3,) plate-centre pose h, m
     q0: np.ndarray  # (nq,) rigid reference (springs 0): closed form (equation 1), least-squares assembly if tilted
-    stem_lengths_m: np.ndarray  # (4,) L_s per leg, m
+    stem_lengths_m: np.ndarray  # (n,) L_s per leg, m
     spring_k: np.ndarray  # per spring: linear stiffness (N/m or N m/rad), NaN for a nonlinear law
     spring_rest: np.ndarray  # per spring: rest value of its coordinate (m or rad)
 
@@ -162,8 +162,8 @@ class MachineModel:
     leg_v: list[np.ndarray]
     springs: list[Spring]
     anchor_placements: list[pin.SE3]  # constraint frame on the plate (plate frame), per leg
-    sigma: np.ndarray  # (4,) sign of the b-revolute against beta
-    leg_frames0: np.ndarray  # (4, 3, 3) R0_i
+    sigma: np.ndarray  # (n,) sign of the b-revolute against beta
+    leg_frames0: np.ndarray  # (n, 3, 3) R0_i
     sections: list[dict[str, tuple[int, float]]]  # per leg: section -> (joint id, z offset in its frame, m)
     cardan_compliance: CardanComplianceSpec
     spring_k: np.ndarray  # per spring: linear k (N/m or N m/rad) at pose_m, NaN if nonlinear
@@ -224,7 +224,7 @@ class MachineModel:
         Starts from ``q_init`` (default: the rigid closed form, which is already closed); returns q.
         ``least_squares``: stop at the configuration that minimises the closure error (the Gauss-Newton step
         below ``tol``) instead of requiring it to vanish: with misaligned cardans the rigid redundant machine
-        generally cannot close (four legs each fix one plate rotation; there are three), and what is left
+        generally cannot close (each of the n > 3 legs fixes one plate rotation; there are three), and what is left
         is closed elastically by the equilibrium solve (a self-stress).
         """
         h = kinematics.require_reachable(self.machine, pose_m)
@@ -274,7 +274,7 @@ class MachineModel:
         return ModelPose(h, q0, ik.lengths_m - m.cylinder.length_m, k, rest)
 
     def place_stem(self, model: pin.Model, stem_lengths_m: np.ndarray) -> None:
-        """Write the stem joint placements for stem lengths (4,) (m) into ``model``: this model's
+        """Write the stem joint placements for stem lengths (n,) (m) into ``model``: this model's
         Pinocchio model or a copy of it (every pose-dependent placement is written)."""
         jp = model.jointPlacements
         for ids, zs in zip(self.stem_joint_ids(), self.stem_placements_z(stem_lengths_m).tolist()):
@@ -282,7 +282,7 @@ class MachineModel:
                 jp[j].translation[2] = z
 
     def spring_stiffness(self, lengths_m: np.ndarray) -> np.ndarray:
-        """Linear spring stiffnesses (..., n_springs) for leg lengths (..., 4) (m), batched: the actuator
+        """Linear spring stiffnesses (..., n_springs) for leg lengths (..., n) (m), batched: the actuator
         in series with the leg's axial compliance (N/m), stem bending n E I_s / L_s and torsion
         n G J_s / L_s (N m/rad) with L_s = l - L_c, the other springs as built; NaN for a nonlinear law."""
         m, n, sec = self.machine, self.springs_per_segment, self.machine.stem_section
@@ -290,7 +290,7 @@ class MachineModel:
         ls = lengths_m - m.cylinder.length_m
         per_kind = np.stack([1.0 / m.axial_compliance_m_per_n(lengths_m),  # actuator, stem bending, torsion
                              n * (m.material.youngs_modulus_pa * sec.second_moment_m4) / ls,
-                             n * (m.material.shear_modulus_pa * sec.polar_moment_m4) / ls], -2)  # (..., 3, 4)
+                             n * (m.material.shear_modulus_pa * sec.polar_moment_m4) / ls], -2)  # (..., 3, legs)
         var, kind, leg = self._variable_springs
         k = np.broadcast_to(self.spring_k, lengths_m.shape[:-1] + self.spring_k.shape).copy()
         k[..., var] = per_kind[..., kind, leg]
@@ -303,8 +303,8 @@ class MachineModel:
         return [[j0 + 3 * k for k in range(n + 1)] for j0 in self._stem_first]
 
     def stem_placements_z(self, stem_lengths_m: np.ndarray) -> np.ndarray:
-        """z translations (..., 4, n + 1) (m) of the :meth:`stem_joint_ids` placements for stem lengths
-        (..., 4): the stem springs at (k + 1/2) L_s / n from the cylinder end (module doc)."""
+        """z translations (..., legs, n + 1) (m) of the :meth:`stem_joint_ids` placements for stem lengths
+        (..., legs): the stem springs at (k + 1/2) L_s / n from the cylinder end (module doc)."""
         n = self.springs_per_segment
         ls = np.asarray(stem_lengths_m, dtype=float)[..., None]
         z = np.broadcast_to(ls / n, ls.shape[:-1] + (n + 1,)).copy()
@@ -329,7 +329,7 @@ _RIGID = ("base_a", "base_b", "prismatic", "plate_b", "plate_a")
 
 
 class _ChainBuilder:
-    """Adds the four leg chains to a Pinocchio model with the plate's free flyer (module doc): one joint
+    """Adds the n leg chains to a Pinocchio model with the plate's free flyer (module doc): one joint
     at a time after ``parent``, placed by ``pending``; records springs, rigid joints and sections."""
 
     def __init__(self, machine: Machine, n: int, cardan_compliance: CardanComplianceSpec) -> None:
@@ -434,25 +434,26 @@ def build_model(machine: Machine, pose_m: np.ndarray, *, springs_per_segment: in
     """Build the VJM Pinocchio model of ``machine`` at the reachable pose ``pose_m`` (m).
 
     ``springs_per_segment`` defaults to ``machine.model.springs_per_segment``. ``cardan_compliance`` is
-    ``None`` (rigid cardans), one :class:`CardanCompliance` for all eight cardans, or a dict keyed by
-    ``(leg 0..3, 'base' | 'plate')``. Raises :class:`UnreachablePoseError` for a pose outside the limits.
+    ``None`` (rigid cardans), one :class:`CardanCompliance` for all 2 n cardans, or a dict keyed by
+    ``(leg 0..n-1, 'base' | 'plate')``. Raises :class:`UnreachablePoseError` for a pose outside the limits.
     """
     h = kinematics.require_reachable(machine, pose_m)
     b = _ChainBuilder(machine, int(springs_per_segment or machine.model.springs_per_segment), cardan_compliance)
-    for i in range(4):
+    legs = range(len(machine.legs))
+    for i in legs:
         b.add_leg(i)
     model, springs = b.model, b.springs
-    frames0 = np.array([_leg_frame0(machine, i) for i in range(4)])
+    frames0 = np.array([_leg_frame0(machine, i) for i in legs])
     anchors = [pin.SE3(frames0[i] @ pin.exp3(machine.cardan_tilts_rad[i, 1]), machine.plate_offsets_m[i].copy())
-               for i in range(4)]
+               for i in legs]
     constraints = [pin.ConstraintModel(pin.FrameAnchorConstraintModel(model, b.ids[i]["plate_end"], pin.SE3.Identity(),
-                                                                      b.plate, anchors[i])) for i in range(4)]
+                                                                      b.plate, anchors[i])) for i in legs]
     var = [(k, 0 if sp.name == "actuator" else 2 if sp.name.endswith(".z") else 1, sp.leg)
            for k, sp in enumerate(springs) if sp.name == "actuator" or sp.name.startswith("stem[")]
     mm = MachineModel(
         machine, model, constraints, b.n, h, np.zeros(model.nq), b.plate, b.ids,
-        [b.leg_velocities(i) for i in range(4)], springs, anchors,
-        np.array([float(np.sign(frames0[i][:, 0] @ machine.beta_axes[i])) for i in range(4)]), frames0,
+        [b.leg_velocities(i) for i in legs], springs, anchors,
+        np.array([float(np.sign(frames0[i][:, 0] @ machine.beta_axes[i])) for i in legs]), frames0,
         b.sections, cardan_compliance,
         np.array([sp.law.k if type(sp.law) is LinearSpring else np.nan for sp in springs]), np.zeros(len(springs)),
         {k: np.array([model.joints[j].idx_q for j in v]) for k, v in b.rigid.items()}, b.stem_first,

@@ -6,7 +6,7 @@ restricted to the tangent space of the manifold, Z^T H Z with J_c Z = 0, is posi
 (Chabrillac & Crouzeix 1984; Gould 1985), the KKT matrix K = [H J_c^T; J_c 0] with J_c of full row rank r
 has exactly r negative eigenvalues; each further one is a direction of lost stability.
 
-Both are computed here blockwise, as the solver factors the KKT matrix: H is block-diagonal over the four
+Both are computed here blockwise, as the solver factors the KKT matrix: H is block-diagonal over the n
 legs and the plate, and each leg's closure rows J_i = [A_i (leg), P_i (plate)] touch only that leg.
 
 * Inertia (Haynsworth's additivity): In(K) = sum_i In(K_i) + In(S), where K_i = [H_i A_i^T; A_i 0] is leg
@@ -14,13 +14,13 @@ legs and the plate, and each leg's closure rows J_i = [A_i (leg), P_i (plate)] t
   is the 6 x 6 plate Schur complement (the machine's condensed tangent stiffness at the plate).
 * Reduced stiffness: in the null-space basis Z made of (a) each leg's internal motions with the plate held
   (an orthonormal null-space basis Z_i of A_i) and (b) the six plate motions with every leg following at
-  least energy, Z^T H Z is block-diagonal: diag(Z_1^T H_1 Z_1, ..., Z_4^T H_4 Z_4, S). Its smallest
+  least energy, Z^T H Z is block-diagonal: diag(Z_1^T H_1 Z_1, ..., Z_n^T H_n Z_n, S). Its smallest
   eigenvalue is reported (Sylvester: its sign, and the count of negative ones, do not depend on the basis).
 
 Units: the coordinates are scaled to be all angle-like before the eigenvalues are taken: translations
 (prismatic and plate) divided by the length scale L_ref = p (m), rotations in rad; the reduced stiffness
 is then in N m (energy per unit squared coordinate), comparable across all its blocks. Cost: one batched
-symmetric eigen-decomposition of the four leg KKT blocks and of their reduced stiffnesses, ~0.3 ms.
+symmetric eigen-decomposition of the n leg KKT blocks and of their reduced stiffnesses, ~0.3 ms.
 """
 
 from __future__ import annotations
@@ -43,7 +43,7 @@ class Stability:
     min_eigenvalue_nm: float  # smallest eigenvalue of the reduced tangent stiffness, N m (module doc)
     max_eigenvalue_nm: float  # largest, N m (the scale of min_eigenvalue_nm)
     kkt_negative_eigenvalues: int  # negative eigenvalues of the KKT matrix (beyond the neutral band)
-    constraints: int  # rows of the closure Jacobian (24): the count a stable minimum has
+    constraints: int  # rows of the closure Jacobian (6 n): the count a stable minimum has
 
     def to_dict(self) -> dict[str, float | int | bool]:
         return {k: getattr(self, k) for k in self.__dataclass_fields__}

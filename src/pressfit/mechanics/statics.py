@@ -1,6 +1,6 @@
-r"""Compliant static equilibrium of the 4-UPU machine (VJM model of :mod:`pressfit.mechanics.model`).
+r"""Compliant static equilibrium of the n-UPU machine (VJM model of :mod:`pressfit.mechanics.model`).
 
-Equilibrium = stationarity of  E(q) - W_load(q)  subject to the four 6D loop closures c_i(q) = 0:
+Equilibrium = stationarity of  E(q) - W_load(q)  subject to the n 6D loop closures c_i(q) = 0 (one per leg):
 
     g(q) + J_c(q)^T lambda = 0,   c(q) = 0,     g = dE/dq - Q_load,
 
@@ -19,7 +19,7 @@ Pinocchio order (v, omega)) has, along the retraction q (+) dq,
 
 and [S_j, S_k] . W = -S_k . (S_j x* W). Applied to the load on the plate and to every multiplier (a dead
 wrench on the leg end and its opposite on the plate), this gives the exact tangent
-H = K_springs - dQ_load/dq + d(J_c^T lambda)/dq, block-diagonal over the four legs and the plate. The KKT
+H = K_springs - dQ_load/dq + d(J_c^T lambda)/dq, block-diagonal over the n legs and the plate. The KKT
 system is solved by eliminating each leg's own KKT block (batched) and a 6x6 Schur complement on the
 plate.
 
@@ -54,7 +54,7 @@ from __future__ import annotations
 import math
 import threading
 from collections.abc import Callable
-from dataclasses import dataclass, field
+from dataclasses import dataclass
 from typing import Any
 
 import numpy as np
@@ -75,7 +75,7 @@ from pressfit.errors import (
     UnstableEquilibriumError,
 )
 from pressfit.mechanics.model import CardanComplianceSpec, MachineModel, ModelPose, SpringLaw, build_model
-from pressfit.mechanics.preload import ActuatorPreload, rest_length_offsets
+from pressfit.mechanics.preload import ActuatorPreload, Amplitudes, rest_length_offsets
 from pressfit.mechanics.stability import Stability, reduced_stability
 from pressfit.spatial import cross, skew
 
@@ -89,8 +89,6 @@ NEWTON_TOL = 1e-10  # stopping tolerance (relative, module doc); the round-off f
 RESIDUAL_TOL = 1e-9
 RESIDUAL_NAMES = ("plate_force", "plate_moment", "machine_force", "machine_moment", "closure_m", "closure_rad",
                   "stationarity")  # the relative residuals, in Residuals.relative() order
-_LEGS = np.arange(4)
-_TAN_F = np.array([0, 1, 2, 3, 0, 1, 2, 3, 4])  # skew(f) factors of _tangent's nine products
 
 
 # --- results -----------------------------------------------------------------------------------------
@@ -153,16 +151,20 @@ class Equilibrium:
     pose_m: np.ndarray  # (3,) nominal plate-centre pose h
     load: np.ndarray  # (6,) plate wrench: force N then moment N m, world axes, at the plate centre
     legs: tuple[LegLoads, ...]
-    actuator_forces_n: np.ndarray  # (4,), > 0 tension
+    actuator_forces_n: np.ndarray  # (n,), > 0 tension
     plate_displacement_m: np.ndarray  # (3,) plate-centre translation from the nominal pose
     plate_rotation_rad: np.ndarray  # (3,) plate rotation vector (world axes)
     q: np.ndarray
-    multipliers: np.ndarray  # (4, 6) per leg: force (N) and couple (N m) the leg exerts on the plate, world
+    multipliers: np.ndarray  # (n, 6) per leg: force (N) and couple (N m) the leg exerts on the plate, world
     iterations: int
     linear: bool
     residuals: Residuals
     stability: Stability  # of the tangent stiffness on the closure manifold (pressfit.mechanics.stability)
-    preload_offsets_m: np.ndarray = field(default_factory=lambda: np.zeros(4))  # actuator rest-length offsets
+    preload_offsets_m: np.ndarray | None = None  # (n,) actuator rest-length offsets, m (None: zeros)
+
+    def __post_init__(self) -> None:
+        if self.preload_offsets_m is None:
+            object.__setattr__(self, "preload_offsets_m", np.zeros(len(self.actuator_forces_n)))
 
     def is_valid(self, tol: float = RESIDUAL_TOL) -> bool:
         return self.residuals.is_valid(tol)
@@ -202,20 +204,20 @@ def _phi_psi(f: np.ndarray, mo: np.ndarray, fp: np.ndarray) -> tuple[np.ndarray,
 class _Static:
     """Pose-independent index structure of the solver for one model, with one thread's constraint datas."""
 
-    legv: np.ndarray  # (4, m) v indices of the leg coordinates
-    act_col: np.ndarray  # (4,) column of the actuator in each leg
-    act_spring: np.ndarray  # (4,) index of each leg's actuator in mm.springs
-    is_force: np.ndarray  # (4, m) translation coordinate (stationarity row in N)
+    legv: np.ndarray  # (n, m) v indices of the leg coordinates
+    act_col: np.ndarray  # (n,) column of the actuator in each leg
+    act_spring: np.ndarray  # (n,) index of each leg's actuator in mm.springs
+    is_force: np.ndarray  # (n, m) translation coordinate (stationarity row in N)
     plate_end: list[int]
-    anchors: np.ndarray  # (3, 4) anchor points in the plate frame
-    frames0: np.ndarray  # (4, 3, 3) anchor orientations in the plate frame (R0_i, turned by a plate cardan tilt)
+    anchors: np.ndarray  # (3, n) anchor points in the plate frame
+    frames0: np.ndarray  # (n, 3, 3) anchor orientations in the plate frame (R0_i, turned by a plate cardan tilt)
     cds: list[pin.ConstraintData]  # constraint datas (one set per thread)
     spring_at: tuple[np.ndarray, np.ndarray]  # (legs, columns) of mm.springs
-    sec_joints: list[int]  # 12 joints carrying the section points, leg-major
+    sec_joints: list[int]  # 3 n joints carrying the section points, leg-major
     sec_z: list[tuple[int, int, float]]  # (leg, section, z) for section points off their joint origin
     lower: np.ndarray  # (m, m) 1.0 strictly below the diagonal
     lin: np.ndarray  # per spring: linear law
-    lin_mask: np.ndarray  # (4, m) coordinate carries a linear spring
+    lin_mask: np.ndarray  # (n, m) coordinate carries a linear spring
     other: list[tuple[int, int, SpringLaw]]  # (leg, column, law) of the springs with a nonlinear law
 
 
@@ -226,15 +228,16 @@ def _static(mm: MachineModel) -> _Static:
     except ValueError:
         raise PressfitError("cardan compliance on only some legs (legs with different numbers of virtual "
                             "joints) is not supported by the solver yet; give it to every leg") from None
-    col = {int(v): (i, c) for i in range(4) for c, v in enumerate(legv[i])}
+    legs = range(len(legv))
+    col = {int(v): (i, c) for i in legs for c, v in enumerate(legv[i])}
     at = np.array([col[s.idx_v] for s in mm.springs], dtype=int).T
     act = np.array([k for k, s in enumerate(mm.springs) if s.name == "actuator"])
-    sec = [mm.sections[i][name] for i in range(4) for name in SECTIONS]
+    sec = [mm.sections[i][name] for i in legs for name in SECTIONS]
     m = legv.shape[1]
     lin = ~np.isnan(mm.spring_k)
     lin_mask = np.zeros(legv.shape, bool)
     lin_mask[at[0, lin], at[1, lin]] = True
-    return _Static(legv, at[1, act], act, _force_rows(mm), [mm.leg_joint_ids[i]["plate_end"] for i in range(4)],
+    return _Static(legv, at[1, act], act, _force_rows(mm), [mm.leg_joint_ids[i]["plate_end"] for i in legs],
                    np.array([a.translation for a in mm.anchor_placements]).T,
                    np.array([a.rotation for a in mm.anchor_placements]),
                    mm.constraint_datas(), (at[0], at[1]), [j for j, _ in sec],
@@ -253,7 +256,7 @@ class _PoseModel:
     plate_joint_id: int
     pose_m: np.ndarray  # (3,), m
     q0: np.ndarray  # (nq,) rigid configuration at pose_m
-    legv: np.ndarray  # (4, m) v indices of the leg coordinates
+    legv: np.ndarray  # (n, m) v indices of the leg coordinates
 
 
 @dataclass
@@ -267,7 +270,7 @@ class _Problem:
     lin_mask: np.ndarray  # (L, m) bool: coordinate carries a linear spring
     other: list[tuple[int, int, SpringLaw]]  # nonlinear springs: (leg, col, law)
     legq: np.ndarray  # (L, m) q indices of leg coordinates
-    offsets: np.ndarray  # (4,) actuator rest-length offsets, m
+    offsets: np.ndarray  # (n,) actuator rest-length offsets, m
     f_ref: float
     l_ref: float
     legv: np.ndarray  # (L, m) v indices of leg coordinates
@@ -284,7 +287,7 @@ def _problem(mm: _PoseModel, sc: _Static, pv: ModelPose, load: np.ndarray, offse
     k[rows[sc.lin], cols[sc.lin]] = pv.spring_k[sc.lin]
     rest_rel[rows, cols] = pv.spring_rest
     rest_rel -= pv.q0[sc.legv + 1]
-    rest_rel[_LEGS, sc.act_col] += offsets
+    rest_rel[np.arange(len(sc.act_col)), sc.act_col] += offsets
     f_pre = float(np.max(np.abs(pv.spring_k[sc.act_spring] * offsets)))
     l_ref = mm.machine.geometry.base_half_side_m
     f, m = load[:3].tolist(), load[3:].tolist()
@@ -297,20 +300,20 @@ def _problem(mm: _PoseModel, sc: _Static, pv: ModelPose, load: np.ndarray, offse
 @dataclass
 class _State:
     q: np.ndarray
-    s: np.ndarray  # (4, 6, m) leg twists
+    s: np.ndarray  # (n, 6, m) leg twists
     sp: np.ndarray  # (6, 6) plate twists
-    pe: np.ndarray  # (4, 3) leg end points
-    pd: np.ndarray  # (4, 3) plate anchor points
+    pe: np.ndarray  # (n, 3) leg end points
+    pd: np.ndarray  # (n, 3) plate anchor points
     pc: np.ndarray  # (3,) plate centre
     rp: np.ndarray  # (3, 3) plate rotation
-    c: np.ndarray  # (4, 6) closure residual (world)
-    a: np.ndarray  # (4, 6, m) wrench map (closure Jacobian on the manifold), leg part
-    p: np.ndarray  # (4, 6, 6) wrench map, plate part
-    ja: np.ndarray  # (4, 6, m) exact closure Jacobian dc/dq, leg part (rotation rows with Jlog3)
-    jp: np.ndarray  # (4, 6, 6) exact closure Jacobian, plate part
-    g_leg: np.ndarray  # (4, m) spring forces
+    c: np.ndarray  # (n, 6) closure residual (world)
+    a: np.ndarray  # (n, 6, m) wrench map (closure Jacobian on the manifold), leg part
+    p: np.ndarray  # (n, 6, 6) wrench map, plate part
+    ja: np.ndarray  # (n, 6, m) exact closure Jacobian dc/dq, leg part (rotation rows with Jlog3)
+    jp: np.ndarray  # (n, 6, 6) exact closure Jacobian, plate part
+    g_leg: np.ndarray  # (n, m) spring forces
     g_plate: np.ndarray  # (6,) -Q_load
-    ktan: np.ndarray  # (4, m) spring tangent stiffness
+    ktan: np.ndarray  # (n, m) spring tangent stiffness
 
 
 def _evaluate(pb: _Problem, q: np.ndarray, data: pin.Data, d_leg: np.ndarray | None = None) -> _State:
@@ -329,16 +332,16 @@ def _evaluate(pb: _Problem, q: np.ndarray, data: pin.Data, d_leg: np.ndarray | N
     rp, pc = op.rotation.copy(), op.translation.copy()
     ends = [oMi[j] for j in sc.plate_end]
     pe = np.array([oe.translation for oe in ends])
-    pd = pc + sc.anchors.T @ rp.T  # (4, 3)
-    rd = rp @ sc.frames0  # (4, 3, 3) anchor orientations
+    pd = pc + sc.anchors.T @ rp.T  # (n, 3)
+    rd = rp @ sc.frames0  # (n, 3, 3) anchor orientations
     rel = [oe.rotation @ rd[i].T for i, oe in enumerate(ends)]  # R_E R_D^T
-    c = np.empty((4, 6))
+    c = np.empty((len(ends), 6))
     c[:, :3] = pe - pd
     c[:, 3:] = [pin.log3(r) for r in rel]
     c[np.abs(c) < CLOSURE_FLOOR] = 0.0  # round-off of ~1 m positions: no information (module doc)
     a = s.copy()  # wrench map, leg part (L, 6, m): twist about O -> (velocity of the point, omega)
     a[:, :3] -= _skew(pe) @ s[:, 3:]  # v + omega x p = v - skew(p) omega
-    p = np.empty((4, 6, 6))  # plate part (L, 6, 6)
+    p = np.empty((len(ends), 6, 6))  # plate part (L, 6, 6)
     p[:, :3] = _skew(pd) @ sp[3:] - sp[:3]
     p[:, 3:] = -sp[3:]
     # d log3(R) for R = R_E R_D^T, world angular velocities: exp(w_E) R = R exp(R^T w_E) and R exp(-w_D), so
@@ -501,14 +504,16 @@ class EquilibriumSolver:
             w = self._local.worker = _Worker(model, model.createData(), _static(self.model))
         return w
 
-    def solve(self, pose_m: np.ndarray, plate_wrench: np.ndarray, *, preload: float | ActuatorPreload | None = None,
-              preload_mode: str | None = None, linear: bool = False, tol: float = NEWTON_TOL, max_iter: int = 25,
+    def solve(self, pose_m: np.ndarray, plate_wrench: np.ndarray, *,
+              preload: Amplitudes | ActuatorPreload | None = None, preload_mode: str | None = None,
+              linear: bool = False, tol: float = NEWTON_TOL, max_iter: int = 25,
               start: Equilibrium | None = None, preload_offsets_m: np.ndarray | None = None,
               step_limit: StepLimit | None = None) -> Equilibrium:
         """Static equilibrium at a reachable pose (m) under a dead plate wrench (6,) (N, N m; world axes, at
         the plate centre; a force (3,) alone is accepted), after an optional actuator preload along v_p.
 
-        ``preload``: a4 (N in force mode, m in length mode; :mod:`pressfit.mechanics.preload`) or an
+        ``preload``: a4 (N in force mode, m in length mode; :mod:`pressfit.mechanics.preload`; the n - 3
+        amplitudes of a machine whose redundancy is not 1) or an
         :class:`ActuatorPreload`; ``preload_mode`` overrides its mode. Preload first, then load.
         Geometrically nonlinear Newton by default (``tol``: relative stationarity and closure, module doc);
         ``linear=True``: small-displacement solve at the assembled pose. Raises UnreachablePoseError,
@@ -517,7 +522,7 @@ class EquilibriumSolver:
 
         Continuation hooks (nonlinear solve; used by :mod:`pressfit.mechanics.clearance`): ``start``, a
         previous solution at the same pose, to start Newton from (its q and multipliers);
-        ``preload_offsets_m``, explicit actuator rest-length offsets (4,) in m instead of ``preload``;
+        ``preload_offsets_m``, explicit actuator rest-length offsets (n,) in m instead of ``preload``;
         ``step_limit(dv)``, a factor in (0, 1] scaling each Newton step (dv over the velocity coordinates).
         """
         load = _wrench(plate_wrench)
@@ -534,10 +539,11 @@ class EquilibriumSolver:
                      *, linear: bool, preload_offsets_m: np.ndarray) -> Stability:
         """The stability report every solve here carries, for an equilibrium of this model found elsewhere
         (the batched :mod:`pressfit.mechanics.fast_statics`): the exact tangent at configuration q (the
-        assembled one if ``linear``, as :func:`_solve_linear` takes it) with the multipliers (4, 6) (N, N m),
-        under the plate wrench (N, N m) after the actuator rest-length offsets (4,) (m)."""
+        assembled one if ``linear``, as :func:`_solve_linear` takes it) with the multipliers (n, 6) (N, N m),
+        under the plate wrench (N, N m) after the actuator rest-length offsets (n,) (m)."""
         pv = self.model.pose_values(pose_m)
-        pb, data = self._problem(pv, _wrench(plate_wrench), np.asarray(preload_offsets_m, dtype=float).reshape(4))
+        pb, data = self._problem(pv, _wrench(plate_wrench),
+                                 np.asarray(preload_offsets_m, dtype=float).reshape(len(self.machine.legs)))
         q = np.asarray(q, dtype=float)
         st = _evaluate(pb, pb.mm.q0, data) if linear else _evaluate(pb, q, data, q[pb.legq] - pb.mm.q0[pb.legq])
         return reduced_stability(*_tangent(pb, st, np.asarray(multipliers, dtype=float)), st.ja, st.jp, pb.is_force,
@@ -561,16 +567,16 @@ def _wrench(plate_wrench: np.ndarray) -> np.ndarray:
     return load
 
 
-def _offsets(machine: Machine, pose: np.ndarray, preload: float | ActuatorPreload | None, preload_mode: str | None,
+def _offsets(machine: Machine, pose: np.ndarray, preload: Amplitudes | ActuatorPreload | None, preload_mode: str | None,
              preload_offsets_m: np.ndarray | None) -> np.ndarray:
-    """Actuator rest-length offsets (4,), m: explicit, or from the preload (:mod:`pressfit.mechanics.preload`)."""
+    """Actuator rest-length offsets (n,), m: explicit, or from the preload (:mod:`pressfit.mechanics.preload`)."""
     if preload_offsets_m is not None:
-        return np.asarray(preload_offsets_m, dtype=float).reshape(4)
+        return np.asarray(preload_offsets_m, dtype=float).reshape(len(machine.legs))
     if isinstance(preload, ActuatorPreload):
         a4, mode = preload.a4, preload_mode or preload.mode
     else:
-        a4, mode = (0.0 if preload is None else float(preload)), preload_mode or "force"
-    return rest_length_offsets(machine, pose, a4, mode) if a4 else np.zeros(4)
+        a4, mode = (0.0 if preload is None else preload), preload_mode or "force"
+    return rest_length_offsets(machine, pose, a4, mode)
 
 
 def solve_equilibrium(
@@ -578,7 +584,7 @@ def solve_equilibrium(
     pose_m: np.ndarray,
     plate_wrench: np.ndarray,
     *,
-    preload: float | ActuatorPreload | None = None,
+    preload: Amplitudes | ActuatorPreload | None = None,
     preload_mode: str | None = None,
     linear: bool = False,
     tol: float = NEWTON_TOL,
@@ -653,7 +659,7 @@ def _where(eq: Equilibrium) -> str:
 
 
 def _force_rows(mm: MachineModel) -> np.ndarray:
-    """(4, m) True where the leg coordinate is a translation (its stationarity row is a force, N)."""
+    """(n, m) True where the leg coordinate is a translation (its stationarity row is a force, N)."""
     prism = {int(mm.model.joints[j].idx_v) for j in range(1, mm.model.njoints)
              if mm.model.joints[j].shortname().startswith("JointModelP")}
     return np.array([[int(v) in prism for v in legv] for legv in mm.leg_v])
@@ -669,7 +675,7 @@ def _solve_linear(pb: _Problem, data: pin.Data) -> Equilibrium:
     k = st.ktan
     r_leg, r_plate = -st.g_leg, -st.g_plate
     # the reference is closed in exact arithmetic (equation 1): its closure residual, round-off, is taken as 0
-    dq_leg, dp, lam, fa = _kkt_solve(st, _diag(k), np.zeros((6, 6)), r_leg, r_plate, np.zeros((4, 6)))
+    dq_leg, dp, lam, fa = _kkt_solve(st, _diag(k), np.zeros((6, 6)), r_leg, r_plate, np.zeros(st.c.shape))
 
     def errors():  # residual of the linear KKT system
         r_l, r_p = _stationarity(pb, st, lam)  # g + J^T lam (g = -r)
@@ -692,26 +698,27 @@ def _diag(k: np.ndarray) -> np.ndarray:
 
 
 def _tangent(pb: _Problem, st: _State, lam: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
-    """Exact tangent blocks: legs (4, m, m) and plate (6, 6) (module doc). The five dead wrenches (the
+    """Exact tangent blocks: legs (n, m, m) and plate (6, 6) (module doc). The n + 1 dead wrenches (the
     multipliers at the leg ends; their opposites plus minus the load on the plate) in one batch."""
+    nl = len(lam)
     lf, lm = lam[:, :3], lam[:, 3:]
     f, m = pb.load[:3], pb.load[3:]
-    sk = _skew(np.concatenate([lf, f[None], st.pe, st.pd, st.pc[None]]))  # skew of lf (4), f, pe (4), pd (4), pc
-    sf, sp = sk[:5], sk[5:]
-    fp = sf[_TAN_F] @ sp  # (9, 3, 3): lf x pe (4), lf x pd (4), f x pc
-    xs = (sp @ np.concatenate([lf, lf, f[None]])[:, :, None])[:, :, 0]  # pe x lf (4), pd x lf (4), pc x f
-    w = np.empty((5, 15))  # per wrench: f, moment about O, skew(f) skew(p) flattened
-    w[:4, :3], w[:4, 3:6], w[:4, 6:] = lf, xs[:4] + lm, fp[:4].reshape(4, 9)
-    w[4, :3] = -f - lf.sum(0)  # on the plate: minus the load at pc, and -(lf, pd x lf + lm) at pd per leg
-    w[4, 3:6] = -(xs[8] + m) - (xs[4:8] + lm).sum(0)
-    w[4, 6:] = (-fp[8] - fp[4:8].sum(0)).reshape(9)
-    phi, psi = _phi_psi(w[:, :3], w[:, 3:6], w[:, 6:].reshape(5, 3, 3))
+    sk = _skew(np.concatenate([lf, f[None], st.pe, st.pd, st.pc[None]]))  # skew of lf (n), f, pe (n), pd (n), pc
+    sf, sp = sk[:nl + 1], sk[nl + 1:]
+    fp = sf[np.r_[0:nl, 0:nl, nl]] @ sp  # (2 n + 1, 3, 3): lf x pe (n), lf x pd (n), f x pc
+    xs = (sp @ np.concatenate([lf, lf, f[None]])[:, :, None])[:, :, 0]  # pe x lf (n), pd x lf (n), pc x f
+    w = np.empty((nl + 1, 15))  # per wrench: f, moment about O, skew(f) skew(p) flattened
+    w[:nl, :3], w[:nl, 3:6], w[:nl, 6:] = lf, xs[:nl] + lm, fp[:nl].reshape(nl, 9)
+    w[nl, :3] = -f - lf.sum(0)  # on the plate: minus the load at pc, and -(lf, pd x lf + lm) at pd per leg
+    w[nl, 3:6] = -(xs[2 * nl] + m) - (xs[nl:2 * nl] + lm).sum(0)
+    w[nl, 6:] = (-fp[2 * nl] - fp[nl:2 * nl].sum(0)).reshape(9)
+    phi, psi = _phi_psi(w[:, :3], w[:, 3:6], w[:, 6:].reshape(nl + 1, 3, 3))
     st_ = st.s.transpose(0, 2, 1)
-    g = st_[:, None] @ np.stack([phi[:4], psi[:4]], 1) @ st.s[:, None]  # (4, 2, m, m)
+    g = st_[:, None] @ np.stack([phi[:nl], psi[:nl]], 1) @ st.s[:, None]  # (n, 2, m, m)
     h_leg = g[:, 1] - g[:, 0] * pb.sc.lower
-    nl, nc = h_leg.shape[:2]
+    nc = h_leg.shape[1]
     h_leg.reshape(nl, nc * nc)[:, ::nc + 1] += st.ktan
-    h_plate = st.sp.T @ (psi[4] - phi[4]) @ st.sp
+    h_plate = st.sp.T @ (psi[nl] - phi[nl]) @ st.sp
     return h_leg, h_plate
 
 
@@ -720,7 +727,7 @@ def _solve_nonlinear(pb: _Problem, data: pin.Data, tol: float, max_iter: int, st
     mm = pb.mm
     q = mm.q0.copy() if start is None else start.q.copy()
     d_leg = np.zeros(pb.legq.shape) if start is None else start.q[pb.legq] - mm.q0[pb.legq]
-    lam = np.zeros((4, 6)) if start is None else start.multipliers.copy()
+    lam = np.zeros(pb.legq.shape[:1] + (6,)) if start is None else start.multipliers.copy()
     stat = np.inf
     for it in range(max_iter + 1):
         st = _evaluate(pb, q, data, d_leg)
@@ -756,8 +763,9 @@ def _result(pb: _Problem, st: _State, lam: np.ndarray, q: np.ndarray, d_leg: np.
     f_load, m_load = pb.load[:3], pb.load[3:]
     lf, lm = lam[:, :3], lam[:, 3:]
     oMi = data.oMi
-    # section points (4 legs, 3 sections, xyz) and deformed leg frames
-    pts = np.array([oMi[j].translation for j in sc.sec_joints]).reshape(4, 3, 3)
+    # section points (n legs, 3 sections, xyz) and deformed leg frames
+    nl = len(lam)
+    pts = np.array([oMi[j].translation for j in sc.sec_joints]).reshape(nl, 3, 3)
     for i, k, z in sc.sec_z:
         pts[i, k] += oMi[sc.sec_joints[3 * i + k]].rotation[:, 2] * z
     ez = pts[:, 2] - pts[:, 0]
@@ -765,13 +773,14 @@ def _result(pb: _Problem, st: _State, lam: np.ndarray, q: np.ndarray, d_leg: np.
     ax = mm.machine.cardan_axes
     ex = ax - (ax * ez).sum(1)[:, None] * ez
     ex /= np.sqrt((ex * ex).sum(1))[:, None]
-    frames = np.stack([ex, _cross3(ez, ex), ez], -1)  # (4, 3, 3), columns e_x, e_y, e_z
+    frames = np.stack([ex, _cross3(ez, ex), ez], -1)  # (n, 3, 3), columns e_x, e_y, e_z
     force = -lf  # the plate's wrench on each leg end, carried to the sections (no loads along the leg)
-    mom = _cross3(st.pe[:, None, :] - pts, force[:, None, :]) - lm[:, None, :]  # (4, 3, 3), world
-    fl = (force[:, None, :] @ frames)[:, 0].tolist()  # (4, 3) leg-frame components
-    ml = (mom @ frames).tolist()  # (4, 3 sections, 3)
+    mom = _cross3(st.pe[:, None, :] - pts, force[:, None, :]) - lm[:, None, :]  # (n, 3, 3), world
+    fl = (force[:, None, :] @ frames)[:, 0].tolist()  # (n, 3) leg-frame components
+    ml = (mom @ frames).tolist()  # (n, 3 sections, 3)
     ac = pb.act_col
-    act = np.where(pb.lin_mask[_LEGS, ac], pb.k[_LEGS, ac] * (d_leg[_LEGS, ac] - pb.rest_rel[_LEGS, ac]), 0.0)
+    legs = np.arange(nl)
+    act = np.where(pb.lin_mask[legs, ac], pb.k[legs, ac] * (d_leg[legs, ac] - pb.rest_rel[legs, ac]), 0.0)
     legs = tuple(LegLoads(sections={name: SectionWrench(N=fl[i][2], V_x=fl[i][0], V_y=fl[i][1],
                                                            M_x=ml[i][k][0], M_y=ml[i][k][1], T=ml[i][k][2])
                                              for k, name in enumerate(SECTIONS)}, frame=frames[i], actuator_force_n=a)
@@ -784,12 +793,12 @@ def _result(pb: _Problem, st: _State, lam: np.ndarray, q: np.ndarray, d_leg: np.
     for cm, cd in zip(mm.constraint_models, cds):
         cm.calc(model, data, cd)
     if linear:  # linearised closure: Pinocchio's constraint Jacobian at q0 times the displacement
-        e = (pin.getConstraintsJacobian(model, data, mm.constraint_models, cds) @ dv).reshape(4, 6)
+        e = (pin.getConstraintsJacobian(model, data, mm.constraint_models, cds) @ dv).reshape(nl, 6)
     else:
         e = np.array([cd.extract().constraint_position_error for cd in cds])
     fm = np.sqrt(np.array([plate[:3] @ plate[:3], plate[3:] @ plate[3:], machine[:3] @ machine[:3],
                            machine[3:] @ machine[3:]])) / (pb.f_ref * np.array([1, pb.l_ref, 1, pb.l_ref]))
-    en = np.sqrt((e * e).reshape(4, 2, 3).sum(2)).max(0)
+    en = np.sqrt((e * e).reshape(nl, 2, 3).sum(2)).max(0)
     res = Residuals(*fm.tolist(), *en.tolist(), float(stat), pb.f_ref, pb.l_ref)
     if linear:  # the free flyer's v is in its local frame; at q0 the plate is world-aligned
         disp, rot = dv[:3].copy(), dv[3:6].copy()
@@ -807,23 +816,23 @@ class ReferenceTangent:
 
     elastic: np.ndarray  # (nv, nv) spring stiffness K_e (N m/rad, N/m)
     geometric: np.ndarray  # (nv, nv) geometric stiffness of the linear multipliers and the load
-    jacobian: np.ndarray  # (24, nv) closure Jacobian at the reference
-    leg_v: np.ndarray  # (4, m) velocity indices of each leg's coordinates
-    axial_forces_n: np.ndarray  # (4,) linear actuator forces, N, > 0 tension
+    jacobian: np.ndarray  # (6 n, nv) closure Jacobian at the reference
+    leg_v: np.ndarray  # (n, m) velocity indices of each leg's coordinates
+    axial_forces_n: np.ndarray  # (n,) linear actuator forces, N, > 0 tension
 
 
 def reference_tangent(solver: EquilibriumSolver, pose_m: np.ndarray, plate_wrench: np.ndarray,
                       offsets_m: np.ndarray | None) -> ReferenceTangent:
-    """Linear solve at a pose (m) under a plate wrench (6,) (N, N m) with actuator offsets (4,) (m), and the
+    """Linear solve at a pose (m) under a plate wrench (6,) (N, N m) with actuator offsets (n,) (m), and the
     tangent there split into K_e and the geometric part (linear in the wrench and the offsets)."""
-    offsets = np.zeros(4) if offsets_m is None else np.asarray(offsets_m, dtype=float)
+    offsets = np.zeros(len(solver.machine.legs)) if offsets_m is None else np.asarray(offsets_m, dtype=float)
     pv = solver.model.pose_values(pose_m)
     pb, data = solver._problem(pv, np.asarray(plate_wrench, dtype=float), offsets)
     eq = _solve_linear(pb, data)
     st = _evaluate(pb, pv.q0, data)
     h_leg, h_plate = _tangent(pb, st, eq.multipliers)
     nv = pb.mm.model.nv
-    full, jac = np.zeros((nv, nv)), np.zeros((24, nv))
+    full, jac = np.zeros((nv, nv)), np.zeros((6 * len(pb.legv), nv))
     full[:6, :6] = h_plate
     for i, v in enumerate(pb.legv):
         full[np.ix_(v, v)] = h_leg[i]
@@ -854,5 +863,5 @@ def solve_case(case: Case, linear: bool = False) -> list[Equilibrium]:
                             "use 'pressfit study preload' or 'pressfit check' for cardan clearance")
     poses, loads = case.poses.array(), case.loads.wrenches()
     solver = EquilibriumSolver(case.machine(), pose_m=poses[0])
-    preload = ActuatorPreload.from_case(case.preload) if case.preload.a4 else None
+    preload = ActuatorPreload.from_case(case.preload) if any(case.preload.amplitudes) else None
     return [solver.solve(h, w, preload=preload, linear=linear or case.solver.linear) for h in poses for w in loads]

@@ -174,6 +174,7 @@ def _colour_axis(colours: list[dict[str, np.ndarray]], key: str) -> dict[str, ob
 
 def scene_figure(machine: Machine, cases: list[SceneCase]) -> go.Figure:
     """The 3D view (module doc): a case dropdown, a colouring toggle and a magnification slider."""
+    machine.require_legs("the 3D scene (pressfit.output.scene3d)", 4)
     shapes, _ = machine_shapes(machine)
     mag = _default_magnification(machine, cases)
     traces, colours, owner = [], {}, []

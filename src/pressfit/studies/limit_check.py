@@ -203,6 +203,7 @@ def evaluate_case(case: Case, progress: bool = False) -> CaseResult:
 def evaluate_envelope(case: Case, progress: bool = False) -> CaseResult:
     """Evaluate every ``[envelope]`` limit of a case (module docstring for the method)."""
     machine = case.machine()
+    machine.require_legs("pressfit check (the limit check)", 4)
     poses_all, loads = case.poses.array(), case.loads.wrenches()
     ok = kinematics.is_reachable(machine, poses_all)
     unreachable = _unreachable(machine, poses_all[~ok])

@@ -202,6 +202,7 @@ def plan_from_case(case: Case, samples: int | None = None, seed: int | None = No
     if n < 1:
         raise PressfitError(f"the number of samples must be at least 1, got {n}")
     machine, poses = case.machine(), case.poses.array()
+    machine.require_legs("the Monte Carlo study", 4)
     if len(poses) > MAX_POSES:
         raise PressfitError(f"{case.path}: key 'poses': a Monte Carlo study takes at most {MAX_POSES} poses, got "
                             f"{len(poses)} (each sample solves every pose)")

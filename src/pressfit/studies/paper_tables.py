@@ -89,6 +89,7 @@ def solve_case(case: Case) -> CaseSolution:
     if case.reference is None:
         raise PressfitError(f"{case.path}: case {case.name} has no [reference] table to compare with")
     machine = case.machine()
+    machine.require_legs("the paper's tables (a 4-UPU)", 4)
     pose, wrench = case.poses.array()[0], case.loads.wrenches()[0]
     solver = EquilibriumSolver(machine, pose_m=pose)
     return CaseSolution(case, solver.solve(pose, wrench, linear=True), solver.solve(pose, wrench, linear=False))

@@ -128,6 +128,7 @@ def preload_study(machine: Machine, pose_m: Any, clearances_m: Any, preloads: An
     The preload a4 = 0 (the baseline "without preload") is always part of the grid; preloads are sorted.
     The small-load stiffness is the secant at the stated load ``SMALL_LOAD_FRACTION * load_max_n`` from its
     own solve (independent of ``steps``); it includes the lost motion a joint's play allows."""
+    machine.require_legs("the preload study (one preload amplitude a4)", 4)
     pose = kinematics.require_reachable(machine, pose_m)
     d = _direction(direction)
     pre = np.unique(np.append(np.atleast_1d(np.asarray(preloads, float)), 0.0))

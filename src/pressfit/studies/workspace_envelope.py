@@ -97,6 +97,7 @@ def load_envelope(machine: Machine, y_m: np.ndarray, n_xz: int = 51, loads_n: np
         progress: show a tqdm bar (default: when there is more than one step).
     Unreachable poses are skipped and counted.
     """
+    machine.require_legs("the load envelope (pressfit.studies.workspace_envelope)", 4)
     loads = _as_wrench(press_loads() if loads_n is None else np.atleast_2d(loads_n))
     x, z = workspace_square(machine, n_xz)
     y = np.atleast_1d(np.asarray(y_m, dtype=float))
