@@ -1,0 +1,71 @@
+"""Files of ``pressfit compare``: ``compare.json`` (every machine's figures and the two claims), ``compare.csv`` (one
+row per machine) and ``compare.png`` (the figures side by side, one panel per figure)."""
+
+from __future__ import annotations
+
+from pathlib import Path
+
+import numpy as np
+
+from pressfit.description.machine import load_machine
+from pressfit.output import files as io
+from pressfit.output.plots import plt
+from pressfit.studies.compare import Comparison, compare
+
+PANELS = (("worst_drive_force_n", "worst drive force [N]", 1.0),
+          ("worst_bending_nm", "worst member bending [N m]", 1.0),
+          ("weakest_stiffness_worst_n_per_m", "weakest tool stiffness, worst [N/um]", 1e-6),
+          ("vertical_stiffness_worst_n_per_m", "vertical tool stiffness, worst [N/um]", 1e-6),
+          ("tilt_worst_rad", "tool tilt under 700 N, worst [mrad]", 1e3),
+          ("first_frequency_lowest_hz", "first natural frequency, lowest [Hz]", 1.0),
+          ("moving_mass_kg", "moving mass [kg]", 1.0),
+          ("lost_motion_m", "lost motion, 20 um play [um]", 1e6))
+CSV_COLUMNS = ("name", "kind", "legs", "source", "worst_drive_force_n", "worst_bending_nm", "worst_bending_member",
+               "weakest_stiffness_worst_n_per_m", "weakest_stiffness_median_n_per_m",
+               "vertical_stiffness_worst_n_per_m", "vertical_stiffness_median_n_per_m", "tilt_worst_rad",
+               "tilt_median_rad", "first_frequency_lowest_hz", "first_frequency_median_hz", "moving_mass_kg",
+               "lost_motion_m", "lost_motion_preloaded_m", "best_preload_n", "max_relative_residual")
+
+
+def compare_figure(result: Comparison) -> plt.Figure:
+    """One bar panel per figure (``PANELS``), a bar per machine; the lost-motion panel adds the preloaded bar."""
+    names = [m.name for m in result.machines]
+    fig, axes = plt.subplots(2, 4, figsize=(16, 7))
+    for ax, (key, label, scale) in zip(axes.flat, PANELS, strict=True):
+        values = np.array([getattr(m, key) for m in result.machines], dtype=float) * scale
+        ax.bar(names, values, color="tab:blue")
+        if key == "lost_motion_m":
+            pre = np.array([np.nan if m.lost_motion_preloaded_m is None else max(m.lost_motion_preloaded_m, 0.0)
+                            for m in result.machines]) * scale
+            ax.bar(names, pre, color="tab:orange", width=0.4, label="with the best preload")
+            ax.legend(fontsize=7)
+        ax.set_title(label, fontsize=9)
+        ax.tick_params(axis="x", labelrotation=20, labelsize=7)
+    fig.suptitle("pressfit compare: the required workspace under the press load and its 5 degree cone")
+    fig.tight_layout()
+    return fig
+
+
+def write_compare(result: Comparison, out_dir: Path | str, overwrite: bool = False) -> list[Path]:
+    out = Path(out_dir)
+    rows = [[m.to_dict()[k] for k in CSV_COLUMNS] for m in result.machines]
+    paths = [io.write_json(out / "compare.json", result.to_dict(), overwrite),
+             io.write_csv(out / "compare.csv", list(CSV_COLUMNS), rows, overwrite)]
+    fig = compare_figure(result)
+    try:
+        paths.append(io.save_figure(fig, out / "compare.png", overwrite))
+    finally:
+        plt.close(fig)
+    return paths
+
+
+def run_compare(machine_paths: list[Path], out_dir: Path | None, overwrite: bool = False,
+                progress: bool = True) -> tuple[Comparison, list[Path]]:
+    """Load every machine file (refused before computing when one does not load), compare them
+    (:func:`pressfit.studies.compare.compare`) and write the files into ``out_dir`` if given (checked first)."""
+    if out_dir is not None:
+        io.check_directory(out_dir, overwrite)
+    machines = [load_machine(p) for p in machine_paths]
+    result = compare(machines, progress)
+    return result, ([] if out_dir is None else io.write_directory(
+        out_dir, overwrite, lambda tmp: write_compare(result, tmp), inputs=machine_paths))
