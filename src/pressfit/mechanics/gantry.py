@@ -389,12 +389,11 @@ def build_gantry_model(gantry: Gantry, pose_m: np.ndarray, *, springs_per_segmen
     s2, top = f.span_m / 2, f.column_height_m
     b = _Builder(gantry, n, transverse, rigid)
     column = _frame(_X, _UP)
+    # depth first (Pinocchio's algorithms need each subtree's velocities contiguous): branch A and the
+    # carriage chain it carries, then branch B
     a_end = b.member(0, "column_left", "column", np.array([-s2, 0.0, 0.0]), column, top)
     a_end = b.member(a_end, "x_beam_left", "x_beam", np.array([-s2, top, 0.0]), _frame(_UP, _X), x + s2)
-    b_end = b.member(0, "column_right", "column", np.array([s2, 0.0, 0.0]), column, top)
-    b_end = b.member(b_end, "x_beam_right", "x_beam", np.array([s2, top, 0.0]), _frame(_UP, -_X), s2 - x)
     carriage = np.array([x, top, 0.0])
-    closure = (b.frame(a_end, carriage, "x_carriage.a"), b.frame(b_end, carriage, "x_carriage.b"))
     axis_v, axis_joints = {}, {}
     j, axis_v["x"] = b.axis(a_end, "x", carriage)
     axis_joints["x"] = j
@@ -407,6 +406,9 @@ def build_gantry_model(gantry: Gantry, pose_m: np.ndarray, *, springs_per_segmen
     axis_joints["y"] = j
     j = b.member(j, "ram", "ram", guide, _frame(_X, -_UP), gantry.ram_guide_height_m - y)
     tool = b.frame(j, np.array([x, y, z]), "tool")
+    b_end = b.member(0, "column_right", "column", np.array([s2, 0.0, 0.0]), column, top)
+    b_end = b.member(b_end, "x_beam_right", "x_beam", np.array([s2, top, 0.0]), _frame(_UP, -_X), s2 - x)
+    closure = (b.frame(a_end, carriage, "x_carriage.a"), b.frame(b_end, carriage, "x_carriage.b"))
     model = b.model
     data = model.createData()
     q = pin.neutral(model)
