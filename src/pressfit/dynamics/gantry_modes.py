@@ -95,13 +95,13 @@ class GantryModes:
     pose_m: np.ndarray  # (3,) tool position
     frequencies_hz: np.ndarray  # (k,)
     tool_shapes: np.ndarray  # (k, 6) tool translation (m) and rotation (rad) per mass-normalised mode, world axes
-    moving_mass_kg: float  # total mass on the model's moving bodies
+    model_mass_kg: float  # total mass on the model's bodies (the columns below their first stations stand on the bed)
     closure_residual: float  # max |J_c phi| over the mass-normalised modes
     eigen_residual: float  # max |K_r x - omega^2 M_r x| / |K_r x| over the modes (on the closure null space)
 
     def to_dict(self) -> dict[str, Any]:
         return {"pose_m": self.pose_m.tolist(), "frequencies_hz": self.frequencies_hz.tolist(),
-                "tool_shapes": self.tool_shapes.tolist(), "moving_mass_kg": self.moving_mass_kg,
+                "tool_shapes": self.tool_shapes.tolist(), "model_mass_kg": self.model_mass_kg,
                 "closure_residual": self.closure_residual, "eigen_residual": self.eigen_residual}
 
 
@@ -130,7 +130,7 @@ def model_modes(gm: GantryModel, count: int = 6) -> GantryModes:
     if not eig <= EIGEN_TOL:
         raise ResidualError("gantry modes", "eigen_residual", eig, EIGEN_TOL, f"at tool pose {tuple(gm.pose_m)} m")
     return GantryModes(pose_m=gm.pose_m.copy(), frequencies_hz=np.sqrt(omega2) / (2 * np.pi),
-                       tool_shapes=(gm.tool_jacobian @ phi).T, moving_mass_kg=total_mass_kg(model),
+                       tool_shapes=(gm.tool_jacobian @ phi).T, model_mass_kg=total_mass_kg(model),
                        closure_residual=closure, eigen_residual=eig)
 
 

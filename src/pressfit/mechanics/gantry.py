@@ -154,6 +154,7 @@ class GantryEquilibrium:
     axial_load_ratio: float  # largest compressive member force / its cantilever Euler load
     residuals: GantryResiduals
     joint_displacements: np.ndarray  # (nv,) dq, m or rad
+    joint_forces: np.ndarray  # (nv,) tau, the force (N) or moment (N m) each joint transmits
 
     def to_dict(self) -> dict[str, Any]:
         return {"pose_m": self.pose_m.tolist(), "tool_wrench": self.tool_wrench.tolist(),
@@ -227,7 +228,7 @@ class GantryModel:
         eq = GantryEquilibrium(pose_m=self.pose_m.copy(), tool_wrench=w, tool_displacement_m=u[:3],
                                tool_rotation_rad=u[3:], members=members, axial_load_ratio=ratio, residuals=res,
                                drive_forces_n=np.array([tau[self.axis_v[a][0]] for a in GANTRY_AXES]),
-                               joint_displacements=dq)
+                               joint_displacements=dq, joint_forces=tau)
         where = f"at tool pose {tuple(self.pose_m.tolist())} m under the tool wrench {tuple(w.tolist())} (N, N m)"
         if not res.worst() <= tol:
             names = ("closure_m", "closure_rad", "bed_force", "bed_moment", "work")
@@ -239,40 +240,49 @@ class GantryModel:
                                            f"beyond the {100 * MAX_AXIAL_LOAD_RATIO:g}% this linear solve accepts")
         return eq
 
-    def station_wrenches(self, member: Member, tau: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
-        """World force (n, 3) (N) and moment about each station point (n, 3) (N m) transmitted by the member's
-        stations: the tip-side part on the root-side part."""
-        t = tau[member.station_v]
-        return t[:, :3] @ member.rotation.T, t[:, 3:] @ member.rotation.T
+    def member(self, name: str) -> Member:
+        """The model member of that name (Member.name)."""
+        return next(mb for mb in self.members if mb.name == name)
+
+    def sections(self, member: Member, joint_forces: np.ndarray, s_m: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+        """Section force (k, 3) (N) and moment about the section point (k, 3) (N m), member frame, at distances
+        ``s_m`` (k,) from the member's root: the tip-side part on the root-side part, from the forces its
+        stations transmit (``joint_forces`` tau, (nv,)), carried to the section from the nearest station on
+        its tip side (the root end from the first station; nothing loads a member between its stations)."""
+        t = joint_forces[member.station_v]
+        f, m = t[:, :3] @ member.rotation.T, t[:, 3:] @ member.rotation.T  # world, about the station points
+        s_m = np.atleast_1d(np.asarray(s_m, dtype=float))
+        k = np.minimum(np.searchsorted(member.station_s_m, s_m - 1e-12 * max(member.length_m, 1.0)), len(t) - 1)
+        arm = member.point_m(member.station_s_m[k]) - member.point_m(s_m)
+        return f[k] @ member.rotation, (m[k] + cross(arm, f[k])) @ member.rotation
+
+    def section_wrench(self, eq: GantryEquilibrium, member: str, s_m: float) -> SectionWrench:
+        """The section wrench of a solution ``eq`` in member ``member`` (Member.name) at s (m) from its root."""
+        (f,), (m,) = self.sections(self.member(member), eq.joint_forces, np.array([s_m]))
+        return SectionWrench(N=float(f[2]), V_x=float(f[0]), V_y=float(f[1]), M_x=float(m[0]), M_y=float(m[1]),
+                             T=float(m[2]))
 
     def _member_loads(self, tau: np.ndarray) -> tuple[dict[str, MemberMoment], float, np.ndarray]:
-        """Largest bending moment per reported member, the axial-load ratio, and the bed reaction (6,) about the
-        origin (the columns' first stations)."""
+        """Largest bending moment per reported member (at its ends and stations), the axial-load ratio, and the
+        bed reaction (6,) about the origin (through the columns' first stations)."""
         best: dict[str, MemberMoment] = {}
         ratio, bed = 0.0, np.zeros(6)
         e = self.gantry.material.youngs_modulus_pa
         for mb in self.members:
-            f, m = self.station_wrenches(mb, tau)
-            s = mb.station_s_m
-            pts = mb.point_m(s)
+            s_all = np.concatenate([[0.0], mb.station_s_m, [mb.length_m]])
+            local_f, local_m = self.sections(mb, tau, s_all)
             if mb.component == "column":
-                bed += np.concatenate([f[0], m[0] + cross(pts[0], f[0])])
-            # the section wrench at the root, each station and the tip (no loads between stations)
-            s_all = np.concatenate([[0.0], s, [mb.length_m]])
-            f_all = np.concatenate([f[:1], f, f[-1:]])
-            p_all = mb.point_m(s_all)
-            m_all = np.concatenate([m[:1] + cross(pts[0] - p_all[0], f[0]), m,
-                                    m[-1:] + cross(pts[-1] - p_all[-1], f[-1])])
-            local_f, local_m = f_all @ mb.rotation, m_all @ mb.rotation
+                p, f = mb.point_m(mb.station_s_m[0]), mb.rotation @ local_f[1]
+                bed += np.concatenate([f, mb.rotation @ local_m[1] + cross(p, f)])
             bending = np.hypot(local_m[:, 0], local_m[:, 1])
             k = int(np.argmax(bending))
             if mb.length_m > 0:
-                sec = mb.section
-                euler = math.pi**2 * e * min(sec.second_moments_m4) / (4 * mb.length_m**2)
+                euler = math.pi**2 * e * min(mb.section.second_moments_m4) / (4 * mb.length_m**2)
                 ratio = max(ratio, float(np.max(-local_f[:, 2])) / euler)
             name = "x_beam" if mb.component == "x_beam" else mb.name
             dist = float(s_all[k]) if mb.name != "x_beam_right" else self.gantry.frame.span_m - float(s_all[k])
-            cand = MemberMoment(member=name, bending_moment_nm=float(bending[k]), at_m=p_all[k], distance_from_root_m=dist,
+            cand = MemberMoment(member=name, bending_moment_nm=float(bending[k]), at_m=mb.point_m(s_all[k]),
+                                distance_from_root_m=dist,
                                 section=SectionWrench(N=float(local_f[k, 2]), V_x=float(local_f[k, 0]),
                                                       V_y=float(local_f[k, 1]), M_x=float(local_m[k, 0]),
                                                       M_y=float(local_m[k, 1]), T=float(local_m[k, 2])))
