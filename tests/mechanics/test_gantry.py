@@ -12,7 +12,7 @@ import numpy as np
 import pytest
 
 from pressfit.description.gantry import load_gantry
-from pressfit.errors import UnreachablePoseError, UnstableEquilibriumError
+from pressfit.errors import ResidualError, UnreachablePoseError, UnstableEquilibriumError
 from pressfit.mechanics.gantry import COMPONENTS, build_gantry_model
 from pressfit.shipped import models_dir
 
@@ -206,6 +206,12 @@ def test_tool_compliance_is_symmetric_and_inverts_the_solve():
     force = np.array([30.0, F, -20.0])
     u = gm.solve(np.concatenate([force, np.zeros(3)])).tool_displacement_m
     assert gm.tool_stiffness_n_per_m() @ u == pytest.approx(force, rel=1e-9)
+
+
+def test_a_solution_over_its_tolerance_is_refused():
+    """The residual check is wired: with a tolerance no solution can meet, the solve raises and names the residual."""
+    with pytest.raises(ResidualError, match="gantry linear solve at tool pose"):
+        build_gantry_model(GANTRY, (0.1, 0.6, 0.1)).solve(UP, tol=-1.0)
 
 
 def test_the_linear_solve_refuses_loads_near_buckling():

@@ -65,7 +65,7 @@ class BeamSection(StrictModel):
             raise ValueError("wall_thickness_m must be less than half of the smaller of width_m and height_m")
         return self
 
-    def _rectangles(self) -> tuple[tuple[float, float], tuple[float, float]]:
+    def rectangles_m(self) -> tuple[tuple[float, float], tuple[float, float]]:
         """(width, height) of the outer and the inner (hole) rectangle, m."""
         b, h = self.width_m, self.height_m
         t = self.wall_thickness_m if self.kind == "box" else 0.0
@@ -77,7 +77,7 @@ class BeamSection(StrictModel):
         if self.kind == "tube":
             d = self.outer_diameter_m
             return math.pi / 4 * (d**2 - (d - 2 * self.wall_thickness_m) ** 2)
-        (b, h), (bi, hi) = self._rectangles()
+        (b, h), (bi, hi) = self.rectangles_m()
         return b * h - bi * hi
 
     @cached_property
@@ -87,7 +87,7 @@ class BeamSection(StrictModel):
             d = self.outer_diameter_m
             i = math.pi / 64 * (d**4 - (d - 2 * self.wall_thickness_m) ** 4)
             return i, i
-        (b, h), (bi, hi) = self._rectangles()
+        (b, h), (bi, hi) = self.rectangles_m()
         return (b * h**3 - bi * hi**3) / 12, (h * b**3 - hi * bi**3) / 12
 
     @cached_property

@@ -45,7 +45,7 @@ def _piece_inertia(section: BeamSection, mass_per_m3: float, length_m: float) ->
         if t >= r:
             return outer
         return outer - pin.Inertia.FromCylinder(mass_per_m3 * math.pi * (r - t) ** 2 * length_m, r - t, length_m)
-    (b, h), (bi, hi) = section._rectangles()
+    (b, h), (bi, hi) = section.rectangles_m()
     outer = pin.Inertia.FromBox(mass_per_m3 * b * h * length_m, b, h, length_m)
     if section.kind == "solid":
         return outer
