@@ -182,7 +182,6 @@ class GantryModel:
     springs_per_segment: int
     transverse: str
     compliance: np.ndarray
-    is_translation: np.ndarray
     coordinate_names: tuple[str, ...]
     members: tuple[Member, ...]
     axis_v: dict[str, np.ndarray]
@@ -233,7 +232,7 @@ class GantryModel:
         if not res.worst() <= tol:
             names = ("closure_m", "closure_rad", "bed_force", "bed_moment", "work")
             values = (res.closure_m / res.length_scale_m, res.closure_rad, res.bed_force, res.bed_moment, res.work)
-            k = int(np.nanargmax(np.where(np.isnan(values), np.inf, values)))
+            k = int(np.argmax(np.where(np.isnan(values), np.inf, values)))
             raise ResidualError("gantry linear solve", names[k], float(values[k]), tol, where)
         if ratio > MAX_AXIAL_LOAD_RATIO:
             raise UnstableEquilibriumError(f"a gantry member {where} carries {100 * ratio:.3g}% of its Euler load, "
@@ -316,7 +315,6 @@ class _Builder:
         self.world = [pin.SE3.Identity()]
         self.compliance: list[float] = []
         self.names: list[str] = []
-        self.translation: list[bool] = []
         self.members: list[Member] = []
 
     def joint(self, parent: int, kind: str, placement: pin.SE3, name: str, compliance: float) -> int:
@@ -324,7 +322,6 @@ class _Builder:
         self.world.append(placement)
         self.compliance.append(compliance)
         self.names.append(name)
-        self.translation.append(kind.startswith("P"))
         return j
 
     def frame(self, joint: int, point: np.ndarray, name: str) -> int:
@@ -426,7 +423,7 @@ def build_gantry_model(gantry: Gantry, pose_m: np.ndarray, *, springs_per_segmen
     pin.updateFramePlacements(model, data)
     jac = [np.array(pin.getFrameJacobian(model, data, fid, pin.LOCAL_WORLD_ALIGNED)) for fid in (tool, *closure)]
     return GantryModel(gantry=gantry, pose_m=np.array([x, y, z]), model=model, springs_per_segment=n,
-                       transverse=transverse, compliance=np.array(b.compliance), is_translation=np.array(b.translation),
+                       transverse=transverse, compliance=np.array(b.compliance),
                        coordinate_names=tuple(b.names), members=tuple(b.members), axis_v=axis_v,
                        axis_joints=axis_joints, tool_frame=tool, tool_jacobian=jac[0], closure_jacobian=jac[1] - jac[2])
 
