@@ -5,7 +5,8 @@ from __future__ import annotations
 import click
 
 from pressfit.cli.common import user_errors
-from pressfit.description.machine import load_machine
+from pressfit.description.gantry import is_gantry_file, load_gantry
+from pressfit.description.machine import load_machine, read_toml
 
 
 @click.command("list")
@@ -17,7 +18,7 @@ def list_cmd() -> None:
 
     click.echo(f"models ({models_dir()}):")
     for path in sorted(models_dir().glob("*.toml")):
-        m = load_machine(path)
+        m = load_gantry(path) if is_gantry_file(read_toml(path)) else load_machine(path)
         click.echo(f"  {path.name}  {m.name}: {m.description}")
     click.echo(f"cases ({cases_dir()}):")
     for path in discover([cases_dir()]):
