@@ -2,6 +2,7 @@
 
 from __future__ import annotations
 
+import math
 from pathlib import Path
 
 import click
@@ -27,8 +28,9 @@ ROWS = (("worst drive force [N]", "worst_drive_force_n", 1.0, ".4g"),
 
 def _cell(figures: dict, keys: str | tuple[str, str], scale: float, fmt: str) -> str:
     def one(v: object) -> str:
-        return "-" if v is None else format(max(float(v), 0.0) * scale if "lost" in str(keys) else float(v) * scale,
-                                            fmt)
+        if v is None or not math.isfinite(float(v)):
+            return "-"
+        return format((max(float(v), 0.0) if "lost" in str(keys) else float(v)) * scale, fmt)  # lost: round-off < 0
     return " / ".join(one(figures[k]) for k in (keys if isinstance(keys, tuple) else (keys,)))
 
 

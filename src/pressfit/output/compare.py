@@ -7,7 +7,8 @@ from pathlib import Path
 
 import numpy as np
 
-from pressfit.description.machine import load_machine
+from pressfit.description.gantry import is_gantry_file, load_gantry
+from pressfit.description.machine import load_machine, read_toml
 from pressfit.output import files as io
 from pressfit.output.plots import plt
 from pressfit.studies.compare import Comparison, compare
@@ -65,7 +66,7 @@ def run_compare(machine_paths: list[Path], out_dir: Path | None, overwrite: bool
     (:func:`pressfit.studies.compare.compare`) and write the files into ``out_dir`` if given (checked first)."""
     if out_dir is not None:
         io.check_directory(out_dir, overwrite)
-    machines = [load_machine(p) for p in machine_paths]
+    machines = [load_gantry(p) if is_gantry_file(read_toml(p)) else load_machine(p) for p in machine_paths]
     result = compare(machines, progress)
     return result, ([] if out_dir is None else io.write_directory(
         out_dir, overwrite, lambda tmp: write_compare(result, tmp), inputs=machine_paths))

@@ -1,0 +1,161 @@
+"""``pressfit compare`` (issue 21 item 4): the per-pose figures recomputed at one pose by an independent engine (the
+Pinocchio VJM statics, per load and per unit load), the 3-UPU's centred pose against its closed form, the claims'
+verdicts turned by figures just on either side of their thresholds, and the CLI's refusals."""
+
+from __future__ import annotations
+
+import dataclasses
+import json
+import math
+from pathlib import Path
+
+import numpy as np
+import pytest
+from click.testing import CliRunner
+
+from pressfit.cli import main
+from pressfit.description.machine import load_machine
+from pressfit.errors import PressfitError
+from pressfit.mechanics.statics import solve_equilibrium
+from pressfit.studies.compare import (
+    BACKLASH_COMPENSATED,
+    CONE_DIRECTIONS,
+    CONE_HALF_ANGLE_RAD,
+    MachineFigures,
+    claims,
+    compare_box,
+    pose_figures,
+)
+
+ROOT = Path(__file__).resolve().parents[2]
+POSE = np.array([0.15, 0.55, -0.1])
+
+
+def test_pose_figures_are_the_pinocchio_statics_at_one_pose():
+    """Independent engine: the Pinocchio VJM linear statics (per-leg spring chains, 6D closures, KKT) at one pose.
+    Drive force: max |actuator force| over the press load and its 5 degree cone, each load solved here; bending:
+    the sections' hypot(M_x, M_y); vertical stiffness 700 N / delta_y under the press load alone; the weakest
+    stiffness: the smallest eigenvalue of the inverse of the 3 x 3 compliance assembled from three unit-load solves;
+    tilt |phi| under the press load. The two engines agree to ~1e-11 (tests/test_condensed_vs_pinocchio.py):
+    asserted to 1e-8."""
+    machine = load_machine()
+    f = pose_figures(machine, POSE[None])
+    cone = [(0.0, 1.0, 0.0)] + [(math.sin(CONE_HALF_ANGLE_RAD) * math.cos(2 * math.pi * k / CONE_DIRECTIONS),
+                                 math.cos(CONE_HALF_ANGLE_RAD),
+                                 math.sin(CONE_HALF_ANGLE_RAD) * math.sin(2 * math.pi * k / CONE_DIRECTIONS))
+                                for k in range(CONE_DIRECTIONS)]
+    solves = [solve_equilibrium(machine, POSE, [*(700.0 * np.array(d)), 0, 0, 0], linear=True) for d in cone]
+    forces = np.max([np.abs(e.actuator_forces_n) for e in solves], axis=0)
+    bending = np.max([[max(math.hypot(s.M_x, s.M_y) for s in leg.sections.values()) for leg in e.legs]
+                      for e in solves], axis=0)
+    np.testing.assert_allclose(f.drive_force_n[0], forces, rtol=1e-8)
+    np.testing.assert_allclose(f.bending_nm[0], bending, rtol=1e-8)
+    press = solves[0]
+    assert f.vertical_stiffness_n_per_m[0] == pytest.approx(700.0 / press.plate_displacement_m[1], rel=1e-8)
+    assert f.tilt_rad[0] == pytest.approx(np.linalg.norm(press.plate_rotation_rad), rel=1e-8)
+    compliance = np.column_stack([solve_equilibrium(machine, POSE, [*e, 0, 0, 0], linear=True).plate_displacement_m
+                                  for e in np.eye(3)])
+    weakest = np.linalg.eigvalsh(np.linalg.inv(0.5 * (compliance + compliance.T)))[0]
+    assert f.weakest_stiffness_n_per_m[0] == pytest.approx(weakest, rel=1e-8)
+    assert f.max_relative_residual < 1e-13
+
+
+def test_the_3upu_at_its_centred_pose_is_the_closed_form():
+    """Tsai's 3-UPU with the plate centre on the y axis: by symmetry each leg carries F / (3 sin alpha) of a
+    vertical force F (sin alpha = the legs' vertical direction cosine, y / l with the leg vector (p - r, y) in its
+    radial plane), and the vertical stiffness is 3 k_a sin^2 alpha (rigid cardans: the leg springs in parallel,
+    each seen through its direction cosine)."""
+    machine = load_machine(ROOT / "models/tsai_3upu.toml")
+    y = 0.6
+    f = pose_figures(machine, np.array([[0.0, y, 0.0]]))
+    u = machine.base_points_m[0] - (np.array([0.0, y, 0.0]) + machine.plate_offsets_m[0])
+    length = np.linalg.norm(u)
+    sin_alpha = abs(u[1]) / length
+    k_a = 1.0 / float(machine.axial_compliance_m_per_n(length))
+    assert f.vertical_stiffness_n_per_m[0] == pytest.approx(3 * k_a * sin_alpha**2, rel=1e-10)
+    tension = 700.0 / (3 * sin_alpha)  # under the press load alone; the cone's worst leg carries more
+    assert f.drive_force_n[0].min() >= tension * (1 - 1e-12)
+    assert f.drive_force_n[0].max() <= 700.0 / (3 * sin_alpha * math.cos(CONE_HALF_ANGLE_RAD)) * 2
+
+
+def test_the_box_is_the_required_workspace_and_refused_when_short():
+    """The box spans the required square and 100 mm of height from the lowest fully reachable height; with
+    leg_length_max_m = 0.88 m the whole square is reachable over 95 mm of height only (the corners' legs 1 and 4
+    reach their maximum: square_height_range) and the machine is refused by name, with 0.90 m (125 mm) it is not."""
+    machine = load_machine()
+    box = compare_box(machine)
+    assert np.allclose([box[:, 0].min(), box[:, 0].max(), box[:, 2].min(), box[:, 2].max()],
+                       [-0.25, 0.25, -0.25, 0.25])
+    assert box[:, 1].max() - box[:, 1].min() == pytest.approx(0.1, abs=1e-12)
+    with pytest.raises(PressfitError, match="pressfit-4upu.*does not cover the required box"):
+        compare_box(machine.with_overrides({"limits": {"leg_length_max_m": 0.88}}))
+    assert len(compare_box(machine.with_overrides({"limits": {"leg_length_max_m": 0.90}}))) == len(box)
+
+
+def _figures(**over: object) -> MachineFigures:
+    base = dict(name="m", source="m.toml", kind="upu", legs=4, heights_m=(0.5, 0.6), poses=1,
+                worst_drive_force_n=500.0,
+                worst_drive_force_pose_m=np.zeros(3), worst_bending_nm=20.0, worst_bending_member="leg 1",
+                weakest_stiffness_worst_n_per_m=1e6, weakest_stiffness_median_n_per_m=2e6,
+                vertical_stiffness_worst_n_per_m=5e6, vertical_stiffness_median_n_per_m=6e6, tilt_worst_rad=1e-3,
+                tilt_median_rad=5e-4, first_frequency_lowest_hz=25.0, first_frequency_median_hz=30.0,
+                moving_mass_kg=40.0, lost_motion_m=50e-6, lost_motion_preloaded_m=0.0, best_preload_n=400.0,
+                preload_note="", max_relative_residual=1e-16)
+    return MachineFigures(**{**base, **over})
+
+
+def test_claims_turn_just_across_their_thresholds():
+    """Each verdict from figures just on either side of its rule (module docstring of studies/compare.py): the
+    4-UPU's worst member moment 1e-9 below / above the gantry's; its weakest stiffness just above / below; its
+    preloaded lost motion just below / above BACKLASH_COMPENSATED of the 3-UPU's; a missing baseline: not measured."""
+    upu4 = _figures(name="four")
+    gantry = _figures(name="gantry", kind="gantry", legs=None, worst_bending_nm=20.0 * (1 + 1e-9),
+                      weakest_stiffness_worst_n_per_m=1e6 * (1 - 1e-9), vertical_stiffness_worst_n_per_m=1e6,
+                      tilt_worst_rad=2e-3, lost_motion_m=float("nan"), lost_motion_preloaded_m=None)
+    upu3 = _figures(name="three", legs=3, lost_motion_m=50e-6, lost_motion_preloaded_m=None, best_preload_n=None)
+    assert [c.verdict for c in claims([upu4, gantry, upu3])] == ["confirmed"] * 3
+    over = dataclasses.replace(gantry, worst_bending_nm=20.0 * (1 - 1e-9),
+                               weakest_stiffness_worst_n_per_m=1e6 * (1 + 1e-9))
+    assert [c.verdict for c in claims([upu4, over, upu3])][:2] == ["refuted", "refuted"]
+    limit = BACKLASH_COMPENSATED * upu3.lost_motion_m
+    below = dataclasses.replace(upu4, lost_motion_preloaded_m=limit * (1 - 1e-9))
+    above = dataclasses.replace(upu4, lost_motion_preloaded_m=limit * (1 + 1e-9))
+    assert claims([below, upu3])[-1].verdict == "confirmed" and claims([above, upu3])[-1].verdict == "refuted"
+    assert [c.verdict for c in claims([upu4])] == ["not measured"] * 3
+
+
+def run(*args: object):
+    return CliRunner().invoke(main, [str(a) for a in args])
+
+
+def test_compare_cli_refuses_bad_input_before_computing(tmp_path):
+    """The same file twice, a missing file, an output directory that holds files: exit 2, one line, nothing written."""
+    four = ROOT / "models/pressfit_4upu.toml"
+    res = run("compare", four, four, "--no-progress")
+    assert res.exit_code == 2 and "twice" in res.output, res.output
+    res = run("compare", four, tmp_path / "none.toml", "--no-progress")
+    assert res.exit_code == 2 and "none.toml" in res.output, res.output
+    out = tmp_path / "out"
+    out.mkdir()
+    (out / "mine.txt").write_text("keep")
+    res = run("compare", four, "--out", out, "--no-progress")
+    assert res.exit_code == 2 and "not empty" in res.output and (out / "mine.txt").read_text() == "keep"
+
+
+def test_compare_cli_writes_the_figures_and_the_claims(tmp_path):
+    """4-UPU against the gantry: JSON with both machines and three claims, compare.csv with a row each, and the
+    precision claim's numbers are the JSON's figures."""
+    res = run("compare", ROOT / "models/pressfit_4upu.toml", ROOT / "models/gantry_cartesian.toml", "--json",
+              "--out", tmp_path / "out", "--no-progress")
+    assert res.exit_code == 0, res.output
+    s = json.loads(res.output)
+    assert [m["kind"] for m in s["machines"]] == ["upu", "gantry"] and len(s["claims"]) == 3
+    four, gantry = s["machines"]
+    precision = s["claims"][0]
+    expected = ("confirmed" if four["weakest_stiffness_worst_n_per_m"] > gantry["weakest_stiffness_worst_n_per_m"]
+                and four["vertical_stiffness_worst_n_per_m"] > gantry["vertical_stiffness_worst_n_per_m"]
+                and four["tilt_worst_rad"] < gantry["tilt_worst_rad"] else "refuted")
+    assert precision["verdict"] == expected
+    assert s["claims"][2]["verdict"] == "not measured"
+    rows = (tmp_path / "out" / "compare.csv").read_text().strip().splitlines()
+    assert len(rows) == 3 and (tmp_path / "out" / "compare.png").stat().st_size > 10_000
