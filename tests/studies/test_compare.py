@@ -159,3 +159,24 @@ def test_compare_cli_writes_the_figures_and_the_claims(tmp_path):
     assert s["claims"][2]["verdict"] == "not measured"
     rows = (tmp_path / "out" / "compare.csv").read_text().strip().splitlines()
     assert len(rows) == 3 and (tmp_path / "out" / "compare.png").stat().st_size > 10_000
+
+
+def test_the_rotated_machine_is_the_shipped_one_turned_45_degrees():
+    """models/pressfit_4upu_rotated45.toml is the shipped machine turned by -45 degrees about y (leg i's radial
+    direction R n_i): a pose R h under the load R F gives it the shipped machine's leg forces and section moments
+    at h under F, leg by leg (the statics is invariant under a rigid rotation of machine, pose and load); so only
+    the workspace square, which does not turn, differs between the two in `pressfit compare`."""
+    shipped, turned = load_machine(), load_machine(ROOT / "models/pressfit_4upu_rotated45.toml")
+    c, s = math.cos(-math.pi / 4), math.sin(-math.pi / 4)
+    rot = np.array([[c, 0.0, s], [0.0, 1.0, 0.0], [-s, 0.0, c]])  # x' = x cos + z sin, z' = -x sin + z cos
+    np.testing.assert_allclose(shipped.base_points_m @ rot.T, turned.base_points_m, atol=1e-15)
+    from pressfit.mechanics import condensed
+
+    rng = np.random.default_rng(3)
+    for _ in range(5):
+        h = np.array([rng.uniform(-0.15, 0.15), rng.uniform(0.55, 0.65), rng.uniform(-0.15, 0.15)])
+        f = rng.normal(size=3) * 300.0
+        a, b = condensed.solve_linear(shipped, h, f), condensed.solve_linear(turned, rot @ h, rot @ f)
+        np.testing.assert_allclose(b.axial_forces_n, a.axial_forces_n, rtol=1e-10, atol=1e-9)
+        np.testing.assert_allclose(b.bending_nm, a.bending_nm, rtol=1e-9, atol=1e-9)
+        np.testing.assert_allclose(b.plate_displacement_m, rot @ a.plate_displacement_m, rtol=1e-9, atol=1e-15)
