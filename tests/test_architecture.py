@@ -5,7 +5,10 @@
 * the physics subpackages (kinematics, mechanics, geometry, dynamics) import neither matplotlib nor
   pressfit.output, and never open files for writing;
 * no module-level mutable state in the library: no module-level dict/list/set that a function mutates
-  (``global`` statements and module-level caches are refused).
+  (``global`` statements and module-level caches are refused);
+* no import circle between modules, counting every import (module level, inside functions, under
+  TYPE_CHECKING): the clearance law lives apart from the clearance solvers for this
+  (mechanics/clearance_law.py; the circle was clearance -> statics -> preload -> clearance).
 """
 
 from __future__ import annotations
@@ -161,3 +164,59 @@ def test_missing_document_check_catches_a_phantom_source():
     phantom, nested = "DESIGN" + ".md", "notes/derivation" + ".md"  # split so that this file cites neither
     assert missing_documents(f"# closed form ({phantom}) and (see {nested})", outputs) == [phantom, nested]
     assert missing_documents("docs/conventions.md, README.md, conventions.md, DIR/report.md", outputs) == []
+
+
+def _module_name(path: Path, root: Path) -> str:
+    rel = path.relative_to(root.parent).with_suffix("")
+    return ".".join(rel.parts).removesuffix(".__init__")
+
+
+def _import_cycles(paths: list[Path], root: Path = SRC) -> list[list[str]]:
+    """The strongly connected components (more than one module) of the import graph of ``paths`` (modules of
+    the package at ``root``)."""
+    names = {_module_name(p, root): p for p in paths}
+    graph = {m: {t for t in _imports(p) if t in names and t != m} for m, p in names.items()}
+    index: dict[str, int] = {}
+    low: dict[str, int] = {}
+    stack: list[str] = []
+    cycles: list[list[str]] = []
+
+    def visit(v: str) -> None:  # Tarjan
+        index[v] = low[v] = len(index)
+        stack.append(v)
+        for w in graph[v]:
+            if w not in index:
+                visit(w)
+                low[v] = min(low[v], low[w])
+            elif w in stack:
+                low[v] = min(low[v], index[w])
+        if low[v] == index[v]:
+            component = []
+            while True:
+                w = stack.pop()
+                component.append(w)
+                if w == v:
+                    break
+            if len(component) > 1:
+                cycles.append(sorted(component))
+
+    for v in graph:
+        if v not in index:
+            visit(v)
+    return cycles
+
+
+def test_no_import_circle():
+    assert _import_cycles(sorted(SRC.rglob("*.py"))) == []
+
+
+def test_the_circle_check_finds_a_circle(tmp_path):
+    """Not vacuous: three modules importing each other in a ring (one inside a function) are one circle."""
+    pkg = tmp_path / "pressfit" / "mechanics"
+    pkg.mkdir(parents=True)
+    (pkg / "a.py").write_text("from pressfit.mechanics.b import f\n")
+    (pkg / "b.py").write_text("def f():\n    from pressfit.mechanics import c\n")
+    (pkg / "c.py").write_text("from typing import TYPE_CHECKING\nif TYPE_CHECKING:\n"
+                              "    from pressfit.mechanics.a import x\n")
+    ring = ["pressfit.mechanics.a", "pressfit.mechanics.b", "pressfit.mechanics.c"]
+    assert _import_cycles(sorted(pkg.glob("*.py")), tmp_path / "pressfit") == [ring]

@@ -25,6 +25,7 @@ from pressfit import kinematics
 from pressfit.description.cases import load_case
 from pressfit.description.machine import load_machine
 from pressfit.mechanics import clearance as C
+from pressfit.mechanics import clearance_law as L
 from pressfit.studies import preload_study
 from pressfit.studies.limit_check import evaluate_case
 
@@ -71,7 +72,7 @@ def test_lost_motion_at_pose_A_is_the_same_for_every_geometry(machine, geometry)
     ld = C.load_deflection(machine, POSE_A, UP, LOADS, C.Clearance.uniform(machine, G, geometry=geometry),
                            unload=False)
     assert ld.lost_motion_m == pytest.approx(2 * G / (2 / math.sqrt(5)), rel=3e-6)
-    assert ld.summary()["clearance_geometry"] == C.GEOMETRY_DESCRIPTIONS[geometry]
+    assert ld.summary()["clearance_geometry"] == L.GEOMETRY_DESCRIPTIONS[geometry]
 
 
 @pytest.mark.parametrize("geometry", GEOMETRIES)
@@ -129,7 +130,7 @@ def test_geometry_from_the_machine_and_the_case(tmp_path):
 def test_outputs_name_the_geometry(machine, tmp_path):
     """Study JSON, CSV rows and text, and the check's method line name the geometry they assume."""
     study = preload_study.preload_study(machine, OFF, [G], [0.0], 700.0, 5, geometry="box", progress=False)
-    text = C.GEOMETRY_DESCRIPTIONS["box"]
+    text = L.GEOMETRY_DESCRIPTIONS["box"]
     assert study.to_dict()["clearance_geometry"] == "box"
     assert study.to_dict()["clearance_geometry_description"] == text
     header, rows = study.rows()

@@ -123,3 +123,7 @@ class StudyFailedError(PressfitError):
         self.failed = failed
         reasons = ", ".join(f"{n} x {reason}" for reason, n in sorted(failed.items(), key=lambda t: -t[1]))
         super().__init__(f"{what}: every sample failed ({reasons}); nothing to summarise")
+
+
+class ClearanceError(PressfitError):
+    """Bad clearance or preload input (negative gap, unknown mode, no closing preload found, ...)."""

@@ -10,7 +10,7 @@ machine has none and is refused), applied before the load in one of two modes:
 * ``force`` (force-controlled drives): a in N; with no load the actuator forces are exactly V a
   (tension > 0). As actuator rest-length offsets: o_i = -((V a)_i c_axial,i + x_i), c_axial the leg's
   axial compliance (m/N) and x_i the extension (m) of the leg's cardan plays (if any) under (V a)_i,
-  which closes every play with (V a)_i != 0 (:class:`pressfit.mechanics.clearance.Clearance`).
+  which closes every play with (V a)_i != 0 (:class:`pressfit.mechanics.clearance_law.Clearance`).
 * ``length`` (position-held drives): a in m; offsets o = -V a (legs shortened by (V a)_i, so that
   a > 0 pulls the legs with v_i > 0 like the force mode).
 
@@ -34,7 +34,7 @@ from pressfit.mechanics.condensed import CondensedResult
 from pressfit.spatial import cross
 
 if TYPE_CHECKING:
-    from pressfit.mechanics.clearance import Clearance
+    from pressfit.mechanics.clearance_law import Clearance
 
 PreloadMode = Literal["force", "length"]
 PRELOAD_MODES = ("force", "length")

@@ -15,7 +15,6 @@ from pressfit import kinematics
 from pressfit.description.machine import Machine
 from pressfit.mechanics import condensed
 from pressfit.mechanics.clearance import (
-    GEOMETRY_DESCRIPTIONS,
     Clearance,
     ClearanceError,
     LoadDeflection,
@@ -26,6 +25,7 @@ from pressfit.mechanics.clearance import (
     critical_preloads,
     load_deflection,
 )
+from pressfit.mechanics.clearance_law import GEOMETRY_DESCRIPTIONS
 from pressfit.mechanics.preload import rest_length_offsets
 
 SMALL_LOAD_FRACTION = 0.1  # the small load of the small-load secant stiffness, as a fraction of the largest load
