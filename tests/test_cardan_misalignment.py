@@ -9,7 +9,7 @@ import pytest
 from pressfit import kinematics
 from pressfit.description.cases import load_case
 from pressfit.description.machine import Machine
-from pressfit.errors import ModelFileError, PressfitError
+from pressfit.errors import CondensedModelError, ModelFileError, PressfitError
 from pressfit.mechanics import condensed
 from pressfit.mechanics.fast_statics import FastEquilibriumSolver
 from pressfit.mechanics.model import build_model
@@ -124,7 +124,7 @@ def test_solvers_that_need_parallel_axes_refuse_a_tilted_machine(machine):
         FastEquilibriumSolver(m, pose_m=POSE_A)
     with pytest.raises(PressfitError, match="misaligned cardans"):
         EquilibriumSolver(m, pose_m=POSE_A).solve(POSE_A, PRESS_N, linear=True)
-    with pytest.raises(condensed.CondensedModelError, match="misaligned cardans"):
+    with pytest.raises(CondensedModelError, match="misaligned cardans"):
         condensed.solve_linear(m, POSE_A[None], PRESS_N)
 
 

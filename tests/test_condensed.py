@@ -15,7 +15,7 @@ import pytest
 from scipy.spatial.transform import Rotation
 
 from pressfit import kinematics
-from pressfit.errors import OutputExistsError, PressfitError
+from pressfit.errors import CondensedModelError, OutputExistsError, PressfitError
 from pressfit.kinematics.workspace import workspace_square
 from pressfit.mechanics import condensed
 from pressfit.mechanics.preload import with_axial_preload
@@ -273,7 +273,7 @@ def test_bad_input_is_a_pressfit_error(machine):
     with pytest.raises(PressfitError):
         condensed.plate_stiffness(machine, [0, 0.6, 0], about="P")
     elastic = machine.with_overrides({"joints": {"cardan_rotational_stiffness_nm_per_rad": 1e5}})
-    with pytest.raises(condensed.CondensedModelError):
+    with pytest.raises(CondensedModelError):
         condensed.solve_linear(elastic, [0, 0.6, 0], [0, 700, 0])
 
 
@@ -390,3 +390,11 @@ def test_stiffness_report_off_centre_against_the_vjm_model(machine):
     k_t = sum(k_axial(li) * np.outer(ei, ei) for li, ei in zip(length, e))
     np.testing.assert_allclose(rep["translational_stiffness_about_p_star_n_per_m"], k_t, rtol=0,
                                atol=1e-12 * np.abs(k_t).max())
+
+
+def test_condensed_model_error_carries_the_broken_assumption(machine):
+    """Callers read the machine and the assumption from the exception, not from its message."""
+    elastic = machine.with_overrides({"joints": {"cardan_rotational_stiffness_nm_per_rad": 1e5}})
+    with pytest.raises(CondensedModelError) as err:
+        condensed.plate_stiffness(elastic, [0.0, 0.6, 0.0])
+    assert (err.value.machine, err.value.assumption) == (machine.name, "free cardans")

@@ -9,7 +9,7 @@ from scipy import special
 
 from pressfit import kinematics
 from pressfit.description.cases import load_case
-from pressfit.errors import ModelFileError
+from pressfit.errors import CondensedModelError, ModelFileError
 from pressfit.mechanics import condensed
 from pressfit.studies import montecarlo as mc
 
@@ -141,7 +141,7 @@ def test_joint_position_errors_move_the_cardans_and_the_condensed_model_refuses_
     np.testing.assert_array_equal(perturbed.base_points_m - machine.base_points_m,
                                   [[0, 0, 0], [0, 1e-4, 0], [0, 0, 0], [0, 0, 0]])
     assert machine.legs_concurrent and not perturbed.legs_concurrent
-    with pytest.raises(condensed.CondensedModelError, match="do not all meet"):
+    with pytest.raises(CondensedModelError, match="do not all meet"):
         condensed.solve_linear(perturbed, np.array([POSE_A]), np.array([0, 700.0, 0, 0, 0, 0]))
 
 

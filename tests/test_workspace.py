@@ -8,7 +8,7 @@ from click.testing import CliRunner
 
 from pressfit import kinematics
 from pressfit.cli import main
-from pressfit.errors import OutputExistsError
+from pressfit.errors import OutputExistsError, WorkspaceError
 from pressfit.kinematics import workspace
 from pressfit.output import maps
 
@@ -27,8 +27,9 @@ def test_square_points(machine):
 
 def test_square_too_large_is_an_error(machine):
     big = machine.with_overrides({"workspace": {"x_half_width_m": 0.6, "z_half_width_m": 0.6}})
-    with pytest.raises(workspace.WorkspaceError, match="no height"):
+    with pytest.raises(WorkspaceError, match="no height") as err:
         workspace.square_height_range(big)
+    assert err.value.heights_m == [] and err.value.angle_deg == 0.0  # the data, not only the message
 
 
 def test_plane_map(machine):

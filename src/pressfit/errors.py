@@ -127,3 +127,26 @@ class StudyFailedError(PressfitError):
 
 class ClearanceError(PressfitError):
     """Bad clearance or preload input (negative gap, unknown mode, no closing preload found, ...)."""
+
+
+class CondensedModelError(PressfitError):
+    """The machine breaks an assumption of the condensed model (:mod:`pressfit.mechanics.condensed`): ``machine``
+    its name, ``assumption`` the one broken ("concurrent legs", "parallel cardan axes", "free cardans"),
+    ``reason`` what in the machine breaks it; the remedy is the Pinocchio statics."""
+
+    def __init__(self, machine: str, assumption: str, reason: str) -> None:
+        self.machine, self.assumption, self.reason = machine, assumption, reason
+        super().__init__(f"{machine}: {reason}; the condensed model assumes {assumption}: use "
+                         "pressfit.mechanics.statics")
+
+
+class WorkspaceError(PressfitError):
+    """The required square, turned by ``angle_deg``, is reachable at no height (``heights_m`` empty) or at heights
+    ``heights_m`` (m, the scan's) that do not form one interval."""
+
+    def __init__(self, angle_deg: float, heights_m: list[float], scan_step_m: float) -> None:
+        self.angle_deg, self.heights_m, self.scan_step_m = angle_deg, heights_m, scan_step_m
+        super().__init__(f"the required square rotated by {angle_deg:g} deg is reachable at no height (scanned y "
+                         f"in steps of {scan_step_m:g} m)" if not heights_m else
+                         f"the heights where the square rotated by {angle_deg:g} deg is reachable do not form one "
+                         f"interval: {heights_m} m")

@@ -14,7 +14,7 @@ import pytest
 
 from pressfit import kinematics
 from pressfit.description.machine import load_machine
-from pressfit.errors import PreloadError
+from pressfit.errors import CondensedModelError, PreloadError
 from pressfit.mechanics import buckling, clearance, condensed, fast_statics, preload, statics
 
 TSAI = Path(__file__).resolve().parents[2] / "models" / "tsai_3upu.toml"
@@ -143,7 +143,7 @@ def test_condensed_refuses_legs_that_do_not_meet(tsai):
     legs = tsai.model_dump()["legs"]
     legs[1]["plate_point_error_m"] = [0.0, 0.0, 1e-3]
     off = tsai.with_overrides({"legs": legs})
-    with pytest.raises(condensed.CondensedModelError, match="do not all meet at one point"):
+    with pytest.raises(CondensedModelError, match="do not all meet at one point"):
         condensed.solve_linear(off, [0.0, 0.6, 0.0], [0.0, F_N, 0.0])
     eq = statics.solve_equilibrium(off, [0.0, 0.6, 0.0], [0.0, F_N, 0.0])  # the Pinocchio model has no such assumption
     assert eq.is_valid()

@@ -20,7 +20,7 @@ import numpy as np
 
 from pressfit import kinematics
 from pressfit.description.machine import Machine
-from pressfit.errors import PressfitError
+from pressfit.errors import WorkspaceError
 
 BOUNDARY_STEP_M = 5e-4
 INTERIOR_POINTS = 41
@@ -30,10 +30,6 @@ MAP_STEP_M = 0.005
 DEFAULT_HEIGHTS_M = (0.6,)  # the paper's Figures 7-11 and Table 4
 DEFAULT_ANGLES_DEG = (0.0, 45.0, 90.0)
 VARIATION_DEFINITION = "(max - min) / max over the required square (boundary + interior grid)"
-
-
-class WorkspaceError(PressfitError):
-    """The required square is reachable at no height, or at heights that do not form one interval."""
 
 
 def square_corners(machine: Machine, angle_deg: float = 0.0) -> np.ndarray:
@@ -92,11 +88,9 @@ def square_height_range(machine: Machine, angle_deg: float = 0.0, tolerance_m: f
     ys = np.arange(scan_step_m, machine.limits.leg_length_max_m + scan_step_m, scan_step_m)
     feasible = np.flatnonzero([ok(y) for y in ys])
     if feasible.size == 0:
-        raise WorkspaceError(f"the required square rotated by {angle_deg:g} deg is reachable at no height "
-                             f"(scanned y in steps of {scan_step_m:g} m)")
+        raise WorkspaceError(float(angle_deg), [], scan_step_m)
     if feasible[-1] - feasible[0] + 1 != feasible.size:
-        raise WorkspaceError(f"the heights where the square rotated by {angle_deg:g} deg is reachable do "
-                             f"not form one interval: {ys[feasible].round(4).tolist()} m")
+        raise WorkspaceError(float(angle_deg), ys[feasible].round(4).tolist(), scan_step_m)
 
     def bisect(good: float, bad: float) -> tuple[float, float]:
         while abs(good - bad) > tolerance_m:

@@ -64,7 +64,7 @@ from dataclasses import dataclass
 import numpy as np
 
 from pressfit.description.machine import Machine
-from pressfit.errors import PressfitError, ResidualError, SingularPoseError
+from pressfit.errors import CondensedModelError, PressfitError, ResidualError, SingularPoseError
 from pressfit.kinematics import concurrency_point, is_reachable, leg_vectors
 from pressfit.kinematics.workspace import workspace_square
 from pressfit.spatial import cross, skew
@@ -76,10 +76,6 @@ PRESS_LOAD_N = 700.0  # the press reaction on the tool, +y (paper section 4)
 # variant 40 times that and refuses one that has lost three more digits
 CONDENSED_RESIDUAL_TOL = 1e-13
 _CHUNK = 16384  # poses per vectorised block: the working set stays in the CPU cache
-
-
-class CondensedModelError(PressfitError):
-    """The machine breaks the condensed model's assumptions (e.g. elastic cardans)."""
 
 
 def rotational_compliances(machine: Machine, leg_length_m: np.ndarray | float) -> tuple[np.ndarray, np.ndarray]:
@@ -142,12 +138,11 @@ class _Core:
 def _core(machine: Machine, h: np.ndarray) -> _Core:
     """Condensed springs and the two 3x3 blocks for poses h of shape (m, 3)."""
     if not machine.legs_concurrent:
-        raise CondensedModelError(f"{machine.name}: the leg lines do not all meet at one point (joint position "
-                                  "errors d_i != (r/p) B_i); the condensed model assumes they do: use "
-                                  "pressfit.mechanics.statics")
+        raise CondensedModelError(machine.name, "concurrent legs", "the leg lines do not all meet at one point "
+                                  "(joint position errors d_i != (r/p) B_i)")
     if machine.has_cardan_tilts:
-        raise CondensedModelError(f"{machine.name}: misaligned cardans (base/plate_cardan_tilt_rad) break the "
-                                  "parallel cardan axes the condensed model assumes: use pressfit.mechanics.statics")
+        raise CondensedModelError(machine.name, "parallel cardan axes", "misaligned cardans "
+                                  "(base/plate_cardan_tilt_rad)")
     u = np.ascontiguousarray(np.moveaxis(leg_vectors(machine, h), (0, 1, 2), (2, 1, 0)))
     length = np.sqrt(u[0] * u[0] + u[1] * u[1] + u[2] * u[2])
     e = u / length
@@ -172,8 +167,8 @@ def _core(machine: Machine, h: np.ndarray) -> _Core:
 
 def _poses(machine: Machine, poses_m: np.ndarray) -> np.ndarray:
     if machine.joints.cardan_rotational_stiffness_nm_per_rad is not None:
-        raise CondensedModelError("the condensed model needs free cardans; this machine gives them a "
-                                  "rotational stiffness: use pressfit.mechanics.statics")
+        raise CondensedModelError(machine.name, "free cardans", "the cardans have a rotational stiffness "
+                                  "(joints.cardan_rotational_stiffness_nm_per_rad)")
     h = np.asarray(poses_m, dtype=float)
     if h.shape[-1:] != (3,) or not np.all(np.isfinite(h)):
         raise PressfitError(f"poses must be finite with shape (..., 3), got shape {h.shape}")
