@@ -556,6 +556,13 @@ class FlexibleMachine:
         return SectionLoads(values, frames)
 
 
+def first_mode_hz(machine: Machine, pose_m: np.ndarray, cardan_compliance: CardanComplianceSpec = None) -> float:
+    """The first mode (Hz) of the flexible machine built at ``pose_m`` (m), the drives holding their lengths: the
+    mode whose period MAX_STEP_FRACTION bounds the step by (module doc)."""
+    fm = FlexibleMachine(machine, pose_m, cardan_compliance=cardan_compliance, damping=Rayleigh(0.0, 0.0))
+    return float(fm.modes.frequencies_hz[0])
+
+
 def leg_frame_loads(wrenches: np.ndarray, cardan_axes: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
     """Section resultants (..., 4, 3, 6) (N, V_x, V_y in N; M_x, M_y, T in N m) in the deformed leg frames,
     and the frames (..., 4, 3, 3) (columns e_x, e_y, e_z; :mod:`.base`), from the world section wrenches
