@@ -25,15 +25,15 @@ ROOT = Path(__file__).resolve().parents[2]
 SHORT = {"move_time_s": 0.5, "descent_time_s": 0.6, "dwell_s": 1.5, "settle_s": 0.2}  # as tests/test_simulation_trust
 
 
-def drive_case(tmp_path: Path, kind: str, simulation: dict | None = None, electric: dict | None = None) -> Path:
-    """cases/paper/insertion_<kind>.toml with ``[simulation]`` keys replaced and, for ``electric``, the machine file
-    rewritten with ``[actuator.electric]`` keys replaced (both into tmp_path)."""
+def drive_case(tmp_path: Path, kind: str, simulation: dict | None = None, table: dict | None = None) -> Path:
+    """cases/paper/insertion_<kind>.toml with ``[simulation]`` keys replaced and, with ``table``, the machine file
+    rewritten with those ``[actuator.<kind>]`` keys replaced (both into tmp_path)."""
     src = ROOT / f"cases/paper/insertion_{kind}.toml"
     data = tomllib.loads(src.read_text())
     model = (src.parent / data["model"]).resolve()
-    if electric:
+    if table:
         machine = tomllib.loads(model.read_text())
-        machine["actuator"]["electric"].update(electric)
+        machine["actuator"][kind].update(table)
         model = tmp_path / f"machine_{kind}.toml"
         model.write_text(tomli_w.dumps(machine))
     data["model"] = str(model)

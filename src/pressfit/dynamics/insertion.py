@@ -517,8 +517,9 @@ def _run_flexible(case: Case, machine: Machine, plan: ScenarioPlan, drives: driv
 def _flexible_steps(case: Case, machine: Machine, plan: ScenarioPlan, drives: drive_kinds.Drive, limiter: bool,
                     progress: bool) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
     """The flexible machine (:class:`pressfit.dynamics.machine.flexible.FlexibleMachine`, the machine file's
-    ``[damping]``, cardan play with ``clearance = true``): ideal force drives on the actuator joints
-    (``DriveInput.forces``), the contact force on the elastic tool point (the plate centre), evaluated at the
+    ``[damping]``, cardan play with ``clearance = true``): the machine's drives on the actuator joints, stepped
+    inside the flexible step's Newton at the mean rate of the step (implicit, so that an oil column is stable:
+    ``FlexibleMachine.step``'s ``drive``), the contact force on the elastic tool point (the plate centre), evaluated at the
     end of each step and held over the next (as in the rigid model); no series compliance (it is in the model).
     Starts from the static equilibrium under gravity with the drives holding the start pose's lengths."""
     sim, trajectory, steps, rigid = plan.simulation, plan.trajectory, plan.steps, plan.rigid
@@ -544,9 +545,16 @@ def _flexible_steps(case: Case, machine: Machine, plan: ScenarioPlan, drives: dr
         try:
             force = ctrl.command(lengths, rates, reference, contact_force, dt)
             command = -ctrl.pinv @ force + a4 * ctrl.null
-            drive, tension = drives.step(drive, command, lengths, rates, dt)
+            stepped = []
+
+            def delivered(end_m: np.ndarray, start: Any = drive, command: np.ndarray = command) -> np.ndarray:
+                stepped[:] = drives.step(start, command, lengths, (end_m - lengths) / dt, dt)  # the mean rate
+                return stepped[1]
+
             wrench[1] = contact_force
-            state = fm.step(state, DriveInput.forces(tension), wrench, dt)
+            state = fm.step(state, DriveInput.forces(tension), wrench, dt, delivered,
+                            drives.step_stiffness_n_per_m(lengths))
+            drive, tension = stepped
             if not (np.all(np.isfinite(state.q)) and np.all(np.isfinite(state.v))):
                 raise _diverged(case, t, "the state is not finite")
             drift = fm.closure_error(state)[0]

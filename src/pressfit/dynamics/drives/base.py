@@ -14,6 +14,10 @@ serves several runs.
 * ``measures``: the quantities its own sensors give (names of the state's fields and of the leg length);
 * ``axial_stiffness_n_per_m(lengths_m)``: its axial stiffness in the statics (the same function as
   :meth:`pressfit.description.machine.Machine.drive_stiffness_n_per_m`);
+* ``step_stiffness_n_per_m(lengths_m)``: -dN/dl of the tension at a step's end in the leg's travel over the step
+  (its loops held within the step): the tangent with which an implicit multibody step takes the drive
+  (:meth:`pressfit.dynamics.machine.flexible.FlexibleMachine.step`); 0 for a drive whose tension does not follow
+  the travel within a step;
 * ``reflected_mass_kg``: rotating inertia reflected along the leg, which the multibody model carries as the
   prismatic joint's armature (:mod:`pressfit.dynamics.inertia`); the delivered force is therefore the drive's
   force before that inertia, never minus it (no double count);
@@ -81,6 +85,8 @@ class Drive(Protocol):
     def saturated(self, command_n: np.ndarray) -> np.ndarray: ...
 
     def axial_stiffness_n_per_m(self, lengths_m: np.ndarray) -> np.ndarray: ...
+
+    def step_stiffness_n_per_m(self, lengths_m: np.ndarray) -> np.ndarray: ...
 
     def linear_port(self, length_m: float, tension_n: float) -> DrivePort: ...
 
