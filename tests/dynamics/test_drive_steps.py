@@ -15,13 +15,14 @@ from scipy.linalg import eigh, null_space
 from pressfit.description.cases import load_case
 from pressfit.description.machine import load_machine
 from pressfit.dynamics import drives, insertion
+from pressfit.dynamics.drives.base import DriveOverStep
 from pressfit.dynamics.drives.hydraulic import STEP_FRACTION
 from pressfit.dynamics.machine.base import DriveInput
 from pressfit.dynamics.machine.flexible import FlexibleMachine, Rayleigh
 from pressfit.dynamics.modes import closure_jacobian, elastic_stiffness, mass_matrix
-from tests.dynamics.test_linearise_drives import _matrix_pencil
 from pressfit.errors import DriveStepError, ModelFileError
 from tests.dynamics.test_insertion_drives import SHORT, drive_case
+from tests.dynamics.test_linearise_drives import _matrix_pencil
 from tests.test_simulation_trust import refused
 
 ROOT = Path(__file__).resolve().parents[2]
@@ -128,15 +129,10 @@ def _hold(machine, fm, implicit, duration_s=0.1):
     for _ in range(round(duration_s / HOLD_STEP_S)):
         lengths = fm.leg_lengths_m(state)
         if implicit:
-            out = []
-
-            def delivered(end, start=drive_state, lengths=lengths):
-                out[:] = drive.step(start, zero, lengths, (end - lengths) / HOLD_STEP_S, HOLD_STEP_S)
-                return out[1]
-
-            state = fm.step(state, DriveInput.forces(tension), wrench, HOLD_STEP_S, delivered,
+            stepped = DriveOverStep(drive, drive_state, zero, lengths, HOLD_STEP_S)
+            state = fm.step(state, DriveInput.forces(tension), wrench, HOLD_STEP_S, stepped,
                             drive.step_stiffness_n_per_m(lengths))
-            drive_state, tension = out
+            drive_state, tension = stepped.result
         else:
             drive_state, tension = drive.step(drive_state, zero, lengths, fm.leg_rates_m_per_s(state), HOLD_STEP_S)
             state = fm.step(state, DriveInput.forces(tension), wrench, HOLD_STEP_S)

@@ -234,7 +234,8 @@ def test_flexible_drive_insertion_agrees_with_the_rigid_model_at_the_paper_speed
     assert abs(peak_f / peak_r - 1.0) < 0.03, (peak_r, peak_f)
     share_r, force_r, pose = _contact_deflection(rigid)
     share_f, _, _ = _contact_deflection(flexible)
-    base = load_machine(ROOT / "models/pressfit_4upu.toml").with_overrides({"actuator": {"axial_stiffness_n_per_m": 1e15}})
+    rigid_actuators = {"actuator": {"axial_stiffness_n_per_m": 1e15}}
+    base = load_machine(ROOT / "models/pressfit_4upu.toml").with_overrides(rigid_actuators)
     machine = load_machine(ROOT / f"models/pressfit_4upu_{kind}.toml")
     part = (condensed_plate_compliance(machine, pose[None])[0][:3, 1]
             - condensed_plate_compliance(base, pose[None])[0][:3, 1]) * force_r

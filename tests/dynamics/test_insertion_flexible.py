@@ -264,7 +264,8 @@ def _first_mode_bound_s(case, pose_m):
     from pressfit.dynamics.machine.flexible import MAX_STEP_FRACTION
     from pressfit.dynamics.modes import natural_modes
 
-    return MAX_STEP_FRACTION / float(natural_modes(case.machine(), np.asarray(pose_m, float), count=1).frequencies_hz[0])
+    modes = natural_modes(case.machine(), np.asarray(pose_m, float), count=1)
+    return MAX_STEP_FRACTION / float(modes.frequencies_hz[0])
 
 
 def test_flexible_step_bound_is_the_stiffest_pose_on_the_path(tmp_path):

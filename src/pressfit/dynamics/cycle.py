@@ -50,9 +50,9 @@ from pressfit.dynamics.control import Trajectory, gravity_feedforward_n
 from pressfit.dynamics.insertion import (
     COMPLETION_FRACTION,
     LEGS,
+    MAX_DEPTH_FACTOR,
     MAX_STEPS,
     MIN_SEGMENT_STEPS,
-    MAX_DEPTH_FACTOR,
     PATH_SAMPLE_M,
     SERIES_COLUMNS,
     WARN_STEPS,

@@ -45,6 +45,7 @@ from pressfit.dynamics.control import (
     Trajectory,
     estimate_pose,
 )
+from pressfit.dynamics.drives.base import DriveOverStep
 from pressfit.dynamics.drives.steps import hydraulic_step_refusal
 from pressfit.dynamics.machine.base import SECTION_COMPONENTS, SECTIONS, DriveInput, Energy
 from pressfit.dynamics.machine.flexible import MAX_STEP_FRACTION, FlexibleMachine, first_mode_hz, leg_frame_loads
@@ -519,8 +520,9 @@ def _flexible_steps(case: Case, machine: Machine, plan: ScenarioPlan, drives: dr
     """The flexible machine (:class:`pressfit.dynamics.machine.flexible.FlexibleMachine`, the machine file's
     ``[damping]``, cardan play with ``clearance = true``): the machine's drives on the actuator joints, stepped
     inside the flexible step's Newton at the mean rate of the step (implicit, so that an oil column is stable:
-    ``FlexibleMachine.step``'s ``drive``), the contact force on the elastic tool point (the plate centre), evaluated at the
-    end of each step and held over the next (as in the rigid model); no series compliance (it is in the model).
+    ``FlexibleMachine.step``'s ``drive``), the contact force on the elastic tool point (the plate centre), evaluated
+    at the end of each step and held over the next (as in the rigid model); no series compliance (it is in the
+    model).
     Starts from the static equilibrium under gravity with the drives holding the start pose's lengths."""
     sim, trajectory, steps, rigid = plan.simulation, plan.trajectory, plan.steps, plan.rigid
     dt, a4 = sim.time_step_s, case.preload.a4_n
@@ -545,16 +547,11 @@ def _flexible_steps(case: Case, machine: Machine, plan: ScenarioPlan, drives: dr
         try:
             force = ctrl.command(lengths, rates, reference, contact_force, dt)
             command = -ctrl.pinv @ force + a4 * ctrl.null
-            stepped = []
-
-            def delivered(end_m: np.ndarray, start: Any = drive, command: np.ndarray = command) -> np.ndarray:
-                stepped[:] = drives.step(start, command, lengths, (end_m - lengths) / dt, dt)  # the mean rate
-                return stepped[1]
-
+            stepped = DriveOverStep(drives, drive, command, lengths, dt)
             wrench[1] = contact_force
-            state = fm.step(state, DriveInput.forces(tension), wrench, dt, delivered,
+            state = fm.step(state, DriveInput.forces(tension), wrench, dt, stepped,
                             drives.step_stiffness_n_per_m(lengths))
-            drive, tension = stepped
+            drive, tension = stepped.result
             if not (np.all(np.isfinite(state.q)) and np.all(np.isfinite(state.v))):
                 raise _diverged(case, t, "the state is not finite")
             drift = fm.closure_error(state)[0]

@@ -91,6 +91,22 @@ class Drive(Protocol):
     def linear_port(self, length_m: float, tension_n: float) -> DrivePort: ...
 
 
+class DriveOverStep:
+    """One drive step from ``state`` as a function of the leg lengths at the step's end (the drive at the mean rate
+    (l - l_n) / dt), for an implicit multibody step that evaluates it per iteration
+    (:meth:`pressfit.dynamics.machine.flexible.FlexibleMachine.step`'s ``drive``); ``result``: the last call's
+    (state, tension N)."""
+
+    def __init__(self, drive: Drive, state: Any, command_n: np.ndarray, lengths_m: np.ndarray, dt_s: float) -> None:
+        self.drive, self.state, self.command_n, self.lengths_m, self.dt_s = drive, state, command_n, lengths_m, dt_s
+        self.result: tuple[Any, np.ndarray] | None = None
+
+    def __call__(self, end_m: np.ndarray) -> np.ndarray:
+        self.result = self.drive.step(self.state, self.command_n, self.lengths_m, (end_m - self.lengths_m) / self.dt_s,
+                                      self.dt_s)
+        return self.result[1]
+
+
 def require_step(dt_s: float) -> float:
     """A time step must be a positive finite number of seconds."""
     if not (np.isfinite(dt_s) and dt_s > 0):

@@ -254,8 +254,8 @@ def oil_column_step_index(stiffness_n_per_m: np.ndarray, mass_kg: np.ndarray, dt
     r"""omega_h dt / 2 for the oil column k_h on a mass m, omega_h = sqrt(k_h / m): the step is stable below 1.
 
     Derived: the rigid model's simulation couples drive and mechanics explicitly (the flexible model takes the
-    drive inside its implicit step, :mod:`pressfit.dynamics.machine.flexible`). Over a step the drive holds the leg rate v_n
-    (its pressures then change the force by -k_h v_n dt: the chambers' A l_dot term through beta / V), and the
+    drive inside its implicit step, :mod:`pressfit.dynamics.machine.flexible`). Over a step the drive holds the leg
+    rate v_n (its pressures then change the force by -k_h v_n dt: the chambers' A l_dot term through beta / V), and the
     mechanics then advance the velocity with the new force (semi-implicit Euler), so on the oil column alone
     F_{n+1} = F_n - k_h dt v_n, v_{n+1} = v_n + dt F_{n+1} / m: the update matrix [[1, -k_h dt], [dt / m,
     1 - a]], a = (omega_h dt)^2, has determinant 1 and trace 2 - a, so its eigenvalues stay on the unit circle

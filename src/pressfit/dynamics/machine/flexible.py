@@ -207,7 +207,7 @@ class FlexibleMachine:
         self._factor: tuple | None = None
         self._factor_key: tuple | None = None
         self._fext: pin.StdVec_Force | None = None  # section_loads' external forces
-        self._drive_k = np.zeros(len(self.act))  # the implicit force drives' tangent -dN/dl in the iteration matrix, N/m
+        self._drive_k = np.zeros(len(self.act))  # implicit force drives' tangent -dN/dl in the iteration matrix, N/m
 
     # --- model -----------------------------------------------------------------------------------
     def _place(self, stem_lengths_m: np.ndarray) -> None:
