@@ -86,6 +86,11 @@ STABILITY_FRACTION = 0.5  # the explicit step is refused beyond this fraction of
 # the run stops when the tool goes deeper below the board face than this many times the commanded interference
 # (the reference's deepest point): the contact law models the pin-board stack down to it, the board face is solid
 MAX_DEPTH_FACTOR = 2.0
+FLEXIBLE_PLAY_REFUSAL = (  # why [simulation] clearance = true is refused with model = "flexible" (docs/dynamics.md)
+    'false with model = "flexible": the implicit step\'s Newton does not converge across a cardan play\'s contact '
+    "edge (a 1e9 N/m dead zone smoothed over 1 nm, far below the Newton steps, whose tangent inside the gap is ~0), "
+    'so the run would stop at its first steps; use model = "rigid" (the clearance statics\' load-deflection curve '
+    "in series at the tool)")
 _CHUNK_ROWS = 4096  # the series grows by this many rows at a time
 _REACH_CHECK_STEPS = 10  # the plate's joint limits are checked every this many steps (and at the last)
 _CURVE_POINTS = 41  # load steps of the clearance load-deflection curve
@@ -246,6 +251,8 @@ def plan_scenario(case: Case, machine: Machine | None = None, preload_key: str =
     free = np.isin(segment, [0, 4, 5])  # approach, move, settle: out of contact by design
     if np.any(path[free, 1] <= board):
         raise _refuse(case, "[simulation] start_m", "a planned approach and move above the board face")
+    if sim.clearance and sim.model == "flexible":
+        raise _refuse(case, "[simulation] clearance", FLEXIBLE_PLAY_REFUSAL)
     warnings = []
     check_preload(case, machine, drive_kinds.of(machine), path, preload_key)
     rigid = rigid_leg_model(machine, np.asarray(sim.start_m, float), sim.baumgarte_rad_per_s)
@@ -290,8 +297,7 @@ def check_flexible_step(case: Case, machine: Machine, sim: Simulation, waypoints
         return
     points = np.unique(np.asarray(waypoints_m, dtype=float), axis=0)
     poses = np.concatenate([points, 0.5 * (waypoints_m[1:] + waypoints_m[:-1])])
-    play = clearance_from_case(case, machine).cardan_compliance() if sim.clearance else None
-    frequencies = np.array([first_mode_hz(machine, p, play) for p in poses])
+    frequencies = np.array([first_mode_hz(machine, p) for p in poses])
     worst = int(np.argmax(frequencies))
     bound = MAX_STEP_FRACTION / frequencies[worst]
     if sim.time_step_s > bound:
@@ -518,7 +524,7 @@ def _run_flexible(case: Case, machine: Machine, plan: ScenarioPlan, drives: driv
 def _flexible_steps(case: Case, machine: Machine, plan: ScenarioPlan, drives: drive_kinds.Drive, limiter: bool,
                     progress: bool) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
     """The flexible machine (:class:`pressfit.dynamics.machine.flexible.FlexibleMachine`, the machine file's
-    ``[damping]``, cardan play with ``clearance = true``): the machine's drives on the actuator joints, stepped
+    ``[damping]``; no cardan play: :data:`FLEXIBLE_PLAY_REFUSAL`): the machine's drives on the actuator joints, stepped
     inside the flexible step's Newton at the mean rate of the step (implicit, so that an oil column is stable:
     ``FlexibleMachine.step``'s ``drive``), the contact force on the elastic tool point (the plate centre), evaluated
     at the end of each step and held over the next (as in the rigid model); no series compliance (it is in the
@@ -526,8 +532,7 @@ def _flexible_steps(case: Case, machine: Machine, plan: ScenarioPlan, drives: dr
     Starts from the static equilibrium under gravity with the drives holding the start pose's lengths."""
     sim, trajectory, steps, rigid = plan.simulation, plan.trajectory, plan.steps, plan.rigid
     dt, a4 = sim.time_step_s, case.preload.a4_n
-    play = clearance_from_case(case, machine).cardan_compliance() if sim.clearance else None
-    fm = FlexibleMachine(machine, np.asarray(sim.start_m, float), cardan_compliance=play)  # step: check_flexible_step
+    fm = FlexibleMachine(machine, np.asarray(sim.start_m, float))  # its step: check_flexible_step
     state = fm.rest_state()
     ctrl = ForceLimitedController(machine, rigid, sim.controller, limiter, np.asarray(sim.start_m, float).copy())
     lengths, rates = fm.leg_lengths_m(state), fm.leg_rates_m_per_s(state)  # what the drives measure

@@ -591,10 +591,10 @@ class FlexibleMachine:
         return SectionLoads(values, frames)
 
 
-def first_mode_hz(machine: Machine, pose_m: np.ndarray, cardan_compliance: CardanComplianceSpec = None) -> float:
+def first_mode_hz(machine: Machine, pose_m: np.ndarray) -> float:
     """The first mode (Hz) of the flexible machine built at ``pose_m`` (m), the drives holding their lengths: the
     mode whose period MAX_STEP_FRACTION bounds the step by (module doc)."""
-    fm = FlexibleMachine(machine, pose_m, cardan_compliance=cardan_compliance, damping=Rayleigh(0.0, 0.0))
+    fm = FlexibleMachine(machine, pose_m, damping=Rayleigh(0.0, 0.0))
     return float(fm.modes.frequencies_hz[0])
 
 
