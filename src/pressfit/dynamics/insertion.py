@@ -552,11 +552,15 @@ def _flexible_steps(case: Case, machine: Machine, plan: ScenarioPlan, drives: dr
         try:
             force = ctrl.command(lengths, rates, reference, contact_force, dt)
             command = -ctrl.pinv @ force + a4 * ctrl.null
-            stepped = DriveOverStep(drives, drive, command, lengths, dt)
             wrench[1] = contact_force
-            state = fm.step(state, DriveInput.forces(tension), wrench, dt, stepped,
-                            drives.step_stiffness_n_per_m(lengths))
-            drive, tension = stepped.result
+            if drives.kind == "force":  # its tension does not follow the travel: stepped once, held over the step
+                drive, tension = drives.step(drive, command, lengths, rates, dt)
+                state = fm.step(state, DriveInput.forces(tension), wrench, dt)
+            else:
+                stepped = DriveOverStep(drives, drive, command, lengths, dt)
+                state = fm.step(state, DriveInput.forces(tension), wrench, dt, stepped,
+                                drives.step_stiffness_n_per_m(lengths))
+                drive, tension = stepped.result
             if not (np.all(np.isfinite(state.q)) and np.all(np.isfinite(state.v))):
                 raise _diverged(case, t, "the state is not finite")
             drift = fm.closure_error(state)[0]
