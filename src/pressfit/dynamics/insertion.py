@@ -526,7 +526,8 @@ def _flexible_steps(case: Case, machine: Machine, plan: ScenarioPlan, drives: dr
     """The flexible machine (:class:`pressfit.dynamics.machine.flexible.FlexibleMachine`, the machine file's
     ``[damping]``; no cardan play: :data:`FLEXIBLE_PLAY_REFUSAL`): the machine's drives on the actuator joints, stepped
     inside the flexible step's Newton at the mean rate of the step (implicit, so that an oil column is stable:
-    ``FlexibleMachine.step``'s ``drive``), the contact force on the elastic tool point (the plate centre), evaluated
+    ``FlexibleMachine.step``'s ``drive``; the ideal force drive, which ignores the travel, once per step), the
+    contact force on the elastic tool point (the plate centre), evaluated
     at the end of each step and held over the next (as in the rigid model); no series compliance (it is in the
     model).
     Starts from the static equilibrium under gravity with the drives holding the start pose's lengths."""
