@@ -413,8 +413,10 @@ def test_saturation_fraction_and_warning():
 
 
 def test_saturating_run_warns_on_stderr(tmp_path):
-    """Drives limited to 140 N (the short scenario peaks near 150 N): simulate exits 0 and warns on stderr."""
-    path = write_case(tmp_path, top={"model_overrides": {"actuator": {"force_limit_n": 140.0}}})
+    """Drives limited to 145 N (the short scenario peaks near 150 N): simulate exits 0 and warns on stderr. (At
+    140 N the saturated machine sags 4.05 mm into the board face during the approach, beyond the 4 mm penetration
+    tolerance: that run is refused, not reported.)"""
+    path = write_case(tmp_path, top={"model_overrides": {"actuator": {"force_limit_n": 145.0}}})
     res = CliRunner().invoke(main, ["simulate", str(path), "--no-progress", "--no-limiter"])
     assert res.exit_code == 0, res.output
     assert "warning: the drives saturated" in res.stderr and "warning" not in res.stdout

@@ -322,11 +322,12 @@ def test_shipped_board_cycle_time_in_closed_form():
 
 def test_cli_runs_the_flexible_model_and_refuses_an_existing_output_before_computing(tmp_path):
     """``--model flexible`` overrides the case's rigid model: the same step loop as ``simulate``'s flexible runs
-    (elastic legs, contact on the elastic tool point); a short fast board (2.6 s at 2 ms steps) presses its pin.
-    A non-empty --out is refused before any computation (exit 2, nothing written)."""
+    (elastic legs, contact on the elastic tool point); a short fast board (2.6 s at 1.75 ms steps: 2 ms is over the
+    flexible step bound at the pin, 1.81 ms) presses its pin. A non-empty --out is refused before any computation
+    (exit 2, nothing written)."""
     fast = {"motion": {"speed_m_per_s": 1.0, "acceleration_m_per_s2": 5.0, "jerk_m_per_s3": 50.0},
             "descent": {"speed_m_per_s": 0.02, "acceleration_m_per_s2": 0.2, "jerk_m_per_s3": 2.0}}
-    path = board(tmp_path, dwell_s=0.3, settle_s=0.0, time_step_s=2e-3, **fast)
+    path = board(tmp_path, dwell_s=0.3, settle_s=0.0, time_step_s=1.75e-3, **fast)
     res = run("cycle", path, "--model", "flexible", "--json", "--no-progress")
     assert res.exit_code == 0, res.output
     summary = json.loads(res.output)

@@ -256,3 +256,52 @@ def test_readme_shipped_scenario_on_the_flexible_model():
     assert case.simulation.controller.deflection_compensation
     assert_printed(s["tool_lateral_error_at_insertion_m"] * 1e6, "6.5")
     assert_printed(s["tool_final_error_m"] * 1e6, "20")
+
+
+def _first_mode_bound_s(case, pose_m):
+    """MAX_STEP_FRACTION of the first period at a pose, s, from `pressfit modes` (natural_modes: the reduced
+    system at the static equilibrium under the weight, a second formulation of the flexible machine's modes)."""
+    from pressfit.dynamics.machine.flexible import MAX_STEP_FRACTION
+    from pressfit.dynamics.modes import natural_modes
+
+    modes = natural_modes(case.machine(), np.asarray(pose_m, float), count=1)
+    return MAX_STEP_FRACTION / float(modes.frequencies_hz[0])
+
+
+def test_flexible_step_bound_is_the_stiffest_pose_on_the_path(tmp_path):
+    """The first mode rises from 21.5 Hz at the shipped start pose to 27.7 Hz at the bottom of the descent: a
+    1.9 ms step is within MAX_STEP_FRACTION of the start pose's period (2.32 ms) but not of the bottom's (1.81 ms),
+    and is refused before the run, one line naming the key, the bound, the pose and the frequency. The printed
+    bound is the bottom's from natural_modes within 0.1% (the run's modes are at the build configuration, those of
+    `pressfit modes` at the equilibrium under the weight: 1e-4 apart); 1.01 x it is refused, 0.99 x it plans."""
+    from pressfit.dynamics.insertion import plan_scenario
+    from tests.test_simulation_trust import refused
+
+    base = load_case(write_case(tmp_path, "base.toml", simulation={"model": "flexible"}))
+    start, bottom = _first_mode_bound_s(base, base.simulation.start_m), _first_mode_bound_s(base, [0.1, 0.598, -0.05])
+    assert start > 1.9e-3 > bottom
+    path = write_case(tmp_path, simulation={"model": "flexible", "time_step_s": 1.9e-3})
+    line = refused(path, "[simulation] time_step_s", "first period on the planned path", "Hz at (0.1, 0.598, -0.05) m")
+    bound = float(line.split("planned path: ")[1].split(" s")[0])
+    assert bound == pytest.approx(bottom, rel=1e-3)
+    for factor, refused_ in ((1.01, True), (0.99, False)):
+        case = load_case(write_case(tmp_path, f"f{factor}.toml", simulation={"model": "flexible",
+                                                                            "time_step_s": factor * bound}))
+        if refused_:
+            with pytest.raises(ModelFileError, match="first period on the planned path"):
+                plan_scenario(case)
+        else:
+            plan_scenario(case)
+
+
+def test_cardan_play_on_the_flexible_model_is_refused_before_the_run(tmp_path):
+    """[simulation] clearance = true with model = "flexible": refused before any step, one line naming the key and
+    the reason (the step's Newton does not converge across a play's contact edge: measured, the shortened scenario
+    stopped at t = 1 ms with the position correction cycling at 95 nm across one play's edge) and what to use; the
+    rigid model plans it."""
+    from pressfit.dynamics.insertion import plan_scenario
+    from tests.test_simulation_trust import refused
+
+    path = write_case(tmp_path, simulation={"model": "flexible", "clearance": True})
+    refused(path, "[simulation] clearance", 'with model = "flexible"', "contact edge", 'use model = "rigid"')
+    plan_scenario(load_case(write_case(tmp_path, "rigid.toml", simulation={"model": "rigid", "clearance": True})))

@@ -50,6 +50,7 @@ from pressfit.dynamics.control import Trajectory, gravity_feedforward_n
 from pressfit.dynamics.insertion import (
     COMPLETION_FRACTION,
     LEGS,
+    MAX_DEPTH_FACTOR,
     MAX_STEPS,
     MIN_SEGMENT_STEPS,
     PATH_SAMPLE_M,
@@ -59,6 +60,7 @@ from pressfit.dynamics.insertion import (
     _check_steps,
     _path,
     _require_reachable,
+    check_flexible_step,
     check_oil_column,
     check_preload,
     drive_limit,
@@ -280,9 +282,11 @@ def plan_cycle(case: Case, machine: Machine | None = None, model: str | None = N
                              exc.expected.replace("[simulation", "[cycle")) from None
     check_oil_column(case, machine, sim, np.array([cycle.start_m, *points[1::4], cycle.end_m]), path,
                      "[cycle] time_step_s")
+    check_flexible_step(case, machine, sim, np.array(points), "[cycle] time_step_s")
     limits = np.array([pins[s.pin - 1].force_limit_n for s in segments])
     warnings = (run_time_warning(steps, dt, trajectory.duration_s),) if steps > WARN_STEPS else ()
-    scenario = ScenarioPlan(trajectory, steps, path, warnings, rigid, sim, limits)
+    scenario = ScenarioPlan(trajectory, steps, path, warnings, rigid, sim, limits,
+                            MAX_DEPTH_FACTOR * max(pin.interference_m for pin in pins))
     return CyclePlan(scenario, pins, tuple(segments), case.model_copy(update={"simulation": sim}))
 
 

@@ -45,9 +45,10 @@ from pressfit.dynamics.control import (
     Trajectory,
     estimate_pose,
 )
+from pressfit.dynamics.drives.base import DriveOverStep
 from pressfit.dynamics.drives.steps import hydraulic_step_refusal
 from pressfit.dynamics.machine.base import SECTION_COMPONENTS, SECTIONS, DriveInput, Energy
-from pressfit.dynamics.machine.flexible import MAX_STEP_FRACTION, FlexibleMachine, leg_frame_loads
+from pressfit.dynamics.machine.flexible import MAX_STEP_FRACTION, FlexibleMachine, first_mode_hz, leg_frame_loads
 from pressfit.dynamics.multibody import RigidLegModel, rigid_leg_model
 from pressfit.errors import (
     ConvergenceError,
@@ -82,6 +83,14 @@ MIN_SEGMENT_STEPS = 10  # every segment of the reference spans at least this man
 PATH_SAMPLE_M = 5e-4  # spacing of the planned-path samples checked against the joint limits, m
 MAX_CLOSURE_DRIFT_M = 2e-5  # the run stops when the loop closures open more than this (m; module docstring)
 STABILITY_FRACTION = 0.5  # the explicit step is refused beyond this fraction of the stability limit
+# the run stops when the tool goes deeper below the board face than this many times the commanded interference
+# (the reference's deepest point): the contact law models the pin-board stack down to it, the board face is solid
+MAX_DEPTH_FACTOR = 2.0
+FLEXIBLE_PLAY_REFUSAL = (  # why [simulation] clearance = true is refused with model = "flexible" (docs/dynamics.md)
+    'false with model = "flexible": the implicit step\'s Newton does not converge across a cardan play\'s contact '
+    "edge (a 1e9 N/m dead zone smoothed over 1 nm, far below the Newton steps, whose tangent inside the gap is ~0), "
+    'so the run would stop at its first steps; use model = "rigid" (the clearance statics\' load-deflection curve '
+    "in series at the tool)")
 _CHUNK_ROWS = 4096  # the series grows by this many rows at a time
 _REACH_CHECK_STEPS = 10  # the plate's joint limits are checked every this many steps (and at the last)
 _CURVE_POINTS = 41  # load steps of the clearance load-deflection curve
@@ -143,6 +152,7 @@ class ScenarioPlan:
     rigid: RigidLegModel
     simulation: Simulation
     force_limits_n: np.ndarray
+    depth_limit_m: float = math.inf  # the run stops beyond this depth below the board face (MAX_DEPTH_FACTOR)
 
 
 def _refuse(case: Case, key: str, expected: str) -> ModelFileError:
@@ -241,15 +251,19 @@ def plan_scenario(case: Case, machine: Machine | None = None, preload_key: str =
     free = np.isin(segment, [0, 4, 5])  # approach, move, settle: out of contact by design
     if np.any(path[free, 1] <= board):
         raise _refuse(case, "[simulation] start_m", "a planned approach and move above the board face")
+    if sim.clearance and sim.model == "flexible":
+        raise _refuse(case, "[simulation] clearance", FLEXIBLE_PLAY_REFUSAL)
     warnings = []
     check_preload(case, machine, drive_kinds.of(machine), path, preload_key)
     rigid = rigid_leg_model(machine, np.asarray(sim.start_m, float), sim.baumgarte_rad_per_s)
     _check_steps(case, sim, rigid, trajectory.waypoints_m[[0, 1, 5]])
     check_oil_column(case, machine, sim, trajectory.waypoints_m, path, "[simulation] time_step_s")
+    check_flexible_step(case, machine, sim, trajectory.waypoints_m, "[simulation] time_step_s")
     if steps > WARN_STEPS:
         warnings.append(run_time_warning(steps, dt, trajectory.duration_s))
     return ScenarioPlan(trajectory, steps, path, tuple(warnings), rigid, sim,
-                        np.full(len(trajectory.durations_s), sim.controller.force_limit_n))
+                        np.full(len(trajectory.durations_s), sim.controller.force_limit_n),
+                        MAX_DEPTH_FACTOR * sim.interference_m)
 
 
 def run_time_warning(steps: int, dt_s: float, duration_s: float) -> str:
@@ -271,6 +285,26 @@ def check_oil_column(case: Case, machine: Machine, sim: Simulation, waypoints_m:
     reason = hydraulic_step_refusal(machine, waypoints_m, path_m, sim.model, sim.time_step_s)
     if reason:
         raise _refuse(case, key, reason)
+
+
+def check_flexible_step(case: Case, machine: Machine, sim: Simulation, waypoints_m: np.ndarray, key: str) -> None:
+    """On the flexible model the step must be at most ``MAX_STEP_FRACTION`` of the first mode's period
+    (:mod:`pressfit.dynamics.machine.flexible`) at every pose the scenario visits, not only at the start pose the
+    model is built at: the first mode spans 13-46 Hz over the workspace. Checked at the waypoints ``waypoints_m``
+    (n, 3), m, and the midpoints of the segments between them (the stiffest pose of the shipped path lies inside
+    its first segment, 0.06% above its end). Nothing to check on the rigid model."""
+    if sim.model != "flexible":
+        return
+    points = np.unique(np.asarray(waypoints_m, dtype=float), axis=0)
+    poses = np.concatenate([points, 0.5 * (waypoints_m[1:] + waypoints_m[:-1])])
+    frequencies = np.array([first_mode_hz(machine, p) for p in poses])
+    worst = int(np.argmax(frequencies))
+    bound = MAX_STEP_FRACTION / frequencies[worst]
+    if sim.time_step_s > bound:
+        where = ", ".join(f"{c:.4g}" for c in poses[worst])
+        raise _refuse(case, key, f"at most {MAX_STEP_FRACTION:g} of the flexible machine's first period on the "
+                      f"planned path: {bound:.4g} s ({frequencies[worst]:.4g} Hz at ({where}) m, "
+                      f"{frequencies.min():.4g} Hz at the softest pose), got {sim.time_step_s:g} s")
 
 
 def check_preload(case: Case, machine: Machine, drives: drive_kinds.Drive, path_m: np.ndarray, key: str) -> None:
@@ -394,6 +428,16 @@ def _drive_failed(case: Case, t: float, exc: DriveStepError) -> PressfitError:
                          "table, or the scenario's speed and forces)")
 
 
+def _check_depth(case: Case, plan: ScenarioPlan, depth_m: float, t: float) -> None:
+    """A tool deeper below the board face than ``plan.depth_limit_m`` stops the run: never a result."""
+    if depth_m > plan.depth_limit_m:
+        raise PressfitError(f"{case.path}: the tool went {1e3 * depth_m:.4g} mm below the board face at t = {t:.4g} s, "
+                            f"beyond the tolerance of {1e3 * plan.depth_limit_m:.4g} mm ({MAX_DEPTH_FACTOR:g} x the "
+                            f"commanded interference_m): the board face is solid and the contact law models "
+                            "the pin-board stack only down to the commanded interference, so the run is refused; "
+                            "the likely keys are the [simulation.controller] gains, the segment times or the drives")
+
+
 def _drift_error(case: Case, drift: float, t: float) -> PressfitError:
     sim = case.simulation
     return PressfitError(f"{case.path}: the loop closures drifted open by {drift:.3g} m at t = {t:.4g} s, "
@@ -455,6 +499,7 @@ def _run_rigid(case: Case, machine: Machine, plan: ScenarioPlan, drives: drive_k
                 lengths, rates)
             if not finite:
                 raise _diverged(case, t, "the state is not finite")
+            _check_depth(case, plan, depth, t)
             row[drift_column] = drift = rigid.closure_error_m()
             if drift > MAX_CLOSURE_DRIFT_M:
                 raise _drift_error(case, drift, t)
@@ -479,18 +524,16 @@ def _run_flexible(case: Case, machine: Machine, plan: ScenarioPlan, drives: driv
 def _flexible_steps(case: Case, machine: Machine, plan: ScenarioPlan, drives: drive_kinds.Drive, limiter: bool,
                     progress: bool) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
     """The flexible machine (:class:`pressfit.dynamics.machine.flexible.FlexibleMachine`, the machine file's
-    ``[damping]``, cardan play with ``clearance = true``): ideal force drives on the actuator joints
-    (``DriveInput.forces``), the contact force on the elastic tool point (the plate centre), evaluated at the
-    end of each step and held over the next (as in the rigid model); no series compliance (it is in the model).
+    ``[damping]``; no cardan play: :data:`FLEXIBLE_PLAY_REFUSAL`): the machine's drives on the actuator joints, stepped
+    inside the flexible step's Newton at the mean rate of the step (implicit, so that an oil column is stable:
+    ``FlexibleMachine.step``'s ``drive``; the ideal force drive, which ignores the travel, once per step), the
+    contact force on the elastic tool point (the plate centre), evaluated
+    at the end of each step and held over the next (as in the rigid model); no series compliance (it is in the
+    model).
     Starts from the static equilibrium under gravity with the drives holding the start pose's lengths."""
     sim, trajectory, steps, rigid = plan.simulation, plan.trajectory, plan.steps, plan.rigid
     dt, a4 = sim.time_step_s, case.preload.a4_n
-    play = clearance_from_case(case, machine).cardan_compliance() if sim.clearance else None
-    fm = FlexibleMachine(machine, np.asarray(sim.start_m, float), cardan_compliance=play)
-    if dt > MAX_STEP_FRACTION * fm.first_period_s:
-        raise _refuse(case, "[simulation] time_step_s", f"at most {MAX_STEP_FRACTION:g} of the flexible machine's "
-                      f"first period ({1e3 * fm.first_period_s:.4g} ms, {fm.modes.frequencies_hz[0]:.4g} Hz at "
-                      f"start_m): {MAX_STEP_FRACTION * fm.first_period_s:.4g} s, got {dt:g} s")
+    fm = FlexibleMachine(machine, np.asarray(sim.start_m, float))  # its step: check_flexible_step
     state = fm.rest_state()
     ctrl = ForceLimitedController(machine, rigid, sim.controller, limiter, np.asarray(sim.start_m, float).copy())
     lengths, rates = fm.leg_lengths_m(state), fm.leg_rates_m_per_s(state)  # what the drives measure
@@ -510,9 +553,15 @@ def _flexible_steps(case: Case, machine: Machine, plan: ScenarioPlan, drives: dr
         try:
             force = ctrl.command(lengths, rates, reference, contact_force, dt)
             command = -ctrl.pinv @ force + a4 * ctrl.null
-            drive, tension = drives.step(drive, command, lengths, rates, dt)
             wrench[1] = contact_force
-            state = fm.step(state, DriveInput.forces(tension), wrench, dt)
+            if drives.kind == "force":  # its tension does not follow the travel: stepped once, held over the step
+                drive, tension = drives.step(drive, command, lengths, rates, dt)
+                state = fm.step(state, DriveInput.forces(tension), wrench, dt)
+            else:
+                stepped = DriveOverStep(drives, drive, command, lengths, dt)
+                state = fm.step(state, DriveInput.forces(tension), wrench, dt, stepped,
+                                drives.step_stiffness_n_per_m(lengths))
+                drive, tension = stepped.result
             if not (np.all(np.isfinite(state.q)) and np.all(np.isfinite(state.v))):
                 raise _diverged(case, t, "the state is not finite")
             drift = fm.closure_error(state)[0]
@@ -522,6 +571,7 @@ def _flexible_steps(case: Case, machine: Machine, plan: ScenarioPlan, drives: dr
             tool = fm.tool_point_m(state)
             _check_pose(case, machine, k, steps, t, tool)
             previous, depth = depth, board - tool[1]
+            _check_depth(case, plan, depth, t)
             contact_force = contact_force_n(sim.contact, depth, (depth - previous) / dt)
             lengths, rates = fm.leg_lengths_m(state), fm.leg_rates_m_per_s(state)
             series.add(k, (t, *reference[0] + [0.0, ctrl.lift_m, 0.0], *ctrl.estimate_m, *tool, *tool,

@@ -14,6 +14,10 @@ serves several runs.
 * ``measures``: the quantities its own sensors give (names of the state's fields and of the leg length);
 * ``axial_stiffness_n_per_m(lengths_m)``: its axial stiffness in the statics (the same function as
   :meth:`pressfit.description.machine.Machine.drive_stiffness_n_per_m`);
+* ``step_stiffness_n_per_m(lengths_m)``: -dN/dl of the tension at a step's end in the leg's travel over the step
+  (its loops held within the step): the tangent with which an implicit multibody step takes the drive
+  (:meth:`pressfit.dynamics.machine.flexible.FlexibleMachine.step`); 0 for a drive whose tension does not follow
+  the travel within a step;
 * ``reflected_mass_kg``: rotating inertia reflected along the leg, which the multibody model carries as the
   prismatic joint's armature (:mod:`pressfit.dynamics.inertia`); the delivered force is therefore the drive's
   force before that inertia, never minus it (no double count);
@@ -82,7 +86,25 @@ class Drive(Protocol):
 
     def axial_stiffness_n_per_m(self, lengths_m: np.ndarray) -> np.ndarray: ...
 
+    def step_stiffness_n_per_m(self, lengths_m: np.ndarray) -> np.ndarray: ...
+
     def linear_port(self, length_m: float, tension_n: float) -> DrivePort: ...
+
+
+class DriveOverStep:
+    """One drive step from ``state`` as a function of the leg lengths at the step's end (the drive at the mean rate
+    (l - l_n) / dt), for an implicit multibody step that evaluates it per iteration
+    (:meth:`pressfit.dynamics.machine.flexible.FlexibleMachine.step`'s ``drive``); ``result``: the last call's
+    (state, tension N)."""
+
+    def __init__(self, drive: Drive, state: Any, command_n: np.ndarray, lengths_m: np.ndarray, dt_s: float) -> None:
+        self.drive, self.state, self.command_n, self.lengths_m, self.dt_s = drive, state, command_n, lengths_m, dt_s
+        self.result: tuple[Any, np.ndarray] | None = None
+
+    def __call__(self, end_m: np.ndarray) -> np.ndarray:
+        self.result = self.drive.step(self.state, self.command_n, self.lengths_m, (end_m - self.lengths_m) / self.dt_s,
+                                      self.dt_s)
+        return self.result[1]
 
 
 def require_step(dt_s: float) -> float:

@@ -145,6 +145,10 @@ class ElectricDrive:
         return r * state.current_a**2
 
 
+    def step_stiffness_n_per_m(self, lengths_m: np.ndarray) -> np.ndarray:
+        """0, N/m: the current follows the travel only through the back-EMF, a rate term the iterations resolve."""
+        return np.zeros_like(np.asarray(lengths_m, dtype=float))
+
     def linear_port(self, length_m: float, tension_n: float) -> DrivePort:
         r"""The current loop (module docstring) with i_ref = dN_cmd / k_f and the back-EMF K_t omega,
         omega = -2 pi v / lead, v the motor side's rate; dN = k_f i. The rotor (``reflected_mass_kg``) sits on

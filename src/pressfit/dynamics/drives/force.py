@@ -66,6 +66,10 @@ class ForceDrive:
     def axial_stiffness_n_per_m(self, lengths_m: np.ndarray) -> np.ndarray:
         return np.full_like(np.asarray(lengths_m, dtype=float), self._stiffness)
 
+    def step_stiffness_n_per_m(self, lengths_m: np.ndarray) -> np.ndarray:
+        """0 (an ideal force source: the travel does not change its tension), N/m."""
+        return np.zeros_like(np.asarray(lengths_m, dtype=float))
+
     def linear_port(self, length_m: float, tension_n: float) -> DrivePort:
         """tau dN' = dN_cmd - dN (the same at every length and tension)."""
         w = 1.0 / self.time_constant_s

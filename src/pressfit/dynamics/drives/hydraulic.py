@@ -33,8 +33,9 @@ moves at its held rate within the step. A step is refused (:class:`pressfit.erro
 the piston would leave the stroke, a pressure leaves [-0.1 p_s, 10 p_s] (a load the cylinder cannot hold: a
 relief valve or cavitation, which this model does not have) or is not finite, or when dt needs more than
 ``MAX_SUBSTEPS``. The oil column's stiffness against the moving mass (sqrt(k_h / m) / 2 pi, hundreds of Hz)
-is the caller's to resolve: the multibody step must be short against it
-(:meth:`HydraulicDrive.axial_stiffness_n_per_m`).
+is the caller's to resolve: an explicit coupling (the rigid model) needs a step short against it
+(:func:`oil_column_step_index`), an implicit one takes :meth:`HydraulicDrive.step_stiffness_n_per_m` as the
+drive's tangent (the flexible model).
 
 Measures: the leg length (a position transducer) and both chamber pressures (the force A (p_a - p_b)).
 No reflected inertia: the piston and rod translate with the stem (``mass.actuator_moving_mass_kg``).
@@ -203,6 +204,11 @@ class HydraulicDrive:
         """The oil column with the valve closed, beta A^2 (1/V_a + 1/V_b), N/m."""
         return self.machine.drive_stiffness_n_per_m(lengths_m)
 
+    def step_stiffness_n_per_m(self, lengths_m: np.ndarray) -> np.ndarray:
+        """The chambers compressed by the piston's travel within a step, the valve and leakage held: the oil
+        column k_h (:meth:`axial_stiffness_n_per_m`), N/m."""
+        return self.axial_stiffness_n_per_m(lengths_m)
+
     def linear_port(self, length_m: float, tension_n: float) -> DrivePort:
         r"""Chambers and valve linearised at rest delivering ``tension_n`` (p_a,b = null +- N / 2A), states
         (dp_a, dp_b, x_v), v = l_dot:
@@ -247,8 +253,9 @@ STEP_FRACTION = 0.5  # the multibody step is refused beyond this fraction of the
 def oil_column_step_index(stiffness_n_per_m: np.ndarray, mass_kg: np.ndarray, dt_s: float) -> np.ndarray:
     r"""omega_h dt / 2 for the oil column k_h on a mass m, omega_h = sqrt(k_h / m): the step is stable below 1.
 
-    Derived: the simulation couples drive and mechanics explicitly. Over a step the drive holds the leg rate v_n
-    (its pressures then change the force by -k_h v_n dt: the chambers' A l_dot term through beta / V), and the
+    Derived: the rigid model's simulation couples drive and mechanics explicitly (the flexible model takes the
+    drive inside its implicit step, :mod:`pressfit.dynamics.machine.flexible`). Over a step the drive holds the leg
+    rate v_n (its pressures then change the force by -k_h v_n dt: the chambers' A l_dot term through beta / V), and the
     mechanics then advance the velocity with the new force (semi-implicit Euler), so on the oil column alone
     F_{n+1} = F_n - k_h dt v_n, v_{n+1} = v_n + dt F_{n+1} / m: the update matrix [[1, -k_h dt], [dt / m,
     1 - a]], a = (omega_h dt)^2, has determinant 1 and trace 2 - a, so its eigenvalues stay on the unit circle

@@ -56,6 +56,21 @@ than MAX_STEP_FRACTION of the first mode's period (at the build pose, the drives
 rocking mode then has fewer than 20 steps per period, its period error (omega h)^2 / 12 passes 0.8%. No finite
 differences: M (``crba``), the spring tangents and B (``getConstraintsJacobian``) are Pinocchio's or analytic.
 
+Drives in the step: a force drive model (:mod:`pressfit.dynamics.drives`) is not a held force. Its
+delivered tension depends on the leg's motion over the step (a hydraulic drive's chambers compress by the
+piston's travel: the oil column k_h = beta A^2 (1/V_a + 1/V_b), 3-12e6 N/m, is a spring in series with the
+leg). Stepped explicitly (its tension from the rate at the start of the step, then held while the mechanics
+take the step), that spring lags by a step: on a generalised-alpha step this adds negative damping of the
+order of omega h / 8 to the oil-column modes, whatever the step (measured: with the valve closed, a 129 Hz
+mode grows 1.9x in 0.15 s at h = 50 us, 4x at 0.1 ms, 41x at 0.25 ms; rho_inf 0.8 does not change it; the
+bound omega_h dt < 2 of :func:`pressfit.dynamics.drives.hydraulic.oil_column_step_index` holds for the rigid
+model's semi-implicit Euler, not here). So ``step(..., drive=)`` takes the drive as a function of the end
+lengths (the drive stepped at the mean rate (l - l_n) / h, consistent with the step's own kinematics) and
+evaluates it in every Newton iteration, with the drive's tangent -dN/dl (``Drive.step_stiffness_n_per_m``:
+k_h for the hydraulic drive) in the iteration matrix: the oil column is then integrated like the legs'
+springs, unconditionally stable (tests/dynamics/test_drive_steps.py: the closed valve's free response
+reproduces the oil-column modes of the linearised machine).
+
 Section resultants (objective, mirror-exact): ``pin.rnea`` with the closure forces as external forces on the
 legs' last bodies gives the wrench each joint transmits to its subtree; the section's wrench (plate side on
 base side) is its opposite, carried to the section point and written in the deformed leg frame
@@ -72,6 +87,7 @@ the consistent acceleration of [M B^T; B 0] with the term dB/dt v left out (exac
 from __future__ import annotations
 
 import math
+from collections.abc import Callable
 from dataclasses import dataclass
 
 import numpy as np
@@ -191,6 +207,7 @@ class FlexibleMachine:
         self._factor: tuple | None = None
         self._factor_key: tuple | None = None
         self._fext: pin.StdVec_Force | None = None  # section_loads' external forces
+        self._drive_k = np.zeros(len(self.act))  # implicit force drives' tangent -dN/dl in the iteration matrix, N/m
 
     # --- model -----------------------------------------------------------------------------------
     def _place(self, stem_lengths_m: np.ndarray) -> None:
@@ -341,11 +358,19 @@ class FlexibleMachine:
         return tau
 
     # --- the step ------------------------------------------------------------------------------------
-    def step(self, state: FlexibleState, drive_input: DriveInput, plate_wrench: np.ndarray,
-             dt_s: float) -> FlexibleState:
+    def step(self, state: FlexibleState, drive_input: DriveInput, plate_wrench: np.ndarray, dt_s: float,
+             drive: Callable[[np.ndarray], np.ndarray] | None = None,
+             drive_stiffness_n_per_m: np.ndarray | None = None) -> FlexibleState:
         """One generalised-alpha step of ``dt_s`` (s) (module doc); the drive input and the plate wrench
-        (6,) (N, N m, world, plate centre) are held over the step. Refuses (PressfitError) a step longer than
-        MAX_STEP_FRACTION of the first mode's period or one whose Newton does not converge."""
+        (6,) (N, N m, world, plate centre) are held over the step. With force drives, ``drive`` (optional) gives
+        the delivered tensions (4,), N, as a function of the actuator lengths (4,), m, at the step's end (a drive
+        model stepped over the step at the mean rate they make): it is evaluated at every Newton iteration, so the
+        drive's own stiffness (an oil column) is implicit in the step like the legs' springs (module doc, "Drives
+        in the step"); ``drive_stiffness_n_per_m`` (4,) its tangent -dN/dl for the iteration matrix (default 0;
+        an approximate tangent only slows the modified Newton). The state records the tensions of the last
+        iterate (``drive``'s last call: the caller's drive state is that call's).
+        Refuses (PressfitError) a step longer than MAX_STEP_FRACTION of the first mode's period or one whose
+        Newton does not converge."""
         h = float(dt_s)
         if not (math.isfinite(h) and 0.0 < h <= MAX_STEP_FRACTION * self.first_period_s):
             bound = MAX_STEP_FRACTION * self.first_period_s
@@ -369,10 +394,14 @@ class FlexibleMachine:
         v_r = self._rigid_velocity(q_n, rates) if np.any(rates) else np.zeros(self.nv)
         key = (h, drive_input.kind, self._placed.tobytes())
         fresh = False
+        implicit = drive is not None and drive_input.kind == "force"
+        self._drive_k = np.zeros(len(self.act)) if drive_stiffness_n_per_m is None or not implicit else \
+            np.asarray(drive_stiffness_n_per_m, dtype=float)
         if self._factor is None or self._factor_key[:2] != key[:2]:
             self._refresh(q_n, k, drive_input, rest, h)
             fresh = True
         tau_ext = self._external(q_n, wrench, drive_input)
+        tension, held = drive_input.values, tau_ext[self.act_v] + drive_input.values  # without the drives
         acc, lam = acc_n.copy(), state.multipliers.copy()
         nv, sv, last, it = self.nv, self.sv, np.inf, 0
         scale, c_acc, c_old = 1.0 / (h * h * b * ca), (1 - af) / (1 - am), (af * acc_n - am * a_n) / (1 - am)
@@ -384,6 +413,9 @@ class FlexibleMachine:
             v = base_v + h * g * a_ps
             bj, phi = self._jacobian(q)
             rel = v - v_r  # M (acc + alpha rel) + h: the inertia and the mass-proportional damping in one rnea
+            if implicit:
+                tension = drive(q[self.act_q])
+                tau_ext[self.act_v] = held - tension
             r = pin.rnea(self.model, self.data, q, v, acc + alpha * rel) + bj.T @ lam - tau_ext
             if self.nonlinear:
                 f, kt = self._springs(q, rest, k, drive_input)
@@ -415,6 +447,8 @@ class FlexibleMachine:
         q = pin.integrate(self.model, q_n, base_dq + h * h * b * a_ps)
         v = base_v + h * g * a_ps
         work = float(self._damping_force(q, v - v_r, rest, k, drive_input) @ pin.difference(self.model, q_n, q))
+        if implicit:  # the drive at the last iterate: within drive_stiffness * NEWTON_TOL (~1e-5 N) of the end's
+            drive_input = DriveInput.forces(tension)
         return FlexibleState(state.time_s + h, q, v, acc, a_ps, lam, drive_input, self._placed.copy(), it, work)
 
     def _damping_force(self, q: np.ndarray, rel: np.ndarray, rest: np.ndarray, k: np.ndarray,
@@ -469,6 +503,7 @@ class FlexibleMachine:
         s = np.zeros((nv + 24, nv + 24))
         s[:nv, :nv] = (1 / (b * ca * h * h) + g / (b * h) * self.damping.alpha_per_s) * self._mass(q)
         s[self.sv, self.sv] += (1 + g / (b * h) * self.damping.beta_s) * kt
+        s[self.act_v, self.act_v] += self._drive_k  # an implicit force drive's tangent (step)
         s[:nv, nv:], s[nv:, :nv] = bj.T, bj
         self._factor = lu_factor(s, check_finite=False, overwrite_a=True)
         self.refreshes += 1
@@ -554,6 +589,13 @@ class FlexibleMachine:
         """Leg section resultants at the three sections (module doc, :mod:`.base`)."""
         values, frames = leg_frame_loads(self.section_wrenches(state), self.machine.cardan_axes)
         return SectionLoads(values, frames)
+
+
+def first_mode_hz(machine: Machine, pose_m: np.ndarray) -> float:
+    """The first mode (Hz) of the flexible machine built at ``pose_m`` (m), the drives holding their lengths: the
+    mode whose period MAX_STEP_FRACTION bounds the step by (module doc)."""
+    fm = FlexibleMachine(machine, pose_m, damping=Rayleigh(0.0, 0.0))
+    return float(fm.modes.frequencies_hz[0])
 
 
 def leg_frame_loads(wrenches: np.ndarray, cardan_axes: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
