@@ -18,6 +18,7 @@ from pressfit import kinematics
 from pressfit.cli import main
 from pressfit.description.cases import load_case
 from pressfit.dynamics import drives as drive_kinds
+from pressfit.dynamics import insertion
 from pressfit.dynamics.actuators import distribution
 from pressfit.dynamics.control import gravity_feedforward_n
 from pressfit.dynamics.cycle import CYCLE_COLUMNS, plan_cycle, simulate_cycle, summarise_cycle
@@ -338,3 +339,12 @@ def test_cli_runs_the_flexible_model_and_refuses_an_existing_output_before_compu
     (out / "keep.txt").write_text("x")
     res = run("cycle", path, "--out", out, "--no-progress")
     assert res.exit_code == 2 and "--overwrite" in res.output and sorted(p.name for p in out.iterdir()) == ["keep.txt"]
+
+
+def test_a_run_time_error_names_the_cycles_keys(tmp_path, monkeypatch):
+    """An error raised inside the step loop of a board names [cycle]'s keys (the board has no [simulation] table):
+    with the closure-drift tolerance set to zero the first step's drift stops the run; the one error line names
+    [cycle] baumgarte_rad_per_s and [cycle.controller], never [simulation]."""
+    monkeypatch.setattr(insertion, "MAX_CLOSURE_DRIFT_M", 0.0)
+    line = refused(board(tmp_path), "drifted open", "[cycle] baumgarte_rad_per_s", "[cycle.controller] gains")
+    assert "[simulation" not in line

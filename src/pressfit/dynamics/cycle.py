@@ -275,18 +275,15 @@ def plan_cycle(case: Case, machine: Machine | None = None, model: str | None = N
                            "[cycle] end_m", f"{_pin_label(pin)}: the planned path ({seg.phase} segment)")
     check_preload(case, machine, drives, path, "[preload] a4_n")
     sim = cycle_simulation(cycle, pins[0], model or cycle.model)
-    try:  # the start, every approach point and the end
-        _check_steps(case, sim, rigid, np.array([cycle.start_m, *points[1::4], cycle.end_m]))
-    except ModelFileError as exc:  # it names [simulation]'s keys: here they are [cycle]'s (the same meaning)
-        raise ModelFileError(case.path, exc.key.replace("[simulation", "[cycle"),
-                             exc.expected.replace("[simulation", "[cycle")) from None
+    _check_steps(case, sim, rigid, np.array([cycle.start_m, *points[1::4], cycle.end_m]), "cycle")  # start,
+    # every approach point and the end
     check_oil_column(case, machine, sim, np.array([cycle.start_m, *points[1::4], cycle.end_m]), path,
                      "[cycle] time_step_s")
     check_flexible_step(case, machine, sim, np.array(points), "[cycle] time_step_s")
     limits = np.array([pins[s.pin - 1].force_limit_n for s in segments])
     warnings = (run_time_warning(steps, dt, trajectory.duration_s),) if steps > WARN_STEPS else ()
     scenario = ScenarioPlan(trajectory, steps, path, warnings, rigid, sim, limits,
-                            MAX_DEPTH_FACTOR * max(pin.interference_m for pin in pins))
+                            MAX_DEPTH_FACTOR * max(pin.interference_m for pin in pins), table="cycle")
     return CyclePlan(scenario, pins, tuple(segments), case.model_copy(update={"simulation": sim}))
 
 
@@ -317,10 +314,7 @@ def simulate_cycle(case: Case, model: str | None = None, progress: bool = False,
     drives = drive_kinds.of(machine)
 
     def run(run_case: Case) -> tuple[np.ndarray, np.ndarray, np.ndarray | None]:
-        try:
-            return run_plan(run_case, machine, plan.scenario, drives, True, progress)
-        except PressfitError as exc:  # the loops name [simulation]'s keys: here they are [cycle]'s (the same)
-            raise PressfitError(str(exc).replace("[simulation", "[cycle")) from None
+        return run_plan(run_case, machine, plan.scenario, drives, True, progress)  # its errors name [cycle]'s keys
 
     rows, phases, sections = run(plan.run_case)
     pin = np.array([plan.segments[k].pin if plan.segments[k].phase in PIN_PHASES else 0 for k in phases])
@@ -339,7 +333,7 @@ def simulate_cycle(case: Case, model: str | None = None, progress: bool = False,
                                     f"{a4:g} N) could not be simulated: {exc}") from None
         sized = run_sizing(_Rows(series), drives, plan.scenario.simulation.time_step_s,
                            baseline if preload_cost else None)
-        sized.energy.require_closed(f"of the board of {case.path}")
+        sized.energy.require_closed(f"of the board of {case.path}", "cycle")
         summary.update(sized.to_dict())
     return CycleResult(series, plan, summary, sections, sized)
 

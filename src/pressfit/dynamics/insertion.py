@@ -153,6 +153,7 @@ class ScenarioPlan:
     simulation: Simulation
     force_limits_n: np.ndarray
     depth_limit_m: float = math.inf  # the run stops beyond this depth below the board face (MAX_DEPTH_FACTOR)
+    table: str = "simulation"  # the case table whose keys the run's errors name: [simulation], a board's [cycle]
 
 
 def _refuse(case: Case, key: str, expected: str) -> ModelFileError:
@@ -337,16 +338,18 @@ def _require_reachable(case: Case, machine: Machine, pose: np.ndarray, key: str,
                       f"breaks {reasons}") from None
 
 
-def _check_steps(case: Case, sim: Simulation, rigid: RigidLegModel, poses_m: np.ndarray) -> None:
+def _check_steps(case: Case, sim: Simulation, rigid: RigidLegModel, poses_m: np.ndarray,
+                 table: str = "simulation") -> None:
     """The explicit step against the position loop (PD gains plus the contact's stiffness and damping on the
     plate's lightest apparent mass at the poses ``poses_m`` (n, 3), m, the waypoints) and the Baumgarte corrector
     (m = 1, k = omega_b^2, c = 2 omega_b): refused beyond ``STABILITY_FRACTION`` of the stability limit
-    (:func:`step_stability`), the margin left for the drives' lag and the sampled estimator the index does not see."""
+    (:func:`step_stability`), the margin left for the drives' lag and the sampled estimator the index does not see;
+    the errors name ``table``'s keys."""
     dt, g, c = sim.time_step_s, sim.controller, sim.contact
     omega = sim.baumgarte_rad_per_s
     if step_stability(1.0, omega**2, 2.0 * omega, dt) > STABILITY_FRACTION:
         bound = math.sqrt(4 + 4 * STABILITY_FRACTION) - 2  # (omega dt)^2 + 4 omega dt = 4 STABILITY_FRACTION
-        raise _refuse(case, "[simulation] baumgarte_rad_per_s", f"omega_b dt at most {bound:.3g} (the explicit "
+        raise _refuse(case, f"[{table}] baumgarte_rad_per_s", f"omega_b dt at most {bound:.3g} (the explicit "
                       f"corrector is stable below 2 sqrt(2) - 2 = 0.83), got {omega:g} rad/s x time_step_s "
                       f"{dt:g} s = {omega * dt:.3g}")
     mass = min(apparent_mass_kg(rigid, p) for p in poses_m)
@@ -355,17 +358,17 @@ def _check_steps(case: Case, sim: Simulation, rigid: RigidLegModel, poses_m: np.
     stiffness, damping = g.kp_n_per_m + c.stiffness_n_per_m + fit, g.kd_n_s_per_m + c.damping_n_s_per_m
     index = step_stability(mass, stiffness, damping, dt)
     if index > STABILITY_FRACTION:
-        raise _refuse(case, "[simulation] time_step_s", f"a step the position loop is stable with: (k dt^2 / m + "
+        raise _refuse(case, f"[{table}] time_step_s", f"a step the position loop is stable with: (k dt^2 / m + "
                       f"2 c dt / m) / 4 = {index:.3g} > {STABILITY_FRACTION:g} (semi-implicit Euler is stable below 1) "
                       f"with k = kp_n_per_m + the contact stiffness = {stiffness:.4g} N/m, c = kd_n_s_per_m + the "
                       f"contact damping = {damping:.4g} N s/m, m = {mass:.4g} kg the plate's lightest apparent mass, "
-                      f"dt = {dt:g} s: reduce time_step_s or the [simulation.controller] gains")
+                      f"dt = {dt:g} s: reduce time_step_s or the [{table}.controller] gains")
 
 
-def _diverged(case: Case, t: float, what: str) -> PressfitError:
+def _diverged(case: Case, t: float, what: str, table: str) -> PressfitError:
     return PressfitError(f"{case.path}: the simulation diverged at t = {t:.4g} s ({what}); the planned path is "
-                         "reachable, so the likely keys are [simulation] time_step_s, the [simulation.controller] "
-                         "gains (kp_n_per_m, kd_n_s_per_m, ki_n_per_m_s, backoff_m_per_s_n) or [simulation] "
+                         f"reachable, so the likely keys are [{table}] time_step_s, the [{table}.controller] "
+                         f"gains (kp_n_per_m, kd_n_s_per_m, ki_n_per_m_s, backoff_m_per_s_n) or [{table}] "
                          "baumgarte_rad_per_s")
 
 
@@ -415,12 +418,12 @@ class _Series:
         return np.concatenate(self.chunks)
 
 
-def _check_pose(case: Case, machine: Machine, k: int, steps: int, t: float, pose: np.ndarray) -> None:
+def _check_pose(case: Case, machine: Machine, k: int, steps: int, t: float, pose: np.ndarray, table: str) -> None:
     bad = [] if k % _REACH_CHECK_STEPS and k != steps - 1 else kinematics.violations(machine, pose) \
         if pose[1] > 0 else [(0, "y_h [m]", pose[1], "minimum 0")]
     if bad:
         raise _diverged(case, t, f"the plate left the reachable set at ({', '.join(f'{c:.4g}' for c in pose)})"
-                        f" m: {format_violation(*bad[0])}")
+                        f" m: {format_violation(*bad[0])}", table)
 
 
 def _drive_failed(case: Case, t: float, exc: DriveStepError) -> PressfitError:
@@ -435,16 +438,17 @@ def _check_depth(case: Case, plan: ScenarioPlan, depth_m: float, t: float) -> No
                             f"beyond the tolerance of {1e3 * plan.depth_limit_m:.4g} mm ({MAX_DEPTH_FACTOR:g} x the "
                             f"commanded interference_m): the board face is solid and the contact law models "
                             "the pin-board stack only down to the commanded interference, so the run is refused; "
-                            "the likely keys are the [simulation.controller] gains, the segment times or the drives")
+                            f"the likely keys are the [{plan.table}.controller] gains, the segment times or the "
+                            "drives")
 
 
-def _drift_error(case: Case, drift: float, t: float) -> PressfitError:
+def _drift_error(case: Case, drift: float, t: float, table: str) -> PressfitError:
     sim = case.simulation
     return PressfitError(f"{case.path}: the loop closures drifted open by {drift:.3g} m at t = {t:.4g} s, "
                          f"over the tolerance of {MAX_CLOSURE_DRIFT_M:g} m (the tool position is only as "
-                         f"good as the closures): raise [simulation] baumgarte_rad_per_s (now "
+                         f"good as the closures): raise [{table}] baumgarte_rad_per_s (now "
                          f"{sim.baumgarte_rad_per_s:g} rad/s) or reduce time_step_s; if the motion itself "
-                         "diverged, the [simulation.controller] gains")
+                         f"diverged, the [{table}.controller] gains")
 
 
 def _run_rigid(case: Case, machine: Machine, plan: ScenarioPlan, drives: drive_kinds.Drive, limiter: bool,
@@ -498,15 +502,15 @@ def _run_rigid(case: Case, machine: Machine, plan: ScenarioPlan, drives: drive_k
                 ctrl.offsets_m, ctrl.estimate_m, ctrl.units, iterations, KINEMATIC_ITERATIONS, contact_tau, post,
                 lengths, rates)
             if not finite:
-                raise _diverged(case, t, "the state is not finite")
+                raise _diverged(case, t, "the state is not finite", plan.table)
             _check_depth(case, plan, depth, t)
             row[drift_column] = drift = rigid.closure_error_m()
             if drift > MAX_CLOSURE_DRIFT_M:
-                raise _drift_error(case, drift, t)
-            _check_pose(case, machine, k, steps, t, q[0:3])
+                raise _drift_error(case, drift, t, plan.table)
+            _check_pose(case, machine, k, steps, t, q[0:3], plan.table)
             row[energy] = (*rigid.energy_j(q, v), 0.0, 0.0)
         except UnreachablePoseError as exc:  # the estimate (feed-forward, compliance) left the workspace
-            raise _diverged(case, t, f"the pose estimate left the reachable set: {exc}") from None
+            raise _diverged(case, t, f"the pose estimate left the reachable set: {exc}", plan.table) from None
         except DriveStepError as exc:
             raise _drive_failed(case, t, exc) from None
     return series.rows(), phases, None
@@ -563,13 +567,13 @@ def _flexible_steps(case: Case, machine: Machine, plan: ScenarioPlan, drives: dr
                                 drives.step_stiffness_n_per_m(lengths))
                 drive, tension = stepped.result
             if not (np.all(np.isfinite(state.q)) and np.all(np.isfinite(state.v))):
-                raise _diverged(case, t, "the state is not finite")
+                raise _diverged(case, t, "the state is not finite", plan.table)
             drift = fm.closure_error(state)[0]
             if drift > MAX_CLOSURE_DRIFT_M:
-                raise _drift_error(case, drift, t)
+                raise _drift_error(case, drift, t, plan.table)
             placements[k], wrenches[k] = fm.section_state(state)
             tool = fm.tool_point_m(state)
-            _check_pose(case, machine, k, steps, t, tool)
+            _check_pose(case, machine, k, steps, t, tool, plan.table)
             previous, depth = depth, board - tool[1]
             _check_depth(case, plan, depth, t)
             contact_force = contact_force_n(sim.contact, depth, (depth - previous) / dt)
@@ -578,9 +582,9 @@ def _flexible_steps(case: Case, machine: Machine, plan: ScenarioPlan, drives: dr
                            contact_force, depth, *command, *tension, ctrl.lift_m, drift, *no_axial,
                            ctrl.null @ tension), lengths, rates, _energies(fm.energy(state), state.damping_work_j))
         except UnreachablePoseError as exc:
-            raise _diverged(case, t, f"the pose estimate left the reachable set: {exc}") from None
+            raise _diverged(case, t, f"the pose estimate left the reachable set: {exc}", plan.table) from None
         except ConvergenceError as exc:
-            raise _diverged(case, t, f"the flexible model's step failed: {exc}") from None
+            raise _diverged(case, t, f"the flexible model's step failed: {exc}", plan.table) from None
         except DriveStepError as exc:
             raise _drive_failed(case, t, exc) from None
         phases[k] = trajectory.segment(t - 1e-12)

@@ -263,12 +263,13 @@ class EnergyBalance:
     def to_dict(self) -> dict[str, Any]:
         return dict(vars(self))
 
-    def require_closed(self, where: str = "") -> EnergyBalance:
-        """Itself, or ResidualError when ``relative_residual`` exceeds ``tolerance`` (the energies are not trusted)."""
+    def require_closed(self, where: str = "", table: str = "simulation") -> EnergyBalance:
+        """Itself, or ResidualError when ``relative_residual`` exceeds ``tolerance`` (the energies are not trusted);
+        the message names ``table``'s time step."""
         if not self.relative_residual <= self.tolerance:
             raise ResidualError(f"the run's energy balance (residual {self.residual_j:.4g} J of the drives' gross work "
                                 f"{self.gross_drive_work_j:.4g} J: the integrator's energy error, first order in "
-                                "[simulation] time_step_s)", "relative energy residual", self.relative_residual,
+                                f"[{table}] time_step_s)", "relative energy residual", self.relative_residual,
                                 self.tolerance, where)
         return self
 
