@@ -69,8 +69,8 @@ def test_a_base_point_error_along_the_leg_lengthens_it_and_moves_its_stem_spring
     at = own.pose_values(pose)
     fast = FastEquilibriumSolver(machine, pose_m=pose)
     ch = fast._chain
-    block, nominal = (fast._block(pose[None], np.zeros((1, 6)), np.zeros((1, n)), b[None], machine.plate_offsets_m[None])
-                      for b in (base, machine.base_points_m))
+    block, nominal = (fast._block(pose[None], np.zeros((1, 6)), np.zeros((1, n)), b[None],
+                                  machine.plate_offsets_m[None]) for b in (base, machine.base_points_m))
     stem = kinematics.inverse_kinematics(machine, pose).lengths_m - machine.cylinder.length_m
     np.testing.assert_allclose(at.stem_lengths_m - stem, [1e-3] + [0.0] * (n - 1), atol=1e-12)
     np.testing.assert_allclose(block.q0leg[0], at.q0[fast._legq], atol=1e-15)  # prismatic: the 1 mm longer leg
