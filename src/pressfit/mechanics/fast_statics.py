@@ -37,6 +37,14 @@ solve per pose, the free joint motions from the closure in the dual bases of the
 Plate coordinates: centre translation (world) and a world rotation
 vector applied on the left (R <- exp(dtheta) R); closure rotation error log3(R_E R_D^T) as the reference.
 
+Joint positions as data: ``solve_batch(base_points_m=..., plate_offsets_m=...)`` gives every solve its own base
+and plate cardan centres B_i, d_i (a Monte Carlo sample's joint position errors). Only the chain's first
+placement and its anchor on the plate depend on them (the cardan axes and leg frames R0_i do not); the leg
+lengths, which set the stem placements and the stem and actuator stiffnesses, come from each solve's inverse
+kinematics. So one model serves every layout, with the answers of a machine built with those errors (tested
+against the reference solver on that machine). Cardan misalignments do not fit this path: their rigid
+configuration is a least-squares assembly (Pinocchio, per pose) and their legs are not straight.
+
 Supported: rigid or linear-spring cardans (``cardan_compliance`` with :class:`LinearSpring` laws, a
 cardan rotational stiffness), actuator preload (offsets). Refused: springs with nonlinear laws (the
 clearance dead zones; :mod:`pressfit.mechanics.clearance` keeps using the reference solver).
