@@ -160,15 +160,16 @@ def test_joint_position_error_acts_as_a_length_offset(machine, tmp_path):
 
 
 def test_fast_path_matches_the_reference_solver_per_sample():
-    """evaluate_chunk (the batched fast solver; a model per sample with the shipped case's joint position
-    errors) against evaluate_sample (the Pinocchio reference solver, stability checked) on the same draws: both
-    solve the same equations to the Newton tolerance 1e-10 (measured 1.3e-8 relative on the smallest outputs,
-    the torsion of a leg near zero): tolerance 1e-6 relative, 1e-9 of the largest value absolute."""
+    """evaluate_chunk (the batched fast solver; the shipped case's joint position errors as per-sample joint
+    positions on the nominal model) against evaluate_sample (the Pinocchio reference solver on each sample's
+    machine, stability checked) on the same draws: both solve the same equations to the Newton tolerance 1e-10
+    (measured 1.3e-8 relative on the smallest outputs, the torsion of a leg near zero): tolerance 1e-6 relative,
+    1e-9 of the largest value absolute."""
     from pressfit.shipped import cases_dir
 
     plan = mc.plan_from_case(load_case(cases_dir() / "studies" / "montecarlo_tolerances.toml"), samples=4,
                              chunk_size=4)
-    assert "one model per sample" in mc.solver_path(plan)
+    assert "one model per chunk (joint position errors as per-sample joint positions)" in mc.solver_path(plan)
     seed = mc.chunk_seeds(plan)[0]
     cols, x = mc.evaluate_chunk(plan, 0, seed), mc.draw_inputs(plan, 0, seed)
     assert np.all(cols["status"] == "ok")

@@ -90,7 +90,8 @@ def test_basis_is_linear_in_the_offsets_and_the_wrench(tmp_path):
     e[1], e[5] = 1e-5, -1e-5
     x = {"plate_point_error_m": e, "actuator_length_offset_m": np.array([3e-6, 0, -2e-6, 0])}
     s = mc._sample_loads(plan, mc._nominal(plan), x, 0.0)
-    ref = buckling.machine_buckling(s.machine, plan.poses_m[0], s.wrenches[0], preload_offsets_m=s.offsets_m[0])
+    ref = buckling.machine_buckling(mc._perturbed(plan.machine, x), plan.poses_m[0], s.wrenches[0],
+                                    preload_offsets_m=s.offsets_m[0])
     assert mc.machine_factor(plan, s) == pytest.approx(ref.load_factor, rel=1e-4)
 
 

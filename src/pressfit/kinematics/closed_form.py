@@ -32,6 +32,10 @@ class LegKinematics:
     alpha_rad: np.ndarray  # equation 1: tan(alpha_i) = (u_i . y) / (u_i . w_i), w_i inward
     beta_rad: np.ndarray  # equation 1: sin(beta_i) = (u_i . s_i) / l_i
 
+    def at(self, index: int | tuple[int, ...]) -> LegKinematics:
+        """The legs' kinematics at one pose of the array (``index`` into the pose dimensions)."""
+        return LegKinematics(**{k: v[index] for k, v in vars(self).items()})
+
 
 def reference_pose_m(machine: Machine) -> np.ndarray:
     """A reachable pose (3,), m, where models are built and shapes attached: x = z = 0, leg length
@@ -42,15 +46,21 @@ def reference_pose_m(machine: Machine) -> np.ndarray:
     return np.array([0.0, rise + g.base_joint_height_m - g.plate_joint_height_m, 0.0])
 
 
-def leg_vectors(machine: Machine, pose_m: np.ndarray) -> np.ndarray:
-    """u_i = h + d_i - B_i, shape (..., n, 3), m."""
+def leg_vectors(machine: Machine, pose_m: np.ndarray, *, base_points_m: np.ndarray | None = None,
+                plate_offsets_m: np.ndarray | None = None) -> np.ndarray:
+    """u_i = h + d_i - B_i, shape (..., n, 3), m. ``base_points_m`` B_i and ``plate_offsets_m`` d_i ((..., n, 3),
+    m, per pose): joint positions other than the machine's (its layout with other joint position errors)."""
     h = np.asarray(pose_m, dtype=float)
-    return h[..., None, :] + (machine.plate_offsets_m - machine.base_points_m)
+    b = machine.base_points_m if base_points_m is None else base_points_m
+    d = machine.plate_offsets_m if plate_offsets_m is None else plate_offsets_m
+    return h[..., None, :] + (d - b)
 
 
-def inverse_kinematics(machine: Machine, pose_m: np.ndarray) -> LegKinematics:
-    """Leg lengths and cardan angles (equation 1 with its atan/asin restored, docs/conventions.md)."""
-    u = leg_vectors(machine, pose_m)
+def inverse_kinematics(machine: Machine, pose_m: np.ndarray, *, base_points_m: np.ndarray | None = None,
+                       plate_offsets_m: np.ndarray | None = None) -> LegKinematics:
+    """Leg lengths and cardan angles (equation 1 with its atan/asin restored, docs/conventions.md); joint
+    positions other than the machine's as in :func:`leg_vectors`."""
+    u = leg_vectors(machine, pose_m, base_points_m=base_points_m, plate_offsets_m=plate_offsets_m)
     length = np.linalg.norm(u, axis=-1)
     alpha = np.arctan2(u[..., 1], np.einsum("...ij,ij->...i", u, machine.inward_directions))
     sin_beta = np.einsum("...ij,ij->...i", u, machine.beta_axes) / length
@@ -96,9 +106,10 @@ def unreachable_reason(machine: Machine, pose_m: np.ndarray) -> str:
     return ""
 
 
-def limit_margins(machine: Machine, pose_m: np.ndarray) -> dict[str, np.ndarray]:
-    """Distance to the nearest limit per leg, shape (..., n); negative = violated (m and rad)."""
-    ik = inverse_kinematics(machine, pose_m)
+def limit_margins(machine: Machine, pose_m: np.ndarray, ik: LegKinematics | None = None) -> dict[str, np.ndarray]:
+    """Distance to the nearest limit per leg, shape (..., n); negative = violated (m and rad) (``ik``: the
+    poses' inverse kinematics, if already computed)."""
+    ik = ik or inverse_kinematics(machine, pose_m)
     lim = machine.limits
     return {
         "leg_length_m": np.minimum(ik.lengths_m - lim.leg_length_min_m, lim.leg_length_max_m - ik.lengths_m),
@@ -107,9 +118,10 @@ def limit_margins(machine: Machine, pose_m: np.ndarray) -> dict[str, np.ndarray]
     }
 
 
-def is_reachable(machine: Machine, pose_m: np.ndarray) -> np.ndarray:
-    """Boolean mask (...,): every leg within Table 3's limits (and the plate above the base)."""
-    m = limit_margins(machine, pose_m)
+def is_reachable(machine: Machine, pose_m: np.ndarray, ik: LegKinematics | None = None) -> np.ndarray:
+    """Boolean mask (...,): every leg within Table 3's limits (and the plate above the base) (``ik``: the
+    poses' inverse kinematics, if already computed)."""
+    m = limit_margins(machine, pose_m, ik)
     ok = np.all((m["leg_length_m"] >= 0) & (m["alpha_rad"] >= 0) & (m["beta_rad"] >= 0), axis=-1)
     return ok & (np.asarray(pose_m)[..., 1] > 0)
 

@@ -37,6 +37,14 @@ solve per pose, the free joint motions from the closure in the dual bases of the
 Plate coordinates: centre translation (world) and a world rotation
 vector applied on the left (R <- exp(dtheta) R); closure rotation error log3(R_E R_D^T) as the reference.
 
+Joint positions as data: ``solve_batch(base_points_m=..., plate_offsets_m=...)`` gives every solve its own base
+and plate cardan centres B_i, d_i (a Monte Carlo sample's joint position errors). Only the chain's first
+placement and its anchor on the plate depend on them (the cardan axes and leg frames R0_i do not); the leg
+lengths, which set the stem placements and the stem and actuator stiffnesses, come from each solve's inverse
+kinematics. So one model serves every layout, with the answers of a machine built with those errors (tested
+against the reference solver on that machine). Cardan misalignments do not fit this path: their rigid
+configuration is a least-squares assembly (Pinocchio, per pose) and their legs are not straight.
+
 Supported: rigid or linear-spring cardans (``cardan_compliance`` with :class:`LinearSpring` laws, a
 cardan rotational stiffness), actuator preload (offsets). Refused: springs with nonlinear laws (the
 clearance dead zones; :mod:`pressfit.mechanics.clearance` keeps using the reference solver).
@@ -199,11 +207,12 @@ class _Kin:
     re: np.ndarray  # (b, n, 3, 3) leg end orientation
 
 
-def _kinematics(ch: _Chain, q: np.ndarray, z: np.ndarray) -> _Kin:
-    """Walk the chains for leg coordinates q (b, n, m) and placements z (b, n, m)."""
+def _kinematics(ch: _Chain, q: np.ndarray, z: np.ndarray, base: np.ndarray) -> _Kin:
+    """Walk the chains for leg coordinates q (b, n, m), placements z (b, n, m) and base cardan centres
+    base (b, n, 3) (m)."""
     nb, nl, m = q.shape
     cols = [np.broadcast_to(ch.r0[:, :, k], (nb, nl, 3)).copy() for k in range(3)]
-    pos = np.broadcast_to(ch.b, (nb, nl, 3)).copy()
+    pos = base.copy()
     cq, sq = np.cos(q)[..., None], np.sin(q)[..., None]
     w, p = np.empty((nb, nl, m, 3)), np.empty((nb, nl, m, 3))
     sec_col = {c: k for k, (c, _) in enumerate(ch.sec)}
@@ -264,6 +273,8 @@ class BatchEquilibrium:
     length_scale_m: float
     preload_offsets_m: np.ndarray  # (b, n) actuator rest-length offsets
     linear: bool
+    base_points_m: np.ndarray  # (b, n, 3) base cardan centres B_i of each solve, world
+    plate_offsets_m: np.ndarray  # (b, n, 3) plate cardan centres d_i of each solve, plate frame
 
     def equilibrium(self, i: int, stability: Stability) -> Equilibrium:
         """Pose i as the reference solver's :class:`Equilibrium`, with its stability report (computed by
@@ -290,6 +301,8 @@ class _Block:
     ks: np.ndarray  # (b, n, m_s) spring stiffnesses
     rest: np.ndarray  # (b, n, m_s) spring rest offsets from q0 (the actuator preload offsets)
     offsets: np.ndarray  # (b, n), m
+    base: np.ndarray  # (b, n, 3) base cardan centres B_i, m
+    anchors: np.ndarray  # (b, n, 3) plate cardan centres d_i in the plate frame, m
     f_ref: np.ndarray  # (b,), N
     row_scale: np.ndarray  # (b, 1, m) 1 / (F_ref or F_ref L_ref) per leg stationarity row
 
@@ -347,7 +360,13 @@ class FastEquilibriumSolver:
     def equilibrium(self, batch: BatchEquilibrium, i: int) -> Equilibrium:
         """Pose i of a batch as the reference solve reports it: with its stability (the reference's exact
         tangent at this solution, :meth:`EquilibriumSolver.stability_at`, ~1 ms) and the same physical
-        checks (raises UnstableEquilibriumError for an unstable or over-strained solution)."""
+        checks (raises UnstableEquilibriumError for an unstable or over-strained solution). Refuses a pose solved
+        with joint positions other than the model's (its stability needs that layout's own model)."""
+        if not (np.array_equal(batch.base_points_m[i], self._chain.b)
+                and np.array_equal(batch.plate_offsets_m[i], self._chain.anchors)):
+            raise FastSolverError(f"pose {i} of the batch was solved with joint positions other than the model's: its "
+                                  "stability report needs the reference solver on that machine "
+                                  "(statics.EquilibriumSolver)")
         stab = self._reference.stability_at(batch.pose_m[i], batch.load[i], batch.q[i], batch.multipliers[i],
                                             linear=batch.linear, preload_offsets_m=batch.preload_offsets_m[i])
         eq = batch.equilibrium(i, stab)
@@ -355,12 +374,17 @@ class FastEquilibriumSolver:
         return eq
 
     def solve_batch(self, poses_m: np.ndarray, plate_wrenches: np.ndarray, *, preload: Amplitudes | None = None,
-                    preload_mode: str = "force", preload_offsets_m: np.ndarray | None = None, linear: bool = False,
-                    tol: float = NEWTON_TOL, max_iter: int = 25) -> BatchEquilibrium:
+                    preload_mode: str = "force", preload_offsets_m: np.ndarray | None = None,
+                    base_points_m: np.ndarray | None = None, plate_offsets_m: np.ndarray | None = None,
+                    linear: bool = False, tol: float = NEWTON_TOL, max_iter: int = 25) -> BatchEquilibrium:
         """Equilibria at reachable poses (b, 3) (m) under plate wrenches (b, 6) or (6,) (N, N m; world, at
         the plate centre), after an actuator preload a4 along v_p (N in force mode, m in length mode;
         :mod:`pressfit.mechanics.preload`; n - 3 amplitudes unless the redundancy is 1) or explicit
-        rest-length offsets (b, n) (m). Geometrically
+        rest-length offsets (b, n) (m). ``base_points_m`` B_i (world) and ``plate_offsets_m`` d_i (plate frame),
+        (b, n, 3) or (n, 3), m: each solve's joint positions (default the model's): the same equilibrium as a
+        machine with those joint position errors and its own model (leg lengths, hence stem placements and
+        stiffnesses, from its inverse kinematics; the cardan axes are the model's); they take explicit
+        ``preload_offsets_m``. Geometrically
         nonlinear by default (``tol``: the reference's relative stationarity and closure); ``linear=True``:
         the small-displacement solve. Raises UnreachablePoseError, SingularPoseError, ConvergenceError, and
         ResidualError when a solution's relative residuals exceed statics.residual_tolerance(tol)."""
@@ -370,16 +394,24 @@ class FastEquilibriumSolver:
         if not np.all(np.isfinite(w)):
             raise PressfitError("plate wrenches must be finite (F in N, then M in N m)")
         nl = len(self.machine.legs)
+        base, anchors = (self._layout(name, a, default, len(h)) for name, a, default in (
+            ("base_points_m", base_points_m, self._chain.b), ("plate_offsets_m", plate_offsets_m, self._chain.anchors)))
         if preload_offsets_m is not None:
             offsets = np.broadcast_to(np.asarray(preload_offsets_m, dtype=float), (len(h), nl))
         elif preload is not None and np.any(preload):
+            if base_points_m is not None or plate_offsets_m is not None:
+                raise PressfitError("a preload amplitude is defined on the model's joint positions; with other joint "
+                                    "positions give the rest-length offsets (preload_offsets_m, m)")
             offsets = rest_length_offsets(self.machine, h, preload, preload_mode)
         else:
             offsets = np.zeros((len(h), nl))
-        parts = [self._solve_block(self._block(h[i:i + _CHUNK], w[i:i + _CHUNK], offsets[i:i + _CHUNK]), linear,
-                                   tol, max_iter) for i in range(0, len(h), _CHUNK)]
+        blocks = (slice(i, i + _CHUNK) for i in range(0, len(h), _CHUNK))
+        parts = [self._solve_block(self._block(h[k], w[k], offsets[k], base[k], anchors[k]), linear, tol, max_iter)
+                 for k in blocks]
         batch = BatchEquilibrium(*[np.concatenate([p[k] for p in parts]) for k in range(12)],
-                                 self.machine.geometry.base_half_side_m, np.array(offsets, dtype=float), linear)
+                                 length_scale_m=self.machine.geometry.base_half_side_m,
+                                 preload_offsets_m=np.array(offsets, dtype=float), linear=linear,
+                                 base_points_m=np.array(base), plate_offsets_m=np.array(anchors))
         relative = batch.residuals.copy()
         relative[:, 4] /= batch.length_scale_m  # closure in m -> relative, as Residuals.relative
         enforce_residuals(relative, residual_tolerance(tol), f"{'linear' if linear else 'nonlinear'} equilibrium "
@@ -387,9 +419,21 @@ class FastEquilibriumSolver:
                           f"{tuple(batch.load[i].tolist())} (N, N m)")
         return batch
 
-    def _block(self, h: np.ndarray, w: np.ndarray, offsets: np.ndarray) -> _Block:
+    def _layout(self, name: str, points: np.ndarray | None, default: np.ndarray, b: int) -> np.ndarray:
+        """Joint positions (b, n, 3) (m) of the solves: ``points`` ((b, n, 3) or (n, 3)) or the model's."""
+        shape = (b,) + default.shape
+        a = default if points is None else np.asarray(points, dtype=float)
+        if a.shape not in (shape, shape[1:]):
+            raise PressfitError(f"{name}: joint positions (m) of shape {shape} or {shape[1:]} (one per leg), got "
+                                f"{a.shape}")
+        if not np.all(np.isfinite(a)):
+            raise PressfitError(f"{name}: joint positions must be finite (m)")
+        return np.broadcast_to(a, shape)
+
+    def _block(self, h: np.ndarray, w: np.ndarray, offsets: np.ndarray, base: np.ndarray,
+               anchors: np.ndarray) -> _Block:
         mm, ch = self.model, self._chain
-        q0 = mm.configurations(h)
+        q0 = mm.configurations(h, base_points_m=base, plate_offsets_m=anchors)
         q0leg = q0[:, self._legq]
         lengths = q0leg[:, :, ch.rigid_cols[2]]
         z = np.broadcast_to(ch.z, q0leg.shape).copy()
@@ -403,15 +447,15 @@ class FastEquilibriumSolver:
                                    np.abs(ks[:, :, act] * offsets).max(1)])
         f_ref = np.where(f_ref > 0, f_ref, 1.0)
         row = np.where(ch.force_rows, 1.0, l_ref)[None, None] * f_ref[:, None, None]
-        return _Block(h, w, q0, q0leg, z, ks, rest, offsets, f_ref, 1.0 / row)
+        return _Block(h, w, q0, q0leg, z, ks, rest, offsets, base, anchors, f_ref, 1.0 / row)
 
     def _evaluate(self, bk: _Block, d: np.ndarray, pc: np.ndarray, rp: np.ndarray
                   ) -> tuple[_Kin, np.ndarray, np.ndarray, np.ndarray]:
         """Kinematics, closure residual c (b, n, 6), leg Jacobian transposed A^T (b, n, m, 6) and anchor
         arms r = p_D - p_C (b, n, 3) at leg offsets d from q0 and plate (pc, rp)."""
         ch = self._chain
-        kin = _kinematics(ch, bk.q0leg + d, bk.z)
-        r = np.einsum("bij,lj->bli", rp, ch.anchors)
+        kin = _kinematics(ch, bk.q0leg + d, bk.z, bk.base)
+        r = np.einsum("bij,blj->bli", rp, bk.anchors)
         rd = rp[:, None] @ ch.frames0
         c = np.concatenate([kin.pe - pc[:, None] - r, _log3(kin.re @ rd.swapaxes(-1, -2))], -1)
         prism = ch.prismatic[:, None]
@@ -520,8 +564,8 @@ class FastEquilibriumSolver:
         s = np.cumsum(inc, -1)
         ln = s[..., -1]
         ez = rl[..., :, 2]
-        pe = ch.b + ez * ln[..., None]
-        c = np.concatenate([pe - bk.pose[:, None] - ch.anchors, _log3(re @ ch.frames0.swapaxes(-1, -2))], -1)
+        pe = bk.base + ez * ln[..., None]
+        c = np.concatenate([pe - bk.pose[:, None] - bk.anchors, _log3(re @ ch.frames0.swapaxes(-1, -2))], -1)
         w = np.stack([f0[..., :, a[0]], rl[..., :, a[1]], rl[..., :, a[-2]], f3[..., :, a[-1]]], -2)
         u = cross(w[..., :2, :], ez[..., None, :])  # base cardan axes x e_z
         v = cross(u, ez[..., None, :])
@@ -554,7 +598,7 @@ class FastEquilibriumSolver:
         sinv = np.stack([sm[..., 1, 1], -sm[..., 0, 1], -sm[..., 1, 0], sm[..., 0, 0]], -1).reshape(sm.shape)
         sinv /= (sm[..., 0, 0] * sm[..., 1, 1] - sm[..., 0, 1] * sm[..., 1, 0])[..., None, None]
         x = -bk.rest
-        r = np.broadcast_to(ch.anchors, bk.q0leg.shape[:2] + (3,))
+        r = bk.anchors
         pj = _plate_jacobian(r)
         qm = pj.swapaxes(-1, -2) @ n_w  # (b, n, 6, 2)
         nr0 = -(n_w.swapaxes(-1, -2) @ g["c"][..., None])[..., 0] + _dot(gm, x[..., None, :])
@@ -601,10 +645,10 @@ class FastEquilibriumSolver:
         r_leg[..., ch.free_cols[2:]] = _dot(w[..., 2:, :], lm[..., None, :])
         lam_l = np.concatenate([(lf[..., None, :] @ rl)[..., 0, :], (lm[..., None, :] @ rl)[..., 0, :]], -1)
         r_leg[..., ch.spring_cols] = self._spring_rows(lam_l, lever) + bk.ks * (dqs - bk.rest)
-        r = np.broadcast_to(ch.anchors, lam.shape[:2] + (3,))
+        r = bk.anchors
         stat = self._stationarity(bk, r_leg, r, lam)
         s, ez = g["s"], g["ez"]
-        pts = np.stack([g["pe"] if col == len(ch.axis) - 1 else ch.b + ez * (s[..., col, None] + off)
+        pts = np.stack([g["pe"] if col == len(ch.axis) - 1 else bk.base + ez * (s[..., col, None] + off)
                         for col, off in ch.sec], -2)
         return self._results(bk, pts, g["pe"], fit - t, r, lam, d, bk.pose + dp[:, :3], _exp3(dp[:, 3:]), stat,
                              np.ones(len(dp), int), dp)

@@ -191,14 +191,20 @@ class MachineModel:
         q[..., r["plate_a"]] = -ik.alpha_rad
         return q
 
-    def configurations(self, poses_m: np.ndarray) -> np.ndarray:
+    def configurations(self, poses_m: np.ndarray, *, base_points_m: np.ndarray | None = None,
+                       plate_offsets_m: np.ndarray | None = None) -> np.ndarray:
         """Rigid closed-form q (..., nq) at reachable poses (..., 3) (m), batched; raises
-        :class:`UnreachablePoseError` naming the first pose outside the joint limits."""
+        :class:`UnreachablePoseError` naming the first pose outside the joint limits. ``base_points_m``,
+        ``plate_offsets_m`` ((..., n, 3), m, per pose): joint positions other than the machine's (other joint
+        position errors: :func:`pressfit.kinematics.leg_vectors`); the chain closes for any of them."""
         h = np.asarray(poses_m, dtype=float)
-        bad = ~kinematics.is_reachable(self.machine, h)
+        ik = kinematics.inverse_kinematics(self.machine, h, base_points_m=base_points_m,
+                                           plate_offsets_m=plate_offsets_m)
+        bad = ~kinematics.is_reachable(self.machine, h, ik)
         if np.any(bad):
-            kinematics.require_reachable(self.machine, h[bad][0] if h.ndim > 1 else h)
-        return self._configuration(h, kinematics.inverse_kinematics(self.machine, h))
+            first = tuple(np.argwhere(bad)[0])
+            kinematics.require_reachable(self.machine, h[first], ik.at(first))
+        return self._configuration(h, ik)
 
     def constraint_datas(self) -> list[pin.ConstraintData]:
         return [cm.createData() for cm in self.constraint_models]

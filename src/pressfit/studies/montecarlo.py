@@ -4,8 +4,9 @@ Each sample draws the case's ``[montecarlo.inputs]`` (SI) and solves the geometr
 equilibrium (:func:`pressfit.mechanics.statics.solve_equilibrium`) at every pose and load of the case:
 
 * ``base_point_error_m``, ``plate_point_error_m``: the real cardan centres B_i + e_B, d_i + e_d (world
-  axes, per leg); the leg lines then miss P*, so the condensed model refuses them and the Pinocchio
-  model is built on the real geometry.
+  axes, per leg); the leg lines then miss P*, so the condensed model refuses them. The fast solver takes
+  them as each solve's joint positions (one nominal model per chunk, the same equilibrium as a model built
+  on the real geometry); the reference solver builds the sample's machine.
 * ``actuator_length_offset_m``: held length minus commanded length, per leg. The drives are position-held
   at the lengths the controller computes from the **nominal** geometry (plus the case's ``[preload]``
   offsets on the nominal machine), so a joint position error also acts as a length offset
@@ -265,16 +266,16 @@ def _tilted(wrenches: np.ndarray, tilt: float, azimuth: float) -> np.ndarray:
 
 
 def _perturbed(machine: Machine, x: dict[str, np.ndarray]) -> Machine:
-    """The sample's machine: joint position errors (m) and cardan misalignments (rad) of ``x`` applied."""
+    """The sample's machine: joint position errors (m) of ``x`` added to the machine's (the joint positions of
+    :func:`_sample_loads`), cardan misalignments (rad) applied."""
     base, plate, tilt = (x.get(k) for k in ("base_point_error_m", "plate_point_error_m", "cardan_misalignment_rad"))
     if base is None and plate is None and tilt is None:
         return machine
     legs = [leg.model_dump() for leg in machine.legs]
     for i, leg in enumerate(legs):
-        if base is not None:
-            leg["base_point_error_m"] = base[3 * i:3 * i + 3].tolist()
-        if plate is not None:
-            leg["plate_point_error_m"] = plate[3 * i:3 * i + 3].tolist()
+        for key, e in (("base_point_error_m", base), ("plate_point_error_m", plate)):
+            if e is not None:
+                leg[key] = (np.array(leg[key]) + e[3 * i:3 * i + 3]).tolist()
         if tilt is not None:
             leg["base_cardan_tilt_rad"], leg["plate_cardan_tilt_rad"] = tilt[6 * i:6 * i + 6].reshape(2, 3).tolist()
     return machine.with_overrides({"legs": legs}, source=f"{machine.source} [montecarlo joint errors]")
@@ -319,10 +320,12 @@ def _nominal(plan: MonteCarloPlan) -> _Nominal:
 
 @dataclass(frozen=True)
 class _SampleLoads:
-    """What one sample solves: its machine, wrenches (W, 6) (N, N m), actuator rest-length offsets per pose
-    (P, 4), m, its leg lengths (P, 4), m, and their Euler loads (P, 4), N."""
+    """What one sample solves: its joint positions B_i (world) and d_i (plate frame), (n, 3) each, m (the
+    nominal machine's plus the sample's joint position errors), wrenches (W, 6) (N, N m), actuator rest-length
+    offsets per pose (P, 4), m, its leg lengths (P, 4), m, and their Euler loads (P, 4), N."""
 
-    machine: Machine
+    base_points_m: np.ndarray
+    plate_offsets_m: np.ndarray
     wrenches: np.ndarray
     offsets_m: np.ndarray
     lengths_m: np.ndarray
@@ -330,12 +333,14 @@ class _SampleLoads:
 
 
 def _sample_loads(plan: MonteCarloPlan, nominal: _Nominal, x: dict[str, np.ndarray], azimuth: float) -> _SampleLoads:
-    machine = _perturbed(plan.machine, x)
-    lengths = nominal.lengths_m if machine is plan.machine else \
-        kinematics.inverse_kinematics(machine, plan.poses_m).lengths_m
+    m = plan.machine
+    base, plate = (getattr(m, a) + x[k].reshape(-1, 3) if k in x else getattr(m, a) for k, a in (
+        ("base_point_error_m", "base_points_m"), ("plate_point_error_m", "plate_offsets_m")))
+    lengths = nominal.lengths_m if base is m.base_points_m and plate is m.plate_offsets_m else \
+        kinematics.inverse_kinematics(m, plan.poses_m, base_points_m=base, plate_offsets_m=plate).lengths_m
     offsets = nominal.lengths_m - lengths + x.get("actuator_length_offset_m", np.zeros(4)) + nominal.preload_offsets_m
     wrenches = _tilted(plan.wrenches, float(x["load_tilt_rad"][0]), azimuth) if "load_tilt_rad" in x else plan.wrenches
-    return _SampleLoads(machine, wrenches, offsets, lengths, plan.critical_loads_n(lengths))
+    return _SampleLoads(base, plate, wrenches, offsets, lengths, plan.critical_loads_n(lengths))
 
 
 def _sample_row(q: dict[str, np.ndarray], internal_n: np.ndarray, residual: np.ndarray,
@@ -379,10 +384,11 @@ def evaluate_sample(plan: MonteCarloPlan, x: dict[str, np.ndarray], azimuth: flo
     factor = machine_factor(plan, s)
     if factor < 1:
         raise _unstable(factor)
+    machine = _perturbed(plan.machine, x)
     g = x.get("cardan_clearance_m")
-    clearance = None if g is None else Clearance.per_joint(s.machine, g.tolist(), geometry="axial")
-    solver = model if s.machine is plan.machine and clearance is None and model is not None else \
-        _solver_for(s.machine, clearance, plan.poses_m[0])
+    clearance = None if g is None else Clearance.per_joint(machine, g.tolist(), geometry="axial")
+    solver = model if machine is plan.machine and clearance is None and model is not None else \
+        _solver_for(machine, clearance, plan.poses_m[0])
     vp = kinematics.preload_vector
     eqs = [(p, _solve(solver, pose, load, s.offsets_m[p], clearance)) for p, pose in enumerate(plan.poses_m)
            for load in s.wrenches]
@@ -396,28 +402,33 @@ def solver_path(plan: MonteCarloPlan) -> str:
     """Which solver the plan's samples take: the reference solver with cardan clearances (dead-zone springs,
     which the fast solver refuses) or cardan misalignments (a model per sample, the solve started from the
     least-squares rigid assembly: the fast solver's closed-form reference needs parallel cardan axes); else
-    the batched fast solver, one model per chunk, or one model per sample with joint position errors (they
-    change the machine)."""
+    the batched fast solver, one model per chunk (joint position errors as each solve's joint positions)."""
     names = {n for n, _ in plan.inputs}
     if names & _REFERENCE_ONLY.keys():
         why = " and ".join(label for n, label in _REFERENCE_ONLY.items() if n in names)
         return f"reference solver ({why}), one model per sample, stability checked with every solve"
-    per = "sample" if names & {"base_point_error_m", "plate_point_error_m"} else "chunk"
-    return (f"fast batched solver, one model per {per}; samples with a whole-machine buckling factor (or a leg's "
-            f"Euler factor) below {STABILITY_RECHECK_FACTOR:g} re-solved by the reference solver (stability check)")
+    joints = " (joint position errors as per-sample joint positions)" if names & {
+        "base_point_error_m", "plate_point_error_m"} else ""
+    return (f"fast batched solver, one model per chunk{joints}; samples with a whole-machine buckling factor (or a "
+            f"leg's Euler factor) below {STABILITY_RECHECK_FACTOR:g} re-solved by the reference solver "
+            "(stability check)")
 
 
 def _fast_rows(plan: MonteCarloPlan, nominal: _Nominal, setups: list[_SampleLoads],
                solver: FastEquilibriumSolver) -> list[dict[str, float] | PressfitError]:
-    """The samples of ``setups`` (sharing ``solver``'s machine) in one batched solve over samples x poses x
-    loads; a failing batch is split to find the failing samples. Checks the small-strain range per solve."""
+    """The samples of ``setups`` (on ``solver``'s model, each with its joint positions) in one batched solve over
+    samples x poses x loads; a failing batch is split to find the failing samples. Checks the small-strain range
+    per solve."""
     n, p, w = len(setups), len(plan.poses_m), len(plan.wrenches)
     per_solve = lambda a: np.stack(
         [np.broadcast_to(a(s)[:, None], (p, w) + a(s).shape[1:]) for s in setups])
+    layout = lambda a: np.repeat(np.stack([a(s) for s in setups]), p * w, axis=0)
     try:
         be = solver.solve_batch(np.broadcast_to(plan.poses_m[None, :, None], (n, p, w, 3)).reshape(-1, 3),
                                 np.stack([np.broadcast_to(s.wrenches, (p, w, 6)) for s in setups]).reshape(-1, 6),
-                                preload_offsets_m=per_solve(lambda s: s.offsets_m).reshape(-1, 4))
+                                preload_offsets_m=per_solve(lambda s: s.offsets_m).reshape(-1, 4),
+                                base_points_m=layout(lambda s: s.base_points_m),
+                                plate_offsets_m=layout(lambda s: s.plate_offsets_m))
     except PressfitError as exc:
         return [exc] if n == 1 else [r for s in setups for r in _fast_rows(plan, nominal, [s], solver)]
     crit, lengths = per_solve(lambda s: s.critical_n).reshape(-1, 4), per_solve(lambda s: s.lengths_m).reshape(-1, 4)
@@ -426,7 +437,7 @@ def _fast_rows(plan: MonteCarloPlan, nominal: _Nominal, setups: list[_SampleLoad
                 * be.actuator_forces_n).sum(1)
     res = be.residuals.copy()
     res[:, 4] /= be.length_scale_m
-    strain = np.abs(be.actuator_forces_n) * setups[0].machine.axial_compliance_m_per_n(lengths) / lengths
+    strain = np.abs(be.actuator_forces_n) * plan.machine.axial_compliance_m_per_n(lengths) / lengths
     m = p * w
     factors = machine_factors(plan, setups)
     rows: list[dict[str, float] | PressfitError] = []
@@ -439,25 +450,13 @@ def _fast_rows(plan: MonteCarloPlan, nominal: _Nominal, setups: list[_SampleLoad
     return rows
 
 
-def _fast_solver(machine: Machine, pose_m: np.ndarray) -> FastEquilibriumSolver | PressfitError:
-    try:
-        return FastEquilibriumSolver(machine, pose_m=pose_m)
-    except PressfitError as exc:
-        return exc
-
-
 def _evaluate_fast(plan: MonteCarloPlan, x: list[dict[str, np.ndarray]], azimuths: np.ndarray
                    ) -> list[dict[str, float] | PressfitError]:
     """The fast path (:func:`solver_path`): batched solves, then the stability re-check of the samples that
     come within STABILITY_RECHECK_FACTOR of a leg's Euler load by the reference solver."""
     nominal = _nominal(plan)
     setups = [_sample_loads(plan, nominal, xj, float(a)) for xj, a in zip(x, azimuths)]
-    if any(s.machine is not plan.machine for s in setups):  # joint position errors: a model per sample
-        solvers = [_fast_solver(s.machine, plan.poses_m[0]) for s in setups]
-        rows = [sv if isinstance(sv, PressfitError) else _fast_rows(plan, nominal, [s], sv)[0]
-                for s, sv in zip(setups, solvers)]
-    else:
-        rows = _fast_rows(plan, nominal, setups, FastEquilibriumSolver(plan.machine, pose_m=plan.poses_m[0]))
+    rows = _fast_rows(plan, nominal, setups, FastEquilibriumSolver(plan.machine, pose_m=plan.poses_m[0]))
     for j, r in enumerate(rows):
         if not isinstance(r, dict):  # a failed fast solve: unstable if the machine buckles below the load
             factor = machine_factor(plan, setups[j])
