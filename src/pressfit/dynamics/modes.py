@@ -105,7 +105,6 @@ def reduced_system(machine: Machine, pose_m: np.ndarray, plate_wrench: np.ndarra
     """:class:`ReducedSystem` at the reachable pose ``pose_m`` (m), loaded by ``plate_wrench`` (6,) (N, N m,
     world axes at the plate centre; default the weight of plate and tool), masses times ``mass_scale``; the
     actuator springs keep the rest lengths of the static solve (the drives hold their lengths)."""
-    machine.require_legs("the modal analysis (pressfit.dynamics.modes, linearise, response)", 4)
     if not (math.isfinite(mass_scale) and mass_scale > 0):
         raise PressfitError(f"mass_scale must be a positive number, got {mass_scale!r}")
     mm = build_model(machine, pose_m)
