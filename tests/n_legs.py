@@ -32,3 +32,14 @@ def rotation_about_y(angle_rad: float):
     theta - angle_rad)."""
     c, s = math.cos(angle_rad), math.sin(angle_rad)
     return np.array([[c, 0.0, s], [0.0, 1.0, 0.0], [-s, 0.0, c]])
+
+
+def ring_machine_file(path, n: int):
+    """Write Tsai's machine file with its legs replaced by :func:`ring` (n) to ``path``; returns the path."""
+    from pathlib import Path
+
+    text = (Path(__file__).resolve().parents[1] / "models" / "tsai_3upu.toml").read_text()
+    head, tail = text.split("[[legs]]", 1)[0], "[limits]" + text.split("[limits]", 1)[1]
+    legs = "".join(f"[[legs]]\nradial_direction = {leg['radial_direction']!r}\n\n" for leg in ring(n))
+    path.write_text(head + legs + tail)
+    return path
