@@ -14,7 +14,8 @@ def centred(machine, y: float) -> tuple[float, float]:
     """sin(alpha) and the axial stiffness k_a (N/m) of every leg at (0, y, 0) (module doc)."""
     g, e = machine.geometry, machine.material.youngs_modulus_pa
     length = math.hypot(y, g.base_half_side_m - g.plate_half_side_m)
-    do, di = machine.cylinder.outer_diameter_m, machine.cylinder.outer_diameter_m - 2 * machine.cylinder.wall_thickness_m
+    cyl = machine.cylinder
+    do, di = cyl.outer_diameter_m, cyl.outer_diameter_m - 2 * cyl.wall_thickness_m
     tube, rod = math.pi / 4 * (do**2 - di**2), math.pi / 4 * machine.stem.diameter_m**2
     lc = machine.cylinder.length_m
     c = 1 / machine.actuator.axial_stiffness_n_per_m + lc / (e * tube) + (length - lc) / (e * rod)

@@ -61,8 +61,9 @@ def test_tsai_preload_study_lost_motion_and_no_preload(tsai):
 
 def test_five_leg_preload_study_runs_along_the_first_basis_vector(five):
     """A 5-leg machine: the study's one preload number a is the amplitude along the first basis vector
-    (a unit self-stress times a in which leg 4 pulls and leg 5 carries nothing: the basis's definition); its lost motion without preload is
-    2 g / sin(alpha) (rel 1e-4), and a preload stiffens the small-load secant (legs 1-4 closed)."""
+    (a unit self-stress times a in which leg 4 pulls and leg 5 carries nothing: the basis's definition); its lost
+    motion without preload is 2 g / sin(alpha) (rel 1e-4), and a preload stiffens the small-load secant (legs
+    1-4 closed)."""
     a = along_first_vector(five, 300.0)
     forces = self_stress_forces_n(five, np.array([0.0, Y, 0.0]), a)
     assert a == (300.0, 0.0) and np.linalg.norm(forces) == pytest.approx(300.0, rel=1e-12)

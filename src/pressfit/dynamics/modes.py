@@ -3,8 +3,8 @@ r"""Natural frequencies and mode shapes of the loaded machine at a pose (small v
 The VJM model (:mod:`pressfit.mechanics.model`) is first brought to its static equilibrium under the plate
 wrench (default: the weight of plate and tool; :func:`pressfit.mechanics.statics.solve_equilibrium`,
 geometrically nonlinear). About that configuration q*, admissible motions dq = N z satisfy the linearised
-loop closures J_c(q*) dq = 0, N an orthonormal basis of the null space of the (6 n x nv) closure Jacobian (n legs, one plate-cardan closure each).
-Restricted to it,
+loop closures J_c(q*) dq = 0, N an orthonormal basis of the null space of the (6 n x nv) closure Jacobian
+(n legs, one plate-cardan closure each). Restricted to it,
 
     K_r = N^T K N,   M_r = N^T M(q*) N,   K_r x = omega^2 M_r x   (scipy.linalg.eigh),
 

@@ -398,7 +398,8 @@ def evaluate_sample(plan: MonteCarloPlan, x: dict[str, np.ndarray], azimuth: flo
            for load in s.wrenches]
     qs = [equilibrium_quantities(eq, s.critical_n[p]) for p, eq in eqs]
     return _sample_row({k: np.stack([q[k] for q in qs]) for k in OUTPUTS},
-                       np.array([np.linalg.norm(nominal.preload_projectors[p] @ eq.actuator_forces_n) for p, eq in eqs]),
+                       np.array([np.linalg.norm(nominal.preload_projectors[p] @ eq.actuator_forces_n)
+                                 for p, eq in eqs]),
                        np.array([eq.residuals.worst() for _, eq in eqs]), factor)
 
 
@@ -433,8 +434,8 @@ def _fast_rows(plan: MonteCarloPlan, nominal: _Nominal, setups: list[_SampleLoad
     crit, lengths = (per_solve(lambda s: s.critical_n).reshape(-1, legs),
                      per_solve(lambda s: s.lengths_m).reshape(-1, legs))
     q = section_quantities(be.actuator_forces_n, be.sections, be.plate_displacement_m, be.plate_rotation_rad, crit)
-    projectors = np.broadcast_to(nominal.preload_projectors[None, :, None], (n, p, w, legs, legs)).reshape(-1, legs, legs)
-    internal = np.linalg.norm(np.einsum("kij,kj->ki", projectors, be.actuator_forces_n), axis=1)
+    projectors = np.broadcast_to(nominal.preload_projectors[None, :, None], (n, p, w, legs, legs))
+    internal = np.linalg.norm(np.einsum("kij,kj->ki", projectors.reshape(-1, legs, legs), be.actuator_forces_n), axis=1)
     res = be.residuals.copy()
     res[:, 4] /= be.length_scale_m
     strain = np.abs(be.actuator_forces_n) * setups[0].machine.axial_compliance_m_per_n(lengths) / lengths

@@ -131,9 +131,10 @@ def preload_study(machine: Machine, pose_m: Any, clearances_m: Any, preloads: An
     With n legs the preload is the amplitude along the first basis vector of the preload space
     (:func:`pressfit.mechanics.preload.along_first_vector`: leg 4 pulls, legs 5..n carry nothing); a 3-leg
     machine has no preload and takes the preload 0 only (any other: PreloadError). The critical preload is NaN
-    on both (:data:`NO_CRITICAL_PRELOAD`). The preload a4 = 0 (the baseline "without preload") is always part of the grid; preloads are sorted.
-    The small-load stiffness is the secant at the stated load ``SMALL_LOAD_FRACTION * load_max_n`` from its
-    own solve (independent of ``steps``); it includes the lost motion a joint's play allows."""
+    on both (:data:`NO_CRITICAL_PRELOAD`). The preload a4 = 0 (the baseline "without preload") is always part of
+    the grid; preloads are sorted. The small-load stiffness is the secant at the stated load
+    ``SMALL_LOAD_FRACTION * load_max_n`` from its own solve (independent of ``steps``); it includes the lost
+    motion a joint's play allows."""
     pose = kinematics.require_reachable(machine, pose_m)
     d = _direction(direction)
     pre = np.unique(np.append(np.atleast_1d(np.asarray(preloads, float)), 0.0))
@@ -203,7 +204,8 @@ def format_answers(study: PreloadStudy) -> str:
              f" N/m with rigid cardans (as 'pressfit stiffness'); small-load secant at {study.small_load_n:g} N; "
              f"clearance geometry {GEOMETRY_DESCRIPTIONS[study.clearance_geometry]}"]
     for a in study.answers():
-        crit = NO_CRITICAL_PRELOAD if math.isnan(a["critical_preload"]) else f"critical preload {a['critical_preload']:.4g} {unit}"
+        crit = NO_CRITICAL_PRELOAD if math.isnan(a["critical_preload"]) else \
+            f"critical preload {a['critical_preload']:.4g} {unit}"
         s = (f"g = {a['clearance_m'] * 1e6:g} um: {crit}; without "
              f"preload lost motion {a['lost_motion_without_preload_m'] * 1e6:.3g} um, small-load secant "
              f"{a['small_load_secant_without_preload_n_per_m']:.3g} N/m, secant at the load "
