@@ -204,11 +204,11 @@ def plan_from_case(case: Case, samples: int | None = None, seed: int | None = No
     if case.solver.linear:
         raise PressfitError(f"{case.path}: the Monte Carlo study solves the nonlinear equilibrium; remove "
                             "[solver] linear = true")
-    inputs = tuple((k, d) for k in input_shapes(1) if (d := getattr(mc.inputs, k)) is not None)
+    machine, poses = case.machine(), case.poses.array()
+    inputs = tuple((k, d) for k in input_shapes(len(machine.legs)) if (d := getattr(mc.inputs, k)) is not None)
     n = samples if samples is not None else mc.samples
     if n < 1:
         raise PressfitError(f"the number of samples must be at least 1, got {n}")
-    machine, poses = case.machine(), case.poses.array()
     if len(poses) > MAX_POSES:
         raise PressfitError(f"{case.path}: key 'poses': a Monte Carlo study takes at most {MAX_POSES} poses, got "
                             f"{len(poses)} (each sample solves every pose)")
