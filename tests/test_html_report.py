@@ -161,10 +161,13 @@ def test_clicking_a_header_sorts_the_table(page):
     assert column() == sorted(column(), reverse=True)
 
 
-def test_3d_geometry_follows_the_kinematics_and_the_solve(machine):
+@pytest.mark.parametrize("which", ["machine", "tsai", "five"])
+def test_3d_geometry_follows_the_kinematics_and_the_solve(request, which):
     """Reference: the closed-form placement of the cardans (B_i on the base; C_i = h + u + exp(m phi) d_i,
-    u and phi from the solve) and the leg radii of the machine's [collision] table; tolerance 1e-6 m is
-    the 0.1 um rounding of the page's coordinates plus float noise."""
+    u and phi from the solve) and the leg radii of the machine's [collision] table, leg by leg for the 4-UPU,
+    the 3-UPU and a 5-leg machine (n legs: 2n cardans, traces leg1..legn); tolerance 1e-6 m is the 0.1 um
+    rounding of the page's coordinates plus float noise."""
+    machine = request.getfixturevalue(which)
     pose, load = np.array([0.1, 0.6, -0.15]), np.array([30.0, 700.0, -20.0])
     eq = solve_equilibrium(machine, pose, load)
     fig = scene_figure(machine, [SceneCase("test", eq)]).to_plotly_json()
@@ -175,7 +178,7 @@ def test_3d_geometry_follows_the_kinematics_and_the_solve(machine):
         at = lambda name, xyz=xyz: np.c_[[xyz[a][names.index(name)] for a in "xyz"]].T
         cardans = pose + m * eq.plate_displacement_m + machine.plate_offsets_m @ pin.exp3(m * eq.plate_rotation_rad).T
         np.testing.assert_allclose(at("cardans"), np.vstack([machine.base_points_m, cardans]), atol=1e-6)
-        for i in range(4):
+        for i in range(len(machine.legs)):
             b, c = machine.base_points_m[i], cardans[i]
             e = (c - b) / np.linalg.norm(c - b)
             v = at(f"leg{i + 1}.cylinder") - b
@@ -184,6 +187,7 @@ def test_3d_geometry_follows_the_kinematics_and_the_solve(machine):
             s = v @ e
             np.testing.assert_allclose([s.min(), s.max()], [0.0, machine.cylinder.length_m], atol=1e-6)
     legs = [t for t in fig["data"] if t["name"].startswith("leg") and t["name"].endswith("cylinder")]
+    assert len(legs) == len(machine.legs) and not any(n.startswith(f"leg{len(machine.legs) + 1}.") for n in names)
     np.testing.assert_allclose([t["intensity"][0] for t in legs], [leg.sections["actuator"].N for leg in eq.legs])
 
 

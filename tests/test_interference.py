@@ -57,10 +57,11 @@ def leg_segments(machine, b, e, length):
 
 def reference_leg_leg(machine, bases, units, lengths):
     """'legi.part|legj.part' -> min over segment pairs of (segment distance - radii), m."""
-    segs = [leg_segments(machine, bases[i], units[i], lengths[i]) for i in range(4)]
+    n = len(bases)
+    segs = [leg_segments(machine, bases[i], units[i], lengths[i]) for i in range(n)]
     out = {}
-    for i in range(4):
-        for j in range(i + 1, 4):
+    for i in range(n):
+        for j in range(i + 1, n):
             for pa, (ra, sa) in segs[i].items():
                 for pb, (rb, sb) in segs[j].items():
                     out[f"leg{i + 1}.{pa}|leg{j + 1}.{pb}"] = min(
@@ -283,3 +284,57 @@ def test_flat_cylinders_are_contained_in_the_capsules(machine):
                            coal.DistanceRequest(), coal.DistanceResult())
     assert cyl["leg1.cylinder|plate"] == pytest.approx(direct, abs=1e-6)
     assert cyl["leg1.cylinder|plate"] > cap["leg1.cylinder|plate"] + 0.02
+
+
+@pytest.mark.parametrize("which", ["tsai", "five"])
+def test_n_legs_capsules_match_segment_distance(request, which):
+    """Issue 21: n legs' bodies leg1..legn, every leg-leg pair (n (n - 1) / 2 leg pairs of 4 body pairs),
+    n leg-plate and n leg-base pairs; the leg-leg distances = closed-form segment distance - radii to 1e-9 m at
+    reachable poses of the required workspace."""
+    m = request.getfixturevalue(which)
+    n = len(m.legs)
+    im = I.build_interference(m)
+    assert im.kinds.count("leg-leg") == 4 * n * (n - 1) // 2
+    assert im.kinds.count("leg-plate") == im.kinds.count("leg-base") == n
+    assert {p.split("|")[0].split(".")[0] for p in im.pairs} == {f"leg{i + 1}" for i in range(n)}
+    rng = np.random.default_rng(5)
+    poses = np.column_stack([rng.uniform(-.25, .25, 20), rng.uniform(.5, .7, 20), rng.uniform(-.25, .25, 20)])
+    poses = poses[kinematics.is_reachable(m, poses)]
+    assert len(poses) >= 10
+    for h in poses:
+        ik = kinematics.inverse_kinematics(m, h)
+        ref = reference_leg_leg(m, m.base_points_m, ik.unit_vectors, ik.lengths_m)
+        check_against_reference(im, I.clearance_at(im, h), ref, 1e-9)
+
+
+def test_tsai_distances_follow_the_120_degree_rotation(tsai):
+    """Rotating the pose by 120 degrees about y maps the 3-UPU onto itself with legs relabelled (R n_i = n_s(i),
+    found from the radial directions): every leg-leg and leg-base distance at R h equals its relabelled pair's
+    at h, and at the centred pose all three of a kind are equal (1e-9 m: capsule distances are closed form in
+    Coal). The plate pairs are left out here: the plate is a 2r square box (the 4-UPU's), not 120-degree
+    symmetric; the mirror x -> -x (legs 2 and 3 swap) maps it onto itself, and with it the leg-plate pairs."""
+    from n_legs import rotation_about_y
+
+    im = I.build_interference(tsai)
+    radial = np.array([leg.radial_direction for leg in tsai.legs])
+
+    def relabel(matrix):
+        return [int(np.argmin(np.linalg.norm(radial - matrix @ r, axis=1))) + 1 for r in radial]
+
+    def mapped(pair, s):
+        names = [f"leg{s[int(b[3]) - 1]}{b[4:]}" if b.startswith("leg") else b for b in pair.split("|")]
+        return "|".join(sorted(names, key=lambda b: (not b.startswith("leg"), b)))
+
+    rot, mirror = rotation_about_y(2 * np.pi / 3), np.diag([-1.0, 1.0, 1.0])
+    for h in ([0.0, 0.6, 0.0], [0.12, 0.62, -0.07]):
+        h = np.array(h)
+        for matrix, kinds in ((rot, ("leg-leg", "leg-base")), (mirror, ("leg-leg", "leg-base", "leg-plate"))):
+            s = relabel(matrix)
+            assert sorted(s) == [1, 2, 3] and s != [1, 2, 3]
+            a = {p.pair: p.distance_m for p in I.clearance_at(im, h).pairs if p.kind in kinds}
+            b = {p.pair: p.distance_m for p in I.clearance_at(im, matrix @ h).pairs}
+            assert max(abs(b[mapped(k, s)] - v) for k, v in a.items()) < 1e-9
+    centre = I.clearance_at(im, [0.0, 0.6, 0.0])
+    for kind in ("leg-base", "leg-plate"):
+        d = [p.distance_m for p in centre.pairs if p.kind == kind]
+        assert max(d) - min(d) < 1e-9 if kind == "leg-base" else d[1] == pytest.approx(d[2], abs=1e-9)

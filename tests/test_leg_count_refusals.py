@@ -1,6 +1,7 @@
 """Layers above mechanics still assume the paper's four legs: each refuses another leg count up front with a
 LegCountError naming the layer (issue 21 item 7), instead of arrays of the wrong shape. The machine is Tsai's
-3-UPU (models/tsai_3upu.toml); the case files are the shipped ones pointed at it."""
+3-UPU (models/tsai_3upu.toml); the case files are the shipped ones pointed at it. Modes, interference, the 3D
+scene, the load envelope, the preload and Monte Carlo studies take n legs (tests/*/test_n_leg_*.py)."""
 
 from pathlib import Path
 
@@ -9,11 +10,9 @@ import pytest
 
 from pressfit.description.cases import load_case
 from pressfit.description.machine import load_machine
-from pressfit.dynamics import modes, multibody
+from pressfit.dynamics import multibody
 from pressfit.errors import LegCountError
-from pressfit.geometry import interference
-from pressfit.output import scene3d
-from pressfit.studies import design, limit_check, montecarlo, paper_tables, preload_study, workspace_envelope
+from pressfit.studies import design, limit_check, paper_tables
 
 ROOT = Path(__file__).resolve().parents[1]
 TSAI = ROOT / "models" / "tsai_3upu.toml"
@@ -21,15 +20,9 @@ POSE = np.array([0.0, 0.6, 0.0])
 
 MACHINE_CALLS = {
     "rigid-leg dynamics": lambda m: multibody.rigid_leg_model(m, POSE),
-    "modal analysis": lambda m: modes.natural_modes(m, POSE),
-    "interference check": lambda m: interference.build_interference(m),
-    "load envelope": lambda m: workspace_envelope.load_envelope(m, [0.6]),
-    "preload study": lambda m: preload_study.preload_study(m, POSE, [2e-5], [100.0], progress=False),
-    "3D scene": lambda m: scene3d.scene_figure(m, []),
 }
 CASE_CALLS = {
     "pressfit check": ("envelope/press_workspace.toml", limit_check.evaluate_envelope),
-    "the Monte Carlo study": ("studies/montecarlo_tolerances.toml", montecarlo.plan_from_case),
     "the design study": ("studies/design_sections.toml", design.plan_from_case),
     "the paper's tables": ("paper/A.toml", paper_tables.solve_case),
 }

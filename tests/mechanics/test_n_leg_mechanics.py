@@ -7,45 +7,16 @@ a lost motion 2 g / sin(alpha); a preload in force mode gives actuator forces V 
 Euler loads scale as the leg compression."""
 
 import math
-from pathlib import Path
 
 import numpy as np
 import pytest
+from n_legs import centred
 
 from pressfit import kinematics
-from pressfit.description.machine import load_machine
 from pressfit.errors import CondensedModelError, PreloadError
 from pressfit.mechanics import buckling, clearance, condensed, fast_statics, preload, statics
 
-TSAI = Path(__file__).resolve().parents[2] / "models" / "tsai_3upu.toml"
 F_N = 700.0  # the press load, +y at the plate centre
-
-
-def ring(n: int) -> list[dict]:
-    """n legs at 360/n degrees about y, leg 1 at -z."""
-    return [{"radial_direction": [math.cos(t), 0.0, math.sin(t)]}
-            for t in (math.radians(-90.0 + 360.0 * i / n) for i in range(n))]
-
-
-@pytest.fixture(scope="module")
-def tsai():
-    return load_machine(TSAI)
-
-
-@pytest.fixture(scope="module")
-def five(machine):
-    return machine.with_overrides({"legs": ring(5)})
-
-
-def _centred(m, y):
-    """sin(alpha) and the axial stiffness k_a (N/m) of every leg at (0, y, 0): actuator, tube and rod in series."""
-    g, e = m.geometry, m.material.youngs_modulus_pa
-    length = math.hypot(y, g.base_half_side_m - g.plate_half_side_m)
-    do, di = m.cylinder.outer_diameter_m, m.cylinder.outer_diameter_m - 2 * m.cylinder.wall_thickness_m
-    tube, rod = math.pi / 4 * (do**2 - di**2), math.pi / 4 * m.stem.diameter_m**2
-    lc = m.cylinder.length_m
-    c = 1 / m.actuator.axial_stiffness_n_per_m + lc / (e * tube) + (length - lc) / (e * rod)
-    return y / length, 1 / c
 
 
 @pytest.mark.parametrize("which, y", [("tsai", 0.6), ("paper", 0.72)])
@@ -57,7 +28,7 @@ def test_centred_vertical_load(request, machine, which, y, method):
     ~0.7 m: the geometric nonlinearity is of that relative order)."""
     m = request.getfixturevalue("tsai") if which == "tsai" else machine
     n = len(m.legs)
-    sa, ka = _centred(m, y)
+    sa, ka = centred(m, y)
     pose, load = np.array([0.0, y, 0.0]), np.array([0.0, F_N, 0.0, 0.0, 0.0, 0.0])
     if method == "condensed":
         r = condensed.solve_linear(m, pose, load)
@@ -116,7 +87,7 @@ def test_three_leg_clearance_lost_motion(tsai):
     """Six cardans of play g each: under a vertical load every joint closes and the plate moves 2 g / sin(alpha)
     (two joints per leg along the leg) before the legs stretch."""
     y, g = 0.6, tsai.joints.cardan_axial_clearance_m
-    sa, _ = _centred(tsai, y)
+    sa, _ = centred(tsai, y)
     cl = clearance.Clearance.uniform(tsai)
     assert cl.gaps_m.shape == (3, 2)
     ld = clearance.load_deflection(tsai, [0.0, y, 0.0], [0.0, 1.0, 0.0], np.linspace(0.0, F_N, 8), cl)
@@ -129,7 +100,7 @@ def test_three_leg_buckling_factors(tsai):
     """Under a downward load each leg is compressed by F / (3 sin(alpha)): its Euler factor is P_cr(l) 3 sin(alpha)
     / F; the mode's energy shares are per leg and sum to 1."""
     y = 0.6
-    sa, _ = _centred(tsai, y)
+    sa, _ = centred(tsai, y)
     res = buckling.machine_buckling(tsai, np.array([0.0, y, 0.0]), np.array([0.0, -F_N, 0.0, 0.0, 0.0, 0.0]))
     length = math.hypot(y, tsai.geometry.base_half_side_m - tsai.geometry.plate_half_side_m)
     np.testing.assert_allclose(res.leg_euler_factors, buckling.leg_critical_load_n(tsai, length) * 3 * sa / F_N,

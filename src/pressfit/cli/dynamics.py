@@ -41,11 +41,13 @@ def modes_cmd(x: float, y: float, z: float, count: int, out_dir: Path | None, ov
     """Natural frequencies and mode shapes at the plate pose X Y Z (m), under the plate's and tool's weight."""
     from pressfit.output.modal import run_modes
 
-    modes, paths = run_modes(load_machine(model_path), [x, y, z], count, out_dir, overwrite)
+    machine = load_machine(model_path)
+    modes, paths = run_modes(machine, [x, y, z], count, out_dir, overwrite)
     if as_json:
         click.echo(to_json(modes.to_dict()))
         return
-    click.echo(f"pose h = ({x:g}, {y:g}, {z:g}) m, moving mass {modes.total_mass_kg:.4g} kg; "
+    click.echo(f"{machine.name}, {len(machine.legs)} legs: pose h = ({x:g}, {y:g}, {z:g}) m, moving mass "
+               f"{modes.total_mass_kg:.4g} kg; "
                f"closure residual of the shapes {modes.closure_residual:.1e}")
     click.echo("mode  f [Hz]      plate translation [m]           plate rotation [rad]  (mass-normalised, kg^-1/2)")
     for k, (f, u) in enumerate(zip(modes.frequencies_hz, modes.plate_shapes, strict=True)):

@@ -3,8 +3,8 @@ r"""Natural frequencies and mode shapes of the loaded machine at a pose (small v
 The VJM model (:mod:`pressfit.mechanics.model`) is first brought to its static equilibrium under the plate
 wrench (default: the weight of plate and tool; :func:`pressfit.mechanics.statics.solve_equilibrium`,
 geometrically nonlinear). About that configuration q*, admissible motions dq = N z satisfy the linearised
-loop closures J_c(q*) dq = 0, N an orthonormal basis of the null space of the (24 x nv) closure Jacobian.
-Restricted to it,
+loop closures J_c(q*) dq = 0, N an orthonormal basis of the null space of the (6 n x nv) closure Jacobian
+(n legs, one plate-cardan closure each). Restricted to it,
 
     K_r = N^T K N,   M_r = N^T M(q*) N,   K_r x = omega^2 M_r x   (scipy.linalg.eigh),
 
@@ -42,8 +42,8 @@ class Modes:
     frequencies_hz: np.ndarray  # (k,)
     shapes: np.ndarray  # (k, nv) mass-normalised generalised velocities phi of the VJM model
     plate_shapes: np.ndarray  # (k, 6) plate-centre translation (m) and rotation (rad) per phi, world axes
-    leg_points_m: np.ndarray  # (4, p, 3) joint centres along each leg, base to plate, at equilibrium
-    leg_point_shapes: np.ndarray  # (k, 4, p, 3) their displacement per phi (m)
+    leg_points_m: np.ndarray  # (n, p, 3) joint centres along each of the n legs, base to plate, at equilibrium
+    leg_point_shapes: np.ndarray  # (k, n, p, 3) their displacement per phi (m)
     closure_residual: float  # max |J_c phi| over the modes (phi mass-normalised): linearised loop closure
     total_mass_kg: float
     equilibrium_residual: float  # worst relative residual of the static equilibrium (statics module)
@@ -51,14 +51,15 @@ class Modes:
     def to_dict(self) -> dict[str, Any]:
         """JSON-ready summary: frequencies and the plate part of each mass-normalised shape (per unit modal
         coordinate, kg^-1/2: translation in m, rotation in rad, world axes)."""
-        return {"pose_m": self.pose_m, "plate_wrench": self.plate_wrench, "total_mass_kg": self.total_mass_kg,
+        return {"pose_m": self.pose_m, "legs": len(self.leg_points_m), "plate_wrench": self.plate_wrench,
+                "total_mass_kg": self.total_mass_kg,
                 "frequencies_hz": self.frequencies_hz,
                 "plate_shapes": [{"translation_m": s[:3], "rotation_rad": s[3:]} for s in self.plate_shapes],
                 "closure_residual": self.closure_residual, "equilibrium_residual": self.equilibrium_residual}
 
 
 def closure_jacobian(mm: MachineModel, model: pin.Model, data: pin.Data, q: np.ndarray) -> np.ndarray:
-    """The (24, nv) loop-closure Jacobian of Pinocchio's frame-anchor constraints at q."""
+    """The (6 n, nv) loop-closure Jacobian of Pinocchio's frame-anchor constraints at q (n legs)."""
     pin.computeJointJacobians(model, data, q)
     cds = [cm.createData() for cm in mm.constraint_models]
     for cm, cd in zip(mm.constraint_models, cds, strict=True):
@@ -105,7 +106,6 @@ def reduced_system(machine: Machine, pose_m: np.ndarray, plate_wrench: np.ndarra
     """:class:`ReducedSystem` at the reachable pose ``pose_m`` (m), loaded by ``plate_wrench`` (6,) (N, N m,
     world axes at the plate centre; default the weight of plate and tool), masses times ``mass_scale``; the
     actuator springs keep the rest lengths of the static solve (the drives hold their lengths)."""
-    machine.require_legs("the modal analysis (pressfit.dynamics.modes, linearise, response)", 4)
     if not (math.isfinite(mass_scale) and mass_scale > 0):
         raise PressfitError(f"mass_scale must be a positive number, got {mass_scale!r}")
     mm = build_model(machine, pose_m)

@@ -93,7 +93,7 @@ class ClosedFormRig:
         self.leg_joint_ids: list[dict[str, int]] = []
         a, w = machine.cardan_axes, machine.inward_directions
         self._a, self._aw, self._w = a, cross(a, w), w
-        for i in range(4):
+        for i in range(len(machine.legs)):
             frame = np.column_stack([a[i], cross(w[i], a[i]), w[i]])
             j1 = self.model.addJoint(0, pin.JointModelRX(), pin.SE3(frame, machine.base_points_m[i]),
                                      f"leg{i + 1}_cardan_a")
@@ -103,7 +103,7 @@ class ClosedFormRig:
                                        "plate_cardan": j3})
         self.plate_joint_id = self.model.addJoint(0, pin.JointModelTranslation(), pin.SE3.Identity(), "plate")
         self._idx = np.array([[self.model.joints[self.leg_joint_ids[i][k]].idx_q
-                               for k in ("base_cardan", "cylinder", "actuator")] for i in range(4)])
+                               for k in ("base_cardan", "cylinder", "actuator")] for i in range(len(machine.legs))])
         self._plate_idx = self.model.joints[self.plate_joint_id].idx_q
 
     def configurations(self, poses_m: np.ndarray) -> np.ndarray:
@@ -125,7 +125,6 @@ class ClosedFormRig:
 def make_rig(machine: Machine, rig: str = "auto") -> Rig:
     """'closed-form' (:class:`ClosedFormRig`), 'model' (:func:`pressfit.mechanics.model.build_model`) or 'auto' (the
     latter when importable, else the former)."""
-    machine.require_legs("the interference check (pressfit.geometry)", 4)
     if rig not in ("auto", "closed-form", "model"):
         raise InterferenceError(f"rig must be 'auto', 'closed-form' or 'model' (got {rig!r})")
     if rig != "closed-form":
@@ -148,7 +147,7 @@ class Shape:
     body: str
     name: str
     geometry: coal.CollisionGeometry
-    carrier: tuple[str, int]  # ('cylinder'|'stem', leg index 0..3) or ('plate'|'world', -1)
+    carrier: tuple[str, int]  # ('cylinder'|'stem', leg index 0..n-1) or ('plate'|'world', -1)
     local: pin.SE3 = field(default_factory=pin.SE3.Identity)  # in the leg frame / plate / world frame
 
 
@@ -200,7 +199,7 @@ def machine_shapes(machine: Machine) -> tuple[list[Shape], list[str]]:
     solid = coal.Capsule if c.leg_shape == "capsule" else coal.Cylinder  # both (radius, length)
     shapes = []
     along = lambda s: pin.SE3(np.eye(3), np.array([0.0, 0.0, s]))
-    for i in range(4):
+    for i in range(len(machine.legs)):
         leg = f"leg{i + 1}"
         shapes.append(Shape(f"{leg}.cylinder", f"{leg}.cylinder", solid(c.cylinder_radius_m, lc),
                             ("cylinder", i), along(lc / 2)))
@@ -224,7 +223,7 @@ def carrier_placements(machine: Machine, pose_m: np.ndarray) -> dict[tuple[str, 
     h = np.asarray(pose_m, dtype=float).reshape(3)
     frames = kinematics.leg_frames(machine, h)
     out = {("world", -1): pin.SE3.Identity(), ("plate", -1): pin.SE3(np.eye(3), h)}
-    for i in range(4):
+    for i in range(len(machine.legs)):
         out[("cylinder", i)] = pin.SE3(frames[i], machine.base_points_m[i])
         out[("stem", i)] = pin.SE3(frames[i], h + machine.plate_offsets_m[i])
     return out
@@ -241,13 +240,13 @@ def pair_kind(pair: str) -> str:
     return f"{a}-{b}"
 
 
-def default_pairs(extras: list[str]) -> tuple[list[str], list[str]]:
-    """(checked pairs, pairs excluded because they touch by design) as 'a|b' names."""
-    legs = [[f"leg{i + 1}.{p}" for p in PART_NAMES] for i in range(4)]
-    pairs = [f"{a}|{b}" for i in range(4) for j in range(i + 1, 4) for a in legs[i] for b in legs[j]]
-    pairs += [f"leg{i + 1}.cylinder|plate" for i in range(4)] + [f"leg{i + 1}.stem|base" for i in range(4)]
+def default_pairs(extras: list[str], n_legs: int) -> tuple[list[str], list[str]]:
+    """(checked pairs, pairs excluded because they touch by design) as 'a|b' names, legs leg1..leg{n_legs}."""
+    legs = [[f"leg{i + 1}.{p}" for p in PART_NAMES] for i in range(n_legs)]
+    pairs = [f"{a}|{b}" for i in range(n_legs) for j in range(i + 1, n_legs) for a in legs[i] for b in legs[j]]
+    pairs += [f"leg{i + 1}.cylinder|plate" for i in range(n_legs)] + [f"leg{i + 1}.stem|base" for i in range(n_legs)]
     pairs += [f"{a}|{x}" for x in extras for leg in legs for a in leg]
-    excluded = [f"leg{i + 1}.{a}|{b}" for i in range(4)
+    excluded = [f"leg{i + 1}.{a}|{b}" for i in range(n_legs)
                 for a, b in (("cylinder", f"leg{i + 1}.stem"), ("cylinder", "base"), ("stem", "plate"))]
     return pairs, excluded
 
@@ -324,7 +323,7 @@ def build_interference(machine: Machine, rig: str | Rig = "auto", include: list[
     clash = [x for x in extras if x in ("plate", "base") or x.startswith("leg")]
     if clash:
         raise InterferenceError(f"extra body names {clash} clash with built-in bodies (plate, base, leg*)")
-    pairs, excluded = default_pairs(extras)
+    pairs, excluded = default_pairs(extras, len(machine.legs))
     drop = {_canonical(p, bodies) for p in [*machine.collision.exclude_pairs, *exclude]}
     add = [_canonical(p, bodies) for p in [*machine.collision.include_pairs, *include]]
     excluded = [p for p in excluded if p not in add] + [p for p in pairs if p in drop]

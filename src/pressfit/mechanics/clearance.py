@@ -37,7 +37,7 @@ from pressfit.description.machine import Machine
 from pressfit.errors import ClearanceError, ConvergenceError
 from pressfit.mechanics import condensed
 from pressfit.mechanics.clearance_law import DEFAULT_SMOOTHING_M, ENDS, Clearance, _laws_force
-from pressfit.mechanics.preload import rest_length_offsets
+from pressfit.mechanics.preload import along_first_vector, rest_length_offsets
 
 NEWTON_TOL = 1e-10  # relative force residual of the small-displacement solve
 
@@ -363,7 +363,8 @@ class CriticalPreload:
 
 def _all_closed(machine: Machine, pose: np.ndarray, d: np.ndarray, loads: np.ndarray, cls: list[Clearance],
                 a4: np.ndarray, mode: str) -> np.ndarray:
-    offsets = np.array([rest_length_offsets(machine, pose, float(a), mode, c) for c, a in zip(cls, a4)])
+    offsets = np.array([rest_length_offsets(machine, pose, along_first_vector(machine, a), mode, c)
+                        for c, a in zip(cls, a4)])
     up, _ = _sweep_small(machine, pose, d, loads, cls, offsets, unload=False)
     gaps = np.array([c.effective_gaps_m(machine, pose) for c in cls])
     return np.array([np.all(np.abs(s["joint_axial_m"]) >= gaps, axis=(1, 2)) for s in up]).all(0)
@@ -406,7 +407,9 @@ def critical_preload(machine: Machine, pose_m: ArrayLike, direction: ArrayLike, 
                      clearance: Clearance | None = None, preload_mode: str = "force", steps: int = 50,
                      tol: float | None = None) -> CriticalPreload:
     """The smallest preload a4 (N in force mode, m in length mode) that keeps every cardan closed
-    (|x| >= its effective gap) at each of ``steps`` load steps up to press_load_n (N) along ``direction``.
+    (|x| >= its effective gap) at each of ``steps`` load steps up to press_load_n (N) along ``direction``;
+    on a machine of five or more legs a4 is the amplitude along the first preload basis vector
+    (:func:`pressfit.mechanics.preload.along_first_vector`); a 3-leg machine has none (PreloadError).
 
     Bisection on the small-displacement model; ``tol`` (default 1e-4 of the press load in N, or of the
     press load times the largest axial compliance in m) is the final bracket width. The smoothing adds a

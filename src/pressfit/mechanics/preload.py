@@ -92,6 +92,13 @@ def self_stress_forces_n(machine: Machine, poses_m: np.ndarray, a4: Amplitudes) 
     return kinematics.preload_basis(machine, h) @ amp
 
 
+def along_first_vector(machine: Machine, a: float) -> Amplitudes:
+    """The amplitudes of a one-number preload a (N or m) of the preload studies: a itself on a machine with at
+    most one preload vector (a 3-leg machine accepts only a = 0 downstream), a along the first basis vector
+    (leg 4 pulls, the legs beyond it carry nothing) and 0 along the others on a machine with more."""
+    return float(a) if machine.redundancy <= 1 else (float(a),) + (0.0,) * (machine.redundancy - 1)
+
+
 def rest_length_offsets(machine: Machine, pose_m: np.ndarray, a4: Amplitudes, mode: str = "force",
                         clearance: Clearance | None = None) -> np.ndarray:
     """Actuator rest-length offsets (n,), m, for a preload of amplitudes a4 (scalar for a redundancy-1

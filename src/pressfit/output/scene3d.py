@@ -81,14 +81,14 @@ def _geometry(shape: Shape, placement: pin.SE3) -> tuple[np.ndarray, np.ndarray 
 
 def _carriers(machine: Machine, eq: Equilibrium, magnification: float) -> tuple[dict, np.ndarray]:
     """World placements of the shape carriers in the deflected state magnified by ``magnification``,
-    and the plate cardan centres C_i (4, 3), m."""
+    and the plate cardan centres C_i (n, 3), m."""
     centre = eq.pose_m + magnification * eq.plate_displacement_m
     rot = pin.exp3(magnification * eq.plate_rotation_rad)
     cardans = centre + machine.plate_offsets_m @ rot.T
     legs = cardans - machine.base_points_m
     frames = frames_along(machine, legs / np.linalg.norm(legs, axis=1, keepdims=True))
     out = {("world", -1): pin.SE3.Identity(), ("plate", -1): pin.SE3(rot, centre)}
-    for i in range(4):
+    for i in range(len(machine.legs)):
         out[("cylinder", i)] = pin.SE3(frames[i], machine.base_points_m[i])
         out[("stem", i)] = pin.SE3(frames[i], cardans[i])
     return out, cardans
@@ -114,7 +114,7 @@ def _leg_hover(eq: Equilibrium, leg: int, part: str, label: str) -> str:
 
 
 def _positions(machine: Machine, eq: Equilibrium, shapes: list[Shape], magnification: float) -> list[np.ndarray]:
-    """World vertices (n, 3) of every shape, then the eight cardans (B_1..4, C_1..4), at a magnification."""
+    """World vertices (n, 3) of every shape, then the 2n cardans (B_1..n, C_1..n), at a magnification."""
     carriers, cardans = _carriers(machine, eq, magnification)
     return ([_geometry(s, carriers[s.carrier] * s.local)[0] for s in shapes]
             + [np.vstack([machine.base_points_m, cardans])])
@@ -159,7 +159,8 @@ def _case_traces(machine: Machine, case: SceneCase, shapes: list[Shape], magnifi
         traces.append(tr)
     traces.append({"type": "scatter3d", "mode": "markers", "name": "cardans", "visible": visible, **_xyz(shown[-1]),
                    "marker": {"size": 4, "color": "black", "symbol": "diamond"},
-                   "text": [f"base cardan B_{i + 1}" for i in range(4)] + [f"plate cardan C_{i + 1}" for i in range(4)],
+                   "text": [f"{kind} cardan {c}_{i + 1}" for kind, c in (("base", "B"), ("plate", "C"))
+                            for i in range(len(machine.legs))],
                    "hovertemplate": "%{text}<br>(%{x:.4f}, %{y:.4f}, %{z:.4f}) m<extra>" + case.label + "</extra>"})
     return traces, colours
 
@@ -174,7 +175,6 @@ def _colour_axis(colours: list[dict[str, np.ndarray]], key: str) -> dict[str, ob
 
 def scene_figure(machine: Machine, cases: list[SceneCase]) -> go.Figure:
     """The 3D view (module doc): a case dropdown, a colouring toggle and a magnification slider."""
-    machine.require_legs("the 3D scene (pressfit.output.scene3d)", 4)
     shapes, _ = machine_shapes(machine)
     mag = _default_magnification(machine, cases)
     traces, colours, owner = [], {}, []

@@ -13,11 +13,11 @@ equilibrium (:func:`pressfit.mechanics.statics.solve_equilibrium`) at every pose
   l_nominal - l_real: the redundant leg turns both into a self-stress.
 * ``load_tilt_rad``: every load force of the case turned by this angle off its direction, about an axis
   at a uniform random azimuth (magnitude and moments kept).
-* ``cardan_clearance_m``: the axial play of each of the 8 cardans (+-g along the leg, geometry "axial"
+* ``cardan_clearance_m``: the axial play of each of the 2n cardans (n legs) (+-g along the leg, geometry "axial"
   whatever the machine's ``cardan_clearance_geometry``: one model serves every pose, and a box's effective
   gap changes with the pose; :mod:`pressfit.mechanics.clearance`, dead-zone springs in the Pinocchio model,
   the load applied in ``CLEARANCE_STEPS`` continuation steps).
-* ``cardan_misalignment_rad``: per cardan (8) and axis (x = +-a_i, y down, z inward, the leg reference
+* ``cardan_misalignment_rad``: per cardan (2n) and axis (x = +-a_i, y down, z inward, the leg reference
   frame), the components of the cardan's misalignment rotation vector (``LegLayout.base_cardan_tilt_rad``,
   ``plate_cardan_tilt_rad``). The rigid redundant machine then generally cannot assemble (Tsai's condition
   broken): the reference solver starts from the least-squares rigid assembly and closes the rest
@@ -25,7 +25,8 @@ equilibrium (:func:`pressfit.mechanics.statics.solve_equilibrium`) at every pose
 
 Per sample the worst value over poses, loads, legs and sections of every ``[envelope]`` load quantity
 (:data:`pressfit.studies.limit_check.LIMITS`, same names and definitions), the internal force
-|v_p . N| (N, the self-stress amplitude along the nominal preload vector v_p, equations 9-10) and the
+|P N| (N, the actuator forces' orthogonal projection on the nominal preload space, equations 9-10: |v_p . N| on
+the 4-UPU, 0 on a 3-leg machine) and the
 largest relative residual are recorded. ``min_buckling_safety_factor`` is, as in ``pressfit check``, the
 whole machine's linearised buckling load factor (:func:`pressfit.mechanics.buckling.machine_buckling`: the
 sample's actuator offsets held, its load scaled), computed exactly at **every** pose and load of every
@@ -63,7 +64,7 @@ from pressfit.errors import PressfitError, UnstableEquilibriumError
 from pressfit.mechanics import buckling, statics
 from pressfit.mechanics.clearance import Clearance
 from pressfit.mechanics.fast_statics import FastEquilibriumSolver
-from pressfit.mechanics.preload import rest_length_offsets
+from pressfit.mechanics.preload import ActuatorPreload, rest_length_offsets, self_stress_forces_n
 from pressfit.studies.limit_check import LIMITS, equilibrium_quantities, section_quantities
 
 OUTPUTS = ("max_tension_n", "max_compression_n", "max_shear_n", "max_bending_nm", "max_torsion_nm",
@@ -74,12 +75,17 @@ MAX_POSES = 64  # poses of a Monte Carlo case: the buckling basis keeps 11 (r, r
 _DL = 1e-5  # m, step of the central difference of the Euler load against the leg length
 CLEARANCE_STEPS = 8  # load continuation steps with cardan clearances (the dead zone needs a path)
 _AXES = "xyz"
-_SHAPES = {"actuator_length_offset_m": [f"leg{i}" for i in range(1, 5)],
-           "base_point_error_m": [f"leg{i}.{a}" for i in range(1, 5) for a in _AXES],
-           "plate_point_error_m": [f"leg{i}.{a}" for i in range(1, 5) for a in _AXES],
-           "load_tilt_rad": [""], "cardan_clearance_m": [f"leg{i}.{e}" for i in range(1, 5) for e in ("base", "plate")],
-           "cardan_misalignment_rad": [f"leg{i}.{e}.{a}" for i in range(1, 5) for e in ("base", "plate")
-                                       for a in _AXES]}
+
+
+def input_shapes(legs: int) -> dict[str, list[str]]:
+    """The column suffixes of every random input of a machine with ``legs`` legs (leg1..leg{legs})."""
+    names = [f"leg{i}" for i in range(1, legs + 1)]
+    return {"actuator_length_offset_m": names, "base_point_error_m": [f"{g}.{a}" for g in names for a in _AXES],
+            "plate_point_error_m": [f"{g}.{a}" for g in names for a in _AXES], "load_tilt_rad": [""],
+            "cardan_clearance_m": [f"{g}.{e}" for g in names for e in ("base", "plate")],
+            "cardan_misalignment_rad": [f"{g}.{e}.{a}" for g in names for e in ("base", "plate") for a in _AXES]}
+
+
 _REFERENCE_ONLY = {"cardan_clearance_m": "cardan clearances",  # inputs the fast solver does not model
                    "cardan_misalignment_rad": "cardan misalignments"}
 
@@ -93,18 +99,18 @@ class MonteCarloPlan:
     machine: Machine
     poses_m: np.ndarray  # (P, 3)
     wrenches: np.ndarray  # (W, 6)
-    preload_a4: float  # N (force mode) or m (length mode)
+    preload_a4: float | tuple[float, ...]  # N (force mode) or m (length mode); n - 3 amplitudes unless n = 4
     preload_mode: str
     inputs: tuple[tuple[str, Distribution], ...]
     samples: int
     seed: int
     chunk_size: int
-    critical_n: np.ndarray  # (P, 4) Euler loads of the nominal legs at the poses, N
-    critical_slope_n_per_m: np.ndarray  # (P, 4) their derivative with the leg length, N/m
+    critical_n: np.ndarray  # (P, n) Euler loads of the nominal legs at the poses, N
+    critical_slope_n_per_m: np.ndarray  # (P, n) their derivative with the leg length, N/m
     buckling: BucklingBasis  # the whole machine's linearised buckling problem per pose
 
     def critical_loads_n(self, lengths_m: np.ndarray) -> np.ndarray:
-        """Euler loads (P, 4), N, of legs of lengths (P, 4), m, near the nominal ones: first order about them
+        """Euler loads (P, n), N, of legs of lengths (P, n), m, near the nominal ones: first order about them
         (relative error ~3 (dl / l)^2, below 1e-7 for joint errors under 0.1 mm at l >= 0.5 m; the exact
         stepped-column solve costs ~10 ms per leg)."""
         return self.critical_n + self.critical_slope_n_per_m * (lengths_m - self.nominal_lengths_m)
@@ -122,7 +128,8 @@ class MonteCarloPlan:
         return k * self.chunk_size, min((k + 1) * self.chunk_size, self.samples)
 
     def input_columns(self) -> list[str]:
-        return [f"{name}.{s}" if s else name for name, _ in self.inputs for s in _SHAPES[name]]
+        shapes = input_shapes(len(self.machine.legs))
+        return [f"{name}.{s}" if s else name for name, _ in self.inputs for s in shapes[name]]
 
     def output_columns(self) -> list[str]:
         return ["sample", "status", *self.input_columns(), *OUTPUTS, *EXTRA_OUTPUTS]
@@ -144,7 +151,7 @@ class BucklingBasis:
     r"""The whole machine's linearised buckling problem (:func:`pressfit.mechanics.buckling.machine_buckling`)
     at each pose of a plan, split by its linearity: on the tangent space of the loop closures (Z orthonormal,
     J_c Z = 0, the nominal machine's reference state) ``elastic`` = Z^T K_e Z (P, r, r), ``per_offset`` the
-    geometric stiffness Z^T K_g0 Z per metre of each actuator's rest-length offset (P, 4, r, r) and
+    geometric stiffness Z^T K_g0 Z per metre of each actuator's rest-length offset (P, n, r, r) and
     ``per_wrench`` Z^T K_g Z per unit plate wrench component (P, 6, r, r) (per N, per N m). K_g0 and K_g
     are linear in the offsets and the wrench (the reference state is a linear solve; tested), so a sample's
     factor is one symmetric eigenproblem: the smallest lambda > 0 with
@@ -167,12 +174,12 @@ class BucklingBasis:
             sym = lambda a, z=z: 0.5 * (z.T @ a @ z + (z.T @ a @ z).T)
             el.append(sym(ref.elastic) + sym(ref.geometric))
             off.append([sym(statics.reference_tangent(solver, pose, np.zeros(6), e * _DL).geometric) / _DL
-                        for e in np.eye(4)])
+                        for e in np.eye(len(machine.legs))])
             wr.append([sym(statics.reference_tangent(solver, pose, e, None).geometric) for e in np.eye(6)])
         return cls(np.array(el), np.array(off), np.array(wr))
 
     def load_factors(self, p: int, offsets_m: np.ndarray, wrenches: np.ndarray) -> np.ndarray:
-        """Load factors (n,) at pose ``p`` for actuator offsets (n, 4), m, and plate wrenches (n, 6) (N, N m):
+        """Load factors (n,) at pose ``p`` for actuator offsets (n, legs), m, and plate wrenches (n, 6) (N, N m):
         inf when no positive factor exists (the load only stiffens), 0 when the offsets alone make the machine
         unstable (the stiffness is not positive definite before any load). One generalised symmetric eigenproblem
         for the smallest eigenvalue each (LAPACK sygvx, ~1 ms for r = 98)."""
@@ -198,12 +205,11 @@ def plan_from_case(case: Case, samples: int | None = None, seed: int | None = No
     if case.solver.linear:
         raise PressfitError(f"{case.path}: the Monte Carlo study solves the nonlinear equilibrium; remove "
                             "[solver] linear = true")
-    inputs = tuple((k, d) for k in _SHAPES if (d := getattr(mc.inputs, k)) is not None)
+    machine, poses = case.machine(), case.poses.array()
+    inputs = tuple((k, d) for k in input_shapes(len(machine.legs)) if (d := getattr(mc.inputs, k)) is not None)
     n = samples if samples is not None else mc.samples
     if n < 1:
         raise PressfitError(f"the number of samples must be at least 1, got {n}")
-    machine, poses = case.machine(), case.poses.array()
-    machine.require_legs("the Monte Carlo study", 4)
     if len(poses) > MAX_POSES:
         raise PressfitError(f"{case.path}: key 'poses': a Monte Carlo study takes at most {MAX_POSES} poses, got "
                             f"{len(poses)} (each sample solves every pose)")
@@ -212,9 +218,11 @@ def plan_from_case(case: Case, samples: int | None = None, seed: int | None = No
         h = poses[bad][0]
         raise PressfitError(f"{case.path}: key 'poses': pose {tuple(float(c) for c in h)} m is not reachable (every "
                             f"sample would fail): {kinematics.unreachable_reason(machine, h)}")
+    a4 = ActuatorPreload.from_case(case.preload).a4
+    self_stress_forces_n(machine, poses, a4)  # a preload the machine cannot take is refused here (PreloadError)
     lengths = kinematics.inverse_kinematics(machine, poses).lengths_m
     crit = lambda d: np.vectorize(lambda v: buckling.leg_critical_load_n(machine, v))(lengths + d)
-    return MonteCarloPlan(case.name, machine, poses, case.loads.wrenches(), case.preload.a4,
+    return MonteCarloPlan(case.name, machine, poses, case.loads.wrenches(), a4,
                           case.preload.mode, inputs, n, mc.seed if seed is None else seed,
                           chunk_size or mc.chunk_size, crit(0.0), (crit(_DL) - crit(-_DL)) / (2 * _DL),
                           BucklingBasis.of(machine, poses))
@@ -245,7 +253,8 @@ def draw_inputs(plan: MonteCarloPlan, k: int, seed: np.random.SeedSequence) -> d
     """The random inputs of chunk k, (n, columns) per input name, plus the load azimuths (n,), rad."""
     rng = np.random.default_rng(seed)
     start, stop = plan.chunk_range(k)
-    out = {name: _draw(d, rng, (stop - start, len(_SHAPES[name]))) for name, d in plan.inputs}
+    shapes = input_shapes(len(plan.machine.legs))
+    out = {name: _draw(d, rng, (stop - start, len(shapes[name]))) for name, d in plan.inputs}
     out["load_azimuth_rad"] = rng.uniform(0.0, 2 * np.pi, stop - start)
     return out
 
@@ -302,27 +311,28 @@ def _solve(mm: statics.EquilibriumSolver, pose: np.ndarray, load: np.ndarray, of
 
 @dataclass(frozen=True)
 class _Nominal:
-    """Per pose of the plan, on the nominal machine: leg lengths (P, 4), m (the commanded lengths), preload
-    rest-length offsets (P, 4), m, and the preload vectors v_p (P, 4)."""
+    """Per pose of the plan, on the nominal machine (n legs): leg lengths (P, n), m (the commanded lengths),
+    preload rest-length offsets (P, n), m, and the orthogonal projectors on the preload space (P, n, n) (v_p v_p^T
+    on the 4-UPU, zero on a 3-leg machine): the internal force is the norm of the actuator forces' projection."""
 
     lengths_m: np.ndarray
     preload_offsets_m: np.ndarray
-    preload_vectors: np.ndarray
+    preload_projectors: np.ndarray
 
 
 def _nominal(plan: MonteCarloPlan) -> _Nominal:
     m, poses = plan.machine, plan.poses_m
     lengths = kinematics.inverse_kinematics(m, poses).lengths_m
-    pre = np.array([rest_length_offsets(m, h, plan.preload_a4, plan.preload_mode) if plan.preload_a4
-                    else np.zeros(4) for h in poses])
-    return _Nominal(lengths, pre, np.array([kinematics.preload_vector(m, h) for h in poses]))
+    pre = np.array([rest_length_offsets(m, h, plan.preload_a4, plan.preload_mode) for h in poses])
+    basis = kinematics.preload_basis(m, poses)  # (P, n, n - 3)
+    return _Nominal(lengths, pre, basis @ np.linalg.pinv(basis))
 
 
 @dataclass(frozen=True)
 class _SampleLoads:
     """What one sample solves: its joint positions B_i (world) and d_i (plate frame), (n, 3) each, m (the
     nominal machine's plus the sample's joint position errors), wrenches (W, 6) (N, N m), actuator rest-length
-    offsets per pose (P, 4), m, its leg lengths (P, 4), m, and their Euler loads (P, 4), N."""
+    offsets per pose (P, n), m, its leg lengths (P, n), m, and their Euler loads (P, n), N (n legs)."""
 
     base_points_m: np.ndarray
     plate_offsets_m: np.ndarray
@@ -338,7 +348,7 @@ def _sample_loads(plan: MonteCarloPlan, nominal: _Nominal, x: dict[str, np.ndarr
         ("base_point_error_m", "base_points_m"), ("plate_point_error_m", "plate_offsets_m")))
     lengths = nominal.lengths_m if base is m.base_points_m and plate is m.plate_offsets_m else \
         kinematics.inverse_kinematics(m, plan.poses_m, base_points_m=base, plate_offsets_m=plate).lengths_m
-    offsets = nominal.lengths_m - lengths + x.get("actuator_length_offset_m", np.zeros(4)) + nominal.preload_offsets_m
+    offsets = nominal.lengths_m - lengths + x.get("actuator_length_offset_m", 0.0) + nominal.preload_offsets_m
     wrenches = _tilted(plan.wrenches, float(x["load_tilt_rad"][0]), azimuth) if "load_tilt_rad" in x else plan.wrenches
     return _SampleLoads(base, plate, wrenches, offsets, lengths, plan.critical_loads_n(lengths))
 
@@ -380,7 +390,8 @@ def evaluate_sample(plan: MonteCarloPlan, x: dict[str, np.ndarray], azimuth: flo
     """Worst outputs over the case's poses and loads for one sample's inputs ``x`` (name -> values), by the
     reference solver (stability checked with every solve). ``model``: the nominal machine's solver, reused
     when the sample changes neither geometry nor joints."""
-    s = _sample_loads(plan, _nominal(plan), x, azimuth)
+    nominal = _nominal(plan)
+    s = _sample_loads(plan, nominal, x, azimuth)
     factor = machine_factor(plan, s)
     if factor < 1:
         raise _unstable(factor)
@@ -389,12 +400,12 @@ def evaluate_sample(plan: MonteCarloPlan, x: dict[str, np.ndarray], azimuth: flo
     clearance = None if g is None else Clearance.per_joint(machine, g.tolist(), geometry="axial")
     solver = model if machine is plan.machine and clearance is None and model is not None else \
         _solver_for(machine, clearance, plan.poses_m[0])
-    vp = kinematics.preload_vector
     eqs = [(p, _solve(solver, pose, load, s.offsets_m[p], clearance)) for p, pose in enumerate(plan.poses_m)
            for load in s.wrenches]
     qs = [equilibrium_quantities(eq, s.critical_n[p]) for p, eq in eqs]
     return _sample_row({k: np.stack([q[k] for q in qs]) for k in OUTPUTS},
-                       np.array([vp(plan.machine, eq.pose_m) @ eq.actuator_forces_n for _, eq in eqs]),
+                       np.array([np.linalg.norm(nominal.preload_projectors[p] @ eq.actuator_forces_n)
+                                 for p, eq in eqs]),
                        np.array([eq.residuals.worst() for _, eq in eqs]), factor)
 
 
@@ -419,22 +430,23 @@ def _fast_rows(plan: MonteCarloPlan, nominal: _Nominal, setups: list[_SampleLoad
     """The samples of ``setups`` (on ``solver``'s model, each with its joint positions) in one batched solve over
     samples x poses x loads; a failing batch is split to find the failing samples. Checks the small-strain range
     per solve."""
-    n, p, w = len(setups), len(plan.poses_m), len(plan.wrenches)
+    n, p, w, legs = len(setups), len(plan.poses_m), len(plan.wrenches), len(plan.machine.legs)
     per_solve = lambda a: np.stack(
         [np.broadcast_to(a(s)[:, None], (p, w) + a(s).shape[1:]) for s in setups])
     layout = lambda a: np.repeat(np.stack([a(s) for s in setups]), p * w, axis=0)
     try:
         be = solver.solve_batch(np.broadcast_to(plan.poses_m[None, :, None], (n, p, w, 3)).reshape(-1, 3),
                                 np.stack([np.broadcast_to(s.wrenches, (p, w, 6)) for s in setups]).reshape(-1, 6),
-                                preload_offsets_m=per_solve(lambda s: s.offsets_m).reshape(-1, 4),
+                                preload_offsets_m=per_solve(lambda s: s.offsets_m).reshape(-1, legs),
                                 base_points_m=layout(lambda s: s.base_points_m),
                                 plate_offsets_m=layout(lambda s: s.plate_offsets_m))
     except PressfitError as exc:
         return [exc] if n == 1 else [r for s in setups for r in _fast_rows(plan, nominal, [s], solver)]
-    crit, lengths = per_solve(lambda s: s.critical_n).reshape(-1, 4), per_solve(lambda s: s.lengths_m).reshape(-1, 4)
+    crit, lengths = (per_solve(lambda s: s.critical_n).reshape(-1, legs),
+                     per_solve(lambda s: s.lengths_m).reshape(-1, legs))
     q = section_quantities(be.actuator_forces_n, be.sections, be.plate_displacement_m, be.plate_rotation_rad, crit)
-    internal = (np.broadcast_to(nominal.preload_vectors[None, :, None], (n, p, w, 4)).reshape(-1, 4)
-                * be.actuator_forces_n).sum(1)
+    projectors = np.broadcast_to(nominal.preload_projectors[None, :, None], (n, p, w, legs, legs))
+    internal = np.linalg.norm(np.einsum("kij,kj->ki", projectors.reshape(-1, legs, legs), be.actuator_forces_n), axis=1)
     res = be.residuals.copy()
     res[:, 4] /= be.length_scale_m
     strain = np.abs(be.actuator_forces_n) * plan.machine.axial_compliance_m_per_n(lengths) / lengths

@@ -5,6 +5,7 @@ curves, lost motion, stiffness and the critical preload that keeps every cardan 
 
 from __future__ import annotations
 
+import math
 from dataclasses import dataclass, replace
 from typing import Any
 
@@ -26,8 +27,10 @@ from pressfit.mechanics.clearance import (
     load_deflection,
 )
 from pressfit.mechanics.clearance_law import GEOMETRY_DESCRIPTIONS
-from pressfit.mechanics.preload import rest_length_offsets
+from pressfit.mechanics.preload import along_first_vector, rest_length_offsets
 
+NO_CRITICAL_PRELOAD = ("no critical preload (3 legs: no redundant actuation; 5 or more: the study's preload, along "
+                       "the first basis vector, leaves the plays of legs 5..n open at no load)")
 SMALL_LOAD_FRACTION = 0.1  # the small load of the small-load secant stiffness, as a fraction of the largest load
 
 
@@ -50,7 +53,7 @@ class PreloadStudy:
     press_secant_stiffness_n_per_m: np.ndarray
     lost_motion_m: np.ndarray
     first_opening_load_n: np.ndarray  # lowest load at which some joint is open (NaN: none opens)
-    critical_preload: np.ndarray  # (G,)
+    critical_preload: np.ndarray  # (G,); NaN unless the machine has 4 legs (NO_CRITICAL_PRELOAD)
     no_clearance_contact_stiffness_n_per_m: float  # g = 0 with the contact springs k_c in series with each leg
     rigid_cardan_stiffness_n_per_m: float  # g = 0 and rigid cardans: the stiffness that ``pressfit stiffness`` gives
     max_residual: float
@@ -74,7 +77,7 @@ class PreloadStudy:
                          float(self.press_stiffness_n_per_m[g, p]),
                          float(self.press_secant_stiffness_n_per_m[g, p]), float(self.lost_motion_m[g, p]),
                          float(self.deflection_m[g, p, -1]), _opt(self.first_opening_load_n[g, p]),
-                         float(self.critical_preload[g]), float(self.small_load_secant_stiffness_n_per_m[g, p]
+                         _opt(self.critical_preload[g]), float(self.small_load_secant_stiffness_n_per_m[g, p]
                                                                / self.small_load_secant_stiffness_n_per_m[g, b])])
         return header, rows
 
@@ -125,10 +128,13 @@ def preload_study(machine: Machine, pose_m: Any, clearances_m: Any, preloads: An
     preload (N, or m in length mode), 0..load_max_n (N) in ``steps`` steps along ``direction``; plus the
     critical preload per clearance.
 
-    The preload a4 = 0 (the baseline "without preload") is always part of the grid; preloads are sorted.
-    The small-load stiffness is the secant at the stated load ``SMALL_LOAD_FRACTION * load_max_n`` from its
-    own solve (independent of ``steps``); it includes the lost motion a joint's play allows."""
-    machine.require_legs("the preload study (one preload amplitude a4)", 4)
+    With n legs the preload is the amplitude along the first basis vector of the preload space
+    (:func:`pressfit.mechanics.preload.along_first_vector`: leg 4 pulls, legs 5..n carry nothing); a 3-leg
+    machine has no preload and takes the preload 0 only (any other: PreloadError). The critical preload is NaN
+    on both (:data:`NO_CRITICAL_PRELOAD`). The preload a4 = 0 (the baseline "without preload") is always part of
+    the grid; preloads are sorted. The small-load stiffness is the secant at the stated load
+    ``SMALL_LOAD_FRACTION * load_max_n`` from its own solve (independent of ``steps``); it includes the lost
+    motion a joint's play allows."""
     pose = kinematics.require_reachable(machine, pose_m)
     d = _direction(direction)
     pre = np.unique(np.append(np.atleast_1d(np.asarray(preloads, float)), 0.0))
@@ -148,7 +154,8 @@ def preload_study(machine: Machine, pose_m: Any, clearances_m: Any, preloads: An
     curves, secants, res = [], [], 0.0
     for var in tqdm(variants, desc="preload study", unit="clearance", disable=not progress):
         cls = [var] * len(pre)
-        offsets = np.array([rest_length_offsets(machine, pose, float(a), preload_mode, var) for a in pre])
+        offsets = np.array([rest_length_offsets(machine, pose, along_first_vector(machine, a), preload_mode, var)
+                            for a in pre])
         up, _ = _sweep_small(machine, pose, d, loads, cls, offsets, unload=False)
         eff = var.effective_gaps_m(machine, pose)
         curves.append([LoadDeflection(pose, d, float(a), preload_mode, "small", var, eff, _branch(loads, up, p), None)
@@ -156,7 +163,8 @@ def preload_study(machine: Machine, pose_m: Any, clearances_m: Any, preloads: An
         at, _ = _sweep_small(machine, pose, d, small, cls, offsets, unload=False)
         secants.append(small[1] / ((at[1]["displacement_m"] - at[0]["displacement_m"]) @ d))
         res = max(res, max(float(s["residual"].max()) for s in up + at))
-    crit = critical_preloads(machine, pose, d, load_max_n, variants, preload_mode, steps)
+    crit = [c.preload for c in critical_preloads(machine, pose, d, load_max_n, variants, preload_mode, steps)] \
+        if machine.redundancy == 1 else [np.nan] * len(variants)
     contact = load_deflection(machine, pose, d, np.array([0.0, 0.5, 1.0]) * small[1], base.with_gap(0.0), unload=False)
     rigid = 1.0 / float(d @ condensed.condensed_plate_compliance(machine, pose[None])[0, :3, :3] @ d)
 
@@ -169,7 +177,7 @@ def preload_study(machine: Machine, pose_m: Any, clearances_m: Any, preloads: An
         grid(lambda c: c.press_stiffness_n_per_m),
         grid(lambda c: c.press_secant_stiffness_n_per_m), grid(lambda c: c.lost_motion_m),
         grid(lambda c: np.nanmin(c.opening_loads_n) if np.any(~np.isnan(c.opening_loads_n)) else np.nan),
-        np.array([c.preload for c in crit]), contact.press_secant_stiffness_n_per_m, rigid, res,
+        np.array(crit), contact.press_secant_stiffness_n_per_m, rigid, res,
         base.contact_stiffness_n_per_m, base.smoothing_m)
 
 
@@ -196,14 +204,16 @@ def format_answers(study: PreloadStudy) -> str:
              f" N/m with rigid cardans (as 'pressfit stiffness'); small-load secant at {study.small_load_n:g} N; "
              f"clearance geometry {GEOMETRY_DESCRIPTIONS[study.clearance_geometry]}"]
     for a in study.answers():
-        s = (f"g = {a['clearance_m'] * 1e6:g} um: critical preload {a['critical_preload']:.4g} {unit}; without "
+        crit = NO_CRITICAL_PRELOAD if math.isnan(a["critical_preload"]) else \
+            f"critical preload {a['critical_preload']:.4g} {unit}"
+        s = (f"g = {a['clearance_m'] * 1e6:g} um: {crit}; without "
              f"preload lost motion {a['lost_motion_without_preload_m'] * 1e6:.3g} um, small-load secant "
              f"{a['small_load_secant_without_preload_n_per_m']:.3g} N/m, secant at the load "
              f"{a['press_secant_without_preload_n_per_m']:.3g} N/m")
         if a["first_sufficient_preload"] is not None:
             s += (f"; with a4 = {a['first_sufficient_preload']:g} {unit}: {a['small_load_secant_with_it_n_per_m']:.3g}"
                   f" N/m and {a['press_secant_with_it_n_per_m']:.3g} N/m")
-        else:
+        elif not math.isnan(a["critical_preload"]):
             s += "; no preload in the list is sufficient"
         lines.append(s)
     return "\n".join(lines)

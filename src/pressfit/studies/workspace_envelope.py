@@ -42,8 +42,8 @@ PLATE_QUANTITIES = {"tilt_rad": ("rad", "max plate tilt |rotation|"),
 
 @dataclass(frozen=True)
 class EnvelopeEntry:
-    """The worst value of one quantity: per leg (shape (4,)) or for the plate (shape ()), with the pose
-    (m) and the force (N, at the plate centre) where it happens (shapes (4, 3) or (3,))."""
+    """The worst value of one quantity: per leg (shape (n,), n legs) or for the plate (shape ()), with the pose
+    (m) and the force (N, at the plate centre) where it happens (shapes (n, 3) or (3,))."""
 
     value: np.ndarray
     pose_m: np.ndarray
@@ -67,9 +67,9 @@ class LoadEnvelope:
 
 
 def _sweep(machine: Machine, h: np.ndarray, loads: np.ndarray) -> dict[str, np.ndarray]:
-    """Every enveloped quantity for poses h (P, 3) under each load (L, 6): (L, P, 4) or (L, P)."""
+    """Every enveloped quantity for poses h (P, 3) under each load (L, 6): (L, P, n) (n legs) or (L, P)."""
     p = h.shape[0]
-    out = {k: np.empty((len(loads), p, 4)) for k in LEG_QUANTITIES}
+    out = {k: np.empty((len(loads), p, len(machine.legs))) for k in LEG_QUANTITIES}
     out.update({k: np.empty((len(loads), p)) for k in PLATE_QUANTITIES})
     for i in range(0, p, _CHUNK):
         core = _core(machine, h[i:i + _CHUNK])
@@ -97,7 +97,6 @@ def load_envelope(machine: Machine, y_m: np.ndarray, n_xz: int = 51, loads_n: np
         progress: show a tqdm bar (default: when there is more than one step).
     Unreachable poses are skipped and counted.
     """
-    machine.require_legs("the load envelope (pressfit.studies.workspace_envelope)", 4)
     loads = _as_wrench(press_loads() if loads_n is None else np.atleast_2d(loads_n))
     x, z = workspace_square(machine, n_xz)
     y = np.atleast_1d(np.asarray(y_m, dtype=float))
@@ -117,9 +116,9 @@ def load_envelope(machine: Machine, y_m: np.ndarray, n_xz: int = 51, loads_n: np
             continue
         q = _sweep(machine, h[ok], loads)
         for k in names:
-            v = q[k].reshape((-1,) + q[k].shape[2:])  # (L * P, 4) or (L * P,)
+            v = q[k].reshape((-1,) + q[k].shape[2:])  # (L * P, n) or (L * P,)
             i = np.argmax(v, axis=0)
-            val = v[i, np.arange(4)] if v.ndim > 1 else v[i]
+            val = v[i, np.arange(v.shape[1])] if v.ndim > 1 else v[i]
             pose, load = h[ok][i % ok.sum()], loads[i // ok.sum(), :3]
             old = best.get(k)
             if old is not None:
