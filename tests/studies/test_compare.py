@@ -94,7 +94,7 @@ def test_the_box_is_the_required_workspace_and_refused_when_short():
 
 def _figures(**over: object) -> MachineFigures:
     base = dict(name="m", source="m.toml", kind="upu", legs=4, heights_m=(0.5, 0.6), poses=1,
-                worst_drive_force_n=500.0,
+                worst_drive_force_n=500.0, drive_force_limit_n=1000.0,
                 worst_drive_force_pose_m=np.zeros(3), worst_bending_nm=20.0, worst_bending_member="leg 1",
                 weakest_stiffness_worst_n_per_m=1e6, weakest_stiffness_median_n_per_m=2e6,
                 vertical_stiffness_worst_n_per_m=5e6, vertical_stiffness_median_n_per_m=6e6, tilt_worst_rad=1e-3,
@@ -121,6 +121,10 @@ def test_claims_turn_just_across_their_thresholds():
     below = dataclasses.replace(upu4, lost_motion_preloaded_m=limit * (1 - 1e-9))
     above = dataclasses.replace(upu4, lost_motion_preloaded_m=limit * (1 + 1e-9))
     assert claims([below, upu3])[-1].verdict == "confirmed" and claims([above, upu3])[-1].verdict == "refuted"
+    # the drives must carry the preload on their worst press force: 500 N + 400 N against a limit just below 900 N
+    weak = dataclasses.replace(below, drive_force_limit_n=900.0 * (1 - 1e-9))
+    assert claims([weak, upu3])[-1].verdict == "refuted"
+    assert claims([dataclasses.replace(weak, drive_force_limit_n=900.0), upu3])[-1].verdict == "confirmed"
     assert [c.verdict for c in claims([upu4])] == ["not measured"] * 3
 
 
@@ -180,3 +184,35 @@ def test_the_rotated_machine_is_the_shipped_one_turned_45_degrees():
         np.testing.assert_allclose(b.axial_forces_n, a.axial_forces_n, rtol=1e-10, atol=1e-9)
         np.testing.assert_allclose(b.bending_nm, a.bending_nm, rtol=1e-9, atol=1e-9)
         np.testing.assert_allclose(b.plate_displacement_m, rot @ a.plate_displacement_m, rtol=1e-9, atol=1e-15)
+
+
+def test_the_readme_table_is_what_compare_computes():
+    """Drift protection for README's comparison table (the independent checks are the tests above): each printed
+    figure recomputed by `pressfit compare` on the shipped machine files, at the printed precision."""
+    from readme import assert_printed
+
+    from pressfit.output.compare import run_compare
+
+    readme = (ROOT / "README.md").read_text().splitlines()
+
+    files = ["pressfit_4upu", "tsai_3upu", "pressfit_4upu_rotated45", "gantry_cartesian"]
+    result, _ = run_compare([ROOT / f"models/{f}.toml" for f in files], None, progress=False)
+    figures = [m.to_dict() for m in result.machines]
+    rows = {"worst drive force [N]": ("worst_drive_force_n", 1.0),
+            "worst member bending [N m]": ("worst_bending_nm", 1.0),
+            "weakest tool stiffness, worst / median [N/um]": (("weakest_stiffness_worst_n_per_m",
+                                                               "weakest_stiffness_median_n_per_m"), 1e-6),
+            "vertical tool stiffness, worst / median [N/um]": (("vertical_stiffness_worst_n_per_m",
+                                                                "vertical_stiffness_median_n_per_m"), 1e-6),
+            "tool tilt under 700 N, worst / median [mrad]": (("tilt_worst_rad", "tilt_median_rad"), 1e3),
+            "first natural frequency, lowest [Hz]": ("first_frequency_lowest_hz", 1.0),
+            "moving mass [kg]": ("moving_mass_kg", 1.0)}
+    for label, (keys, scale) in rows.items():
+        line = next(x for x in readme if x.startswith(f"| {label} |"))
+        cells = [c.strip() for c in line.split("|")[2:6]]
+        for cell, f in zip(cells, figures, strict=True):
+            for printed, key in zip(cell.split(" / "), keys if isinstance(keys, tuple) else (keys,), strict=True):
+                assert_printed(f[key] * scale, printed)
+    assert [c["verdict"] for c in result.to_dict()["claims"]] == ["refuted", "confirmed", "confirmed"]
+    for f, printed in zip(figures[:3], ("48.1", "47.9", "47.8"), strict=True):
+        assert_printed(f["lost_motion_m"] * 1e6, printed)

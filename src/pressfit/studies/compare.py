@@ -69,6 +69,7 @@ class MachineFigures:
     poses: int  # box poses evaluated (each under every load)
     worst_drive_force_n: float
     worst_drive_force_pose_m: np.ndarray
+    drive_force_limit_n: float  # what one drive delivers (magnitude), N
     worst_bending_nm: float
     worst_bending_member: str  # e.g. "leg 2"
     weakest_stiffness_worst_n_per_m: float
@@ -163,6 +164,7 @@ def upu_figures(machine: Machine, heights: int = COMPARE_HEIGHTS, grid: int = CO
         name=machine.name, source=str(machine.source or machine.name), kind="upu", legs=len(machine.legs),
         heights_m=(float(poses[0, 1]), float(poses[-1, 1])), poses=len(poses),
         worst_drive_force_n=float(f.drive_force_n[i_force]), worst_drive_force_pose_m=poses[i_force[0]],
+        drive_force_limit_n=machine.actuator.drive_force_limit_n,
         worst_bending_nm=float(f.bending_nm[i_bend]), worst_bending_member=f"leg {i_bend[1] + 1}",
         weakest_stiffness_worst_n_per_m=float(f.weakest_stiffness_n_per_m.min()),
         weakest_stiffness_median_n_per_m=float(np.median(f.weakest_stiffness_n_per_m)),
@@ -217,8 +219,9 @@ def claims(figures: list[MachineFigures]) -> list[Claim]:
     legs: against the first gantry, precision (confirmed when the 4-UPU's weakest and vertical tool stiffness, worst
     over the box, are both higher and its worst tilt lower) and the members (confirmed when its worst member bending
     moment is lower); against the first 3-leg UPU, the backlash (confirmed when the 4-UPU's lost motion with its
-    best preload is below ``BACKLASH_COMPENSATED`` of the 3-UPU's, which no preload can change; the preload's cost
-    in drive force is stated beside it). "not measured" when the baseline is not among the machines."""
+    best preload is below ``BACKLASH_COMPENSATED`` of the 3-UPU's, which no preload can change, and the drives
+    carry that preload on top of their worst press force: a4 + the worst drive force within the drive force limit,
+    a4 bounding each leg's share |a4 v_i|). "not measured" when the baseline is not among the machines."""
     upu4 = next((f for f in figures if f.kind == "upu" and f.legs == 4), None)
     gantry = next((f for f in figures if f.kind == "gantry"), None)
     upu3 = next((f for f in figures if f.kind == "upu" and f.legs == 3), None)
@@ -250,14 +253,16 @@ def claims(figures: list[MachineFigures]) -> list[Claim]:
                          evidence="compare a 4-leg and a 3-leg UPU machine file with the play figures"))
     else:
         left = max(upu4.lost_motion_preloaded_m, 0.0)
-        ok = left < BACKLASH_COMPENSATED * upu3.lost_motion_m
+        carried = upu4.best_preload_n + upu4.worst_drive_force_n
+        ok = left < BACKLASH_COMPENSATED * upu3.lost_motion_m and carried <= upu4.drive_force_limit_n
         out.append(Claim(
             claim=PRELOAD_CLAIM, baseline=upu3.name, verdict="confirmed" if ok else "refuted",
             evidence=(f"with {PLAY_M * 1e6:g} um of play in every cardan, at the box's centre under the press load: "
                       f"lost motion {upu3.lost_motion_m * 1e6:.3g} um ({upu3.name}: {upu3.preload_note}) against "
                       f"{upu4.lost_motion_m * 1e6:.3g} um without preload and {left * 1e6:.3g} um with a preload of "
-                      f"{upu4.best_preload_n:.4g} N ({upu4.name}); the preload adds up to {upu4.best_preload_n:.4g} N "
-                      f"to the drives' {upu4.worst_drive_force_n:.4g} N worst press force")))
+                      f"{upu4.best_preload_n:.4g} N ({upu4.name}); with it the drives carry up to {carried:.4g} N "
+                      f"({upu4.best_preload_n:.4g} N of preload on their {upu4.worst_drive_force_n:.4g} N worst press "
+                      f"force) against their {upu4.drive_force_limit_n:.4g} N limit")))
     return out
 
 
@@ -294,6 +299,7 @@ def gantry_figures(gantry: Gantry, heights: int = COMPARE_HEIGHTS, grid: int = C
     return MachineFigures(
         name=gantry.name, source=str(gantry.source or gantry.name), kind="gantry", legs=None,
         heights_m=(float(y[0]), float(y[-1])), poses=len(poses), worst_drive_force_n=m.worst_drive_force_n,
+        drive_force_limit_n=float("nan"),
         worst_drive_force_pose_m=m.worst_drive_pose_m, worst_bending_nm=m.worst_bending_moment_nm,
         worst_bending_member=m.worst_bending_member, weakest_stiffness_worst_n_per_m=m.min_tool_stiffness_n_per_m,
         weakest_stiffness_median_n_per_m=m.median_tool_stiffness_n_per_m,
