@@ -78,7 +78,7 @@ FORCE_SAMPLES = 11  # points per segment where the drive speed and force bounds 
 PIN_PHASES = ("descent", "dwell", "retract")  # a pin's window: its figures are computed on these rows
 
 
-@dataclass(frozen=True)
+@dataclass(frozen=True, kw_only=True)
 class Segment:
     """One segment of the reference: its phase, the pin it serves (from 1; the traverse and the approach: the pin
     they lead to, the final move and settle: the last pin), its end points (m), duration (s), the limits it ran
@@ -106,7 +106,7 @@ class Segment:
                 "peak_acceleration_m_per_s2": p.peak_acceleration_m_per_s2 if p else 0.0}
 
 
-@dataclass(frozen=True)
+@dataclass(frozen=True, kw_only=True)
 class CyclePlan:
     """A validated board (:func:`plan_cycle`): the scenario plan the step loops run, the resolved pins, the
     segments and the run case (the case with ``simulation`` = the cycle's settings)."""
@@ -241,14 +241,16 @@ def plan_cycle(case: Case, machine: Machine | None = None, model: str | None = N
     def add(phase: str, pin: ResolvedPin, target: np.ndarray, hold_s: float | None = None) -> None:
         a, index = points[-1], len(segments)
         if hold_s is not None:
-            segments.append(Segment(index, phase, pin.index, a, target, hold_s, None, None, phase))
+            segments.append(Segment(index=index, phase=phase, pin=pin.index, start_m=a, end_m=target,
+                                    duration_s=hold_s, limits=None, profile=None, binding_limit=phase))
         else:
             limits, key = (descent, "[cycle.descent]") if phase in ("descent", "retract") else \
                 (cycle.motion, "[cycle.motion]")
             v, acc, jerk, profile, binding = _scaled(case, rigid, machine, drives, a, target, limits, key,
                                                      f"{_pin_label(pin)}, its {phase}")
-            segments.append(Segment(index, phase, pin.index, a, target, profile.duration_s, (v, acc, jerk), profile,
-                                    binding))
+            segments.append(Segment(index=index, phase=phase, pin=pin.index, start_m=a, end_m=target,
+                                    duration_s=profile.duration_s, limits=(v, acc, jerk), profile=profile,
+                                    binding_limit=binding))
         points.append(target)
 
     for k, pin in enumerate(pins):
@@ -283,10 +285,11 @@ def plan_cycle(case: Case, machine: Machine | None = None, model: str | None = N
     limits = np.array([pins[s.pin - 1].force_limit_n for s in segments])
     warnings = (run_time_warning(steps, dt, trajectory.duration_s),) if steps > WARN_STEPS else ()
     scenario = ScenarioPlan(trajectory, steps, path, warnings, rigid, sim, limits)
-    return CyclePlan(scenario, pins, tuple(segments), case.model_copy(update={"simulation": sim}))
+    return CyclePlan(scenario=scenario, pins=pins, segments=tuple(segments),
+                     run_case=case.model_copy(update={"simulation": sim}))
 
 
-@dataclass(frozen=True)
+@dataclass(frozen=True, kw_only=True)
 class CycleResult:
     """A simulated board: ``series`` (n, len(CYCLE_COLUMNS)), one row per step (the simulate columns, the pin
     and the segment of the row), the plan, and ``summary`` (:func:`summarise_cycle`, JSON-ready)."""
@@ -337,7 +340,7 @@ def simulate_cycle(case: Case, model: str | None = None, progress: bool = False,
                            baseline if preload_cost else None)
         sized.energy.require_closed(f"of the board of {case.path}")
         summary.update(sized.to_dict())
-    return CycleResult(series, plan, summary, sections, sized)
+    return CycleResult(series=series, plan=plan, summary=summary, sections=sections, sizing=sized)
 
 
 @dataclass(frozen=True)

@@ -38,7 +38,7 @@ _CHUNK_NAME = re.compile(r"chunk-(\d{6})\.parquet")
 _STUDY_KEY, _CHUNK_KEY = "pressfit.study_sha256", "pressfit.chunk"
 
 
-@dataclass(frozen=True)
+@dataclass(frozen=True, kw_only=True)
 class MonteCarloRun:
     """A finished study: its summary, the chunks run now (the rest were resumed), the files written, and the
     damaged chunk files found and run again."""
@@ -180,7 +180,7 @@ def run_montecarlo(case: Case, out_dir: Path | str, *, samples: int | None = Non
     if summary.failed and sum(summary.failed.values()) == summary.samples:
         raise StudyFailedError(f"{case.path}: Monte Carlo study in {out}", summary.failed)
     written = write_summary(summary, columns, envelope, out)
-    return MonteCarloRun(summary, run, plan.n_chunks, written, damaged)
+    return MonteCarloRun(summary=summary, chunks_run=run, chunks_total=plan.n_chunks, written=written, rerun=damaged)
 
 
 def write_summary(summary: montecarlo.MonteCarloSummary, columns: dict[str, np.ndarray], envelope: dict[str, float],
