@@ -54,7 +54,7 @@ from numpy.typing import ArrayLike
 
 from pressfit import kinematics
 from pressfit.description.machine import ExtraBody, Machine
-from pressfit.errors import PressfitError
+from pressfit.errors import InterferenceError
 from pressfit.kinematics import reference_pose_m
 from pressfit.kinematics.workspace import square_height_range, workspace_box, workspace_square
 from pressfit.spatial import cross
@@ -63,10 +63,7 @@ PART_NAMES = ("cylinder", "stem")
 KIND_ORDER = ("leg", "plate", "base", "extra")
 _MIN_DISTANCE = operator.attrgetter("min_distance")
 _CHUNK = 1024  # poses per block of the sweep
-
-
-class InterferenceError(PressfitError):
-    """Bad interference input: unknown body in a pair override, unreadable mesh, no reachable height."""
+RIGS = ("auto", "closed-form", "model")  # make_rig's names
 
 
 class Rig(Protocol):
@@ -126,14 +123,16 @@ def make_rig(machine: Machine, rig: str = "auto") -> Rig:
     """'closed-form' (:class:`ClosedFormRig`), 'model' (:func:`pressfit.mechanics.model.build_model`) or 'auto' (the
     latter when importable, else the former)."""
     machine.require_legs("the interference check (pressfit.geometry)", 4)
-    if rig not in ("auto", "closed-form", "model"):
-        raise InterferenceError(f"rig must be 'auto', 'closed-form' or 'model' (got {rig!r})")
+    if rig not in RIGS:
+        raise InterferenceError(f"rig must be 'auto', 'closed-form' or 'model' (got {rig!r})", key="rig", value=rig,
+                                allowed=RIGS)
     if rig != "closed-form":
         try:
             from pressfit.mechanics.model import build_model
         except ImportError:
             if rig == "model":
-                raise InterferenceError("pressfit.mechanics.model is not available") from None
+                raise InterferenceError("pressfit.mechanics.model is not available", key="rig", value=rig,
+                                        allowed=("closed-form",)) from None
         else:
             return build_model(machine, reference_pose_m(machine))
     return ClosedFormRig(machine)
@@ -168,7 +167,7 @@ def load_mesh_convex(path: Path | str, scale: float = 1.0) -> coal.ConvexBase:
         if len(faces) == 0:
             raise ValueError("no triangles")
     except Exception as exc:  # trimesh raises many types for bad files
-        raise InterferenceError(f"cannot load mesh {path}: {exc}") from None
+        raise InterferenceError(f"cannot load mesh {path}: {exc}", key="mesh", value=str(path)) from None
     bvh = coal.BVHModelOBBRSS()
     bvh.beginModel(len(faces), len(vertices))
     bvh.addVertices(vertices)
@@ -257,7 +256,8 @@ def default_pairs(extras: list[str]) -> tuple[list[str], list[str]]:
 def _canonical(pair: str, bodies: list[str]) -> str:
     parts = [p.strip() for p in pair.split("|")]
     if len(parts) != 2 or parts[0] == parts[1] or any(p not in bodies for p in parts):
-        raise InterferenceError(f"pair {pair!r}: expected 'a|b' with two different bodies among {bodies}")
+        raise InterferenceError(f"pair {pair!r}: expected 'a|b' with two different bodies among {bodies}",
+                                key="pair", value=pair, allowed=tuple(bodies))
     return "|".join(sorted(parts, key=bodies.index))
 
 
@@ -301,7 +301,8 @@ class AffineConfigurations:
                              rng.uniform(-ws.z_half_width_m, ws.z_half_width_m, 4 * probes)])
         h = h[kinematics.is_reachable(machine, h)][:probes]
         if len(h) < probes:
-            raise InterferenceError("too few reachable probe poses to vectorise the rig's configurations")
+            raise InterferenceError("too few reachable probe poses to vectorise the rig's configurations",
+                                    key="probe_poses", value=len(h))
         q = np.array([rig.configuration_at(p) for p in h])
         fit, check = slice(0, probes // 2), slice(probes // 2, probes)
         self.weights = np.linalg.lstsq(self.features(h[fit]), q[fit], rcond=None)[0]
@@ -325,7 +326,8 @@ def build_interference(machine: Machine, rig: str | Rig = "auto", include: list[
     extras = [b.name for b in machine.collision.extra_bodies]
     clash = [x for x in extras if x in ("plate", "base") or x.startswith("leg")]
     if clash:
-        raise InterferenceError(f"extra body names {clash} clash with built-in bodies (plate, base, leg*)")
+        raise InterferenceError(f"extra body names {clash} clash with built-in bodies (plate, base, leg*)",
+                                key="extra_bodies", value=tuple(clash))
     pairs, excluded = default_pairs(extras)
     drop = {_canonical(p, bodies) for p in [*machine.collision.exclude_pairs, *exclude]}
     add = [_canonical(p, bodies) for p in [*machine.collision.include_pairs, *include]]
@@ -525,7 +527,7 @@ def sweep(im: InterferenceModel, poses_m: np.ndarray, margin_m: float | None = N
             bar.update(len(idx))
     margin = im.machine.collision.safety_margin_m if margin_m is None else float(margin_m)
     if not len(todo):
-        raise InterferenceError(f"none of the {n} poses is reachable")
+        raise InterferenceError(f"none of the {n} poses is reachable", key="poses", value=n)
     return SweepResult(poses_m=poses, reachable=ok, min_distance_m=dmin, worst_pair=worst, pairs=im.pairs,
                        kinds=im.kinds, excluded=im.excluded, pair_min_m=pmin, pair_argmin=parg, margin_m=margin,
                        grid_axes_m=grid_axes_m)
