@@ -262,8 +262,8 @@ def plan_cycle(case: Case, machine: Machine | None = None, model: str | None = N
         add("retract", pin, above)
     add("move", pins[-1], np.asarray(cycle.end_m, float))
     add("settle", pins[-1], points[-1], max(cycle.settle_s, 1e-9))
-    trajectory = Trajectory(np.array(points), np.array([s.duration_s for s in segments]),
-                            tuple(s.phase for s in segments), tuple(s.profile for s in segments))
+    trajectory = Trajectory(waypoints_m=np.array(points), durations_s=np.array([s.duration_s for s in segments]),
+                            phases=tuple(s.phase for s in segments), shapes=tuple(s.profile for s in segments))
     steps = _check_length(case, trajectory.duration_s, dt, len(pins))
     path, index = _path(trajectory)
     ok = kinematics.is_reachable(machine, path)
@@ -284,7 +284,8 @@ def plan_cycle(case: Case, machine: Machine | None = None, model: str | None = N
                      "[cycle] time_step_s")
     limits = np.array([pins[s.pin - 1].force_limit_n for s in segments])
     warnings = (run_time_warning(steps, dt, trajectory.duration_s),) if steps > WARN_STEPS else ()
-    scenario = ScenarioPlan(trajectory, steps, path, warnings, rigid, sim, limits)
+    scenario = ScenarioPlan(trajectory=trajectory, steps=steps, path_m=path, warnings=warnings, rigid=rigid,
+                            simulation=sim, force_limits_n=limits)
     return CyclePlan(scenario=scenario, pins=pins, segments=tuple(segments),
                      run_case=case.model_copy(update={"simulation": sim}))
 

@@ -151,7 +151,9 @@ def preload_study(machine: Machine, pose_m: Any, clearances_m: Any, preloads: An
         offsets = np.array([rest_length_offsets(machine, pose, float(a), preload_mode, var) for a in pre])
         up, _ = _sweep_small(machine, pose, d, loads, cls, offsets, unload=False)
         eff = var.effective_gaps_m(machine, pose)
-        curves.append([LoadDeflection(pose, d, float(a), preload_mode, "small", var, eff, _branch(loads, up, p), None)
+        curves.append([LoadDeflection(pose_m=pose, direction=d, preload=float(a), preload_mode=preload_mode,
+                                      method="small", clearance=var, effective_gaps_m=eff,
+                                      loading=_branch(loads, up, p), unloading=None)
                        for p, a in enumerate(pre)])
         at, _ = _sweep_small(machine, pose, d, small, cls, offsets, unload=False)
         secants.append(small[1] / ((at[1]["displacement_m"] - at[0]["displacement_m"]) @ d))
