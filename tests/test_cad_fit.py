@@ -95,7 +95,8 @@ def test_synthetic_tables_recover_the_perturbation(cases):
     exact = _pinocchio_tables(cases, truth)
     printed = np.array([round(v, 1) if abs(v) >= 1 else float(f"{v:.2g}") for v in exact.ravel()])
     half = np.array([cf._half_unit(v) if abs(v) > 1e-12 else 0.0 for v in printed])  # exact zeros: floor
-    tables = cf.PrintedTables(printed.reshape(exact.shape), np.hypot(half, cf.FLOOR).reshape(exact.shape), True)
+    tables = cf.PrintedTables(values=printed.reshape(exact.shape), sigma=np.hypot(half, cf.FLOOR).reshape(exact.shape),
+                              c_leg1_reversed=True)
     fit = cf.fit_cad_model(cases, tables, compare_without_couple_stress=False)
     assert fit.reduced_chi_square < 1.0
     for p, t in zip(fit.parameters, truth, strict=True):

@@ -63,7 +63,8 @@ def test_gains_and_preload_in_the_grid_reach_the_run_and_the_fastest_case(tmp_pa
         "cycle_time_s": np.array([3.0]), "worst_alignment_error_m": np.array([1e-6]),
         "worst_overshoot_n": np.array([0.0]), "pins_passed": np.array([2]), "within_limits": np.array([True]),
         "error": np.array([""], dtype=object), "on_front": np.array([True])}
-    text = fastest_case_toml(CycleStudyResult(case, columns, np.array([0]), 0, "rigid"))
+    text = fastest_case_toml(CycleStudyResult(case=case, columns=columns, front=np.array([0]), fastest=0,
+                                              model="rigid"))
     (tmp_path / "fastest.toml").write_text(text)
     written = load_case(tmp_path / "fastest.toml")
     assert written.cycle.controller.kp_n_per_m == 2.0 * g.kp_n_per_m and written.preload.a4_n == 0.0
@@ -80,7 +81,8 @@ def test_summary_of_a_pin_never_touched_is_json(tmp_path):
                "worst_alignment_error_m": np.array([np.inf, np.nan]), "worst_overshoot_n": np.array([0.0, np.nan]),
                "pins_passed": np.array([0, 0]), "within_limits": np.array([False, False]),
                "error": np.array(["", "refused"], dtype=object), "on_front": np.array([True, False])}
-    result = CycleStudyResult(load_case(study_case(tmp_path)), columns, np.array([0]), None, "rigid")
+    result = CycleStudyResult(case=load_case(study_case(tmp_path)), columns=columns, front=np.array([0]), fastest=None,
+                              model="rigid")
     s = json.loads(to_json(result.summary()))
     assert s["front"][0]["worst_alignment_error_m"] is None and s["failed"] == 1
     assert s["fastest_within_limits"] is None

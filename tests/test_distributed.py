@@ -12,6 +12,7 @@ import numpy as np
 import pytest
 
 from pressfit.description.cases import load_case
+from pressfit.errors import ClusterError
 from pressfit.output import montecarlo_files as mcf
 from pressfit.studies import distributed, montecarlo
 from tests.test_montecarlo import synthetic_case
@@ -132,3 +133,11 @@ def test_scheduler_and_worker_as_separate_processes(case, tmp_path):
             p.terminate()
         for p in procs:
             p.wait(timeout=30)
+
+
+def test_a_cluster_error_carries_what_was_asked_for():
+    """Workers and a scheduler address together are refused before any connection, the request as data
+    (ClusterError.workers, .scheduler), so a caller needs no message parsing."""
+    with pytest.raises(ClusterError, match="not both") as refused:
+        distributed._client(2, "tcp://127.0.0.1:1", False)
+    assert (refused.value.workers, refused.value.scheduler, refused.value.chunk) == (2, "tcp://127.0.0.1:1", None)

@@ -14,7 +14,7 @@ import numpy as np
 import pytest
 
 from pressfit.description.cases import load_case
-from pressfit.errors import OutputExistsError
+from pressfit.errors import ClusterError, OutputExistsError
 from pressfit.output import montecarlo_files as mcf
 from pressfit.studies import distributed, montecarlo
 from tests.test_distributed import TILT
@@ -123,10 +123,10 @@ def test_a_first_run_that_wrote_only_study_json_can_be_restarted(case, cluster, 
     out = tmp_path / "mc"
 
     def unreachable(*a, **k):
-        raise distributed.ClusterError("cannot reach the Dask scheduler at 'tcp://10.9.9.9:8786'")
+        raise ClusterError("cannot reach the Dask scheduler at 'tcp://10.9.9.9:8786'", scheduler="tcp://10.9.9.9:8786")
 
     monkeypatch.setattr(distributed, "run_chunks", unreachable)
-    with pytest.raises(distributed.ClusterError):
+    with pytest.raises(ClusterError):
         mcf.run_montecarlo(case, out, chunk_size=3, progress=False)
     assert [p.name for p in out.iterdir()] == ["study.json"]
     monkeypatch.undo()
@@ -180,10 +180,10 @@ def test_progress_is_shown_before_the_cluster_starts(monkeypatch, capsys):
     """The progress bar (0 of N samples) is on screen before connecting (old code: only after every future
     was submitted, minutes for 1e9 samples)."""
     def slow_cluster(*a, **k):
-        raise distributed.ClusterError("stop here")
+        raise ClusterError("stop here")
 
     monkeypatch.setattr(distributed, "connect", slow_cluster)
-    with pytest.raises(distributed.ClusterError):
+    with pytest.raises(ClusterError):
         distributed.run_chunks(_square, [(1,)] * 10, [100] * 10, lambda k, r: None, progress=True, name="mc")
     assert "0/1000" in capsys.readouterr().err
 
@@ -271,8 +271,9 @@ def test_a_tls_scheduler_with_certificates_from_the_dask_configuration(case, tmp
         remote = mcf.read_samples(tmp_path / "tls")
         for key_ in remote:
             np.testing.assert_array_equal(remote[key_], np.concatenate([c[key_] for c in here]), err_msg=key_)
-        with pytest.raises(distributed.ClusterError, match="tls:// needs the client's certificates"):
+        with pytest.raises(ClusterError, match="tls:// needs the client's certificates") as refused:
             distributed._client(None, address, False)
+        assert refused.value.scheduler == address and refused.value.cause.startswith("tls:// needs")
     finally:
         for p in procs:
             p.terminate()

@@ -12,6 +12,7 @@ from click.testing import CliRunner
 
 from pressfit import kinematics
 from pressfit.cli import main
+from pressfit.errors import InterferenceError
 from pressfit.geometry import interference as I
 
 
@@ -191,8 +192,10 @@ def test_excluded_pairs_are_not_evaluated(machine):
                    and a[:4] != b[:4] for a, b in names_of_geometry_pairs(over))
     touching = {p.pair: p.distance_m for p in I.clearance_at(over, [0, 0.6, 0]).pairs}["leg1.stem|plate"]
     assert touching < 0  # the stem ends at its plate cardan, on the plate's side face: why it is excluded
-    with pytest.raises(I.InterferenceError):
+    with pytest.raises(InterferenceError) as refused:
         I.build_interference(machine, exclude=["leg1.stem|nothing"])
+    assert refused.value.key == "pair" and refused.value.value == "leg1.stem|nothing"  # the data, not the text
+    assert "leg1.stem" in refused.value.allowed and "nothing" not in refused.value.allowed
 
 
 def test_mesh_body_matches_box_primitive(machine, tmp_path):

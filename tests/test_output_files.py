@@ -13,7 +13,7 @@ from click.testing import CliRunner
 
 from pressfit.cli import _Group, main
 from pressfit.description.machine import read_toml
-from pressfit.errors import ModelFileError, OutputError
+from pressfit.errors import ModelFileError, OutputError, OutputExistsError
 from pressfit.output.files import write_directory, write_text
 
 
@@ -68,12 +68,14 @@ def test_sigterm_during_output_leaves_no_partial_or_temporary_file(tmp_path):
 
 def test_output_directory_checks(tmp_path):
     (tmp_path / "afile").write_text("x")
-    with pytest.raises(OutputError, match="not a directory"):
+    with pytest.raises(OutputError, match="not a directory") as refused:
         write_directory(tmp_path / "afile", True, lambda tmp: [])
+    assert refused.value.path == str(tmp_path / "afile")  # the refused output, as data
     (tmp_path / "full").mkdir()
     (tmp_path / "full" / "keep.txt").write_text("x")
-    with pytest.raises(Exception, match="not empty"):
+    with pytest.raises(OutputExistsError, match="not empty") as refused:
         write_directory(tmp_path / "full", False, lambda tmp: [])
+    assert refused.value.path == str(tmp_path / "full")
 
 
 def test_workspace_refuses_heights_that_share_a_file_name(tmp_path):

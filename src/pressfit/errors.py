@@ -57,11 +57,21 @@ class ConvergenceError(PressfitError):
 
 
 class OutputExistsError(PressfitError):
-    """An output file exists and overwriting was not requested."""
+    """An output file exists and overwriting was not requested (or another run holds it): ``path`` the file
+    or directory refused."""
+
+    def __init__(self, message: str, *, path: object) -> None:
+        self.path = str(path)
+        super().__init__(message)
 
 
 class OutputError(PressfitError):
-    """An output file cannot be written (its directory is a file, or not writable)."""
+    """An output file cannot be written (its directory is a file, or not writable): ``path`` the output
+    refused (None when the request itself is wrong, before any path)."""
+
+    def __init__(self, message: str, *, path: object = None) -> None:
+        self.path = None if path is None else str(path)
+        super().__init__(message)
 
 
 class OutputConflictError(OutputError):
@@ -69,8 +79,8 @@ class OutputConflictError(OutputError):
     ``path`` the output, ``other`` the other option or the input (refused before any computation)."""
 
     def __init__(self, option: str, path: object, other: str, message: str) -> None:
-        self.option, self.path, self.other = option, str(path), other
-        super().__init__(message)
+        self.option, self.other = option, other
+        super().__init__(message, path=path)
 
 
 class ResidualError(PressfitError):
@@ -114,6 +124,29 @@ class DriveStepError(PressfitError):
     def __init__(self, kind: str, leg: int, quantity: str, value: float, limit: str) -> None:
         self.kind, self.leg, self.quantity, self.value, self.limit = kind, leg, quantity, value, limit
         super().__init__(f"{kind} drive of leg {leg}: {quantity} = {value:.6g} breaks {limit}")
+
+
+class InterferenceError(PressfitError):
+    """Bad interference input (:mod:`pressfit.geometry.interference`): ``key`` the input at fault ("rig",
+    "mesh", "pair", "extra_bodies", "probe_poses", "poses"), ``value`` its value (the rig's name, the mesh
+    file, the pair 'a|b', the clashing names, the number of reachable probe poses, the number of poses given)
+    and ``allowed`` the valid values where there is a list (the rig names, the bodies a pair may name)."""
+
+    def __init__(self, message: str, *, key: str, value: object, allowed: tuple[str, ...] = ()) -> None:
+        self.key, self.value, self.allowed = key, value, allowed
+        super().__init__(message)
+
+
+class ClusterError(PressfitError):
+    """The Dask cluster cannot be started or reached, or a chunk failed on it (:mod:`pressfit.studies.distributed`):
+    ``scheduler`` the address asked for (None: a local cluster), ``workers`` the number of workers asked for
+    (None: the default), ``chunk`` the index of the chunk that failed (None: no chunk ran) and ``cause`` the
+    underlying error's text ("" if none)."""
+
+    def __init__(self, message: str, *, scheduler: str | None = None, workers: int | None = None,
+                 chunk: int | None = None, cause: str = "") -> None:
+        self.scheduler, self.workers, self.chunk, self.cause = scheduler, workers, chunk, cause
+        super().__init__(message)
 
 
 class StudyFailedError(PressfitError):

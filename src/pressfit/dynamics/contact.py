@@ -51,7 +51,7 @@ def contact_force_n(contact: Contact, depth_m: float, depth_rate_m_per_s: float 
     return float(kernels.contact_law(contact_parameters(contact), float(depth_m), float(depth_rate_m_per_s)))
 
 
-@dataclass(frozen=True)
+@dataclass(frozen=True, kw_only=True)
 class ContactState:
     """The contact at one instant: force (N, +y on the tool), interference (m), tool deflection (3,), m."""
 
@@ -77,7 +77,7 @@ def solve_contact(contact: Contact, rigid_tip_m: np.ndarray, deflection: Callabl
 
     r0, d0, u0 = residual(0.0)
     if r0 >= 0.0:
-        return ContactState(0.0, d0, u0)
+        return ContactState(force_n=0.0, depth_m=d0, deflection_m=u0)
     # the deflection grows with the force (compliance >= 0), so the depth at zero force bounds the force
     lo, hi = 0.0, contact_force_n(contact, d0, max(d0 - previous_depth_m, 0.0) / dt_s)
     for _ in range(kernels.BISECTIONS):
@@ -89,4 +89,4 @@ def solve_contact(contact: Contact, rigid_tip_m: np.ndarray, deflection: Callabl
         if hi - lo <= 1e-9 * hi:
             break
     _, d, u = residual(hi)
-    return ContactState(hi, d, u)
+    return ContactState(force_n=hi, depth_m=d, deflection_m=u)

@@ -80,7 +80,7 @@ FORCE_SAMPLES = 11  # points per segment where the drive speed and force bounds 
 PIN_PHASES = ("descent", "dwell", "retract")  # a pin's window: its figures are computed on these rows
 
 
-@dataclass(frozen=True)
+@dataclass(frozen=True, kw_only=True)
 class Segment:
     """One segment of the reference: its phase, the pin it serves (from 1; the traverse and the approach: the pin
     they lead to, the final move and settle: the last pin), its end points (m), duration (s), the limits it ran
@@ -108,7 +108,7 @@ class Segment:
                 "peak_acceleration_m_per_s2": p.peak_acceleration_m_per_s2 if p else 0.0}
 
 
-@dataclass(frozen=True)
+@dataclass(frozen=True, kw_only=True)
 class CyclePlan:
     """A validated board (:func:`plan_cycle`): the scenario plan the step loops run, the resolved pins, the
     segments and the run case (the case with ``simulation`` = the cycle's settings)."""
@@ -243,14 +243,16 @@ def plan_cycle(case: Case, machine: Machine | None = None, model: str | None = N
     def add(phase: str, pin: ResolvedPin, target: np.ndarray, hold_s: float | None = None) -> None:
         a, index = points[-1], len(segments)
         if hold_s is not None:
-            segments.append(Segment(index, phase, pin.index, a, target, hold_s, None, None, phase))
+            segments.append(Segment(index=index, phase=phase, pin=pin.index, start_m=a, end_m=target,
+                                    duration_s=hold_s, limits=None, profile=None, binding_limit=phase))
         else:
             limits, key = (descent, "[cycle.descent]") if phase in ("descent", "retract") else \
                 (cycle.motion, "[cycle.motion]")
             v, acc, jerk, profile, binding = _scaled(case, rigid, machine, drives, a, target, limits, key,
                                                      f"{_pin_label(pin)}, its {phase}")
-            segments.append(Segment(index, phase, pin.index, a, target, profile.duration_s, (v, acc, jerk), profile,
-                                    binding))
+            segments.append(Segment(index=index, phase=phase, pin=pin.index, start_m=a, end_m=target,
+                                    duration_s=profile.duration_s, limits=(v, acc, jerk), profile=profile,
+                                    binding_limit=binding))
         points.append(target)
 
     for k, pin in enumerate(pins):
@@ -262,8 +264,8 @@ def plan_cycle(case: Case, machine: Machine | None = None, model: str | None = N
         add("retract", pin, above)
     add("move", pins[-1], np.asarray(cycle.end_m, float))
     add("settle", pins[-1], points[-1], max(cycle.settle_s, 1e-9))
-    trajectory = Trajectory(np.array(points), np.array([s.duration_s for s in segments]),
-                            tuple(s.phase for s in segments), tuple(s.profile for s in segments))
+    trajectory = Trajectory(waypoints_m=np.array(points), durations_s=np.array([s.duration_s for s in segments]),
+                            phases=tuple(s.phase for s in segments), shapes=tuple(s.profile for s in segments))
     steps = _check_length(case, trajectory.duration_s, dt, len(pins))
     path, index = _path(trajectory)
     ok = kinematics.is_reachable(machine, path)
@@ -282,12 +284,14 @@ def plan_cycle(case: Case, machine: Machine | None = None, model: str | None = N
     check_flexible_step(case, machine, sim, np.array(points), "[cycle] time_step_s")
     limits = np.array([pins[s.pin - 1].force_limit_n for s in segments])
     warnings = (run_time_warning(steps, dt, trajectory.duration_s),) if steps > WARN_STEPS else ()
-    scenario = ScenarioPlan(trajectory, steps, path, warnings, rigid, sim, limits,
-                            MAX_DEPTH_FACTOR * max(pin.interference_m for pin in pins), table="cycle")
-    return CyclePlan(scenario, pins, tuple(segments), case.model_copy(update={"simulation": sim}))
+    scenario = ScenarioPlan(trajectory=trajectory, steps=steps, path_m=path, warnings=warnings, rigid=rigid,
+                            simulation=sim, force_limits_n=limits,
+                            depth_limit_m=MAX_DEPTH_FACTOR * max(pin.interference_m for pin in pins), table="cycle")
+    return CyclePlan(scenario=scenario, pins=pins, segments=tuple(segments),
+                     run_case=case.model_copy(update={"simulation": sim}))
 
 
-@dataclass(frozen=True)
+@dataclass(frozen=True, kw_only=True)
 class CycleResult:
     """A simulated board: ``series`` (n, len(CYCLE_COLUMNS)), one row per step (the simulate columns, the pin
     and the segment of the row), the plan, and ``summary`` (:func:`summarise_cycle`, JSON-ready)."""
@@ -335,7 +339,7 @@ def simulate_cycle(case: Case, model: str | None = None, progress: bool = False,
                            baseline if preload_cost else None)
         sized.energy.require_closed(f"of the board of {case.path}", "cycle")
         summary.update(sized.to_dict())
-    return CycleResult(series, plan, summary, sections, sized)
+    return CycleResult(series=series, plan=plan, summary=summary, sections=sections, sizing=sized)
 
 
 @dataclass(frozen=True)

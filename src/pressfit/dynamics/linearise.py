@@ -77,7 +77,7 @@ Model = Literal["flexible", "rigid"]
 AXES = ("x", "y", "z")
 
 
-@dataclass(frozen=True)
+@dataclass(frozen=True, kw_only=True)
 class Plant:
     """The linear plant at a pose (module doc): state x = [z, z', F]; inputs the four force commands (N) and the
     contact force (N, +y on the tool); ``c_lengths``, ``c_rates``, ``c_tool`` (4 / 4 / 3, n) the outputs, m and
@@ -238,7 +238,7 @@ def linear_plant(machine: Machine, pose_m: np.ndarray, contact: Contact | None =
                  vertical_mass_kg=float(m_y), drive_kind=getattr(drive, "kind", "force"), tensions_n=tensions)
 
 
-@dataclass(frozen=True)
+@dataclass(frozen=True, kw_only=True)
 class Loop:
     """The linearised closed loop (module doc): plant ``plant``, closed-loop state matrix ``a`` over
     [plant state, integral of the error (3)], the Cartesian loop transfer ``open_loop`` (inputs the Cartesian
@@ -283,7 +283,7 @@ def axis_loop(loop: Loop, axis: int) -> ct.StateSpace:
     return ct.ss(a - b[:, others] @ c[others], b[:, [axis]], c[[axis]], np.zeros((1, 1)))
 
 
-@dataclass(frozen=True)
+@dataclass(frozen=True, kw_only=True)
 class Margins:
     """Stability margins of one axis loop: gain margin (ratio; inf if none) at its phase crossover (Hz), phase
     margin (deg) at the gain crossover (Hz); ``stable``: the closed loop's poles all in the left half plane."""
@@ -305,7 +305,7 @@ class StructuralMode:
     drive_energy_fraction: float
 
 
-@dataclass(frozen=True)
+@dataclass(frozen=True, kw_only=True)
 class PoseDesign:
     """What ``pressfit control`` reports at one pose (SI; module doc)."""
 
@@ -433,7 +433,7 @@ def design_at(machine: Machine, gains: Controller, pose_m: np.ndarray, name: str
                       bode_open_loop=bode_ol, bode_reference=bode_ref)
 
 
-@dataclass(frozen=True)
+@dataclass(frozen=True, kw_only=True)
 class ControlDesign:
     """``pressfit control``: the loop at the pin pose (in contact) and at the case's waypoints."""
 

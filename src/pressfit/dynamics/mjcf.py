@@ -119,7 +119,7 @@ def mujoco_state(rigid: RigidLegModel, q: np.ndarray, v: np.ndarray) -> tuple[np
     return qpos, qvel
 
 
-@dataclass(frozen=True)
+@dataclass(frozen=True, kw_only=True)
 class PassiveMotion:
     """One passive run (no actuator force, gravity on) of the rigid-leg machine in Pinocchio and in MuJoCo from
     the same state, sampled every time step (row 0 the initial state). Plate positions (m, world), plate
@@ -180,5 +180,7 @@ def passive_motion(machine: Machine, pose_m: np.ndarray,
         errors = [max(errors[0], rigid.closure_error_m()), max(errors[1], _weld_error_m(mj_model, mj_data))]
     if not (np.all(np.isfinite(plates)) and np.all(np.isfinite(errors))):
         raise PressfitError(f"passive motion diverged (non-finite state) at time step {timestep_s} s: reduce it")
-    return PassiveMotion(np.arange(steps + 1) * timestep_s, plates[0], plates[1], angles[0], angles[1],
-                         errors[0], errors[1], timestep_s)
+    return PassiveMotion(time_s=np.arange(steps + 1) * timestep_s, pinocchio_plate_m=plates[0],
+                         mujoco_plate_m=plates[1], pinocchio_rotation_rad=angles[0], mujoco_rotation_rad=angles[1],
+                         pinocchio_closure_error_m=errors[0], mujoco_closure_error_m=errors[1],
+                         timestep_s=timestep_s)

@@ -33,7 +33,7 @@ from pressfit.mechanics.model import MachineModel, build_model
 from pressfit.mechanics.statics import solve_equilibrium
 
 
-@dataclass(frozen=True)
+@dataclass(frozen=True, kw_only=True)
 class Modes:
     """The lowest natural modes at a pose (SI). Legs in kinematic order, modes by increasing frequency."""
 
@@ -81,7 +81,7 @@ def mass_matrix(model: pin.Model, data: pin.Data, q: np.ndarray) -> np.ndarray:
     return np.triu(m) + np.triu(m, 1).T
 
 
-@dataclass(frozen=True)
+@dataclass(frozen=True, kw_only=True)
 class ReducedSystem:
     """Small vibrations about the static equilibrium at a pose, restricted to the linearised loop closures
     (module docstring): ``mass_kg`` M_r and ``stiffness`` K_r (r, r) on the orthonormal closure null-space
@@ -140,8 +140,10 @@ def natural_modes(machine: Machine, pose_m: np.ndarray, count: int = 6, plate_wr
     phi = (rs.basis @ x).T
     closure = float(np.max(np.abs(closure_jacobian(rs.mm, rs.model, rs.data, rs.q) @ phi.T)))
     points, shapes = _leg_motion(rs.mm, rs.model, rs.data, rs.q, phi)
-    return Modes(rs.mm.pose_m.copy(), rs.plate_wrench, np.sqrt(omega2) / (2 * np.pi), phi, (rs.plate_map @ x).T,
-                 points, shapes, closure, total_mass_kg(rs.model), rs.equilibrium_residual)
+    return Modes(pose_m=rs.mm.pose_m.copy(), plate_wrench=rs.plate_wrench, frequencies_hz=np.sqrt(omega2) / (2 * np.pi),
+                 shapes=phi, plate_shapes=(rs.plate_map @ x).T, leg_points_m=points, leg_point_shapes=shapes,
+                 closure_residual=closure, total_mass_kg=total_mass_kg(rs.model),
+                 equilibrium_residual=rs.equilibrium_residual)
 
 
 def _leg_motion(mm: MachineModel, model: pin.Model, data: pin.Data, q: np.ndarray,

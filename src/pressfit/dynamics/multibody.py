@@ -71,7 +71,7 @@ class PoseCache:
         return self.value
 
 
-@dataclass
+@dataclass(kw_only=True)
 class RigidLegModel:
     """The rigid-leg closed-loop model and its solver workspace (Pinocchio data, constraint datas)."""
 
@@ -199,11 +199,15 @@ def rigid_leg_model(machine: Machine, pose_m: np.ndarray, baumgarte_rad_per_s: f
             if model.existJointName(full.names[j]):
                 current = model.getJointId(full.names[j])
             owner[j] = current
-    rigid = RigidLegModel(machine, model, model.createData(), pin.StdVec_RigidConstraintModel(),
-                          pin.StdVec_RigidConstraintData(), pin.ProximalSettings(1e-12, 1e-10, 10),
-                          np.array([model.joints[model.getJointId(f"leg{i + 1}.actuator")].idx_v for i in range(4)]),
-                          np.array([model.joints[model.getJointId(f"leg{i + 1}.actuator")].idx_q for i in range(4)]),
-                          mm.sigma.copy(), np.zeros(model.nq), baumgarte_rad_per_s)
+    actuators = [model.joints[model.getJointId(f"leg{i + 1}.actuator")] for i in range(len(machine.legs))]
+    rigid = RigidLegModel(machine=machine, model=model, data=model.createData(),
+                          constraint_models=pin.StdVec_RigidConstraintModel(),
+                          constraint_datas=pin.StdVec_RigidConstraintData(),
+                          prox=pin.ProximalSettings(1e-12, 1e-10, 10),
+                          actuator_v=np.array([j.idx_v for j in actuators]),
+                          actuator_q=np.array([j.idx_q for j in actuators]),
+                          sigma=mm.sigma.copy(), reference_q=np.zeros(model.nq),
+                          baumgarte_rad_per_s=baumgarte_rad_per_s)
     rigid.reference_q = rigid.configuration_at(mm.pose_m)
     rigid.end_joints = tuple(model.getJointId(f"leg{i + 1}.plate_cardan.a") for i in range(4))
     data = model.createData()

@@ -43,7 +43,7 @@ CONTRIBUTION_FLOOR = 1e-3
 STATIC_TOL = 1e-9  # relative: u(infinity) of the modal sum against the direct static solve K_r^-1 G^T F
 
 
-@dataclass(frozen=True)
+@dataclass(frozen=True, kw_only=True)
 class ToolResponse:
     """Step response and receptance at the tool (SI). ``time_s`` (n,), ``displacement_m`` (n, 3) world axes
     from the loaded equilibrium; ``frequencies_hz`` (m,), ``receptance_m_per_n`` (m, 3, 3) complex;

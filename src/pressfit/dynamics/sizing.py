@@ -57,7 +57,7 @@ PRELOAD_FIGURES = ("rms_force_n", "copper_loss_w", "positive_energy_j", "regener
                    "supply_energy_j")  # given again with a4 = 0 (the preload's cost)
 
 
-@dataclass(frozen=True)
+@dataclass(frozen=True, kw_only=True)
 class Rating:
     """A sizing figure beside its rating: ``value`` and ``rating`` in the figure's unit, ``key`` the machine-file
     key the rating comes from."""
@@ -80,7 +80,7 @@ class Rating:
                 "key": self.key}
 
 
-@dataclass(frozen=True)
+@dataclass(frozen=True, kw_only=True)
 class ElectricSizing:
     """An electric drive's motor figures (module docstring): torque N m, current A, speed rad/s, loss W, energy J
     (the copper figures None without ``winding_resistance_ohm``)."""
@@ -94,7 +94,7 @@ class ElectricSizing:
     copper_energy_j: float | None
 
 
-@dataclass(frozen=True)
+@dataclass(frozen=True, kw_only=True)
 class HydraulicSizing:
     """A hydraulic drive's supply figures (module docstring): flow m^3/s, power W, energy J."""
 
@@ -104,7 +104,7 @@ class HydraulicSizing:
     supply_energy_j: float
 
 
-@dataclass(frozen=True)
+@dataclass(frozen=True, kw_only=True)
 class DriveSizing:
     """One drive over a motion (module docstring). ``leg`` from 1; forces N, speed m/s, power W, energy J."""
 
@@ -174,8 +174,8 @@ def drive_sizing(tensions_n: np.ndarray, rates_m_per_s: np.ndarray, dt_s: float,
     kind = getattr(drive, "kind", "force")
     out = []
     for i in range(n.shape[1]):
-        ratings = [Rating("peak_force_n", float(peak_force[i]), float(drive.force_limit_n),
-                          _FORCE_LIMIT_KEYS[kind])]
+        ratings = [Rating(figure="peak_force_n", value=float(peak_force[i]), rating=float(drive.force_limit_n),
+                          key=_FORCE_LIMIT_KEYS[kind])]
         electric = hydraulic = None
         if kind == "electric":
             electric, more = _electric(drive.table, n[:, i], v[:, i], dt_s, float(power[:, i].max()),
@@ -210,14 +210,15 @@ def _electric(t: Any, n: np.ndarray, v: np.ndarray, dt_s: float, peak_power_w: f
         peak_current_a=float(np.abs(current).max()),
         peak_motor_speed_rad_per_s=2.0 * math.pi * peak_speed / t.lead_m,
         copper_loss_w=loss, copper_energy_j=None if loss is None else loss * n.size * dt_s)
-    ratings = [Rating("peak_speed_m_per_s", peak_speed, t.speed_limit_rad_per_s * t.lead_m / (2.0 * math.pi),
-                      "[actuator.electric] speed_limit_rad_per_s lead / (2 pi)")]
+    ratings = [Rating(figure="peak_speed_m_per_s", value=peak_speed,
+                      rating=t.speed_limit_rad_per_s * t.lead_m / (2.0 * math.pi),
+                      key="[actuator.electric] speed_limit_rad_per_s lead / (2 pi)")]
     if t.continuous_torque_nm is not None:
-        ratings.append(Rating("rms_torque_nm", sizing.rms_torque_nm, t.continuous_torque_nm,
-                              "[actuator.electric] continuous_torque_nm"))
+        ratings.append(Rating(figure="rms_torque_nm", value=sizing.rms_torque_nm, rating=t.continuous_torque_nm,
+                              key="[actuator.electric] continuous_torque_nm"))
     if t.rated_power_w is not None:
-        ratings.append(Rating("peak_power_w", max(peak_power_w, 0.0), t.rated_power_w,
-                              "[actuator.electric] rated_power_w"))
+        ratings.append(Rating(figure="peak_power_w", value=max(peak_power_w, 0.0), rating=t.rated_power_w,
+                              key="[actuator.electric] rated_power_w"))
     return sizing, ratings
 
 
@@ -227,8 +228,8 @@ def _hydraulic(t: Any, n: np.ndarray, v: np.ndarray, dt_s: float) -> tuple[Hydra
     sizing = HydraulicSizing(peak_flow_m3_per_s=float(flow.max()), peak_supply_power_w=float(power.max()),
                              mean_supply_power_w=float(power.mean()), supply_energy_j=float(power.sum() * dt_s))
     rated = t.valve_flow_gain_m3_per_s_sqrt_pa * math.sqrt(0.5 * (t.supply_pressure_pa - t.tank_pressure_pa))
-    return sizing, [Rating("peak_flow_m3_per_s", sizing.peak_flow_m3_per_s, rated,
-                           "[actuator.hydraulic] valve_flow_gain_m3_per_s_sqrt_pa sqrt((p_s - p_t) / 2)")]
+    return sizing, [Rating(figure="peak_flow_m3_per_s", value=sizing.peak_flow_m3_per_s, rating=rated,
+                           key="[actuator.hydraulic] valve_flow_gain_m3_per_s_sqrt_pa sqrt((p_s - p_t) / 2)")]
 
 
 def with_preload_cost(sizing: tuple[DriveSizing, ...], tensions_n: np.ndarray, without: tuple[DriveSizing, ...],
@@ -243,7 +244,7 @@ def with_preload_cost(sizing: tuple[DriveSizing, ...], tensions_n: np.ndarray, w
                  for i, (s, w) in enumerate(zip(sizing, without, strict=True)))
 
 
-@dataclass(frozen=True)
+@dataclass(frozen=True, kw_only=True)
 class EnergyBalance:
     """The energy balance of a run (module docstring), J; ``relative_residual`` = |residual_j| /
     ``gross_drive_work_j``; ``drive_losses_j`` (copper, valve throttling) upstream of the joints, beside it."""

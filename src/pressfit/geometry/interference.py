@@ -54,7 +54,7 @@ from numpy.typing import ArrayLike
 
 from pressfit import kinematics
 from pressfit.description.machine import ExtraBody, Machine
-from pressfit.errors import PressfitError
+from pressfit.errors import InterferenceError
 from pressfit.kinematics import reference_pose_m
 from pressfit.kinematics.workspace import square_height_range, workspace_box, workspace_square
 from pressfit.spatial import cross
@@ -63,10 +63,7 @@ PART_NAMES = ("cylinder", "stem")
 KIND_ORDER = ("leg", "plate", "base", "extra")
 _MIN_DISTANCE = operator.attrgetter("min_distance")
 _CHUNK = 1024  # poses per block of the sweep
-
-
-class InterferenceError(PressfitError):
-    """Bad interference input: unknown body in a pair override, unreadable mesh, no reachable height."""
+RIGS = ("auto", "closed-form", "model")  # make_rig's names
 
 
 class Rig(Protocol):
@@ -125,21 +122,23 @@ class ClosedFormRig:
 def make_rig(machine: Machine, rig: str = "auto") -> Rig:
     """'closed-form' (:class:`ClosedFormRig`), 'model' (:func:`pressfit.mechanics.model.build_model`) or 'auto' (the
     latter when importable, else the former)."""
-    if rig not in ("auto", "closed-form", "model"):
-        raise InterferenceError(f"rig must be 'auto', 'closed-form' or 'model' (got {rig!r})")
+    if rig not in RIGS:
+        raise InterferenceError(f"rig must be 'auto', 'closed-form' or 'model' (got {rig!r})", key="rig", value=rig,
+                                allowed=RIGS)
     if rig != "closed-form":
         try:
             from pressfit.mechanics.model import build_model
         except ImportError:
             if rig == "model":
-                raise InterferenceError("pressfit.mechanics.model is not available") from None
+                raise InterferenceError("pressfit.mechanics.model is not available", key="rig", value=rig,
+                                        allowed=("closed-form",)) from None
         else:
             return build_model(machine, reference_pose_m(machine))
     return ClosedFormRig(machine)
 
 
 # --- shapes ---------------------------------------------------------------------------------------
-@dataclass(frozen=True)
+@dataclass(frozen=True, kw_only=True)
 class Shape:
     """One Coal shape of a body, its carrying joint ('cylinder', 'stem', 'plate', 'world') and its
     world placement as a function of the pose (closed form; used once, to attach it to the joint)."""
@@ -167,7 +166,7 @@ def load_mesh_convex(path: Path | str, scale: float = 1.0) -> coal.ConvexBase:
         if len(faces) == 0:
             raise ValueError("no triangles")
     except Exception as exc:  # trimesh raises many types for bad files
-        raise InterferenceError(f"cannot load mesh {path}: {exc}") from None
+        raise InterferenceError(f"cannot load mesh {path}: {exc}", key="mesh", value=str(path)) from None
     bvh = coal.BVHModelOBBRSS()
     bvh.beginModel(len(faces), len(vertices))
     bvh.addVertices(vertices)
@@ -184,7 +183,7 @@ def _extra_shape(machine: Machine, body: ExtraBody) -> Shape:
         path = Path(body.mesh_path)  # type: ignore[arg-type]
         geom = load_mesh_convex(path if path.is_absolute() else _source_dir(machine) / path, body.mesh_scale)
     local = pin.SE3(pin.rpy.rpyToMatrix(np.asarray(body.rotation_rpy_rad)), np.asarray(body.translation_m))
-    return Shape(body.name, body.name, geom, (body.frame, -1), local)
+    return Shape(body=body.name, name=body.name, geometry=geom, carrier=(body.frame, -1), local=local)
 
 
 def machine_shapes(machine: Machine) -> tuple[list[Shape], list[str]]:
@@ -201,18 +200,20 @@ def machine_shapes(machine: Machine) -> tuple[list[Shape], list[str]]:
     along = lambda s: pin.SE3(np.eye(3), np.array([0.0, 0.0, s]))
     for i in range(len(machine.legs)):
         leg = f"leg{i + 1}"
-        shapes.append(Shape(f"{leg}.cylinder", f"{leg}.cylinder", solid(c.cylinder_radius_m, lc),
-                            ("cylinder", i), along(lc / 2)))
+        shapes.append(Shape(body=f"{leg}.cylinder", name=f"{leg}.cylinder",
+                            geometry=solid(c.cylinder_radius_m, lc), carrier=("cylinder", i), local=along(lc / 2)))
         stub = solid if stub_end > lc else coal.Capsule  # a zero-length stub: a sphere
-        shapes.append(Shape(f"{leg}.stem", f"{leg}.stem.stub", stub(c.stem_radius_m, stub_end - lc),
-                            ("cylinder", i), along((lc + stub_end) / 2)))
+        shapes.append(Shape(body=f"{leg}.stem", name=f"{leg}.stem.stub",
+                            geometry=stub(c.stem_radius_m, stub_end - lc), carrier=("cylinder", i),
+                            local=along((lc + stub_end) / 2)))
         # the rod: placed from the plate cardan backwards (the 'stem' frame is the leg frame at C_i)
-        shapes.append(Shape(f"{leg}.stem", f"{leg}.stem.rod", solid(c.stem_radius_m, lmin),
-                            ("stem", i), along(-lmin / 2)))
+        shapes.append(Shape(body=f"{leg}.stem", name=f"{leg}.stem.rod", geometry=solid(c.stem_radius_m, lmin),
+                            carrier=("stem", i), local=along(-lmin / 2)))
     r, e = machine.geometry.plate_half_side_m, c.base_half_extent_m or machine.geometry.base_half_side_m
-    shapes.append(Shape("plate", "plate", coal.Box(2 * r, c.plate_thickness_m, 2 * r), ("plate", -1)))
-    shapes.append(Shape("base", "base", coal.Box(2 * e, c.base_thickness_m, 2 * e), ("world", -1),
-                        pin.SE3(np.eye(3), np.array([0.0, -c.base_thickness_m / 2, 0.0]))))
+    shapes.append(Shape(body="plate", name="plate", geometry=coal.Box(2 * r, c.plate_thickness_m, 2 * r),
+                        carrier=("plate", -1)))
+    shapes.append(Shape(body="base", name="base", geometry=coal.Box(2 * e, c.base_thickness_m, 2 * e),
+                        carrier=("world", -1), local=pin.SE3(np.eye(3), np.array([0.0, -c.base_thickness_m / 2, 0.0]))))
     shapes += [_extra_shape(machine, b) for b in c.extra_bodies]
     return shapes, notes
 
@@ -254,12 +255,13 @@ def default_pairs(extras: list[str], n_legs: int) -> tuple[list[str], list[str]]
 def _canonical(pair: str, bodies: list[str]) -> str:
     parts = [p.strip() for p in pair.split("|")]
     if len(parts) != 2 or parts[0] == parts[1] or any(p not in bodies for p in parts):
-        raise InterferenceError(f"pair {pair!r}: expected 'a|b' with two different bodies among {bodies}")
+        raise InterferenceError(f"pair {pair!r}: expected 'a|b' with two different bodies among {bodies}",
+                                key="pair", value=pair, allowed=tuple(bodies))
     return "|".join(sorted(parts, key=bodies.index))
 
 
 # --- the model ------------------------------------------------------------------------------------
-@dataclass(frozen=True, eq=False)
+@dataclass(frozen=True, eq=False, kw_only=True)
 class InterferenceModel:
     """Coal shapes attached to a rig's joints, the checked body pairs and their geometry pairs."""
 
@@ -298,7 +300,8 @@ class AffineConfigurations:
                              rng.uniform(-ws.z_half_width_m, ws.z_half_width_m, 4 * probes)])
         h = h[kinematics.is_reachable(machine, h)][:probes]
         if len(h) < probes:
-            raise InterferenceError("too few reachable probe poses to vectorise the rig's configurations")
+            raise InterferenceError("too few reachable probe poses to vectorise the rig's configurations",
+                                    key="probe_poses", value=len(h))
         q = np.array([rig.configuration_at(p) for p in h])
         fit, check = slice(0, probes // 2), slice(probes // 2, probes)
         self.weights = np.linalg.lstsq(self.features(h[fit]), q[fit], rcond=None)[0]
@@ -322,7 +325,8 @@ def build_interference(machine: Machine, rig: str | Rig = "auto", include: list[
     extras = [b.name for b in machine.collision.extra_bodies]
     clash = [x for x in extras if x in ("plate", "base") or x.startswith("leg")]
     if clash:
-        raise InterferenceError(f"extra body names {clash} clash with built-in bodies (plate, base, leg*)")
+        raise InterferenceError(f"extra body names {clash} clash with built-in bodies (plate, base, leg*)",
+                                key="extra_bodies", value=tuple(clash))
     pairs, excluded = default_pairs(extras, len(machine.legs))
     drop = {_canonical(p, bodies) for p in [*machine.collision.exclude_pairs, *exclude]}
     add = [_canonical(p, bodies) for p in [*machine.collision.include_pairs, *include]]
@@ -360,12 +364,14 @@ def build_interference(machine: Machine, rig: str | Rig = "auto", include: list[
         batch = fit if fit.error < 1e-12 else None
         notes.append(f"{kin}: configurations vectorised by a verified affine fit (max error {fit.error:.1e})"
                      if batch else f"{kin}: configurations per pose (the affine fit errs by {fit.error:.1e})")
-    return InterferenceModel(machine, rig_obj, gm, tuple(pairs), tuple(pair_kind(p) for p in pairs),
-                             tuple(excluded), np.array(starts, dtype=np.intp), tuple(notes), kin, batch)
+    return InterferenceModel(machine=machine, rig=rig_obj, geometry_model=gm, pairs=tuple(pairs),
+                             kinds=tuple(pair_kind(p) for p in pairs), excluded=tuple(excluded),
+                             group_starts=np.array(starts, dtype=np.intp), notes=tuple(notes), kinematics=kin,
+                             batch=batch)
 
 
 # --- queries --------------------------------------------------------------------------------------
-@dataclass(frozen=True)
+@dataclass(frozen=True, kw_only=True)
 class PairDistance:
     """Signed minimum distance of one body pair (m; negative = penetration) and the witness points
     on each body (world frame, m)."""
@@ -377,7 +383,7 @@ class PairDistance:
     point_b_m: tuple[float, float, float]
 
 
-@dataclass(frozen=True)
+@dataclass(frozen=True, kw_only=True)
 class PoseClearance:
     """Every checked pair at one pose, against a safety margin (m)."""
 
@@ -427,9 +433,10 @@ def clearance_at_configuration(im: InterferenceModel, q: np.ndarray, margin_m: f
     for k, pair in enumerate(im.pairs):  # geometry pairs were added (shape of body a, shape of body b)
         g = bounds[k] + int(np.argmin(d[bounds[k]:bounds[k + 1]]))
         pa, pb = ev.results[g].getNearestPoint1(), ev.results[g].getNearestPoint2()
-        out.append(PairDistance(pair, im.kinds[k], float(d[g]), tuple(map(float, pa)), tuple(map(float, pb))))
+        out.append(PairDistance(pair=pair, kind=im.kinds[k], distance_m=float(d[g]), point_a_m=tuple(map(float, pa)),
+                                point_b_m=tuple(map(float, pb))))
     margin = im.machine.collision.safety_margin_m if margin_m is None else float(margin_m)
-    return PoseClearance(tuple(map(float, pose_m)), margin, tuple(out), im.excluded)
+    return PoseClearance(pose_m=tuple(map(float, pose_m)), margin_m=margin, pairs=tuple(out), excluded=im.excluded)
 
 
 def clearance_at(im: InterferenceModel, pose_m: ArrayLike, margin_m: float | None = None,
@@ -439,7 +446,7 @@ def clearance_at(im: InterferenceModel, pose_m: ArrayLike, margin_m: float | Non
     return clearance_at_configuration(im, im.rig.configuration_at(h), margin_m, h)
 
 
-@dataclass(frozen=True, eq=False)
+@dataclass(frozen=True, eq=False, kw_only=True)
 class SweepResult:
     """Clearance over poses. Per pose: the minimum over pairs and the worst pair (NaN / -1 where the
     pose is unreachable and skipped). Per pair: the minimum over poses and where."""
@@ -519,8 +526,10 @@ def sweep(im: InterferenceModel, poses_m: np.ndarray, margin_m: float | None = N
             bar.update(len(idx))
     margin = im.machine.collision.safety_margin_m if margin_m is None else float(margin_m)
     if not len(todo):
-        raise InterferenceError(f"none of the {n} poses is reachable")
-    return SweepResult(poses, ok, dmin, worst, im.pairs, im.kinds, im.excluded, pmin, parg, margin, grid_axes_m)
+        raise InterferenceError(f"none of the {n} poses is reachable", key="poses", value=n)
+    return SweepResult(poses_m=poses, reachable=ok, min_distance_m=dmin, worst_pair=worst, pairs=im.pairs,
+                       kinds=im.kinds, excluded=im.excluded, pair_min_m=pmin, pair_argmin=parg, margin_m=margin,
+                       grid_axes_m=grid_axes_m)
 
 
 def workspace_sweep(im: InterferenceModel, points: int = 41, heights: int = 7,

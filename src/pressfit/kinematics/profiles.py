@@ -27,7 +27,7 @@ import numpy as np
 LIMITS = ("speed", "acceleration", "jerk")
 
 
-@dataclass(frozen=True)
+@dataclass(frozen=True, kw_only=True)
 class SCurve:
     """The minimum-time S-curve of ``distance_m`` (m) under ``speed_m_per_s``, ``acceleration_m_per_s2`` and
     ``jerk_m_per_s3`` (:func:`s_curve`). ``jerk_time_s`` T_j, ``constant_acceleration_time_s`` T_c,
@@ -129,7 +129,8 @@ def s_curve(distance_m: float, speed_m_per_s: float, acceleration_m_per_s2: floa
                       v0 + a0 * duration + jerk * duration**2 / 2, a0 + jerk * duration))
     _, x3, v3, _ = knots[-1]
     knots[-1] = (knots[-1][0], x3, v3, 0.0)  # the acceleration is zero at the end of the speed-up (round-off)
-    return SCurve(d, v, a, j, tj, tc, tv, tuple(knots))
+    return SCurve(distance_m=d, speed_m_per_s=v, acceleration_m_per_s2=a, jerk_m_per_s3=j, jerk_time_s=tj,
+                  constant_acceleration_time_s=tc, cruise_time_s=tv, _knots=tuple(knots))
 
 
 def quintic(s: np.ndarray | float) -> tuple[np.ndarray, np.ndarray]:
@@ -139,7 +140,7 @@ def quintic(s: np.ndarray | float) -> tuple[np.ndarray, np.ndarray]:
     return s**3 * (10 - 15 * s + 6 * s * s), 30 * s * s * (1 - s) ** 2
 
 
-@dataclass(frozen=True)
+@dataclass(frozen=True, kw_only=True)
 class Quintic:
     """The minimum-jerk rest-to-rest move of ``distance_m`` (m) in the least time ``duration_s`` (s) its peak
     speed 15 D / (8 T) (at s = 1/2), acceleration 10 D / (sqrt(3) T^2) (at s = (3 - sqrt(3)) / 6) and jerk
@@ -176,7 +177,7 @@ def quintic_move(distance_m: float, speed_m_per_s: float, acceleration_m_per_s2:
     times = (15.0 * d / (8.0 * speed_m_per_s), math.sqrt(10.0 * d / (math.sqrt(3.0) * acceleration_m_per_s2)),
              (60.0 * d / jerk_m_per_s3) ** (1.0 / 3.0))
     k = int(np.argmax(times))
-    return Quintic(d, float(times[k]), LIMITS[k] if d > 0 else "")
+    return Quintic(distance_m=d, duration_s=float(times[k]), binding_limit=LIMITS[k] if d > 0 else "")
 
 
 def s_curve_time_s(distance_m: float, speed_m_per_s: float, acceleration_m_per_s2: float,

@@ -36,9 +36,9 @@ def check_target(path: Path | str, overwrite: bool) -> Path:
     path = Path(path)
     real = Path(os.path.realpath(path))
     if real.exists() and not real.is_file():
-        raise OutputError(f"cannot write {path}: it is a directory or special file, not a regular file")
+        raise OutputError(f"cannot write {path}: it is a directory or special file, not a regular file", path=path)
     if real.exists() and not overwrite:
-        raise OutputExistsError(f"{path} exists; pass --overwrite to replace it")
+        raise OutputExistsError(f"{path} exists; pass --overwrite to replace it", path=path)
     _check_parent(path, real.parent)
     return real
 
@@ -49,9 +49,9 @@ def _check_parent(path: Path, parent: Path) -> None:
     while not anc.exists() and anc != anc.parent:
         anc = anc.parent
     if not anc.is_dir():
-        raise OutputError(f"cannot write {path}: {anc} is not a directory")
+        raise OutputError(f"cannot write {path}: {anc} is not a directory", path=path)
     if not os.access(anc, os.W_OK | os.X_OK):
-        raise OutputError(f"cannot write {path}: {anc} is not writable")
+        raise OutputError(f"cannot write {path}: {anc} is not writable", path=path)
 
 
 def _same_file(a: Path, b: Path) -> bool:
@@ -86,12 +86,12 @@ def check_directory(out_dir: Path | str, overwrite: bool) -> Path:
     empty unless ``overwrite`` (then files of the same names are replaced), and its parent writable."""
     out = Path(out_dir)
     if out.exists() and not out.is_dir():
-        raise OutputError(f"cannot write {out}: it exists and is not a directory")
+        raise OutputError(f"cannot write {out}: it exists and is not a directory", path=out)
     if (out / LOCK_NAME).is_dir():
         raise OutputExistsError(f"{out} is being written by another pressfit run (or by one that was killed: "
-                                f"then remove {out / LOCK_NAME})")
+                                f"then remove {out / LOCK_NAME})", path=out)
     if out.is_dir() and not overwrite and any(out.iterdir()):
-        raise OutputExistsError(f"{out} exists and is not empty; pass --overwrite to replace its files")
+        raise OutputExistsError(f"{out} exists and is not empty; pass --overwrite to replace its files", path=out)
     _check_parent(out, out if out.is_dir() else out.parent)
     return out
 
@@ -115,7 +115,7 @@ def write_directory(out_dir: Path | str, overwrite: bool, write: Callable[[Path]
         real.parent.mkdir(parents=True, exist_ok=True)
         tmp = Path(tempfile.mkdtemp(prefix=f".{real.name}.", dir=real.parent))
     except OSError as exc:
-        raise OutputError(f"cannot write {out}: {exc.strerror}") from None
+        raise OutputError(f"cannot write {out}: {exc.strerror}", path=out) from None
     try:
         written = [Path(p) for p in write(tmp)]
         files = sorted(q.relative_to(tmp) for q in tmp.rglob("*") if q.is_file())
@@ -124,7 +124,7 @@ def write_directory(out_dir: Path | str, overwrite: bool, write: Callable[[Path]
         _move_in(tmp, real, out, overwrite)
         return [out / p.relative_to(tmp) for p in written] if written else [out / p for p in files]
     except OSError as exc:
-        raise OutputError(f"cannot write {out}: {exc.strerror}") from None
+        raise OutputError(f"cannot write {out}: {exc.strerror}", path=out) from None
     finally:
         shutil.rmtree(tmp, ignore_errors=True)
 
@@ -149,13 +149,13 @@ def _move_in(tmp: Path, real: Path, out: Path, overwrite: bool) -> None:
         lock.mkdir()
     except FileExistsError:
         raise OutputExistsError(f"{out} is being written by another pressfit run (or by one that was killed: "
-                                f"then remove {lock})") from None
+                                f"then remove {lock})", path=out) from None
     except NotADirectoryError:
-        raise OutputError(f"cannot write {out}: it is no longer a directory") from None
+        raise OutputError(f"cannot write {out}: it is no longer a directory", path=out) from None
     try:
         if not overwrite and set(os.listdir(real)) - {LOCK_NAME}:
             raise OutputExistsError(f"{out} was filled by another run while this one computed; this run wrote "
-                                    "nothing (pass --overwrite to replace its files)")
+                                    "nothing (pass --overwrite to replace its files)", path=out)
         for p in sorted(q for q in tmp.rglob("*") if q.is_file()):
             target = real / p.relative_to(tmp)
             target.parent.mkdir(parents=True, exist_ok=True)
@@ -175,7 +175,7 @@ def _atomic(path: Path | str, write: Callable[[Path], None], overwrite: bool) ->
         real.parent.mkdir(parents=True, exist_ok=True)
         fd, tmp = tempfile.mkstemp(prefix=f".{real.name}.", suffix=real.suffix, dir=real.parent)
     except OSError as exc:
-        raise OutputError(f"cannot write {path}: {exc.strerror}") from None
+        raise OutputError(f"cannot write {path}: {exc.strerror}", path=path) from None
     os.close(fd)
     try:
         os.chmod(tmp, real.stat().st_mode & 0o7777 if real.exists() else 0o666 & ~_umask())

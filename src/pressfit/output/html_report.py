@@ -58,7 +58,7 @@ _SORT_JS = """document.querySelectorAll("table.sortable th").forEach(th => th.ad
 }));"""
 
 
-@dataclass(frozen=True)
+@dataclass(frozen=True, kw_only=True)
 class ReportContent:
     """Everything ``write_report`` computed that the page shows (SI), with the JSON records of its tables."""
 

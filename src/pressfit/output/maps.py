@@ -84,11 +84,11 @@ def write_kinematic_maps(machine: Machine, out_dir: Path | str, heights_m: Itera
     if len(set(stems)) != len(stems):
         y0, y1 = next((a, b) for i, a in enumerate(heights) for b in heights[i + 1:] if f"{a:.3f}" == f"{b:.3f}")
         raise OutputError(f"heights {y0:g} m and {y1:g} m would write the same files maps_y{y0:.3f}.*: "
-                          "give heights that differ by at least 1 mm")
+                          "give heights that differ by at least 1 mm", path=out / f"maps_y{y0:.3f}.csv")
     clash = [p for p in names if p.exists()]
     if clash and not overwrite:
         raise OutputExistsError(f"{clash[0]} exists ({len(clash)} output files do); pass --overwrite "
-                                "to replace them")
+                                "to replace them", path=clash[0])
     squares = [np.vstack([c, c[:1]]) for c in (square_corners(machine, 0.0), square_corners(machine, 45.0))]
     written, plane_maps = [], []
     with tqdm(total=len(heights) + 1, desc="workspace", unit="step", disable=not progress) as bar:

@@ -38,7 +38,7 @@ _CHUNK_NAME = re.compile(r"chunk-(\d{6})\.parquet")
 _STUDY_KEY, _CHUNK_KEY = "pressfit.study_sha256", "pressfit.chunk"
 
 
-@dataclass(frozen=True)
+@dataclass(frozen=True, kw_only=True)
 class MonteCarloRun:
     """A finished study: its summary, the chunks run now (the rest were resumed), the files written, and the
     damaged chunk files found and run again."""
@@ -117,7 +117,7 @@ def finished_chunks(out_dir: Path, plan: montecarlo.MonteCarloPlan) -> tuple[fro
             damaged.append(path)
         elif state != "ok":
             raise OutputExistsError(f"{path} is not a chunk of this Monte Carlo study: {state}; remove it or pass "
-                                    "--overwrite")
+                                    "--overwrite", path=path)
         else:
             done.add(k)
     return frozenset(done), damaged
@@ -135,7 +135,8 @@ def read_samples(out_dir: Path | str, plan: montecarlo.MonteCarloPlan | None = N
     table = pa.concat_tables([pq.read_table(p) for p in paths]).sort_by("sample")
     cols = {name: table.column(name).to_numpy(zero_copy_only=False) for name in table.column_names}
     if plan is not None and not np.array_equal(cols["sample"], np.arange(plan.samples)):
-        raise OutputExistsError(f"{out / CHUNK_DIR}: the chunks do not hold samples 0..{plan.samples - 1} exactly once")
+        raise OutputExistsError(f"{out / CHUNK_DIR}: the chunks do not hold samples 0..{plan.samples - 1} exactly "
+                                "once", path=out / CHUNK_DIR)
     return cols
 
 
@@ -152,10 +153,10 @@ def _prepare(out_dir: Path, fingerprint: dict[str, object], overwrite: bool) -> 
         if json.loads(manifest.read_text(encoding="utf-8")) != json.loads(io.to_json(fingerprint)):
             raise OutputExistsError(f"{out_dir} holds a different Monte Carlo study (study.json differs: case, "
                                     "samples, seed, chunk size, inputs or pressfit version); pass --overwrite or "
-                                    "another --out")
+                                    "another --out", path=out_dir)
         return
     if started or (out_dir / "summary.json").exists():
-        raise OutputExistsError(f"{out_dir} holds results without study.json; pass --overwrite")
+        raise OutputExistsError(f"{out_dir} holds results without study.json; pass --overwrite", path=out_dir)
     io.write_json(manifest, fingerprint, overwrite=True)  # fresh, or a start that wrote nothing else
 
 
@@ -180,7 +181,7 @@ def run_montecarlo(case: Case, out_dir: Path | str, *, samples: int | None = Non
     if summary.failed and sum(summary.failed.values()) == summary.samples:
         raise StudyFailedError(f"{case.path}: Monte Carlo study in {out}", summary.failed)
     written = write_summary(summary, columns, envelope, out)
-    return MonteCarloRun(summary, run, plan.n_chunks, written, damaged)
+    return MonteCarloRun(summary=summary, chunks_run=run, chunks_total=plan.n_chunks, written=written, rerun=damaged)
 
 
 def write_summary(summary: montecarlo.MonteCarloSummary, columns: dict[str, np.ndarray], envelope: dict[str, float],

@@ -67,10 +67,11 @@ def write_report(machine: Machine, out_dir: Path | str, overwrite: bool = False,
         _scene_case(f"paper case {s.case.name.removeprefix('paper-')}", s.nonlinear) for s in parts["solutions"]]
     sweep = parts["interference"]
     write_html_report(out, ReportContent(
-        machine, scene, [e.as_dict() for e in parts["entries"]], parts["plane_maps"], parts["envelope"],
-        parts["envelope_table"], parts["stiffness"], parts["studies"], sweep,
-        [{"kind": k, **v} for k, v in sweep.kind_minima().items()], parts["insertion"], parts["cycle"],
-        parts["cycle_front"]), overwrite)
+        machine=machine, scene=scene, tables=[e.as_dict() for e in parts["entries"]], plane_maps=parts["plane_maps"],
+        envelope=parts["envelope"], envelope_table=parts["envelope_table"], stiffness=parts["stiffness"],
+        preload=parts["studies"], interference=sweep,
+        interference_table=[{"kind": k, **v} for k, v in sweep.kind_minima().items()], insertion=parts["insertion"],
+        cycle=parts["cycle"], cycle_front=parts["cycle_front"]), overwrite)
     steps.update()
     steps.close()
     return path

@@ -57,7 +57,7 @@ QUANTITIES = ("F_z", "M_z", "M_bend")  # the frame-independent printed entries (
 FLOOR = 1e-3  # N or N m: the paper solver's noise level, see the module docstring
 
 
-@dataclass(frozen=True)
+@dataclass(frozen=True, kw_only=True)
 class Parameter:
     """One quantity of the CAD model: name (with unit suffix), starting value (Table 3 / case files), and
     whether the fit adjusts it (the joint heights are held: the tables cannot determine them)."""
@@ -72,21 +72,27 @@ def parameters(cases: dict[str, Case]) -> tuple[Parameter, ...]:
     """The CAD model's parameters and their starting values, read from the paper case files (SI)."""
     g = cases["A"].machine().geometry
     a, b, c = (cases[n].poses.array()[0] for n in CASES)
-    return (Parameter("base_half_side_m", g.base_half_side_m, "p, radial base joint offset (sets the scale)", False),
-            Parameter("plate_half_side_m", g.plate_half_side_m, "r, radial plate joint offset"),
-            Parameter("base_joint_height_m", g.base_joint_height_m, "h_b, base cardans above the base", False),
-            Parameter("plate_joint_height_m", g.plate_joint_height_m, "h_p, plate cardans above the load", False),
-            Parameter("A_y_m", float(a[1]), "case A pose y_h (x_h = z_h = 0)"),
-            Parameter("B_x_m", float(b[0]), "case B pose x_h"), Parameter("B_y_m", float(b[1]), "case B pose y_h"),
-            Parameter("B_z_m", float(b[2]), "case B pose z_h"), Parameter("C_x_m", float(c[0]), "case C pose x_h"),
-            Parameter("C_y_m", float(c[1]), "case C pose y_h"),
-            Parameter("C_dz_m", 0.0, "case C: z_h + (p - r), 0 when leg 1 is vertical"),
-            *(Parameter(f"{n}_self_stress_n", 0.0, f"case {n}: axial self-stress a along v_p") for n in CASES),
-            *(Parameter(f"{n}_couple_self_stress_nm", 0.0, f"case {n}: couple self-stress b along w_c")
-              for n in CASES))
+    return (Parameter(name="base_half_side_m", initial=g.base_half_side_m,
+                      meaning="p, radial base joint offset (sets the scale)", fitted=False),
+            Parameter(name="plate_half_side_m", initial=g.plate_half_side_m, meaning="r, radial plate joint offset"),
+            Parameter(name="base_joint_height_m", initial=g.base_joint_height_m,
+                      meaning="h_b, base cardans above the base", fitted=False),
+            Parameter(name="plate_joint_height_m", initial=g.plate_joint_height_m,
+                      meaning="h_p, plate cardans above the load", fitted=False),
+            Parameter(name="A_y_m", initial=float(a[1]), meaning="case A pose y_h (x_h = z_h = 0)"),
+            Parameter(name="B_x_m", initial=float(b[0]), meaning="case B pose x_h"),
+            Parameter(name="B_y_m", initial=float(b[1]), meaning="case B pose y_h"),
+            Parameter(name="B_z_m", initial=float(b[2]), meaning="case B pose z_h"),
+            Parameter(name="C_x_m", initial=float(c[0]), meaning="case C pose x_h"),
+            Parameter(name="C_y_m", initial=float(c[1]), meaning="case C pose y_h"),
+            Parameter(name="C_dz_m", initial=0.0, meaning="case C: z_h + (p - r), 0 when leg 1 is vertical"),
+            *(Parameter(name=f"{n}_self_stress_n", initial=0.0, meaning=f"case {n}: axial self-stress a along v_p")
+              for n in CASES),
+            *(Parameter(name=f"{n}_couple_self_stress_nm", initial=0.0,
+                        meaning=f"case {n}: couple self-stress b along w_c") for n in CASES))
 
 
-@dataclass(frozen=True)
+@dataclass(frozen=True, kw_only=True)
 class PrintedTables:
     """The fitted data: values and sigmas (N, N m) of shape (case A..C, quantity F_z/M_z/M_bend, CAD leg 1..4)."""
 
@@ -113,7 +119,7 @@ def printed_tables(cases: dict[str, Case], c_leg1_reversed: bool = True, floor: 
         sigma[i] = np.hypot([half["F_z"], half["M_z"], np.hypot(half["M_x"], half["M_y"])], floor)
     if c_leg1_reversed:
         values[2, :2, 0] *= -1
-    return PrintedTables(values, sigma, c_leg1_reversed)
+    return PrintedTables(values=values, sigma=sigma, c_leg1_reversed=c_leg1_reversed)
 
 
 def configure(cases: dict[str, Case], theta: np.ndarray) -> list[tuple[Machine, np.ndarray, float]]:
@@ -150,7 +156,7 @@ def predict(cases: dict[str, Case], theta: np.ndarray) -> np.ndarray:
 
 
 # --- the fit -------------------------------------------------------------------------------------------
-@dataclass(frozen=True)
+@dataclass(frozen=True, kw_only=True)
 class FittedParameter:
     """A parameter at the optimum; ``std`` is inf when the tables do not determine it (or it is held)."""
 
@@ -163,7 +169,7 @@ class FittedParameter:
     determined: bool
 
 
-@dataclass(frozen=True)
+@dataclass(frozen=True, kw_only=True)
 class EntryResidual:
     """One printed entry (N or N m, the paper's axes and signs) beside the Table 3 model and the fitted one."""
 
@@ -184,7 +190,7 @@ class EntryResidual:
         return self.fitted - self.printed
 
 
-@dataclass(frozen=True)
+@dataclass(frozen=True, kw_only=True)
 class Identifiability:
     """What the tables determine. ``singular_values``: of the weighted Jacobian over all parameters (held ones
     included) with unit-norm columns (unit-free; exact degeneracies show as ~1e-9 or less). For each held
@@ -206,7 +212,7 @@ class Identifiability:
         return sorted(pairs, key=lambda t: -abs(t[2]))
 
 
-@dataclass(frozen=True)
+@dataclass(frozen=True, kw_only=True)
 class SplitVerdict:
     """Case C's axial split: the fitted self-stress beside what the physical rules would give (N)."""
 
@@ -218,7 +224,7 @@ class SplitVerdict:
     verdict: str
 
 
-@dataclass(frozen=True)
+@dataclass(frozen=True, kw_only=True)
 class CadFit:
     """The identified CAD model, its residuals, uncertainties and identifiability (SI units)."""
 
@@ -302,7 +308,8 @@ def _identifiability(jac: np.ndarray, names: tuple[str, ...], free: np.ndarray, 
         sensitivity[names[k]] = float(np.linalg.norm(jac[:, k] + jf @ d))
     sd = np.sqrt(np.diag(cov))
     corr = cov / np.outer(np.where(sd > 0, sd, 1.0), np.where(sd > 0, sd, 1.0))
-    return Identifiability(tuple(float(x) for x in s), directions, sensitivity, fitted, corr)
+    return Identifiability(singular_values=tuple(float(x) for x in s), held_directions=directions,
+                           held_sensitivity=sensitivity, fitted_names=fitted, correlations=corr)
 
 
 def _split_verdict(cases: dict[str, Case], theta: np.ndarray, a_std: float) -> SplitVerdict:
@@ -327,7 +334,8 @@ def _split_verdict(cases: dict[str, Case], theta: np.ndarray, a_std: float) -> S
         verdict = (f"an artefact of the paper's solver: the printed split is the elastic one plus a self-stress "
                    f"a = {a:.1f} +- {a_std:.1f} N along v_p that no load produces and no physical rule gives "
                    f"(elastic: 0 N, minimum norm: {a_mn:.1f} N)")
-    return SplitVerdict(float(a), float(a_std), a_mn, printed, reversed_, verdict)
+    return SplitVerdict(self_stress_n=float(a), self_stress_std_n=float(a_std), min_norm_self_stress_n=a_mn,
+                        vertical_balance_printed_n=printed, vertical_balance_reversed_n=reversed_, verdict=verdict)
 
 
 def load_paper_cases(directory: Path = PAPER_CASES) -> dict[str, Case]:
@@ -359,16 +367,19 @@ def fit_cad_model(cases: dict[str, Case] | None = None, tables: PrintedTables | 
     if compare_without_couple_stress:
         held = free & ~np.array([n.endswith("_couple_self_stress_nm") for n in names])
         chi2_no_couple = float(np.sum(_residuals(cases, tables, _optimise(cases, tables, theta0, held)) ** 2))
-    fitted = tuple(FittedParameter(p.name, p.meaning, p.initial, float(v), float(s), p.fitted,
-                                   bool(p.fitted and np.isfinite(s)))
+    fitted = tuple(FittedParameter(name=p.name, meaning=p.meaning, initial=p.initial, value=float(v), std=float(s),
+                                   fitted=p.fitted, determined=bool(p.fitted and np.isfinite(s)))
                    for p, v, s in zip(params, theta, std, strict=True))
     before, after = predict(cases, theta0), predict(cases, theta)
-    entries = tuple(EntryResidual(n, q, leg + 1, float(tables.values[i, j, leg]), float(tables.sigma[i, j, leg]),
-                                  float(before[i, j, leg]), float(after[i, j, leg]))
+    entries = tuple(EntryResidual(case=n, quantity=q, cad_leg=leg + 1, printed=float(tables.values[i, j, leg]),
+                                  sigma=float(tables.sigma[i, j, leg]), table3=float(before[i, j, leg]),
+                                  fitted=float(after[i, j, leg]))
                     for i, n in enumerate(CASES) for j, q in enumerate(QUANTITIES) for leg in range(4))
-    return CadFit(fitted, entries, chi2, float(np.sum(((before - tables.values) / tables.sigma) ** 2)), dof, scale,
-                  chi2_no_couple, _identifiability(jac, names, free, cov),
-                  _split_verdict(cases, theta, float(std[names.index("C_self_stress_n")])))
+    return CadFit(parameters=fitted, entries=entries, chi_square=chi2,
+                  chi_square_table3=float(np.sum(((before - tables.values) / tables.sigma) ** 2)), dof=dof,
+                  covariance_scale=scale, chi_square_without_couple_stress=chi2_no_couple,
+                  identifiability=_identifiability(jac, names, free, cov),
+                  split=_split_verdict(cases, theta, float(std[names.index("C_self_stress_n")])))
 
 
 def to_dict(fit: CadFit) -> dict[str, object]:

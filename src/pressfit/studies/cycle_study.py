@@ -118,7 +118,7 @@ def pareto_front(objectives: np.ndarray) -> np.ndarray:
     return np.array(front, dtype=int)
 
 
-@dataclass(frozen=True)
+@dataclass(frozen=True, kw_only=True)
 class CycleStudyResult:
     """Every sample (``columns``: the factors, ``FIGURES``, ``within_limits``, ``on_front``, ``error``), the front
     (indices, by cycle time), and the fastest sample within the limits (None: none is)."""
@@ -175,4 +175,4 @@ def cycle_study(case: Case, model: str | None = None, workers: int | None = None
     columns["on_front"] = on
     ok = np.flatnonzero(columns["within_limits"])
     fastest = int(ok[np.argmin(columns["cycle_time_s"][ok])]) if ok.size else None
-    return CycleStudyResult(case, columns, front, fastest, model or case.cycle.model)
+    return CycleStudyResult(case=case, columns=columns, front=front, fastest=fastest, model=model or case.cycle.model)

@@ -52,7 +52,7 @@ CONSTRAINTS = {  # [design.constraints] key -> (metric, sense): the metric must 
     "min_vertical_stiffness_n_per_m": ("max_vertical_compliance_m_per_n", "inverse")}
 
 
-@dataclass(frozen=True)
+@dataclass(frozen=True, kw_only=True)
 class DesignPlan:
     """Everything a worker needs (picklable): the case's machine, its load wrenches (W, 6) (N, N m) and
     ``[design]`` table."""
@@ -77,7 +77,7 @@ def plan_from_case(case: Case, trials: int | None = None) -> DesignPlan:
     if trials is not None and trials < 1:
         raise PressfitError(f"the number of trials must be at least 1, got {trials}")
     design = case.design if trials is None else case.design.model_copy(update={"trials": trials})
-    return DesignPlan(case.name, case.machine(), case.loads.wrenches(), design)
+    return DesignPlan(name=case.name, machine=case.machine(), wrenches=case.loads.wrenches(), design=design)
 
 
 def design_machine(plan: DesignPlan, params: dict[str, float]) -> Machine:
@@ -162,7 +162,7 @@ def pareto_mask(objectives: np.ndarray, feasible: np.ndarray) -> np.ndarray:
     return out
 
 
-@dataclass(frozen=True)
+@dataclass(frozen=True, kw_only=True)
 class DesignResult:
     """Every trial as columns (:meth:`DesignPlan.columns` plus ``pareto``), and the Pareto rows by the
     first objective."""
@@ -227,4 +227,4 @@ def run_design(plan: DesignPlan, *, workers: int | None = None, scheduler: str |
     objectives = np.column_stack([cols[k] for k in plan.design.objectives])
     cols["pareto"] = pareto_mask(objectives, cols["feasible"])
     front = np.flatnonzero(cols["pareto"])
-    return DesignResult(plan, cols, front[np.argsort(objectives[front, 0], kind="stable")])
+    return DesignResult(plan=plan, columns=cols, pareto=front[np.argsort(objectives[front, 0], kind="stable")])

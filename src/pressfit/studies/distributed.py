@@ -21,17 +21,13 @@ from typing import TYPE_CHECKING
 
 from tqdm import tqdm
 
-from pressfit.errors import PressfitError
+from pressfit.errors import ClusterError
 
 if TYPE_CHECKING:
     from distributed import Client
 
 
 IN_FLIGHT_PER_THREAD = 4  # chunks queued per worker thread: keeps every worker busy, memory bounded
-
-
-class ClusterError(PressfitError):
-    """The Dask cluster cannot be started or reached, or a chunk failed on it."""
 
 
 def default_workers() -> int:
@@ -62,20 +58,23 @@ def _client(workers: int | None, scheduler: str | None, dashboard: bool) -> Clie
 
     if scheduler is not None:
         if workers is not None:
-            raise ClusterError("give either a number of workers or a scheduler address, not both")
+            raise ClusterError("give either a number of workers or a scheduler address, not both",
+                               scheduler=scheduler, workers=workers)
         if (warn := transport_warning(scheduler)) is not None:
             tqdm.write(warn, file=sys.stderr)
         try:
             return Client(scheduler, timeout="20s")
         except TypeError:  # distributed: "TLS expects a `ssl_context` argument ... Instead got None"
-            raise ClusterError(f"cannot reach the Dask scheduler at {scheduler!r}: tls:// needs the client's "
-                               "certificates in the Dask configuration (distributed.comm.tls.ca-file, "
-                               "distributed.comm.tls.client.cert, distributed.comm.tls.client.key)") from None
+            cause = ("tls:// needs the client's certificates in the Dask configuration (distributed.comm.tls.ca-file, "
+                     "distributed.comm.tls.client.cert, distributed.comm.tls.client.key)")
+            raise ClusterError(f"cannot reach the Dask scheduler at {scheduler!r}: {cause}", scheduler=scheduler,
+                               cause=cause) from None
         except (OSError, TimeoutError, ValueError) as exc:
-            raise ClusterError(f"cannot reach the Dask scheduler at {scheduler!r}: {exc}") from None
+            raise ClusterError(f"cannot reach the Dask scheduler at {scheduler!r}: {exc}", scheduler=scheduler,
+                               cause=str(exc)) from None
     n = workers or default_workers()
     if n < 1:
-        raise ClusterError(f"the number of workers must be at least 1, got {n}")
+        raise ClusterError(f"the number of workers must be at least 1, got {n}", workers=n)
     # scheduler and (only when asked) dashboard on loopback: a local study opens nothing to the network
     cluster = LocalCluster(n_workers=n, threads_per_worker=1, processes=True, host="127.0.0.1",
                            dashboard_address="127.0.0.1:0" if dashboard else None, silence_logs=40,
@@ -161,7 +160,7 @@ def _run(client: Client, task: Callable[..., object], chunk_args: Sequence[tuple
         for fut, result in queue:
             k = futures.pop(fut)
             if fut.status == "error":
-                raise ClusterError(f"{name} {k} failed on the cluster: {result!r}")
+                raise ClusterError(f"{name} {k} failed on the cluster: {result!r}", chunk=k, cause=repr(result))
             sink(k, result)
             run += 1
             bar.update(sizes[k])

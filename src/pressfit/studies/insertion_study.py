@@ -36,7 +36,7 @@ COLUMNS = ("preload_n", "clearance_m", "critical_preload_n", "hidden_error_m", "
            "lateral_error_m", "peak_contact_force_n", "overshoot_n", "steady_insertion_force_n")
 
 
-@dataclass(frozen=True)
+@dataclass(frozen=True, kw_only=True)
 class InsertionStudy:
     """Rows (one per preload x clearance, preload varying fastest) of ``COLUMNS`` (SI), the insertion pose."""
 
@@ -94,4 +94,4 @@ def insertion_study(case: Case, preloads_n: list[float], clearances_m: list[floa
             rows.append((p, g, critical, np.linalg.norm(hidden), play,
                          s["tool_lateral_error_at_insertion_m"], s["peak_contact_force_n"], s["overshoot_n"],
                          s["steady_insertion_force_n"]))
-    return InsertionStudy(case.name, pose, np.array(rows, dtype=float))
+    return InsertionStudy(case=case.name, pose_m=pose, rows=np.array(rows, dtype=float))

@@ -37,7 +37,7 @@ from pressfit.mechanics.statics import Equilibrium, EquilibriumSolver
 SECTIONS = ("base", "actuator", "plate")
 
 
-@dataclass(frozen=True)
+@dataclass(frozen=True, kw_only=True)
 class Limit:
     """How one ``[envelope]`` key is evaluated: a per-(pose, leg) quantity and its sense."""
 
@@ -48,22 +48,23 @@ class Limit:
 
 
 LIMITS: dict[str, Limit] = {
-    "max_tension_n": Limit("leg axial tension", "N", "max"),
-    "max_compression_n": Limit("leg axial compression", "N", "max"),
-    "max_shear_n": Limit("leg shear |V|", "N", "max"),
-    "max_bending_nm": Limit("leg bending |M_b|", "N m", "max"),
-    "max_torsion_nm": Limit("leg torsion |T|", "N m", "max"),
-    "max_actuator_force_n": Limit("actuator force |F|", "N", "max"),
-    "max_plate_deflection_m": Limit("plate deflection |u|", "m", "max"),
-    "max_plate_tilt_rad": Limit("plate tilt |theta|", "rad", "max"),
-    "min_buckling_safety_factor": Limit("buckling safety factor", "-", "min"),
-    "min_leg_length_margin_m": Limit("leg-length limit margin", "m", "min", False),
-    "min_angle_margin_rad": Limit("cardan-angle limit margin", "rad", "min", False),
-    "min_interference_distance_m": Limit("minimum interference distance", "m", "min", False),
+    "max_tension_n": Limit(label="leg axial tension", unit="N", sense="max"),
+    "max_compression_n": Limit(label="leg axial compression", unit="N", sense="max"),
+    "max_shear_n": Limit(label="leg shear |V|", unit="N", sense="max"),
+    "max_bending_nm": Limit(label="leg bending |M_b|", unit="N m", sense="max"),
+    "max_torsion_nm": Limit(label="leg torsion |T|", unit="N m", sense="max"),
+    "max_actuator_force_n": Limit(label="actuator force |F|", unit="N", sense="max"),
+    "max_plate_deflection_m": Limit(label="plate deflection |u|", unit="m", sense="max"),
+    "max_plate_tilt_rad": Limit(label="plate tilt |theta|", unit="rad", sense="max"),
+    "min_buckling_safety_factor": Limit(label="buckling safety factor", unit="-", sense="min"),
+    "min_leg_length_margin_m": Limit(label="leg-length limit margin", unit="m", sense="min", load_dependent=False),
+    "min_angle_margin_rad": Limit(label="cardan-angle limit margin", unit="rad", sense="min", load_dependent=False),
+    "min_interference_distance_m": Limit(label="minimum interference distance", unit="m", sense="min",
+                                         load_dependent=False),
 }
 
 
-@dataclass(frozen=True)
+@dataclass(frozen=True, kw_only=True)
 class LimitResult:
     """One envelope line: the worst value over the case, where it happens, and the verdict."""
 
@@ -80,7 +81,7 @@ class LimitResult:
     sense: str = "max"  # "max": worst <= limit passes; "min": worst >= limit passes
 
 
-@dataclass(frozen=True)
+@dataclass(frozen=True, kw_only=True)
 class CaseResult:
     """Every envelope line of one case, plus the poses that could not be evaluated."""
 
@@ -104,7 +105,7 @@ class FileError:
     message: str
 
 
-@dataclass(frozen=True)
+@dataclass(frozen=True, kw_only=True)
 class CheckRun:
     """``pressfit check``: the verdict of every checkable case, the files that could not be checked, and the
     cases without an ``[envelope]``. Exit code: 2 if any file is in error, else 1 if any case fails, else 0."""
@@ -140,7 +141,7 @@ def check_files(paths: list[Path | str], progress: bool = False) -> CheckRun:
             results.append(evaluate_case(case, progress=progress))
         except PressfitError as exc:
             errors.append(FileError(case.path, str(exc)))
-    return CheckRun(results, errors, [c.path for c in cases if c not in checked])
+    return CheckRun(results=results, errors=errors, skipped=[c.path for c in cases if c not in checked])
 
 
 def _axial_quantities(n: np.ndarray, critical: np.ndarray) -> dict[str, np.ndarray]:
@@ -210,7 +211,8 @@ def evaluate_envelope(case: Case, progress: bool = False) -> CaseResult:
     poses = poses_all[ok]
     wanted = {k: v for k, v in case.envelope.model_dump().items() if v is not None}
     if not len(poses):
-        return CaseResult(case.name, case.path, len(poses_all), len(loads), unreachable)
+        return CaseResult(case=case.name, path=case.path, n_poses=len(poses_all), n_loads=len(loads),
+                          unreachable=unreachable)
     if case.preload.mode == "length" and case.preload.a4:
         raise PressfitError(f"{case.path}: [preload] mode = \"length\" is not supported by the envelope check "
                             "(its linear sweep superposes force-mode preload only); give a4_n with mode = \"force\"")
@@ -232,7 +234,8 @@ def evaluate_envelope(case: Case, progress: bool = False) -> CaseResult:
     lines.sort(key=lambda x: list(wanted).index(x.key))
     if unstable:
         lines = _instability_line(lines, unstable, poses, loads, wanted.get("min_buckling_safety_factor"))
-    return CaseResult(case.name, case.path, len(poses_all), len(loads), unreachable, lines)
+    return CaseResult(case=case.name, path=case.path, n_poses=len(poses_all), n_loads=len(loads),
+                      unreachable=unreachable, limits=lines)
 
 
 def _linear_sweep(case: Case, machine: Machine, poses: np.ndarray, loads: np.ndarray, critical: np.ndarray,
@@ -347,7 +350,7 @@ def _refine(machine: Machine, poses: np.ndarray, loads: np.ndarray, pairs: list[
     return out
 
 
-STABILITY = Limit("stable equilibrium under the full load (1 = stable, 0 = none found)", "-", "min")
+STABILITY = Limit(label="stable equilibrium under the full load (1 = stable, 0 = none found)", unit="-", sense="min")
 
 
 def _instability_line(lines: list[LimitResult], unstable: dict[tuple[int, int], str], poses: np.ndarray,
@@ -424,9 +427,9 @@ def _with_clearance(case: Case, machine: Machine, pose: np.ndarray, load: np.nda
 def _line(key: str, spec: Limit, limit: float, worst: float, leg: int | None, pose: np.ndarray,
           load: np.ndarray | None, method: str) -> LimitResult:
     passed = worst <= limit if spec.sense == "max" else worst >= limit
-    return LimitResult(key, spec.label, spec.unit, float(limit), float(worst), leg,
-                       [float(c) for c in pose], [] if load is None else [float(c) for c in load],
-                       method, bool(passed), spec.sense)
+    return LimitResult(key=key, label=spec.label, unit=spec.unit, limit=float(limit), worst=float(worst), leg=leg,
+                       pose_m=[float(c) for c in pose], load=[] if load is None else [float(c) for c in load],
+                       method=method, passed=bool(passed), sense=spec.sense)
 
 
 def _interference(machine: object, poses: np.ndarray, progress: bool) -> np.ndarray:
@@ -439,19 +442,23 @@ def _interference(machine: object, poses: np.ndarray, progress: bool) -> np.ndar
 
 # --- simulation limits ---------------------------------------------------------------------------------------
 SIMULATION_LIMITS: dict[str, tuple[Limit, str, str]] = {  # [simulation.limits] key -> (line, summary key, where)
-    "max_contact_force_n": (Limit("peak contact force", "N", "max"), "peak_contact_force_n", "peak_contact_force"),
-    "max_overshoot_n": (Limit("contact force overshoot over the insertion limit", "N", "max"), "overshoot_n",
-                        "overshoot"),
-    "max_positioning_error_m": (Limit("tool positioning error", "m", "max"), "positioning_error_m",
+    "max_contact_force_n": (Limit(label="peak contact force", unit="N", sense="max"), "peak_contact_force_n",
+                            "peak_contact_force"),
+    "max_overshoot_n": (Limit(label="contact force overshoot over the insertion limit", unit="N", sense="max"),
+                        "overshoot_n", "overshoot"),
+    "max_positioning_error_m": (Limit(label="tool positioning error", unit="m", sense="max"), "positioning_error_m",
                                 "positioning_error"),
-    "max_settling_time_s": (Limit("settling time of the contact force", "s", "max"), "settling_time_s", "settled"),
-    "max_actuator_force_n": (Limit("peak actuator tension |N|", "N", "max"), "peak_actuator_tension_n",
+    "max_settling_time_s": (Limit(label="settling time of the contact force", unit="s", sense="max"),
+                            "settling_time_s", "settled"),
+    "max_actuator_force_n": (Limit(label="peak actuator tension |N|", unit="N", sense="max"), "peak_actuator_tension_n",
                              "peak_actuator_tension"),
-    "max_axial_force_n": (Limit("peak leg axial force |N| at the plate cardan", "N", "max"),
+    "max_axial_force_n": (Limit(label="peak leg axial force |N| at the plate cardan", unit="N", sense="max"),
                           "peak_leg_axial_force_n", "peak_leg_axial_force"),
-    "max_torsion_nm": (Limit("peak leg torsion |T| over the three sections (flexible model)", "N m", "max"),
+    "max_torsion_nm": (Limit(label="peak leg torsion |T| over the three sections (flexible model)", unit="N m",
+                             sense="max"),
                        "peak_leg_torsion_nm", "peak_leg_torsion"),
-    "max_bending_nm": (Limit("peak leg bending |M_b| over the three sections (flexible model)", "N m", "max"),
+    "max_bending_nm": (Limit(label="peak leg bending |M_b| over the three sections (flexible model)", unit="N m",
+                             sense="max"),
                        "peak_leg_bending_nm", "peak_leg_bending"),
 }
 
@@ -503,13 +510,14 @@ def simulation_lines(wanted: dict[str, float], summary: dict[str, Any], pin_xz_m
 
 # --- cycle limits --------------------------------------------------------------------------------------------
 CYCLE_LIMITS: dict[str, Limit] = {  # [cycle.limits] key -> its line (description.cases.CycleLimits)
-    "max_cycle_time_s": Limit("cycle time of the board", "s", "max"),
-    "max_overshoot_n": Limit("worst pin's contact force overshoot over its insertion limit", "N", "max"),
-    "max_alignment_error_m": Limit("worst pin's lateral alignment error at first contact", "m", "max"),
-    "max_rms_drive_force_n": Limit("worst drive's RMS force over the cycle", "N", "max"),
-    "max_peak_drive_force_n": Limit("worst drive's peak force over the cycle", "N", "max"),
-    "max_energy_per_cycle_j": Limit("drives' positive mechanical energy per cycle (regeneration not credited)",
-                                    "J", "max"),
+    "max_cycle_time_s": Limit(label="cycle time of the board", unit="s", sense="max"),
+    "max_overshoot_n": Limit(label="worst pin's contact force overshoot over its insertion limit", unit="N",
+                             sense="max"),
+    "max_alignment_error_m": Limit(label="worst pin's lateral alignment error at first contact", unit="m", sense="max"),
+    "max_rms_drive_force_n": Limit(label="worst drive's RMS force over the cycle", unit="N", sense="max"),
+    "max_peak_drive_force_n": Limit(label="worst drive's peak force over the cycle", unit="N", sense="max"),
+    "max_energy_per_cycle_j": Limit(label="drives' positive mechanical energy per cycle (regeneration not credited)",
+                                    unit="J", sense="max"),
 }
 CYCLE_DRIVE_LIMITS = ("max_rms_drive_force_n", "max_peak_drive_force_n", "max_energy_per_cycle_j")
 

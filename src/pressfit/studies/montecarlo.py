@@ -90,7 +90,7 @@ _REFERENCE_ONLY = {"cardan_clearance_m": "cardan clearances",  # inputs the fast
                    "cardan_misalignment_rad": "cardan misalignments"}
 
 
-@dataclass(frozen=True)
+@dataclass(frozen=True, kw_only=True)
 class MonteCarloPlan:
     """Everything a worker needs (picklable): the nominal machine, the case's poses (m) and load
     wrenches (N, N m), the preload, the random inputs and the sampling plan."""
@@ -146,7 +146,7 @@ class MonteCarloPlan:
                 "inputs": {n: d.model_dump() for n, d in self.inputs}}
 
 
-@dataclass(frozen=True)
+@dataclass(frozen=True, kw_only=True)
 class BucklingBasis:
     r"""The whole machine's linearised buckling problem (:func:`pressfit.mechanics.buckling.machine_buckling`)
     at each pose of a plan, split by its linearity: on the tangent space of the loop closures (Z orthonormal,
@@ -176,7 +176,7 @@ class BucklingBasis:
             off.append([sym(statics.reference_tangent(solver, pose, np.zeros(6), e * _DL).geometric) / _DL
                         for e in np.eye(len(machine.legs))])
             wr.append([sym(statics.reference_tangent(solver, pose, e, None).geometric) for e in np.eye(6)])
-        return cls(np.array(el), np.array(off), np.array(wr))
+        return cls(elastic=np.array(el), per_offset=np.array(off), per_wrench=np.array(wr))
 
     def load_factors(self, p: int, offsets_m: np.ndarray, wrenches: np.ndarray) -> np.ndarray:
         """Load factors (n,) at pose ``p`` for actuator offsets (n, legs), m, and plate wrenches (n, 6) (N, N m):
@@ -222,10 +222,11 @@ def plan_from_case(case: Case, samples: int | None = None, seed: int | None = No
     self_stress_forces_n(machine, poses, a4)  # a preload the machine cannot take is refused here (PreloadError)
     lengths = kinematics.inverse_kinematics(machine, poses).lengths_m
     crit = lambda d: np.vectorize(lambda v: buckling.leg_critical_load_n(machine, v))(lengths + d)
-    return MonteCarloPlan(case.name, machine, poses, case.loads.wrenches(), a4,
-                          case.preload.mode, inputs, n, mc.seed if seed is None else seed,
-                          chunk_size or mc.chunk_size, crit(0.0), (crit(_DL) - crit(-_DL)) / (2 * _DL),
-                          BucklingBasis.of(machine, poses))
+    return MonteCarloPlan(name=case.name, machine=machine, poses_m=poses, wrenches=case.loads.wrenches(),
+                          preload_a4=a4, preload_mode=case.preload.mode, inputs=inputs, samples=n,
+                          seed=mc.seed if seed is None else seed, chunk_size=chunk_size or mc.chunk_size,
+                          critical_n=crit(0.0), critical_slope_n_per_m=(crit(_DL) - crit(-_DL)) / (2 * _DL),
+                          buckling=BucklingBasis.of(machine, poses))
 
 
 def chunk_seed(plan: MonteCarloPlan, k: int) -> np.random.SeedSequence:
@@ -309,7 +310,7 @@ def _solve(mm: statics.EquilibriumSolver, pose: np.ndarray, load: np.ndarray, of
     return eq  # type: ignore[return-value]
 
 
-@dataclass(frozen=True)
+@dataclass(frozen=True, kw_only=True)
 class _Nominal:
     """Per pose of the plan, on the nominal machine (n legs): leg lengths (P, n), m (the commanded lengths),
     preload rest-length offsets (P, n), m, and the orthogonal projectors on the preload space (P, n, n) (v_p v_p^T
@@ -325,10 +326,10 @@ def _nominal(plan: MonteCarloPlan) -> _Nominal:
     lengths = kinematics.inverse_kinematics(m, poses).lengths_m
     pre = np.array([rest_length_offsets(m, h, plan.preload_a4, plan.preload_mode) for h in poses])
     basis = kinematics.preload_basis(m, poses)  # (P, n, n - 3)
-    return _Nominal(lengths, pre, basis @ np.linalg.pinv(basis))
+    return _Nominal(lengths_m=lengths, preload_offsets_m=pre, preload_projectors=basis @ np.linalg.pinv(basis))
 
 
-@dataclass(frozen=True)
+@dataclass(frozen=True, kw_only=True)
 class _SampleLoads:
     """What one sample solves: its joint positions B_i (world) and d_i (plate frame), (n, 3) each, m (the
     nominal machine's plus the sample's joint position errors), wrenches (W, 6) (N, N m), actuator rest-length
@@ -350,7 +351,8 @@ def _sample_loads(plan: MonteCarloPlan, nominal: _Nominal, x: dict[str, np.ndarr
         kinematics.inverse_kinematics(m, plan.poses_m, base_points_m=base, plate_offsets_m=plate).lengths_m
     offsets = nominal.lengths_m - lengths + x.get("actuator_length_offset_m", 0.0) + nominal.preload_offsets_m
     wrenches = _tilted(plan.wrenches, float(x["load_tilt_rad"][0]), azimuth) if "load_tilt_rad" in x else plan.wrenches
-    return _SampleLoads(base, plate, wrenches, offsets, lengths, plan.critical_loads_n(lengths))
+    return _SampleLoads(base_points_m=base, plate_offsets_m=plate, wrenches=wrenches, offsets_m=offsets,
+                        lengths_m=lengths, critical_n=plan.critical_loads_n(lengths))
 
 
 def _sample_row(q: dict[str, np.ndarray], internal_n: np.ndarray, residual: np.ndarray,
@@ -523,7 +525,7 @@ def wilson_interval(k: int, n: int, z: float = 1.959963984540054) -> tuple[float
     return max(0.0, (centre - half) / (1 + z * z / n)), min(1.0, (centre + half) / (1 + z * z / n))
 
 
-@dataclass(frozen=True)
+@dataclass(frozen=True, kw_only=True)
 class Exceedance:
     """P(the worst value of a sample breaks the ``[envelope]`` limit), failed samples counted as breaking."""
 
@@ -535,7 +537,7 @@ class Exceedance:
     ci95: tuple[float, float]  # Wilson score interval
 
 
-@dataclass(frozen=True)
+@dataclass(frozen=True, kw_only=True)
 class MonteCarloSummary:
     samples: int
     failed: dict[str, int]  # status -> count of samples whose solve failed
@@ -595,7 +597,8 @@ def summarize(plan: MonteCarloPlan, columns: dict[str, np.ndarray], envelope: di
         v = columns[key]
         bad = ~ok | ((v > limit) if LIMITS[key].sense == "max" else (v < limit))
         count = int(bad.sum())
-        exceed.append(Exceedance(key, float(limit), count, n, count / n, wilson_interval(count, n)))
+        exceed.append(Exceedance(key=key, limit=float(limit), count=count, samples=n, probability=count / n,
+                                 ci95=wilson_interval(count, n)))
     names = plan.input_columns()
     sens = {}
     if ok.sum() < MIN_SENSITIVITY_SAMPLES:
@@ -605,4 +608,5 @@ def summarize(plan: MonteCarloPlan, columns: dict[str, np.ndarray], envelope: di
         for key in (k for k in outputs if k != "residual"):
             rho = [(name, _spearman(columns[name][ok], columns[key][ok])) for name in names]
             sens[key] = sorted(rho, key=lambda t: -abs(t[1]))
-    return MonteCarloSummary(n, failed, quantiles, exceed, sens, notes)
+    return MonteCarloSummary(samples=n, failed=failed, quantiles=quantiles, exceedance=exceed, sensitivity=sens,
+                             notes=notes)

@@ -36,7 +36,7 @@ PAPER_CASES = cases_dir() / "paper"
 NEGLIGIBLE = {"F": 1e-3, "M": 1e-3}  # N, N m: entries below this on both sides count as "~0"
 
 
-@dataclass(frozen=True)
+@dataclass(frozen=True, kw_only=True)
 class TableEntry:
     """One printed entry of Table 5 (forces, N) or Table 6 (moments, N m) and ours beside it."""
 
@@ -75,7 +75,7 @@ def paper_components(eq: Equilibrium, leg: int, axial_sign: int) -> dict[str, fl
             "M_x": s.M_x, "M_y": flip * s.M_y, "M_bend": float(np.hypot(s.M_x, s.M_y)), "M_z": flip * s.T}
 
 
-@dataclass(frozen=True)
+@dataclass(frozen=True, kw_only=True)
 class CaseSolution:
     """A paper case and its two solutions: linear (the rigid-limit comparison) and geometrically nonlinear."""
 
@@ -92,7 +92,8 @@ def solve_case(case: Case) -> CaseSolution:
     machine.require_legs("the paper's tables (a 4-UPU)", 4)
     pose, wrench = case.poses.array()[0], case.loads.wrenches()[0]
     solver = EquilibriumSolver(machine, pose_m=pose)
-    return CaseSolution(case, solver.solve(pose, wrench, linear=True), solver.solve(pose, wrench, linear=False))
+    return CaseSolution(case=case, linear=solver.solve(pose, wrench, linear=True),
+                        nonlinear=solver.solve(pose, wrench, linear=False))
 
 
 def compare_solution(solution: CaseSolution) -> list[TableEntry]:
@@ -108,7 +109,8 @@ def compare_solution(solution: CaseSolution) -> list[TableEntry]:
             tiny = NEGLIGIBLE[q[0]]
             compared = q in COMPARED
             err = np.nan if not compared or max(abs(paper), abs(a)) < tiny else (a - paper) / abs(paper)
-            out.append(TableEntry(solution.case.name, q, cad, kin, paper, a, b, float(err), compared))
+            out.append(TableEntry(case=solution.case.name, quantity=q, cad_leg=cad, kinematic_leg=kin, paper=paper,
+                                  linear=a, nonlinear=b, relative_error=float(err), compared=compared))
     return out
 
 

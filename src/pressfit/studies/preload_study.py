@@ -35,7 +35,7 @@ SMALL_LOAD_FRACTION = 0.1  # the small load of the small-load secant stiffness, 
 
 
 # --- the preload study -------------------------------------------------------------------------------------
-@dataclass(frozen=True)
+@dataclass(frozen=True, kw_only=True)
 class PreloadStudy:
     """Stiffness and lost motion over a (clearance x preload) grid at one pose; arrays (G, P) (SI)."""
 
@@ -158,7 +158,9 @@ def preload_study(machine: Machine, pose_m: Any, clearances_m: Any, preloads: An
                             for a in pre])
         up, _ = _sweep_small(machine, pose, d, loads, cls, offsets, unload=False)
         eff = var.effective_gaps_m(machine, pose)
-        curves.append([LoadDeflection(pose, d, float(a), preload_mode, "small", var, eff, _branch(loads, up, p), None)
+        curves.append([LoadDeflection(pose_m=pose, direction=d, preload=float(a), preload_mode=preload_mode,
+                                      method="small", clearance=var, effective_gaps_m=eff,
+                                      loading=_branch(loads, up, p), unloading=None)
                        for p, a in enumerate(pre)])
         at, _ = _sweep_small(machine, pose, d, small, cls, offsets, unload=False)
         secants.append(small[1] / ((at[1]["displacement_m"] - at[0]["displacement_m"]) @ d))
@@ -172,13 +174,19 @@ def preload_study(machine: Machine, pose_m: Any, clearances_m: Any, preloads: An
         return np.array([[f(c) for c in row] for row in curves])
 
     return PreloadStudy(
-        pose, d, preload_mode, gaps, variants[0].geometry, pre, loads, grid(lambda c: c.deflection_m), float(small[1]),
-        np.array(secants),
-        grid(lambda c: c.press_stiffness_n_per_m),
-        grid(lambda c: c.press_secant_stiffness_n_per_m), grid(lambda c: c.lost_motion_m),
-        grid(lambda c: np.nanmin(c.opening_loads_n) if np.any(~np.isnan(c.opening_loads_n)) else np.nan),
-        np.array(crit), contact.press_secant_stiffness_n_per_m, rigid, res,
-        base.contact_stiffness_n_per_m, base.smoothing_m)
+        pose_m=pose, direction=d, preload_mode=preload_mode, clearances_m=gaps,
+        clearance_geometry=variants[0].geometry, preloads=pre, loads_n=loads,
+        deflection_m=grid(lambda c: c.deflection_m), small_load_n=float(small[1]),
+        small_load_secant_stiffness_n_per_m=np.array(secants),
+        press_stiffness_n_per_m=grid(lambda c: c.press_stiffness_n_per_m),
+        press_secant_stiffness_n_per_m=grid(lambda c: c.press_secant_stiffness_n_per_m),
+        lost_motion_m=grid(lambda c: c.lost_motion_m),
+        first_opening_load_n=grid(lambda c: np.nanmin(c.opening_loads_n) if np.any(~np.isnan(c.opening_loads_n))
+                                  else np.nan),
+        critical_preload=np.array(crit),
+        no_clearance_contact_stiffness_n_per_m=contact.press_secant_stiffness_n_per_m,
+        rigid_cardan_stiffness_n_per_m=rigid, max_residual=res,
+        contact_stiffness_n_per_m=base.contact_stiffness_n_per_m, smoothing_m=base.smoothing_m)
 
 
 def study_from_case(case: Any) -> dict[str, Any]:

@@ -40,7 +40,7 @@ PLATE_QUANTITIES = {"tilt_rad": ("rad", "max plate tilt |rotation|"),
                     "deflection_m": ("m", "max plate-centre displacement |delta|")}
 
 
-@dataclass(frozen=True)
+@dataclass(frozen=True, kw_only=True)
 class EnvelopeEntry:
     """The worst value of one quantity: per leg (shape (n,), n legs) or for the plate (shape ()), with the pose
     (m) and the force (N, at the plate centre) where it happens (shapes (n, 3) or (3,))."""
@@ -50,7 +50,7 @@ class EnvelopeEntry:
     load_n: np.ndarray
 
 
-@dataclass(frozen=True)
+@dataclass(frozen=True, kw_only=True)
 class LoadEnvelope:
     """Workspace load envelope of the condensed linear model (SI). ``entries`` holds every name of
     LEG_QUANTITIES and PLATE_QUANTITIES; ``maps`` the worst value over y, loads and legs on the x-z grid
@@ -131,9 +131,10 @@ def load_envelope(machine: Machine, y_m: np.ndarray, n_xz: int = 51, loads_n: np
             maps[k] = np.maximum(maps[k], col.reshape((-1,) + grid).max(0))
     if not best:
         raise PressfitError("no pose of the envelope grid is reachable")
-    return LoadEnvelope(x, z, y, loads, int(y.size * z.size * x.size - n_bad), n_bad,
-                        {k: EnvelopeEntry(*best[k]) for k in names},
-                        {k: np.where(np.isfinite(m), m, np.nan) for k, m in maps.items()})
+    return LoadEnvelope(x_m=x, z_m=z, y_m=y, loads=loads, n_evaluated=int(y.size * z.size * x.size - n_bad),
+                        n_unreachable=n_bad,
+                        entries={k: EnvelopeEntry(value=v, pose_m=p, load_n=f) for k, (v, p, f) in best.items()},
+                        maps={k: np.where(np.isfinite(m), m, np.nan) for k, m in maps.items()})
 
 
 def envelope_rows(env: LoadEnvelope) -> tuple[list[str], list[list[object]]]:
