@@ -117,8 +117,9 @@ def _rows(page, table_id):
 
 
 def _text(v):
-    """The test's own statement of the page's format: floats to 4 significant digits, others as text."""
-    return f"{v:.4g}" if isinstance(v, float) else str(v)
+    """The test's own statement of the page's format: floats to 4 significant digits, a missing value (JSON null)
+    as an empty cell, others as text."""
+    return f"{v:.4g}" if isinstance(v, float) else "" if v is None else str(v)
 
 
 def _check_table(page, table_id, records, special=None):
@@ -239,3 +240,18 @@ def test_board_cells_equal_the_cycle_json(page, report_dir):
     _check_table(page, "cycle-front", STUDY_FRONT)
     md = (report_dir / "report.md").read_text()
     assert "## 8. The shipped board's work cycle" in md and "first 2 pins" in md
+
+
+def test_compare_cells_equal_the_compare_json(page, report_dir):
+    """Section 10 (issue 21 item 4): the machines-compared table shows compare/compare.json's records (the
+    report's machine first, then the shipped 3-UPU, gantry and turned 4-UPU), and every claim is stated."""
+    js = json.loads((report_dir / "compare" / "compare.json").read_text())
+    keys = ("name", "legs", "worst_drive_force_n", "worst_bending_nm", "weakest_stiffness_worst_n_per_m",
+            "vertical_stiffness_worst_n_per_m", "tilt_worst_rad", "first_frequency_lowest_hz", "moving_mass_kg",
+            "lost_motion_m", "lost_motion_preloaded_m", "best_preload_n")
+    assert [m["name"] for m in js["machines"]] == ["pressfit-4upu", "tsai-3upu", "gantry-cartesian",
+                                                   "pressfit-4upu-rotated45"]
+    _check_table(page, "compare-machines", [{k: m[k] for k in keys} for m in js["machines"]])
+    md = (report_dir / "report.md").read_text()
+    assert "## 9. The machines compared" in md and all(c["claim"] in md for c in js["claims"])
+    assert {c["verdict"] for c in js["claims"]} <= {"confirmed", "refuted"}  # all three measured

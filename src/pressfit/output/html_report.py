@@ -24,6 +24,7 @@ import numpy as np
 import plotly.graph_objects as go
 from plotly.colors import qualitative
 from plotly.offline import get_plotlyjs
+from plotly.subplots import make_subplots
 
 from pressfit.description.machine import Machine
 from pressfit.dynamics.cycle import CycleResult
@@ -34,6 +35,7 @@ from pressfit.mechanics.condensed import StiffnessMaps
 from pressfit.output.files import write_text
 from pressfit.output.maps import kinematic_fields
 from pressfit.output.scene3d import SceneCase, scene_figure
+from pressfit.studies.compare import Comparison
 from pressfit.studies.cycle_study import FACTOR_LABELS
 from pressfit.studies.preload_study import PreloadStudy, format_answers
 from pressfit.studies.workspace_envelope import LEG_QUANTITIES, PLATE_QUANTITIES, LoadEnvelope
@@ -75,6 +77,7 @@ class ReportContent:
     insertion: tuple[InsertionResult, InsertionResult] | None = None  # the paper's scenario with / without limiter
     cycle: CycleResult | None = None  # the shipped board (cycle/cycle.json)
     cycle_front: Record | None = None  # a throughput study's summary.json (cycle/study_summary.json), if given
+    comparison: Comparison | None = None  # the machines compared (compare/compare.json)
 
 
 def cell_text(value: object) -> str:
@@ -94,13 +97,15 @@ def relative_error_text(record: Record) -> str:
 
 def _table(table_id: str, columns: Sequence[tuple[str, str]], records: list[Record],
            texts: dict[str, Callable[[Record], str]] | None = None) -> str:
-    """A sortable table of JSON records: columns (key, header); ``texts`` overrides a column's cell text."""
+    """A sortable table of JSON records: columns (key, header); ``texts`` overrides a column's cell text. A
+    non-finite number is JSON null and an empty cell, as the JSON files write it (``output.files.to_json``)."""
     texts = texts or {}
     head = "".join(f"<th>{html.escape(h)}</th>" for _, h in columns)
     rows = []
     for r in records:
-        cells = [f"<td data-key=\"{k}\" data-value=\"{html.escape(json.dumps(r[k]))}\">"
-                 f"{html.escape(texts[k](r) if k in texts else cell_text(r[k]))}</td>" for k, _ in columns]
+        values = {k: None if isinstance(r[k], float) and not np.isfinite(r[k]) else r[k] for k, _ in columns}
+        cells = [f"<td data-key=\"{k}\" data-value=\"{html.escape(json.dumps(values[k]))}\">"
+                 f"{html.escape(texts[k](r) if k in texts else cell_text(values[k]))}</td>" for k, _ in columns]
         rows.append("<tr>" + "".join(cells) + "</tr>")
     return (f'<table class="sortable" id="{table_id}"><thead><tr>{head}</tr></thead><tbody>'
             + "\n".join(rows) + "</tbody></table>")
@@ -361,6 +366,38 @@ def _cycle_section(page: _Page, c: ReportContent) -> None:
         page.add(_links("cycle/study_summary.json"))
 
 
+COMPARE_COLUMNS = (("name", "machine"), ("legs", "legs"), ("worst_drive_force_n", "worst drive force [N]"),
+                   ("worst_bending_nm", "worst member bending [N m]"),
+                   ("weakest_stiffness_worst_n_per_m", "weakest stiffness, worst [N/m]"),
+                   ("vertical_stiffness_worst_n_per_m", "vertical stiffness, worst [N/m]"),
+                   ("tilt_worst_rad", "tilt under 700 N, worst [rad]"),
+                   ("first_frequency_lowest_hz", "first frequency, lowest [Hz]"),
+                   ("moving_mass_kg", "moving mass [kg]"),
+                   ("lost_motion_m", "lost motion, 20 um play [m]"),
+                   ("lost_motion_preloaded_m", "lost motion, best preload [m]"), ("best_preload_n", "best preload [N]"))
+
+
+def _compare_section(page: _Page, c: ReportContent) -> None:
+    if c.comparison is None:
+        return
+    machines = [m.to_dict() for m in c.comparison.machines]
+    page.section("compare", "10. The machines compared",
+                 "<code>pressfit compare</code>: the report's machine beside Tsai's 3-UPU, the Cartesian gantry of the "
+                 "paper's Figure 2 and the 4-UPU turned 45 degrees, each over its required box under the 700 N press "
+                 "load and its 5 degree cone; the paper's claims decided with the numbers: "
+                 + "; ".join(f"<b>{html.escape(x.verdict)}</b> against {html.escape(x.baseline)}: "
+                             f"{html.escape(x.claim)} ({html.escape(x.evidence)})" for x in c.comparison.claims) + ".")
+    fig = make_subplots(rows=1, cols=4, subplot_titles=("worst drive force [N]", "worst member bending [N m]",
+                                                        "weakest tool stiffness [N/m]", "first frequency [Hz]"))
+    for col, key in enumerate(("worst_drive_force_n", "worst_bending_nm", "weakest_stiffness_worst_n_per_m",
+                               "first_frequency_lowest_hz"), start=1):
+        fig.add_bar(x=[m["name"] for m in machines], y=[m[key] for m in machines], row=1, col=col, showlegend=False)
+    fig.update_layout(height=420)
+    page.figure(fig)
+    page.add(_table("compare-machines", COMPARE_COLUMNS, [{k: m[k] for k, _ in COMPARE_COLUMNS} for m in machines]))
+    page.add(_links("compare/compare.json", "compare/compare.csv"))
+
+
 def write_html_report(out_dir: Path | str, content: ReportContent, overwrite: bool = False) -> Path:
     """Write ``report.html`` and ``plotly.min.js`` (the offline plotly bundle) into out_dir; returns the page."""
     out = Path(out_dir)
@@ -369,7 +406,7 @@ def write_html_report(out_dir: Path | str, content: ReportContent, overwrite: bo
     page.add(f"<h1>pressfit report: {html.escape(m.name)}</h1><p>Machine file: <code>{html.escape(m.source)}</code>. "
              "SI units throughout. The same numbers as <a href=\"report.md\">report.md</a>, interactive.</p>")
     for section in (_scene_section, _tables_section, _kinematics_section, _envelope_section, _stiffness_section,
-                    _preload_section, _interference_section, _insertion_section, _cycle_section):
+                    _preload_section, _interference_section, _insertion_section, _cycle_section, _compare_section):
         section(page, content)
     write_text(out / "plotly.min.js", get_plotlyjs(), overwrite)
     doc = (f"<!DOCTYPE html>\n<html lang=\"en\"><head><meta charset=\"utf-8\"><title>pressfit report: "

@@ -50,12 +50,12 @@ def write_report(machine: Machine, out_dir: Path | str, overwrite: bool = False,
     """
     out = Path(out_dir)
     study = None if cycle_study is None else read_cycle_study(cycle_study)  # checked before computing
-    steps = tqdm(total=9, desc="report", disable=not progress, unit="section")
+    steps = tqdm(total=10, desc="report", disable=not progress, unit="section")
     md = [f"# pressfit report: {machine.name}", "",
           f"Machine file: `{machine.source}`. SI units throughout. Interactive version "
           "(3D view of the loaded machine, sortable tables, zoomable plots): [report.html](report.html).", ""]
     sections = (_tables_section, _kinematics_section, _envelope_section, _stiffness_section, _preload_section,
-                _interference_section, _insertion_section, _cycle_section)
+                _interference_section, _insertion_section, _cycle_section, _compare_section)
     parts: dict[str, object] = {"cycle_study": study}
     for section in sections:
         md += section(machine, out, overwrite, quick, parts)
@@ -71,7 +71,7 @@ def write_report(machine: Machine, out_dir: Path | str, overwrite: bool = False,
         envelope=parts["envelope"], envelope_table=parts["envelope_table"], stiffness=parts["stiffness"],
         preload=parts["studies"], interference=sweep,
         interference_table=[{"kind": k, **v} for k, v in sweep.kind_minima().items()], insertion=parts["insertion"],
-        cycle=parts["cycle"], cycle_front=parts["cycle_front"]), overwrite)
+        cycle=parts["cycle"], cycle_front=parts["cycle_front"], comparison=parts["comparison"]), overwrite)
     steps.update()
     steps.close()
     return path
@@ -232,6 +232,35 @@ def _cycle_section(machine: Machine, out: Path, overwrite: bool, quick: bool, pa
                "worst overshoot:", "",
                _md_table([*FACTORS, *FRONT_FIGURES], [[r[k] for k in (*FACTORS, *FRONT_FIGURES)]
                                                         for r in front["front"]]), ""]
+    return md
+
+
+COMPARED = ("tsai_3upu.toml", "gantry_cartesian.toml", "pressfit_4upu_rotated45.toml")  # beside the report's machine
+
+
+def _compare_section(machine: Machine, out: Path, overwrite: bool, quick: bool, parts: Parts) -> list[str]:
+    """The report's machine beside the shipped baselines (``COMPARED``; :mod:`pressfit.studies.compare`), and the
+    paper's claims decided; ``quick``: a 2 x 3 x 3 box instead of 3 x 5 x 5."""
+    from pressfit.description.gantry import load_gantry
+    from pressfit.description.machine import load_machine
+    from pressfit.output.compare import CSV_COLUMNS, write_compare
+    from pressfit.shipped import models_dir
+    from pressfit.studies.compare import compare
+
+    others = [load_gantry(models_dir() / f) if f.startswith("gantry") else load_machine(models_dir() / f)
+              for f in COMPARED]
+    result = compare([machine, *others], progress=False, **({"heights": 2, "grid": 3} if quick else {}))
+    parts["comparison"] = result
+    write_compare(result, out / "compare", overwrite)
+    figures = [m.to_dict() for m in result.machines]
+    md = ["## 9. The machines compared (issue 21: `pressfit compare`)", "",
+          f"The report's machine beside Tsai's 3-UPU, the Cartesian gantry of Figure 2 and the 4-UPU turned 45 "
+          f"degrees, each over its required box ({result.machines[0].poses} poses"
+          f"{', shortened for --quick' if quick else ''}) under the 700 N press load and its 5 degree cone.", "",
+          _md_table(["figure", *[f["name"] for f in figures]],
+                    [[k, *[f[k] for f in figures]] for k in CSV_COLUMNS[4:]]), "",
+          *[f"- **{c.verdict}** ({c.baseline}): {c.claim}. {c.evidence}." for c in result.claims], "",
+          "![compare](compare/compare.png)", ""]
     return md
 
 

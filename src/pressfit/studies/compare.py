@@ -311,10 +311,12 @@ def gantry_figures(gantry: Gantry, heights: int = COMPARE_HEIGHTS, grid: int = C
         preload_note="the gantry's guides and screws have no play model", max_relative_residual=m.worst_residual)
 
 
-def compare(machines: list[Machine | Gantry], progress: bool = True) -> Comparison:
-    """Every machine's figures (:func:`upu_figures`, :func:`gantry_figures`) and the claims."""
+def compare(machines: list[Machine | Gantry], progress: bool = True, heights: int = COMPARE_HEIGHTS,
+            grid: int = COMPARE_GRID) -> Comparison:
+    """Every machine's figures (:func:`upu_figures`, :func:`gantry_figures`, on ``heights`` x ``grid`` x ``grid``
+    box poses) and the claims."""
     from tqdm import tqdm
 
-    figures = [gantry_figures(m) if isinstance(m, Gantry) else upu_figures(m)
+    figures = [gantry_figures(m, heights, grid) if isinstance(m, Gantry) else upu_figures(m, heights, grid)
                for m in tqdm(machines, desc="compare", unit="machine", disable=not progress)]
     return Comparison(machines=figures, claims=claims(figures))
