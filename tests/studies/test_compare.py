@@ -117,10 +117,15 @@ def test_claims_turn_just_across_their_thresholds():
     over = dataclasses.replace(gantry, worst_bending_nm=20.0 * (1 - 1e-9),
                                weakest_stiffness_worst_n_per_m=1e6 * (1 + 1e-9))
     assert [c.verdict for c in claims([upu4, over, upu3])][:2] == ["refuted", "refuted"]
+    tie = dataclasses.replace(gantry, worst_bending_nm=20.0, weakest_stiffness_worst_n_per_m=1e6)  # equal: not better
+    assert [c.verdict for c in claims([upu4, tie, upu3])][:2] == ["refuted", "refuted"]
+    tilted = dataclasses.replace(gantry, tilt_worst_rad=1e-3 * (1 - 1e-9))  # stiffer 4-UPU, but the gantry tilts less
+    assert claims([upu4, tilted, upu3])[0].verdict == "refuted"
     limit = BACKLASH_COMPENSATED * upu3.lost_motion_m
     below = dataclasses.replace(upu4, lost_motion_preloaded_m=limit * (1 - 1e-9))
     above = dataclasses.replace(upu4, lost_motion_preloaded_m=limit * (1 + 1e-9))
     assert claims([below, upu3])[-1].verdict == "confirmed" and claims([above, upu3])[-1].verdict == "refuted"
+    assert claims([dataclasses.replace(upu4, lost_motion_preloaded_m=limit), upu3])[-1].verdict == "refuted"  # at it
     # the drives must carry the preload on their worst press force: 500 N + 400 N against a limit just below 900 N
     weak = dataclasses.replace(below, drive_force_limit_n=900.0 * (1 - 1e-9))
     assert claims([weak, upu3])[-1].verdict == "refuted"

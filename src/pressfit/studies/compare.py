@@ -122,20 +122,21 @@ class PoseFigures:
 def pose_figures(machine: Machine, poses_m: np.ndarray) -> PoseFigures:
     """:class:`PoseFigures` at ``poses_m`` (k, 3), m, from the condensed model (its residual enforced)."""
     poses = np.atleast_2d(np.asarray(poses_m, dtype=float))
-    loads = press_loads(PRESS_LOAD_N, CONE_HALF_ANGLE_RAD, CONE_DIRECTIONS)
-    forces, bending, residual = [], [], 0.0
-    for load in (*loads, np.array([0.0, PRESS_LOAD_N, 0.0])):  # the last: the press load alone, for the tilt
+    loads = press_loads(PRESS_LOAD_N, CONE_HALF_ANGLE_RAD, CONE_DIRECTIONS)  # the first: the press load alone
+    forces, bending, tilt, residual = [], [], None, 0.0
+    for load in loads:
         res = condensed.solve_linear(machine, poses, np.broadcast_to(load, poses.shape))
         residual = max(residual, float(res.relative_residual().max()))
         forces.append(np.abs(res.axial_forces_n))
         bending.append(res.bending_nm)
+        tilt = res.tilt_rad if tilt is None else tilt
     if residual > CONDENSED_RESIDUAL_TOL:
         raise ResidualError("compare: condensed solve", "relative equilibrium residual", residual,
                             CONDENSED_RESIDUAL_TOL)
     compliance = condensed.condensed_plate_compliance(machine, poses)[:, :3, :3]
     return PoseFigures(poses_m=poses, drive_force_n=np.max(forces, axis=0), bending_nm=np.max(bending, axis=0),
                        weakest_stiffness_n_per_m=np.linalg.eigvalsh(np.linalg.inv(compliance))[:, 0],
-                       vertical_stiffness_n_per_m=1.0 / compliance[:, 1, 1], tilt_rad=res.tilt_rad,
+                       vertical_stiffness_n_per_m=1.0 / compliance[:, 1, 1], tilt_rad=tilt,
                        max_relative_residual=residual)
 
 
