@@ -65,7 +65,7 @@ def leg_critical_loads_n(machine: Machine, leg_lengths_m: np.ndarray) -> np.ndar
 
 
 # --- linearised buckling of the whole machine -------------------------------------------------------------
-@dataclass(frozen=True)
+@dataclass(frozen=True, kw_only=True)
 class BucklingResult:
     """Linearised buckling of the machine under a plate wrench (see :func:`machine_buckling`)."""
 
@@ -131,5 +131,6 @@ def machine_buckling(
     euler = np.where(
         n1 < 0, (leg_critical_loads_n(solver.machine, lengths) + n0) / np.where(n1 < 0, -n1, 1.0), math.inf
     )
-    return BucklingResult(factor, factors, phi, phi[:6].copy(), energy / energy.sum(), euler,
-                          load.axial_forces_n + pre.axial_forces_n)
+    return BucklingResult(load_factor=factor, load_factors=factors, mode_dq=phi, plate_motion=phi[:6].copy(),
+                          leg_energy_share=energy / energy.sum(), leg_euler_factors=euler,
+                          axial_forces_n=load.axial_forces_n + pre.axial_forces_n)

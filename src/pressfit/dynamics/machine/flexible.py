@@ -541,7 +541,7 @@ class FlexibleMachine:
             e[self.act] = 0.0
         kin = float(pin.computeKineticEnergy(self.model, self.data, state.q, state.v))
         pot = float(pin.computePotentialEnergy(self.model, self.data, state.q))
-        return Energy(kin, float(e.sum()), pot)
+        return Energy(kinetic_j=kin, elastic_j=float(e.sum()), potential_j=pot)
 
     def closure_wrenches(self, state: FlexibleState) -> np.ndarray:
         """(4, 6) the world wrench (force N, moment about the world origin N m) the plate exerts on each leg's
