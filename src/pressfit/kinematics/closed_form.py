@@ -289,7 +289,9 @@ def pseudo_inverse(machine: Machine, pose_m: np.ndarray) -> np.ndarray:
     h = np.asarray(pose_m, dtype=float)
     c = _core(machine, h.reshape(-1, 3))
     if np.any(c.det < _SINGULAR_DET):
-        raise SingularPoseError("the static matrix A is singular (legs cannot balance every force)")
+        i = int(np.argmax(c.det < _SINGULAR_DET))
+        raise SingularPoseError("the static matrix A is singular (legs cannot balance every force)",
+                                pose_m=h.reshape(-1, 3)[i], determinant=float(c.det[i]))
     return np.moveaxis(c.pinv, (0, 1, 2), (2, 1, 0)).reshape(*h.shape[:-1], len(machine.legs), 3)
 
 
@@ -308,7 +310,8 @@ def force_indices(machine: Machine, pose_m: np.ndarray) -> np.ndarray:
     """
     out = indices(machine, pose_m)
     if np.any(out.singular):
-        raise SingularPoseError("the static matrix A is singular (legs cannot balance every force)")
+        raise SingularPoseError("the static matrix A is singular (legs cannot balance every force)",
+                                pose_m=np.asarray(pose_m, dtype=float).reshape(-1, 3)[np.argmax(out.singular)])
     return out.force_indices
 
 

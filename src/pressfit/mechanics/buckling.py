@@ -120,7 +120,8 @@ def machine_buckling(
         mu, vec = eigh(0.5 * (gr + gr.T), 0.5 * (kr + kr.T))  # G phi = mu K phi  <=>  lambda = -1 / mu
     except np.linalg.LinAlgError:
         raise UnstableEquilibriumError("the preloaded machine is unstable before any load is applied "
-                                       f"(actuator offsets {offsets.tolist()} m)") from None
+                                       f"(actuator offsets {offsets.tolist()} m)", pose_m=pose, load=np.zeros(6)
+                                       ) from None
     phi = z @ vec[:, 0]
     factors = -1.0 / mu[:12][mu[:12] < 0]
     factor = float(factors[0]) if len(factors) else math.inf

@@ -160,7 +160,7 @@ def _core(machine: Machine, h: np.ndarray) -> _Core:
     bad = ~((det_t > 1e-12 * k_a.max(0) ** 3) & (det_r > 1e-12 * k_r.max(0) ** 3))
     if np.any(bad):
         raise SingularPoseError(f"the condensed plate stiffness is singular at {int(bad.sum())} pose(s), "
-                                f"e.g. h = {h[np.argmax(bad)].tolist()} m")
+                                f"e.g. h = {h[np.argmax(bad)].tolist()} m", pose_m=h[np.argmax(bad)])
     rho = np.ascontiguousarray((h - concurrency_point(machine, h)).T)
     return _Core(e=e, sin_beta=s, c=c, k_a=k_a, k_r=k_r, rho=rho, kt=kt, kr=kr, ct=ct, cr=cr)
 

@@ -58,7 +58,7 @@ from dataclasses import dataclass
 import numpy as np
 
 from pressfit.description.machine import Machine
-from pressfit.errors import ConvergenceError, PressfitError, SingularPoseError
+from pressfit.errors import ConvergenceError, FastSolverError, PressfitError, SingularPoseError
 from pressfit.mechanics.model import MachineModel, build_model
 from pressfit.mechanics.preload import Amplitudes, rest_length_offsets
 from pressfit.mechanics.stability import Stability
@@ -80,10 +80,6 @@ from pressfit.mechanics.statics import (
 from pressfit.spatial import cross, skew
 
 _CHUNK = 1024  # poses per block: the per-leg arrays of a block stay in the CPU cache
-
-
-class FastSolverError(PressfitError):
-    """The model has something the fast solver does not support (use the reference solver)."""
 
 
 @dataclass(frozen=True, kw_only=True)
@@ -584,7 +580,8 @@ class FastEquilibriumSolver:
         if np.any(np.abs(det) < 1e-9) or np.any(nn < 1e-9):
             bad = np.flatnonzero((np.abs(det) < 1e-9).any(1) | (nn < 1e-9).any(1))[0]
             raise SingularPoseError(f"pose {bk.pose[bad].tolist()} m: a cardan axis is along its leg or the plate "
-                                    "cardan axes are parallel (the leg's transmitted wrenches degenerate)")
+                                    "cardan axes are parallel (the leg's transmitted wrenches degenerate)",
+                                    pose_m=bk.pose[bad])
         b = -_dot(w[..., :2, :], n[..., None, :]) / ln[..., None]
         f = (b[..., :1] * v[..., 1, :] - b[..., 1:] * v[..., 0, :]) / det[..., None]
         n_w = np.zeros(q.shape[:2] + (6, 2))

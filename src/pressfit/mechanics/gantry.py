@@ -236,7 +236,8 @@ class GantryModel:
             raise ResidualError("gantry linear solve", names[k], float(values[k]), tol, where)
         if ratio > MAX_AXIAL_LOAD_RATIO:
             raise UnstableEquilibriumError(f"a gantry member {where} carries {100 * ratio:.3g}% of its Euler load, "
-                                           f"beyond the {100 * MAX_AXIAL_LOAD_RATIO:g}% this linear solve accepts")
+                                           f"beyond the {100 * MAX_AXIAL_LOAD_RATIO:g}% this linear solve accepts",
+                                           pose_m=self.pose_m, load=w)
         return eq
 
     def member(self, name: str) -> Member:

@@ -397,7 +397,8 @@ def _kkt_solve(st: _State, h_leg: np.ndarray, h_plate: np.ndarray, r_leg: np.nda
     for i in range(nl):  # direct LAPACK: numpy's batched linalg costs more on 35x35 blocks
         lu, piv, sol[i], info = _gesv(kkt[i], rhs[i])
         if info != 0:
-            raise SingularPoseError(f"leg {i + 1}'s elastic KKT block is singular (a leg mechanism has no stiffness)")
+            raise SingularPoseError(f"leg {i + 1}'s elastic KKT block is singular (a leg mechanism has no stiffness)",
+                                    pose_m=st.pc)
         lus.append((lu, piv))
     zz, z = sol[:, :, :6], sol[:, :, 6]
     pt = st.p.transpose(0, 2, 1)
@@ -406,10 +407,11 @@ def _kkt_solve(st: _State, h_leg: np.ndarray, h_plate: np.ndarray, r_leg: np.nda
         sv = _gesdd(schur, compute_uv=0)[1].tolist()
         if not all(map(math.isfinite, sv)) or sv[-1] <= 1e-13 * sv[0]:
             raise SingularPoseError("the plate stiffness is singular at this pose "
-                                    f"(condition {sv[0] / max(sv[-1], 1e-300):.3g})")
+                                    f"(condition {sv[0] / max(sv[-1], 1e-300):.3g})", pose_m=st.pc,
+                                    smallest_singular_value=sv[-1])
     lu, piv, info = _getrf(schur)
     if info != 0:
-        raise SingularPoseError("the plate stiffness is singular at this pose")
+        raise SingularPoseError("the plate stiffness is singular at this pose", pose_m=st.pc)
     fa = _Factor(lu=lus, zz=zz, pt=pt, schur=(lu, piv), m=m)
     dp = _getrs(lu, piv, r_plate - (pt @ z[:, m:, None]).sum(0)[:, 0])[0]
     sol = z + zz @ dp
@@ -631,14 +633,15 @@ def _check_physical(machine: Machine, eq: Equilibrium) -> None:
             f"no stable equilibrium {_where(eq)}: the tangent stiffness on the closure manifold has smallest "
             f"eigenvalue {s.min_eigenvalue_nm:.4g} N m (largest {s.max_eigenvalue_nm:.4g} N m) and the KKT matrix "
             f"{s.kkt_negative_eigenvalues} negative eigenvalues for {s.constraints} constraints: the load is "
-            "beyond the machine's buckling load")
+            "beyond the machine's buckling load", pose_m=eq.pose_m, load=eq.load)
     lengths = kinematics.inverse_kinematics(machine, eq.pose_m).lengths_m
     strain = np.abs(eq.actuator_forces_n) * machine.axial_compliance_m_per_n(lengths) / lengths
     if strain.max() > MAX_AXIAL_STRAIN:
         i = int(np.argmax(strain))
         raise UnstableEquilibriumError(f"leg {i + 1} {_where(eq)} changes length by {100 * strain[i]:.3g}% "
                                        f"(axial force {eq.actuator_forces_n[i]:.4g} N), beyond the "
-                                       f"{100 * MAX_AXIAL_STRAIN:g}% small-strain range of this linear-elastic model")
+                                       f"{100 * MAX_AXIAL_STRAIN:g}% small-strain range of this linear-elastic model",
+                                       leg=i + 1, pose_m=eq.pose_m, load=eq.load)
 
 
 def residual_tolerance(tol: float = NEWTON_TOL) -> float:
