@@ -10,7 +10,8 @@
   TYPE_CHECKING): the clearance law lives apart from the clearance solvers for this
   (mechanics/clearance_law.py; the circle was clearance -> statics -> preload -> clearance);
 * results and records are built by keyword: a public dataclass with 3 or more ``__init__`` fields is
-  ``kw_only`` (a positional call that reorders two fields would silently permute the physics).
+  ``kw_only`` (a positional call that reorders two fields would silently permute the physics);
+* every exception is defined in errors.py.
 """
 
 from __future__ import annotations
@@ -120,11 +121,7 @@ def test_the_cli_holds_no_physics(layer, path):
 
 # modules (or module:Class) not yet converted to keyword-only results: the integrator shrinks this list
 KW_ONLY_EXEMPT = {
-    "kinematics/closed_form.py", "kinematics/workspace.py",
-    "mechanics/buckling.py", "mechanics/clearance.py", "mechanics/condensed.py", "mechanics/fast_statics.py",
-    "mechanics/model.py", "mechanics/stability.py", "mechanics/statics.py", "dynamics/insertion.py",
-    "dynamics/control.py", "dynamics/machine/base.py", "dynamics/machine/flexible.py",
-    "dynamics/drives/base.py", "dynamics/drives/hydraulic.py",
+    "dynamics/insertion.py", "dynamics/control.py", "dynamics/machine/flexible.py",
     "dynamics/multibody.py:PoseCache",  # built positionally in dynamics/control.py
 }
 
@@ -160,6 +157,16 @@ def test_results_are_built_by_keyword(layer, path):
                         "@dataclass(..., kw_only=True) and build it by keyword"
 
 
+@pytest.mark.parametrize(("layer", "path"), MODULES, ids=[str(p.relative_to(SRC)) for _, p in MODULES])
+def test_exceptions_live_in_errors_py(layer, path):
+    """Every exception is defined in errors.py (one place to read what a failure carries)."""
+    if layer == "errors":
+        return
+    bad = [n.name for n in ast.walk(ast.parse(path.read_text())) if isinstance(n, ast.ClassDef)
+           and any(re.search(r"(Error|Exception)$", ast.unparse(b)) for b in n.bases)]
+    assert not bad, f"{path}: exception {', '.join(bad)} is defined outside errors.py: move it there"
+
+
 def test_the_exempt_modules_still_need_their_exemption():
     """Every entry of KW_ONLY_EXEMPT names an existing module (and class) that would fail without it: a
     converted module leaves the list."""
@@ -173,11 +180,14 @@ def test_the_exempt_modules_still_need_their_exemption():
 
 
 def test_the_rules_catch_a_violation(tmp_path):
-    """The checks are not vacuous: a physics module that plots and keeps a cache is refused, and so is a
-    positional result (a 3-field dataclass that is not kw_only)."""
+    """The checks are not vacuous: a physics module that plots, keeps a cache and defines its own exception is
+    refused, and so is a positional result (a 3-field dataclass that is not kw_only)."""
     bad = tmp_path / "bad.py"
     bad.write_text("import matplotlib\nfrom pressfit.output import files\n_CACHE = {}\n"
-                   "def f(k):\n    _CACHE[k] = 1\n    open('x', 'w')\n")
+                   "def f(k):\n    _CACHE[k] = 1\n    open('x', 'w')\n"
+                   "class SolverError(errors.PressfitError):\n    pass\n")
+    with pytest.raises(AssertionError, match="exception SolverError is defined outside errors.py"):
+        test_exceptions_live_in_errors_py("mechanics", bad)
     with pytest.raises(AssertionError, match="imports matplotlib"):
         test_physics_neither_plots_nor_writes("mechanics", bad)
     with pytest.raises(AssertionError, match="module-level _CACHE is mutated"):

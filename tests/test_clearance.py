@@ -36,7 +36,7 @@ def k_axial(machine, pose=POSE_A):
 @pytest.mark.parametrize("w", [1e-7, 1e-9])
 def test_law_energy_force_tangent_consistent(w):
     """Reference: central finite differences of the law's own energy and force (calculus); rel. 1e-6."""
-    law = L.DeadZone(G, 1e9, w)
+    law = L.DeadZone(gap=G, stiffness=1e9, width=w)
     h = w / 1000  # truncation h^2 f''' / 6 ~ 1e-7 k w; energy round-off ~ 1e-16 k g^2 / h
     for x in [-3e-5, -G - w, -G, -1e-5, 0.0, 7e-6, G - 2 * w, G, G + w, 2.5e-5]:
         fd_f = (law.energy(x + h) - law.energy(x - h)) / (2 * h)
@@ -46,7 +46,8 @@ def test_law_energy_force_tangent_consistent(w):
     # the sharp limit (reference: the dead-zone definition): 0 inside, k (|x| - g) sign(x) outside
     assert abs(law.force(0.5 * G)) <= law.stiffness * w * w / (2 * 0.5 * G)  # inside: k w^2 / (4 |u|) per side
     assert law.force(G + 1e-6) == pytest.approx(law.stiffness * 1e-6, rel=1e-3 if w < 1e-8 else 1e-1)
-    assert L.DeadZone(0.0, 1e9, w).force(3e-6) == pytest.approx(1e9 * 3e-6, rel=1e-12)  # g = 0: linear
+    linear = L.DeadZone(gap=0.0, stiffness=1e9, width=w)
+    assert linear.force(3e-6) == pytest.approx(1e9 * 3e-6, rel=1e-12)  # g = 0: linear
     f = np.array([-300.0, -0.1, 0.0, 0.1, 300.0])
     assert np.allclose(law.force(L.invert_law(f, G, 1e9, w)), f, rtol=1e-10, atol=1e-12)
 

@@ -124,7 +124,7 @@ def test_geometry_from_the_machine_and_the_case(tmp_path):
                                    "loads": {"press_force_n": 700.0}, "clearance": {"geometry": "box"}}))
     assert C.clearance_from_case(load_case(path), load_machine()).geometry == "box"
     with pytest.raises(C.ClearanceError, match="axial, box, sphere"):
-        C.Clearance(np.full((4, 2), G), 1e9, geometry="cube")
+        C.Clearance(gaps_m=np.full((4, 2), G), contact_stiffness_n_per_m=1e9, geometry="cube")
 
 
 def test_outputs_name_the_geometry(machine, tmp_path):

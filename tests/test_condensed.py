@@ -335,8 +335,9 @@ def test_singular_pose_is_refused(short_cylinder, y):
                  lambda: condensed.plate_stiffness(short_cylinder, [[0, 0.72, 0], h])):
         with warnings.catch_warnings():
             warnings.simplefilter("error")
-            with pytest.raises(SingularPoseError, match=r"singular at 1 pose\(s\), e\.g\. h = \[0\.0, "):
+            with pytest.raises(SingularPoseError, match=r"singular at 1 pose\(s\), e\.g\. h = \[0\.0, ") as exc:
                 call()
+            assert exc.value.pose_m == tuple(h)
 
 
 def test_pose_just_clear_of_the_guard_is_solved(short_cylinder):

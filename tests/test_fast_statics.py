@@ -10,7 +10,8 @@ import numpy as np
 import pytest
 
 from pressfit import kinematics
-from pressfit.mechanics.fast_statics import FastEquilibriumSolver, FastSolverError
+from pressfit.errors import FastSolverError
+from pressfit.mechanics.fast_statics import FastEquilibriumSolver
 from pressfit.mechanics.model import CardanCompliance, LinearSpring, build_model
 from pressfit.mechanics.statics import SECTIONS, EquilibriumSolver
 

@@ -100,10 +100,13 @@ def test_singular_pose(machine):
     assert ix.singular.tolist() == [True, False]
     assert np.isnan(ix.force_indices[0]).all() and np.isnan(ix.preload_vector[0]).all()
     assert np.isfinite(ix.force_indices[1]).all()
-    with pytest.raises(SingularPoseError):
-        kinematics.force_indices(machine, [0.0, 0.0, 0.0])
-    with pytest.raises(SingularPoseError):
-        kinematics.pseudo_inverse(machine, [0.0, 0.0, 0.0])
+    with pytest.raises(SingularPoseError) as exc:
+        kinematics.force_indices(machine, [[0.0, 0.6, 0.0], [0.0, 0.0, 0.0]])
+    assert exc.value.pose_m == (0.0, 0.0, 0.0)  # the error names the singular pose of the batch, not the first
+    with pytest.raises(SingularPoseError) as exc:
+        kinematics.pseudo_inverse(machine, [[0.0, 0.6, 0.0], [0.0, 0.0, 0.0]])
+    # rank 2: det(A A^T) vanishes to round-off (its trace is n = 4 for unit leg vectors)
+    assert exc.value.pose_m == (0.0, 0.0, 0.0) and abs(exc.value.determinant) < 1e-12
 
 
 def test_pose_report(machine):

@@ -18,6 +18,7 @@ from click.testing import CliRunner
 
 from pressfit import kinematics
 from pressfit.cli import main
+from pressfit.errors import ClearanceError
 from pressfit.studies import preload_study
 
 POSE_A = [0.0, 0.72, 0.0]
@@ -77,3 +78,13 @@ def test_both_no_clearance_stiffnesses_are_named_and_8_percent_apart(machine, cl
     assert out["rigid_cardan_stiffness_n_per_m"] == pytest.approx(closed_form["rigid"], rel=1e-9)
     assert out["no_clearance_contact_stiffness_n_per_m"] == pytest.approx(closed_form["contact"], rel=1e-9)
     assert out["table"][0]["preload_n"] == 0.0  # the baseline row is written too
+
+
+@pytest.mark.parametrize(("preloads", "load_max_n", "steps", "key"), [([math.nan], 700.0, 50, "preloads"),
+                                                                      ([0.0], -1.0, 50, "load_max_n"),
+                                                                      ([0.0], 700.0, 1, "steps")])
+def test_bad_study_input_names_its_key(machine, preloads, load_max_n, steps, key):
+    """The refusal carries the argument at fault (callers read ``key``, never the message)."""
+    with pytest.raises(ClearanceError) as exc:
+        preload_study.preload_study(machine, POSE_A, [G], preloads, load_max_n, steps, progress=False)
+    assert exc.value.key == key and exc.value.path is None

@@ -35,8 +35,9 @@ def test_press_loads_are_stable(machine, pose, load, linear):
 def test_the_1e12_n_tensile_load_is_refused(machine):
     """Newton converged to a branch with a leg at -4e6 N (issue 10): the stability check refuses it."""
     with pytest.raises(UnstableEquilibriumError, match=r"no stable equilibrium at pose \(0, 0.72, 0\) m under the "
-                                                       r"load \(0, 1e\+12, 0, 0, 0, 0\).*smallest eigenvalue -"):
+                                                       r"load \(0, 1e\+12, 0, 0, 0, 0\).*smallest eigenvalue -") as exc:
         solve_equilibrium(machine, POSE_A, [0, 1e12, 0])
+    assert exc.value.leg is None and exc.value.pose_m == (0.0, 0.72, 0.0) and exc.value.load == (0, 1e12, 0, 0, 0, 0)
 
 
 @pytest.mark.parametrize("linear", [False, True])
@@ -161,7 +162,9 @@ def test_small_strain_range_is_a_leg_strain_not_a_plate_displacement(machine):
     far beyond small strains): refused. At (0, 0.8, 0) a 2.7 kN lateral force rotates the plate (the soft
     plate-rotation mode) and moves it 17 mm with leg strains below 1e-4: accepted (a 20 mm displacement cap
     refused its linear solve, 20.0 mm)."""
-    with pytest.raises(UnstableEquilibriumError, match=r"changes length by [89]\.\d+% .* 1% small-strain range"):
+    with pytest.raises(UnstableEquilibriumError, match=r"changes length by [89]\.\d+% .* 1% small-strain range") as exc:
         solve_equilibrium(machine, POSE_A, [0, 1e7, 0])
+    assert exc.value.leg in range(1, 5) and str(exc.value).startswith(f"leg {exc.value.leg} at pose (0, 0.72, 0) m")
+    assert exc.value.pose_m == (0.0, 0.72, 0.0) and exc.value.load == (0, 1e7, 0, 0, 0, 0)
     eq = solve_equilibrium(machine, [0, 0.8, 0], [0, 4775.36, 2686.14], linear=True)
     assert np.linalg.norm(eq.plate_displacement_m) > 0.02 and eq.stability.stable

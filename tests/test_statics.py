@@ -361,8 +361,9 @@ def test_leg_mechanism_is_reported_as_singular(machine):
     mm = build_model(
         machine, POSE, springs_per_segment=1, cardan_compliance=CardanCompliance(translation=LinearSpring(0.0))
     )
-    with pytest.raises(SingularPoseError):
+    with pytest.raises(SingularPoseError) as exc:
         solve_equilibrium(mm, POSE, WRENCH)
+    assert exc.value.pose_m == pytest.approx(tuple(POSE), abs=1e-9)  # found at the first Newton step, at the pose
 
 
 def test_to_dict_has_the_documented_keys(machine):

@@ -2,6 +2,8 @@
 
 from __future__ import annotations
 
+from collections.abc import Iterable
+
 
 class PressfitError(Exception):
     """Base class of every error pressfit raises on purpose (the CLI turns it into exit code 2)."""
@@ -41,8 +43,21 @@ class UnreachablePoseError(PressfitError):
         super().__init__(f"pose {pose} m is not reachable: " + "; ".join(format_violation(*v) for v in violations))
 
 
+def _floats(values: Iterable[float] | None) -> tuple[float, ...] | None:
+    """A pose or a wrench as a tuple of floats (None stays None)."""
+    return None if values is None else tuple(float(v) for v in values)
+
+
 class SingularPoseError(PressfitError):
-    """The static matrix or the stiffness is singular at this pose."""
+    """The static matrix or the stiffness is singular at this pose: ``pose_m`` the plate pose (m; the first
+    singular pose of a batch), ``smallest_singular_value`` and ``determinant`` of the matrix the message names
+    (in that matrix's units; det(A A^T) is dimensionless); each None where the raiser does not have it."""
+
+    def __init__(self, message: str, *, pose_m: Iterable[float] | None = None,
+                 smallest_singular_value: float | None = None, determinant: float | None = None) -> None:
+        self.pose_m, self.determinant = _floats(pose_m), determinant
+        self.smallest_singular_value = smallest_singular_value
+        super().__init__(message)
 
 
 class ConvergenceError(PressfitError):
@@ -114,7 +129,14 @@ class LegCountError(PressfitError):
 
 
 class UnstableEquilibriumError(PressfitError):
-    """The solution found is not a physical, stable state (a leg beyond buckling, a huge displacement)."""
+    """The solution found is not a physical, stable state (a leg beyond buckling, a huge displacement):
+    ``leg`` the leg at fault (1-n; None: the whole machine), ``pose_m`` the plate (or tool) pose (m) and
+    ``load`` the wrench applied there (N, N m); each None where the raiser does not have it."""
+
+    def __init__(self, message: str, *, leg: int | None = None, pose_m: Iterable[float] | None = None,
+                 load: Iterable[float] | None = None) -> None:
+        self.leg, self.pose_m, self.load = leg, _floats(pose_m), _floats(load)
+        super().__init__(message)
 
 
 class DriveStepError(PressfitError):
@@ -159,7 +181,18 @@ class StudyFailedError(PressfitError):
 
 
 class ClearanceError(PressfitError):
-    """Bad clearance or preload input (negative gap, unknown mode, no closing preload found, ...)."""
+    """Bad clearance or preload input (negative gap, unknown mode, no closing preload found, ...): ``key`` the
+    input at fault (an argument or a case file's key, None where the message names no single one), ``path``
+    the case file (None: not from a file)."""
+
+    def __init__(self, message: str, *, key: str | None = None, path: object = None) -> None:
+        self.key, self.path = key, None if path is None else str(path)
+        super().__init__(message)
+
+
+class FastSolverError(PressfitError):
+    """The model has something the fast solver (:mod:`pressfit.mechanics.fast_statics`) does not support: use
+    the reference solver."""
 
 
 class CondensedModelError(PressfitError):

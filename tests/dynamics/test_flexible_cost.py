@@ -57,8 +57,10 @@ def _opened(fm, state, seed=0, size=1e-2):
     acceleration, the multipliers kept: a state the section-load shortcuts must handle exactly as well."""
     rng = np.random.default_rng(seed)
     q = pin.integrate(fm.model, state.q, size * rng.standard_normal(fm.nv))
-    return type(state)(state.time_s, q, 0.1 * rng.standard_normal(fm.nv), rng.standard_normal(fm.nv),
-                       state.pseudo_acceleration, state.multipliers, state.drive, state.stem_lengths_m, 0)
+    return type(state)(time_s=state.time_s, q=q, v=0.1 * rng.standard_normal(fm.nv),
+                       acceleration=rng.standard_normal(fm.nv), pseudo_acceleration=state.pseudo_acceleration,
+                       multipliers=state.multipliers, drive=state.drive, stem_lengths_m=state.stem_lengths_m,
+                       iterations=0)
 
 
 def test_closure_wrenches_equal_the_least_squares_over_the_leg_twists(machine):

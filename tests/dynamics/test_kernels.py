@@ -68,8 +68,9 @@ def test_distribution_refuses_a_singular_a_just_below_the_limit(sigma, singular)
     v, _ = np.linalg.qr(RNG.normal(size=(4, 4)))
     a = u @ np.diag([1.0, 0.7, sigma]) @ v[:3]
     if singular:
-        with pytest.raises(SingularPoseError, match="smallest singular value 9.8"):
+        with pytest.raises(SingularPoseError, match="smallest singular value 9.8") as exc:
             distribution(a.T)
+        assert exc.value.smallest_singular_value == pytest.approx(sigma, rel=1e-4)
     else:
         pinv, null = distribution(a.T)
         bound = 10 * (1.0 / sigma) ** 2 * np.finfo(float).eps

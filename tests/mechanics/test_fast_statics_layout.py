@@ -12,8 +12,8 @@ import pytest
 from test_fast_statics import random_cases, worst_difference
 
 from pressfit import kinematics
-from pressfit.errors import PressfitError, UnreachablePoseError
-from pressfit.mechanics.fast_statics import FastEquilibriumSolver, FastSolverError
+from pressfit.errors import FastSolverError, PressfitError, UnreachablePoseError
+from pressfit.mechanics.fast_statics import FastEquilibriumSolver
 from pressfit.mechanics.model import build_model
 from pressfit.mechanics.statics import EquilibriumSolver
 

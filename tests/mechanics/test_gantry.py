@@ -222,8 +222,10 @@ def test_the_linear_solve_refuses_loads_near_buckling():
     euler = math.pi**2 * E * i / (4 * length**2)
     gm = build_gantry_model(GANTRY, (0.0, 0.5, 0.0))
     assert gm.solve([0, 0.009 * euler, 0, 0, 0, 0]).axial_load_ratio == pytest.approx(0.009, rel=1e-9)
-    with pytest.raises(UnstableEquilibriumError, match="Euler load"):
+    with pytest.raises(UnstableEquilibriumError, match="Euler load") as exc:
         gm.solve([0, 0.011 * euler, 0, 0, 0, 0])
+    assert exc.value.leg is None and exc.value.pose_m == (0.0, 0.5, 0.0)
+    assert exc.value.load == (0, 0.011 * euler, 0, 0, 0, 0)
 
 
 @pytest.mark.parametrize(("pose", "text"), [((0.3, 0.6, 0.0), "x [m] = 0.3 breaks maximum 0.25"),

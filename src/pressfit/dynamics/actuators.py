@@ -47,7 +47,8 @@ def distribution(unit_vectors: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
 
 def singular_error(sigma: float) -> SingularPoseError:
     """The refusal of a singular A (smallest singular value ``sigma`` below ``SINGULAR_SIGMA``)."""
-    return SingularPoseError(f"the static matrix A is singular (smallest singular value {sigma:.2e})")
+    return SingularPoseError(f"the static matrix A is singular (smallest singular value {sigma:.2e})",
+                             smallest_singular_value=float(sigma))
 
 
 def distribute(machine: Machine, pose_m: np.ndarray, plate_force_n: np.ndarray, preload_n: float) -> np.ndarray:

@@ -88,7 +88,7 @@ def inertial_gantry_model(gm: GantryModel) -> pin.Model:
     return model
 
 
-@dataclass(frozen=True)
+@dataclass(frozen=True, kw_only=True)
 class GantryModes:
     """The lowest natural modes of the gantry at a tool pose (SI), by increasing frequency."""
 
@@ -134,7 +134,7 @@ def model_modes(gm: GantryModel, count: int = 6) -> GantryModes:
                        closure_residual=closure, eigen_residual=eig)
 
 
-@dataclass(frozen=True)
+@dataclass(frozen=True, kw_only=True)
 class GantryMetrics:
     """What ``pressfit compare`` reads of a gantry over a set of tool poses and loads (SI). "Worst" is over
     every pose and load; the medians are over the poses of each pose's worst value over the loads."""

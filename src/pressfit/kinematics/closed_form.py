@@ -22,7 +22,7 @@ from pressfit.spatial import cross
 Y_AXIS = np.array([0.0, 1.0, 0.0])
 
 
-@dataclass(frozen=True)
+@dataclass(frozen=True, kw_only=True)
 class LegKinematics:
     """Inverse kinematics of every leg at an array of poses (shapes (..., n) and (..., n, 3))."""
 
@@ -64,7 +64,8 @@ def inverse_kinematics(machine: Machine, pose_m: np.ndarray, *, base_points_m: n
     length = np.linalg.norm(u, axis=-1)
     alpha = np.arctan2(u[..., 1], np.einsum("...ij,ij->...i", u, machine.inward_directions))
     sin_beta = np.einsum("...ij,ij->...i", u, machine.beta_axes) / length
-    return LegKinematics(u, length, u / length[..., None], alpha, np.arcsin(np.clip(sin_beta, -1, 1)))
+    return LegKinematics(vectors_m=u, lengths_m=length, unit_vectors=u / length[..., None], alpha_rad=alpha,
+                         beta_rad=np.arcsin(np.clip(sin_beta, -1, 1)))
 
 
 def _bound_text(value: float, bound: float) -> str:
@@ -163,7 +164,7 @@ _SINGULAR_DET = 1e-12  # det(A A^T) below this: A has rank < 3 (A A^T has trace 
 _CHUNK = 4096  # poses per block: the working set stays in the CPU cache
 
 
-@dataclass(frozen=True)
+@dataclass(frozen=True, kw_only=True)
 class Indices:
     """Equations 4-10 at an array of poses (NaN where A is singular, see ``singular``)."""
 
@@ -180,7 +181,7 @@ class Indices:
         return self.preload_basis[..., 0]
 
 
-@dataclass(frozen=True)
+@dataclass(frozen=True, kw_only=True)
 class _Core:
     e: np.ndarray  # leg unit vectors = columns of A = rows of dl/dh, (3, n, m)
     det: np.ndarray  # det(A A^T), (m,)
@@ -200,7 +201,7 @@ def _core(machine: Machine, poses: np.ndarray) -> _Core:
     inv_det = 1.0 / np.where(det < _SINGULAR_DET, np.nan, det)
     pinv = np.stack([e[0] * (c * inv_det) + e[1] * (d * inv_det) + e[2] * (f * inv_det)
                      for c, d, f in ((c00, c01, c02), (c01, c11, c12), (c02, c12, c22))])
-    return _Core(e, det, pinv, (g00, g01, g02, g11, g12, g22))
+    return _Core(e=e, det=det, pinv=pinv, gram=(g00, g01, g02, g11, g12, g22))
 
 
 def _dexterity(gram: tuple[np.ndarray, ...]) -> np.ndarray:
@@ -274,8 +275,8 @@ def indices(machine: Machine, pose_m: np.ndarray) -> Indices:
         v[:, :, t] = basis
         v[:, :, t][:, :, sing[t]] = np.nan
     shape = h.shape[:-1]
-    return Indices(n.reshape(shape), f.T.reshape(*shape, 3), np.moveaxis(v, -1, 0).reshape(*shape, nl, nl - 3),
-                   sing.reshape(shape))
+    return Indices(dexterity=n.reshape(shape), force_indices=f.T.reshape(*shape, 3),
+                   preload_basis=np.moveaxis(v, -1, 0).reshape(*shape, nl, nl - 3), singular=sing.reshape(shape))
 
 
 def dexterity(machine: Machine, pose_m: np.ndarray) -> np.ndarray:
@@ -288,7 +289,9 @@ def pseudo_inverse(machine: Machine, pose_m: np.ndarray) -> np.ndarray:
     h = np.asarray(pose_m, dtype=float)
     c = _core(machine, h.reshape(-1, 3))
     if np.any(c.det < _SINGULAR_DET):
-        raise SingularPoseError("the static matrix A is singular (legs cannot balance every force)")
+        i = int(np.argmax(c.det < _SINGULAR_DET))
+        raise SingularPoseError("the static matrix A is singular (legs cannot balance every force)",
+                                pose_m=h.reshape(-1, 3)[i], determinant=float(c.det[i]))
     return np.moveaxis(c.pinv, (0, 1, 2), (2, 1, 0)).reshape(*h.shape[:-1], len(machine.legs), 3)
 
 
@@ -307,7 +310,8 @@ def force_indices(machine: Machine, pose_m: np.ndarray) -> np.ndarray:
     """
     out = indices(machine, pose_m)
     if np.any(out.singular):
-        raise SingularPoseError("the static matrix A is singular (legs cannot balance every force)")
+        raise SingularPoseError("the static matrix A is singular (legs cannot balance every force)",
+                                pose_m=np.asarray(pose_m, dtype=float).reshape(-1, 3)[np.argmax(out.singular)])
     return out.force_indices
 
 

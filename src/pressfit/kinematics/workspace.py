@@ -61,7 +61,7 @@ def _poses(xz: np.ndarray, y_m: float) -> np.ndarray:
     return np.column_stack([xz[:, 0], np.full(len(xz), y_m), xz[:, 1]])
 
 
-@dataclass(frozen=True)
+@dataclass(frozen=True, kw_only=True)
 class HeightRange:
     """Heights y_h (m) at which every sample of the rotated required square is reachable."""
 
@@ -100,8 +100,9 @@ def square_height_range(machine: Machine, angle_deg: float = 0.0, tolerance_m: f
 
     lo = bisect(ys[feasible[0]], ys[feasible[0] - 1] if feasible[0] > 0 else 0.0)
     hi = bisect(ys[feasible[-1]], ys[feasible[-1]] + scan_step_m)
-    return HeightRange(float(angle_deg), float(lo[0]), float(hi[0]), tolerance_m,
-                       _first_violation(machine, xz, lo[1]), _first_violation(machine, xz, hi[1]))
+    return HeightRange(angle_deg=float(angle_deg), y_min_m=float(lo[0]), y_max_m=float(hi[0]), tolerance_m=tolerance_m,
+                       limit_below=_first_violation(machine, xz, lo[1]),
+                       limit_above=_first_violation(machine, xz, hi[1]))
 
 
 def _first_violation(machine: Machine, xz: np.ndarray, y_m: float) -> str:
@@ -113,7 +114,7 @@ def _first_violation(machine: Machine, xz: np.ndarray, y_m: float) -> str:
     return f"at (x, y, z) = ({h[0]:.4f}, {h[1]:.6f}, {h[2]:.4f}) m: {kinematics.unreachable_reason(machine, h)}"
 
 
-@dataclass(frozen=True)
+@dataclass(frozen=True, kw_only=True)
 class SquareStats:
     """Dexterity and force indices over the rotated required square at one height (N/N, -)."""
 
@@ -139,9 +140,11 @@ def square_statistics(machine: Machine, y_m: float, angle_deg: float = 0.0,
     poses = _poses(square_points(machine, angle_deg), y_m)
     ix = kinematics.indices(machine, poses)
     n_min, n_max = float(ix.dexterity.min()), float(ix.dexterity.max())
-    return SquareStats(float(y_m), float(angle_deg), bool(np.all(kinematics.is_reachable(machine, poses))),
-                       n_min, n_max, (n_max - n_min) / n_max,
-                       tuple(ix.force_indices.min(axis=0).tolist()), tuple(ix.force_indices.max(axis=0).tolist()))
+    return SquareStats(y_m=float(y_m), angle_deg=float(angle_deg),
+                       all_reachable=bool(np.all(kinematics.is_reachable(machine, poses))), dexterity_min=n_min,
+                       dexterity_max=n_max, dexterity_variation=(n_max - n_min) / n_max,
+                       force_index_min=tuple(ix.force_indices.min(axis=0).tolist()),
+                       force_index_max=tuple(ix.force_indices.max(axis=0).tolist()))
 
 
 def dexterity_half_width(machine: Machine, y_m: float, variation: float = 0.15,
@@ -163,7 +166,7 @@ def dexterity_half_width(machine: Machine, y_m: float, variation: float = 0.15,
     return lo
 
 
-@dataclass(frozen=True)
+@dataclass(frozen=True, kw_only=True)
 class PlaneMap:
     """Maps on the x-z plane at height y_m (the paper's Figures 7-11); NaN where not reachable."""
 
@@ -187,8 +190,8 @@ def plane_map(machine: Machine, y_m: float, half_extent_m: float = MAP_HALF_EXTE
     ix = kinematics.indices(machine, poses)
     rates = kinematics.jacobian(machine, poses)
     mask = np.where(ok, 1.0, np.nan)
-    return PlaneMap(float(y_m), x, z, ok, ix.dexterity * mask, ix.force_indices * mask[..., None],
-                    rates * mask[..., None, None])
+    return PlaneMap(y_m=float(y_m), x_m=x, z_m=z, reachable=ok, dexterity=ix.dexterity * mask,
+                    force_indices=ix.force_indices * mask[..., None], leg_rates=rates * mask[..., None, None])
 
 
 _AXES = "xyz"

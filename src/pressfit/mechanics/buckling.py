@@ -65,7 +65,7 @@ def leg_critical_loads_n(machine: Machine, leg_lengths_m: np.ndarray) -> np.ndar
 
 
 # --- linearised buckling of the whole machine -------------------------------------------------------------
-@dataclass(frozen=True)
+@dataclass(frozen=True, kw_only=True)
 class BucklingResult:
     """Linearised buckling of the machine under a plate wrench (see :func:`machine_buckling`)."""
 
@@ -120,7 +120,8 @@ def machine_buckling(
         mu, vec = eigh(0.5 * (gr + gr.T), 0.5 * (kr + kr.T))  # G phi = mu K phi  <=>  lambda = -1 / mu
     except np.linalg.LinAlgError:
         raise UnstableEquilibriumError("the preloaded machine is unstable before any load is applied "
-                                       f"(actuator offsets {offsets.tolist()} m)") from None
+                                       f"(actuator offsets {offsets.tolist()} m)", pose_m=pose, load=np.zeros(6)
+                                       ) from None
     phi = z @ vec[:, 0]
     factors = -1.0 / mu[:12][mu[:12] < 0]
     factor = float(factors[0]) if len(factors) else math.inf
@@ -131,5 +132,6 @@ def machine_buckling(
     euler = np.where(
         n1 < 0, (leg_critical_loads_n(solver.machine, lengths) + n0) / np.where(n1 < 0, -n1, 1.0), math.inf
     )
-    return BucklingResult(factor, factors, phi, phi[:6].copy(), energy / energy.sum(), euler,
-                          load.axial_forces_n + pre.axial_forces_n)
+    return BucklingResult(load_factor=factor, load_factors=factors, mode_dq=phi, plate_motion=phi[:6].copy(),
+                          leg_energy_share=energy / energy.sum(), leg_euler_factors=euler,
+                          axial_forces_n=load.axial_forces_n + pre.axial_forces_n)

@@ -43,7 +43,7 @@ NEWTON_TOL = 1e-10  # relative force residual of the small-displacement solve
 
 
 # --- small-displacement solver, batched --------------------------------------------------------------------
-@dataclass(frozen=True)
+@dataclass(frozen=True, kw_only=True)
 class _Chain:
     """One decoupled block: n legs with direction u_i (n, 3), spring k_i (n,) in series with two plays."""
 
@@ -108,7 +108,7 @@ class _Chain:
         raise ConvergenceError("clearance equilibrium (small-displacement Newton)", float(res.max()), tol, max_iter)
 
 
-@dataclass(frozen=True)
+@dataclass(frozen=True, kw_only=True)
 class _SmallModel:
     """The condensed legs at one pose with B clearance/preload variants."""
 
@@ -127,12 +127,12 @@ class _SmallModel:
                     (cl0.contact_stiffness_n_per_m, cl0.smoothing_m, cl0.rotation_gaps_rad is None):
                 raise ClearanceError("a batch needs the same contact law for every clearance")
         gaps = np.array([c.effective_gaps_m(machine, pose) for c in clearances])
-        trans = _Chain(core.e[:, :, 0].T, core.k_a[:, 0], gaps, cl0.contact_stiffness_n_per_m, cl0.smoothing_m)
+        trans = _Chain(u=core.e[:, :, 0].T, k=core.k_a[:, 0], gaps=gaps, kc=cl0.contact_stiffness_n_per_m,
+                       w=cl0.smoothing_m)
         rg = None if cl0.rotation_gaps_rad is None else np.array([c.rotation_gaps_rad for c in clearances])
-        rot = _Chain(
-            core.c[:, :, 0].T, core.k_r[:, 0], rg, cl0.rotation_stiffness_nm_per_rad, cl0.rotation_smoothing_rad
-        )
-        return cls(pose, trans, rot, core.rho[:, 0], np.asarray(offsets, dtype=float))
+        rot = _Chain(u=core.c[:, :, 0].T, k=core.k_r[:, 0], gaps=rg, kc=cl0.rotation_stiffness_nm_per_rad,
+                     w=cl0.rotation_smoothing_rad)
+        return cls(pose=pose, trans=trans, rot=rot, rho=core.rho[:, 0], offsets=np.asarray(offsets, dtype=float))
 
     def solve(self, wrench: np.ndarray, state: tuple | None) -> tuple[dict[str, np.ndarray], tuple]:
         """wrench (B, 6) at the plate centre; returns per-member results and the state for the next step."""
@@ -149,7 +149,7 @@ class _SmallModel:
 
 
 # --- load-deflection ---------------------------------------------------------------------------------------
-@dataclass(frozen=True)
+@dataclass(frozen=True, kw_only=True)
 class Branch:
     """States along one loading direction of a load-deflection curve (step k at ``loads_n[k]``)."""
 
@@ -161,7 +161,7 @@ class Branch:
     residual: np.ndarray  # (n,) relative residual of each solve
 
 
-@dataclass(frozen=True)
+@dataclass(frozen=True, kw_only=True)
 class LoadDeflection:
     """A load-deflection curve at one pose (SI). ``unloading`` is stored in the order of ``loading``
     (its state k is at loads_n[k], reached from above). Derived quantities are along ``direction``."""
@@ -270,7 +270,7 @@ def _loads(loads: ArrayLike) -> np.ndarray:
 
 def _branch(loads: np.ndarray, states: list[dict[str, np.ndarray]], member: int) -> Branch:
     keys = ("displacement_m", "rotation_rad", "axial_forces_n", "joint_axial_m", "residual")
-    return Branch(loads, *(np.array([s[k][member] for s in states]) for k in keys))
+    return Branch(loads_n=loads, **{k: np.array([s[k][member] for s in states]) for k in keys})
 
 
 def _sweep_small(machine: Machine, pose: np.ndarray, direction: np.ndarray, loads: np.ndarray,
@@ -344,12 +344,13 @@ def load_deflection(machine: Machine, pose_m: ArrayLike, direction: ArrayLike, l
         up, down = _sweep_nonlinear(machine, pose, d, loads, cl, offsets, unload)
     else:
         raise ClearanceError(f"method must be 'small' or 'nonlinear', got {method!r}")
-    return LoadDeflection(pose, d, float(preload), preload_mode, method, given, cl.gaps_m, _branch(loads, up, 0),
-                          _branch(loads, down, 0) if unload else None)
+    return LoadDeflection(pose_m=pose, direction=d, preload=float(preload), preload_mode=preload_mode, method=method,
+                          clearance=given, effective_gaps_m=cl.gaps_m, loading=_branch(loads, up, 0),
+                          unloading=_branch(loads, down, 0) if unload else None)
 
 
 # --- critical preload --------------------------------------------------------------------------------------
-@dataclass(frozen=True)
+@dataclass(frozen=True, kw_only=True)
 class CriticalPreload:
     """Smallest preload keeping every joint closed (|x| >= g) at every load step up to the press load."""
 
@@ -399,7 +400,8 @@ def critical_preloads(machine: Machine, pose_m: ArrayLike, direction: ArrayLike,
         n_eval += 1
         lo, hi = np.where(ok, lo, mid), np.where(ok, mid, hi)
     hi = np.where(closed0, 0.0, hi)
-    return [CriticalPreload(float(h), float(lw), float(h - lw), preload_mode, float(press_load_n), n_eval)
+    return [CriticalPreload(preload=float(h), lower=float(lw), tolerance=float(h - lw), preload_mode=preload_mode,
+                            press_load_n=float(press_load_n), evaluations=n_eval)
             for h, lw in zip(hi, lo)]
 
 

@@ -81,7 +81,7 @@ def _big_s(u: np.ndarray, w: float) -> np.ndarray:
     return 0.5 * u * _s(u, w) + 0.25 * w * w * np.arcsinh(u / w)
 
 
-@dataclass(frozen=True)
+@dataclass(frozen=True, kw_only=True)
 class DeadZone:
     """Smoothed dead zone of +-gap (m) with contact stiffness (N/m or N m/rad) and smoothing width (m or
     rad); a :class:`pressfit.mechanics.model.SpringLaw`, vectorised over numpy arrays. gap = 0 gives k x exactly."""
@@ -125,7 +125,7 @@ def invert_law(force: np.ndarray, gap: np.ndarray, stiffness: float, width: floa
 
 
 # --- clearance description ---------------------------------------------------------------------------------
-@dataclass(frozen=True)
+@dataclass(frozen=True, kw_only=True)
 class Clearance:
     """Plays of the 2 n cardans (n legs) and their contact law (SI).
 
@@ -168,7 +168,7 @@ class Clearance:
         g = machine.joints.cardan_axial_clearance_m if gap_m is None else gap_m
         kw.setdefault("contact_stiffness_n_per_m", machine.joints.cardan_contact_stiffness_n_per_m)
         kw.setdefault("geometry", machine.joints.cardan_clearance_geometry)
-        return cls(np.full((len(machine.legs), 2), float(g)), **kw)
+        return cls(gaps_m=np.full((len(machine.legs), 2), float(g)), **kw)
 
     @classmethod
     def per_joint(cls, machine: Machine, gaps_m: list[float], **kw: Any) -> Clearance:
@@ -178,7 +178,7 @@ class Clearance:
                                  f"{machine.name}'s {len(machine.legs)} legs, got {len(gaps_m)}")
         kw.setdefault("contact_stiffness_n_per_m", machine.joints.cardan_contact_stiffness_n_per_m)
         kw.setdefault("geometry", machine.joints.cardan_clearance_geometry)
-        return cls(np.asarray(gaps_m, dtype=float).reshape(-1, 2), **kw)
+        return cls(gaps_m=np.asarray(gaps_m, dtype=float).reshape(-1, 2), **kw)
 
     @classmethod
     def random(cls, machine: Machine, low_m: float, high_m: float, seed: int, **kw: Any) -> Clearance:
@@ -187,7 +187,7 @@ class Clearance:
             raise ClearanceError(f"need 0 <= low_m <= high_m, got {low_m}, {high_m}")
         kw.setdefault("contact_stiffness_n_per_m", machine.joints.cardan_contact_stiffness_n_per_m)
         kw.setdefault("geometry", machine.joints.cardan_clearance_geometry)
-        return cls(np.random.default_rng(seed).uniform(low_m, high_m, (len(machine.legs), 2)), **kw)
+        return cls(gaps_m=np.random.default_rng(seed).uniform(low_m, high_m, (len(machine.legs), 2)), **kw)
 
     def with_gap(self, gap_m: float) -> Clearance:
         """The same contact law and geometry with every cardan's play g = gap_m (m)."""
@@ -219,13 +219,14 @@ class Clearance:
         return replace(self, gaps_m=self.effective_gaps_m(machine, pose_m), geometry="axial")
 
     def law(self, leg: int, end: int) -> DeadZone:
-        return DeadZone(float(self.gaps_m[leg, end]), self.contact_stiffness_n_per_m, self.smoothing_m)
+        return DeadZone(gap=float(self.gaps_m[leg, end]), stiffness=self.contact_stiffness_n_per_m,
+                        width=self.smoothing_m)
 
     def rotation_law(self, leg: int, end: int) -> DeadZone | None:
         if self.rotation_gaps_rad is None:
             return None
-        return DeadZone(float(self.rotation_gaps_rad[leg, end]), self.rotation_stiffness_nm_per_rad,
-                        self.rotation_smoothing_rad)
+        return DeadZone(gap=float(self.rotation_gaps_rad[leg, end]), stiffness=self.rotation_stiffness_nm_per_rad,
+                        width=self.rotation_smoothing_rad)
 
     def cardan_compliance(self) -> dict:
         """The ``cardan_compliance`` argument of :func:`pressfit.mechanics.model.build_model` (axial

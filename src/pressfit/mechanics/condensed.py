@@ -121,7 +121,7 @@ def _sym_full(s: Sym) -> np.ndarray:
     return np.stack([a, b, c, b, d, e, c, e, f], -1).reshape(-1, 3, 3)
 
 
-@dataclass(frozen=True)
+@dataclass(frozen=True, kw_only=True)
 class _Core:
     e: np.ndarray  # (3, n, m) leg unit vectors, base -> plate
     sin_beta: np.ndarray  # (n, m) e_i . a_i
@@ -160,9 +160,9 @@ def _core(machine: Machine, h: np.ndarray) -> _Core:
     bad = ~((det_t > 1e-12 * k_a.max(0) ** 3) & (det_r > 1e-12 * k_r.max(0) ** 3))
     if np.any(bad):
         raise SingularPoseError(f"the condensed plate stiffness is singular at {int(bad.sum())} pose(s), "
-                                f"e.g. h = {h[np.argmax(bad)].tolist()} m")
+                                f"e.g. h = {h[np.argmax(bad)].tolist()} m", pose_m=h[np.argmax(bad)])
     rho = np.ascontiguousarray((h - concurrency_point(machine, h)).T)
-    return _Core(e, s, c, k_a, k_r, rho, kt, kr, ct, cr)
+    return _Core(e=e, sin_beta=s, c=c, k_a=k_a, k_r=k_r, rho=rho, kt=kt, kr=kr, ct=ct, cr=cr)
 
 
 def _poses(machine: Machine, poses_m: np.ndarray) -> np.ndarray:
@@ -214,7 +214,7 @@ def condensed_plate_compliance(machine: Machine, poses_m: np.ndarray, about: str
 
 
 # --- the linear solve ----------------------------------------------------------------------------
-@dataclass(frozen=True)
+@dataclass(frozen=True, kw_only=True)
 class CondensedResult:
     """Linear elastic equilibrium at an array of poses (leading shape ``...``), SI units.
 
@@ -318,9 +318,11 @@ def solve_linear(machine: Machine, poses_m: np.ndarray, plate_wrench: np.ndarray
         wc = w[:, None] if wf is None else np.ascontiguousarray(wf[i:i + _CHUNK].T)
         for o, x in zip(out, _solve_core(machine, _core(machine, hf[i:i + _CHUNK]), wc), strict=True):
             o[i:i + _CHUNK] = x.T  # (3, m) -> (m, 3); (n, m) -> (m, n); (3, n, m) -> (m, n, 3)
-    o = [x.reshape(shape + x.shape[1:]) for x in out]
-    result = CondensedResult(np.broadcast_to(h, shape + (3,)), np.broadcast_to(w, shape + (6,)), *o,
-                             machine.plate_offsets_m)
+    delta, phi, n, cpl, c, e, moments, res_f, res_m = (x.reshape(shape + x.shape[1:]) for x in out)
+    result = CondensedResult(pose_m=np.broadcast_to(h, shape + (3,)), plate_wrench=np.broadcast_to(w, shape + (6,)),
+                             plate_displacement_m=delta, plate_rotation_rad=phi, axial_forces_n=n, couples_nm=cpl,
+                             couple_directions=c, leg_unit_vectors=e, leg_moments_nm=moments, force_residual_n=res_f,
+                             moment_residual_nm=res_m, plate_offsets_m=machine.plate_offsets_m)
     relative = result.relative_residual().reshape(-1)
     bad = ~(relative <= CONDENSED_RESIDUAL_TOL)
     if bad.any():
@@ -331,7 +333,7 @@ def solve_linear(machine: Machine, poses_m: np.ndarray, plate_wrench: np.ndarray
     return result
 
 
-@dataclass(frozen=True)
+@dataclass(frozen=True, kw_only=True)
 class StiffnessMaps:
     """Maps over the x-z square at height y; arrays are indexed [i_z, i_x], SI units.
 
@@ -388,9 +390,11 @@ def stiffness_maps(machine: Machine, y_m: float, n: int = 51, press_load_n: floa
     def masked(v: np.ndarray) -> np.ndarray:
         return np.where(ok, v, np.nan)
 
-    return StiffnessMaps(x, z, float(y_m), float(press_load_n), ok, masked(1 / comp[..., 1, 1]), masked(1 / lam_max),
-                         masked(1 / comp[..., 0, 0]), masked(1 / comp[..., 2, 2]), masked(res.tilt_rad),
-                         masked(np.hypot(res.plate_displacement_m[..., 0], res.plate_displacement_m[..., 2])))
+    return StiffnessMaps(x_m=x, z_m=z, y_m=float(y_m), press_load_n=float(press_load_n), reachable=ok,
+                         vertical_n_per_m=masked(1 / comp[..., 1, 1]), lateral_n_per_m=masked(1 / lam_max),
+                         lateral_x_n_per_m=masked(1 / comp[..., 0, 0]), lateral_z_n_per_m=masked(1 / comp[..., 2, 2]),
+                         tilt_rad=masked(res.tilt_rad),
+                         drift_m=masked(np.hypot(res.plate_displacement_m[..., 0], res.plate_displacement_m[..., 2])))
 
 
 def stiffness_report(machine: Machine, pose_m: np.ndarray, press_load_n: float = PRESS_LOAD_N) -> dict[str, object]:

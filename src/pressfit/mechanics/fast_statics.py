@@ -58,12 +58,14 @@ from dataclasses import dataclass
 import numpy as np
 
 from pressfit.description.machine import Machine
-from pressfit.errors import ConvergenceError, PressfitError, SingularPoseError
+from pressfit.errors import ConvergenceError, FastSolverError, PressfitError, SingularPoseError
 from pressfit.mechanics.model import MachineModel, build_model
 from pressfit.mechanics.preload import Amplitudes, rest_length_offsets
 from pressfit.mechanics.stability import Stability
 from pressfit.mechanics.statics import (
     NEWTON_TOL,
+    RESIDUAL_NAMES,
+    SECTION_COMPONENTS,
     SECTIONS,
     Equilibrium,
     EquilibriumSolver,
@@ -80,11 +82,7 @@ from pressfit.spatial import cross, skew
 _CHUNK = 1024  # poses per block: the per-leg arrays of a block stay in the CPU cache
 
 
-class FastSolverError(PressfitError):
-    """The model has something the fast solver does not support (use the reference solver)."""
-
-
-@dataclass(frozen=True)
+@dataclass(frozen=True, kw_only=True)
 class _Chain:
     """Pose-independent structure of the n (identical) leg chains, columns in chain order."""
 
@@ -139,21 +137,21 @@ def _chain(mm: MachineModel) -> _Chain:
     jcol = {j: c for c, j in enumerate(joints[0])}
     act = int(scols[[mm.springs[k].name == "actuator" for k in spring_idx[0][order]]][0])
     return _Chain(
-        np.array(["XYZ".index(k[1]) for k in kinds[0]]),
-        np.array([k[0] == "P" for k in kinds[0]]),
-        z,
-        np.array([jcol[j] for j in mm.stem_joint_ids()[0]]),
-        np.array([pl[r[0]].rotation for r in joints]),
-        np.array([pl[r[0]].translation for r in joints]),
-        scols,
-        np.setdiff1d(np.arange(legv.shape[1]), scols),
-        spring_idx[:, order],
-        rigid,
-        act,
-        tuple((jcol[mm.sections[0][s][0]], mm.sections[0][s][1]) for s in SECTIONS),
-        np.array([a.translation for a in mm.anchor_placements]),
-        np.array(mm.leg_frames0),
-        np.array([k[0] == "P" for k in kinds[0]]),
+        axis=np.array(["XYZ".index(k[1]) for k in kinds[0]]),
+        prismatic=np.array([k[0] == "P" for k in kinds[0]]),
+        z=z,
+        stem_cols=np.array([jcol[j] for j in mm.stem_joint_ids()[0]]),
+        r0=np.array([pl[r[0]].rotation for r in joints]),
+        b=np.array([pl[r[0]].translation for r in joints]),
+        spring_cols=scols,
+        free_cols=np.setdiff1d(np.arange(legv.shape[1]), scols),
+        spring_index=spring_idx[:, order],
+        rigid_cols=rigid,
+        act_col=act,
+        sec=tuple((jcol[mm.sections[0][s][0]], mm.sections[0][s][1]) for s in SECTIONS),
+        anchors=np.array([a.translation for a in mm.anchor_placements]),
+        frames0=np.array(mm.leg_frames0),
+        force_rows=np.array([k[0] == "P" for k in kinds[0]]),
     )
 
 
@@ -196,7 +194,7 @@ def _dot(a: np.ndarray, b: np.ndarray) -> np.ndarray:
     return (a * b).sum(-1)
 
 
-@dataclass
+@dataclass(kw_only=True)
 class _Kin:
     """Kinematics of a block of poses (b poses, n legs, m columns)."""
 
@@ -231,7 +229,7 @@ def _kinematics(ch: _Chain, q: np.ndarray, z: np.ndarray, base: np.ndarray) -> _
         if c in sec_col:
             k = sec_col[c]
             sec[:, :, k] = pos + cols[2] * ch.sec[k][1]
-    return _Kin(w, p, sec, pos, np.stack(cols, -1))
+    return _Kin(w=w, p=p, sec=sec, pe=pos, re=np.stack(cols, -1))
 
 
 def _log3(r: np.ndarray) -> np.ndarray:
@@ -253,7 +251,7 @@ def _exp3(v: np.ndarray) -> np.ndarray:
     return np.eye(3) + a * k + b * (k @ k)
 
 
-@dataclass(frozen=True)
+@dataclass(frozen=True, kw_only=True)
 class BatchEquilibrium:
     """Equilibria at b poses (SI; legs in kinematic order; conventions of :class:`Equilibrium`)."""
 
@@ -280,16 +278,22 @@ class BatchEquilibrium:
         """Pose i as the reference solver's :class:`Equilibrium`, with its stability report (computed by
         :meth:`FastEquilibriumSolver.equilibrium`)."""
         s = self.sections[i].tolist()
-        legs = tuple(LegLoads({name: SectionWrench(*s[leg][k]) for k, name in enumerate(SECTIONS)}, self.frames[i, leg],
-                              float(self.actuator_forces_n[i, leg])) for leg in range(self.actuator_forces_n.shape[1]))
-        res = Residuals(*self.residuals[i].tolist(), float(self.force_scale_n[i]), self.length_scale_m)
-        return Equilibrium(self.pose_m[i].copy(), self.load[i].copy(), legs, self.actuator_forces_n[i].copy(),
-                           self.plate_displacement_m[i].copy(), self.plate_rotation_rad[i].copy(), self.q[i].copy(),
-                           self.multipliers[i].copy(), int(self.iterations[i]), self.linear, res, stability,
-                           self.preload_offsets_m[i].copy())
+        legs = tuple(LegLoads(sections={name: SectionWrench(**dict(zip(SECTION_COMPONENTS, s[leg][k], strict=True)))
+                                        for k, name in enumerate(SECTIONS)},
+                              frame=self.frames[i, leg], actuator_force_n=float(self.actuator_forces_n[i, leg]))
+                     for leg in range(self.actuator_forces_n.shape[1]))
+        res = Residuals(**dict(zip(RESIDUAL_NAMES, self.residuals[i].tolist(), strict=True)),
+                        force_scale_n=float(self.force_scale_n[i]), length_scale_m=self.length_scale_m)
+        return Equilibrium(pose_m=self.pose_m[i].copy(), load=self.load[i].copy(), legs=legs,
+                           actuator_forces_n=self.actuator_forces_n[i].copy(),
+                           plate_displacement_m=self.plate_displacement_m[i].copy(),
+                           plate_rotation_rad=self.plate_rotation_rad[i].copy(), q=self.q[i].copy(),
+                           multipliers=self.multipliers[i].copy(), iterations=int(self.iterations[i]),
+                           linear=self.linear, residuals=res, stability=stability,
+                           preload_offsets_m=self.preload_offsets_m[i].copy())
 
 
-@dataclass
+@dataclass(kw_only=True)
 class _Block:
     """The pose-dependent constants of a block of poses."""
 
@@ -408,7 +412,7 @@ class FastEquilibriumSolver:
         blocks = (slice(i, i + _CHUNK) for i in range(0, len(h), _CHUNK))
         parts = [self._solve_block(self._block(h[k], w[k], offsets[k], base[k], anchors[k]), linear, tol, max_iter)
                  for k in blocks]
-        batch = BatchEquilibrium(*[np.concatenate([p[k] for p in parts]) for k in range(12)],
+        batch = BatchEquilibrium(**{k: np.concatenate([p[k] for p in parts]) for k in parts[0]},
                                  length_scale_m=self.machine.geometry.base_half_side_m,
                                  preload_offsets_m=np.array(offsets, dtype=float), linear=linear,
                                  base_points_m=np.array(base), plate_offsets_m=np.array(anchors))
@@ -447,7 +451,8 @@ class FastEquilibriumSolver:
                                    np.abs(ks[:, :, act] * offsets).max(1)])
         f_ref = np.where(f_ref > 0, f_ref, 1.0)
         row = np.where(ch.force_rows, 1.0, l_ref)[None, None] * f_ref[:, None, None]
-        return _Block(h, w, q0, q0leg, z, ks, rest, offsets, base, anchors, f_ref, 1.0 / row)
+        return _Block(pose=h, load=w, q0=q0, q0leg=q0leg, z=z, ks=ks, rest=rest, offsets=offsets, base=base,
+                      anchors=anchors, f_ref=f_ref, row_scale=1.0 / row)
 
     def _evaluate(self, bk: _Block, d: np.ndarray, pc: np.ndarray, rp: np.ndarray
                   ) -> tuple[_Kin, np.ndarray, np.ndarray, np.ndarray]:
@@ -512,7 +517,7 @@ class FastEquilibriumSolver:
         dqs = -x - (ast @ lam[..., None])[..., 0] / bk.ks
         return z[..., 6:], dqs, dp, lam
 
-    def _solve_block(self, bk: _Block, linear: bool, tol: float, max_iter: int) -> tuple[np.ndarray, ...]:
+    def _solve_block(self, bk: _Block, linear: bool, tol: float, max_iter: int) -> dict[str, np.ndarray]:
         if linear and self._straight is not None:
             return self._solve_straight(bk)
         ch = self._chain
@@ -575,7 +580,8 @@ class FastEquilibriumSolver:
         if np.any(np.abs(det) < 1e-9) or np.any(nn < 1e-9):
             bad = np.flatnonzero((np.abs(det) < 1e-9).any(1) | (nn < 1e-9).any(1))[0]
             raise SingularPoseError(f"pose {bk.pose[bad].tolist()} m: a cardan axis is along its leg or the plate "
-                                    "cardan axes are parallel (the leg's transmitted wrenches degenerate)")
+                                    "cardan axes are parallel (the leg's transmitted wrenches degenerate)",
+                                    pose_m=bk.pose[bad])
         b = -_dot(w[..., :2, :], n[..., None, :]) / ln[..., None]
         f = (b[..., :1] * v[..., 1, :] - b[..., 1:] * v[..., 0, :]) / det[..., None]
         n_w = np.zeros(q.shape[:2] + (6, 2))
@@ -584,8 +590,8 @@ class FastEquilibriumSolver:
         return {"rl": rl, "s": s, "ln": ln, "ez": ez, "pe": pe, "c": c, "w": w, "u": u, "v": v, "det": det, "n": n,
                 "nn": nn, "n_w": n_w, "n_l": n_l}
 
-    def _solve_straight(self, bk: _Block) -> tuple[np.ndarray, ...]:
-        """The linear solve in closed form for straight legs (module doc), in BatchEquilibrium order."""
+    def _solve_straight(self, bk: _Block) -> dict[str, np.ndarray]:
+        """The linear solve in closed form for straight legs (module doc), by BatchEquilibrium field."""
         ch = self._chain
         g = self._straight_legs(bk)
         ln, n_w = g["ln"], g["n_w"]
@@ -622,7 +628,7 @@ class FastEquilibriumSolver:
         return np.tensordot(wrench_l, st.base, ([-1], [1])) + lever * np.tensordot(wrench_l, st.lever, ([-1], [1]))
 
     def _straight_finish(self, bk: _Block, g: dict[str, np.ndarray], lever: np.ndarray, pj: np.ndarray,
-                         dp: np.ndarray, lam: np.ndarray, dqs: np.ndarray) -> tuple[np.ndarray, ...]:
+                         dp: np.ndarray, lam: np.ndarray, dqs: np.ndarray) -> dict[str, np.ndarray]:
         """Free joint motions from the linearised closure A_f dq_f = t (dual bases of the cardan axes), the
         residuals (free-joint stationarity A_f^T lambda, spring rows, plate; the closure left by dq_f) and
         the results."""
@@ -667,8 +673,8 @@ class FastEquilibriumSolver:
         stat: np.ndarray,
         iters: np.ndarray,
         dp_linear: np.ndarray | None,
-    ) -> tuple[np.ndarray, ...]:
-        """Sections, plate motion and residuals (statics._result's definitions), in BatchEquilibrium order."""
+    ) -> dict[str, np.ndarray]:
+        """Sections, plate motion and residuals (statics._result's definitions), by BatchEquilibrium field."""
         ch, l_ref = self._chain, self.machine.geometry.base_half_side_m
         f_load, m_load = bk.load[:, :3], bk.load[:, 3:]
         lf, lm = lam[..., :3], lam[..., 3:]
@@ -702,4 +708,6 @@ class FastEquilibriumSolver:
         q[:, 3:6] = rot * np.where(t > 0, np.sin(t / 2) / np.where(t > 0, t, 1.0), 0.5)
         q[:, 6] = np.cos(t[:, 0] / 2)
         disp, rot = (pc - bk.pose, rot) if dp_linear is None else (dp_linear[:, :3], dp_linear[:, 3:])
-        return (bk.pose, bk.load, act_force, sections, frames, disp, rot, lam, q, iters, res, bk.f_ref)
+        return dict(pose_m=bk.pose, load=bk.load, actuator_forces_n=act_force, sections=sections, frames=frames,
+                    plate_displacement_m=disp, plate_rotation_rad=rot, multipliers=lam, q=q, iterations=iters,
+                    residuals=res, force_scale_n=bk.f_ref)

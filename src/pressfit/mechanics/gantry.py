@@ -81,7 +81,7 @@ def _frame(y_axis: np.ndarray, z_axis: np.ndarray) -> np.ndarray:
     return np.column_stack([cross(y_axis, z_axis), y_axis, z_axis])
 
 
-@dataclass(frozen=True)
+@dataclass(frozen=True, kw_only=True)
 class Member:
     """One straight elastic member of the model at its pose: ``rotation`` columns are the local x (width),
     y (height) and z (root to tip) axes in the world; ``station_v`` (n, 6) the velocity indices of each
@@ -109,7 +109,7 @@ class Member:
         return self.root_m + np.multiply.outer(s_m, self.rotation[:, 2])
 
 
-@dataclass(frozen=True)
+@dataclass(frozen=True, kw_only=True)
 class MemberMoment:
     """The largest bending moment in a member under one load: its magnitude sqrt(M_x^2 + M_y^2) (N m), where
     (world point, m; distance from the member's root, m: for the X beam from the left column's top), and the
@@ -122,7 +122,7 @@ class MemberMoment:
     section: SectionWrench
 
 
-@dataclass(frozen=True)
+@dataclass(frozen=True, kw_only=True)
 class GantryResiduals:
     """Residuals of a gantry solve (module doc): closure in m and rad, the rest relative."""
 
@@ -141,7 +141,7 @@ class GantryResiduals:
         return {k: float(getattr(self, k)) for k in self.__dataclass_fields__}
 
 
-@dataclass(frozen=True)
+@dataclass(frozen=True, kw_only=True)
 class GantryEquilibrium:
     """The linear static response of the gantry to a tool wrench at a pose (SI, world axes)."""
 
@@ -167,7 +167,7 @@ class GantryEquilibrium:
                 "axial_load_ratio": self.axial_load_ratio, "residuals": self.residuals.to_dict()}
 
 
-@dataclass
+@dataclass(kw_only=True)
 class GantryModel:
     """The VJM Pinocchio model of a gantry at one tool pose (module doc); never changed after it is built.
 
@@ -236,7 +236,8 @@ class GantryModel:
             raise ResidualError("gantry linear solve", names[k], float(values[k]), tol, where)
         if ratio > MAX_AXIAL_LOAD_RATIO:
             raise UnstableEquilibriumError(f"a gantry member {where} carries {100 * ratio:.3g}% of its Euler load, "
-                                           f"beyond the {100 * MAX_AXIAL_LOAD_RATIO:g}% this linear solve accepts")
+                                           f"beyond the {100 * MAX_AXIAL_LOAD_RATIO:g}% this linear solve accepts",
+                                           pose_m=self.pose_m, load=w)
         return eq
 
     def member(self, name: str) -> Member:

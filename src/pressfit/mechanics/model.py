@@ -79,7 +79,7 @@ class LinearSpring:
         return self.k
 
 
-@dataclass(frozen=True)
+@dataclass(frozen=True, kw_only=True)
 class CardanCompliance:
     """Virtual joints for one cardan's constrained directions; ``None`` keeps that direction rigid.
 
@@ -93,7 +93,7 @@ class CardanCompliance:
     axial: SpringLaw | None = None
 
 
-@dataclass
+@dataclass(kw_only=True)
 class Spring:
     """An elastic virtual joint: energy law(q[idx_q] - rest)."""
 
@@ -108,7 +108,7 @@ class Spring:
 CardanComplianceSpec = CardanCompliance | dict[tuple[int, str], CardanCompliance | None] | None
 
 
-@dataclass(frozen=True)
+@dataclass(frozen=True, kw_only=True)
 class ModelPose:
     """The pose-dependent values of a :class:`MachineModel` at one reachable pose: a fresh value per pose
     (the model itself never changes after it is built).
@@ -124,7 +124,7 @@ class ModelPose:
     spring_rest: np.ndarray  # per spring: rest value of its coordinate (m or rad)
 
 
-@dataclass
+@dataclass(kw_only=True)
 class MachineModel:
     """The Pinocchio model of a machine, with its springs and loop closures, built at a reference pose.
 
@@ -277,7 +277,8 @@ class MachineModel:
         rest = q0[[s.idx_q for s in self.springs]]
         if m.has_cardan_tilts:
             q0 = self.assemble(h, q0, tol=1e-13, least_squares=True)
-        return ModelPose(h, q0, ik.lengths_m - m.cylinder.length_m, k, rest)
+        return ModelPose(pose_m=h, q0=q0, stem_lengths_m=ik.lengths_m - m.cylinder.length_m, spring_k=k,
+                         spring_rest=rest)
 
     def place_stem(self, model: pin.Model, stem_lengths_m: np.ndarray) -> None:
         """Write the stem joint placements for stem lengths (n,) (m) into ``model``: this model's
@@ -362,7 +363,7 @@ class _ChainBuilder:
         self.parent, self.pending = j, pin.SE3.Identity()
         if law is not None:
             jm = self.model.joints[j]
-            self.springs.append(Spring(name, self.leg, jm.idx_q, jm.idx_v, law))
+            self.springs.append(Spring(name=name, leg=self.leg, idx_q=jm.idx_q, idx_v=jm.idx_v, law=law))
         return j
 
     def virtual(self, end: str, which: str) -> None:
@@ -456,14 +457,15 @@ def build_model(machine: Machine, pose_m: np.ndarray, *, springs_per_segment: in
                                                                       b.plate, anchors[i])) for i in legs]
     var = [(k, 0 if sp.name == "actuator" else 2 if sp.name.endswith(".z") else 1, sp.leg)
            for k, sp in enumerate(springs) if sp.name == "actuator" or sp.name.startswith("stem[")]
-    mm = MachineModel(
-        machine, model, constraints, b.n, h, np.zeros(model.nq), b.plate, b.ids,
-        [b.leg_velocities(i) for i in legs], springs, anchors,
-        np.array([float(np.sign(frames0[i][:, 0] @ machine.beta_axes[i])) for i in legs]), frames0,
-        b.sections, cardan_compliance,
-        np.array([sp.law.k if type(sp.law) is LinearSpring else np.nan for sp in springs]), np.zeros(len(springs)),
-        {k: np.array([model.joints[j].idx_q for j in v]) for k, v in b.rigid.items()}, b.stem_first,
-        tuple(np.array(c, dtype=int) for c in zip(*var)))
+    mm = MachineModel(machine=machine, model=model, constraint_models=constraints, springs_per_segment=b.n, pose_m=h,
+                      q0=np.zeros(model.nq), plate_joint_id=b.plate, leg_joint_ids=b.ids,
+                      leg_v=[b.leg_velocities(i) for i in legs], springs=springs, anchor_placements=anchors,
+                      sigma=np.array([float(np.sign(frames0[i][:, 0] @ machine.beta_axes[i])) for i in legs]),
+                      leg_frames0=frames0, sections=b.sections, cardan_compliance=cardan_compliance,
+                      spring_k=np.array([sp.law.k if type(sp.law) is LinearSpring else np.nan for sp in springs]),
+                      spring_rest=np.zeros(len(springs)),
+                      _rigid_idx={k: np.array([model.joints[j].idx_q for j in v]) for k, v in b.rigid.items()},
+                      _stem_first=b.stem_first, _variable_springs=tuple(np.array(c, dtype=int) for c in zip(*var)))
     at = mm.pose_values(h)
     mm.place_stem(model, at.stem_lengths_m)
     variable = set(mm._variable_springs[0].tolist())

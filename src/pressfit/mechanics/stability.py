@@ -32,7 +32,7 @@ import numpy as np
 NEUTRAL_TOL = 1e-10  # eigenvalues within this fraction of the largest count as zero (round-off is ~1e-15)
 
 
-@dataclass(frozen=True)
+@dataclass(frozen=True, kw_only=True)
 class Stability:
     """Stability of an equilibrium (module doc). ``stable``: the reduced tangent stiffness is positive
     definite (no eigenvalue below -NEUTRAL_TOL times its largest) and the KKT matrix has exactly as many
@@ -82,4 +82,5 @@ def reduced_stability(h_leg: np.ndarray, h_plate: np.ndarray, a: np.ndarray, p: 
     top = float(np.max(np.abs(reduced)))
     neg = int((w < -NEUTRAL_TOL * np.abs(w).max(1, keepdims=True)).sum() + (ws < -NEUTRAL_TOL * top).sum())
     lo = float(reduced.min())
-    return Stability(bool(lo >= -NEUTRAL_TOL * top and neg == 6 * nl), lo, float(reduced.max()), neg, 6 * nl)
+    return Stability(stable=bool(lo >= -NEUTRAL_TOL * top and neg == 6 * nl), min_eigenvalue_nm=lo,
+                     max_eigenvalue_nm=float(reduced.max()), kkt_negative_eigenvalues=neg, constraints=6 * nl)

@@ -80,6 +80,7 @@ from pressfit.mechanics.stability import Stability, reduced_stability
 from pressfit.spatial import cross, skew
 
 SECTIONS = ("base", "actuator", "plate")
+SECTION_COMPONENTS = ("N", "V_x", "V_y", "M_x", "M_y", "T")  # SectionWrench's fields
 CLOSURE_FLOOR = 64 * np.finfo(float).eps  # m or rad: closure components below it are round-off (module doc)
 NEWTON_TOL = 1e-10  # stopping tolerance (relative, module doc); the round-off floor is about 3e-12
 # Relative tolerance every returned solution is held to (Residuals.is_valid's default and the README's validity
@@ -92,7 +93,7 @@ RESIDUAL_NAMES = ("plate_force", "plate_moment", "machine_force", "machine_momen
 
 
 # --- results -----------------------------------------------------------------------------------------
-@dataclass(frozen=True)
+@dataclass(frozen=True, kw_only=True)
 class SectionWrench:
     """Wrench of the plate-side part on the base-side part, about the section point, deformed leg frame."""
 
@@ -107,14 +108,14 @@ class SectionWrench:
         return {"N": self.N, "V_x": self.V_x, "V_y": self.V_y, "M_x": self.M_x, "M_y": self.M_y, "T": self.T}
 
 
-@dataclass(frozen=True)
+@dataclass(frozen=True, kw_only=True)
 class LegLoads:
     sections: dict[str, SectionWrench]  # 'base', 'actuator', 'plate'
     frame: np.ndarray  # (3, 3) columns e_x, e_y, e_z of the (deformed) leg frame
     actuator_force_n: float  # prismatic spring force, N, > 0 tension
 
 
-@dataclass(frozen=True)
+@dataclass(frozen=True, kw_only=True)
 class Residuals:
     """Equilibrium and closure residuals of a solution (relative, see module doc; closure also in m, rad)."""
 
@@ -144,7 +145,7 @@ class Residuals:
         return {k: float(getattr(self, k)) for k in self.__dataclass_fields__}
 
 
-@dataclass(frozen=True)
+@dataclass(frozen=True, kw_only=True)
 class Equilibrium:
     """A static equilibrium of the machine (SI). Legs in kinematic order."""
 
@@ -200,7 +201,7 @@ def _phi_psi(f: np.ndarray, mo: np.ndarray, fp: np.ndarray) -> tuple[np.ndarray,
     return phi, psi
 
 
-@dataclass
+@dataclass(kw_only=True)
 class _Static:
     """Pose-independent index structure of the solver for one model, with one thread's constraint datas."""
 
@@ -237,15 +238,17 @@ def _static(mm: MachineModel) -> _Static:
     lin = ~np.isnan(mm.spring_k)
     lin_mask = np.zeros(legv.shape, bool)
     lin_mask[at[0, lin], at[1, lin]] = True
-    return _Static(legv, at[1, act], act, _force_rows(mm), [mm.leg_joint_ids[i]["plate_end"] for i in legs],
-                   np.array([a.translation for a in mm.anchor_placements]).T,
-                   np.array([a.rotation for a in mm.anchor_placements]),
-                   mm.constraint_datas(), (at[0], at[1]), [j for j, _ in sec],
-                   [(n // 3, n % 3, z) for n, (_, z) in enumerate(sec) if z], np.tril(np.ones((m, m)), -1), lin,
-                   lin_mask, [(int(at[0, k]), int(at[1, k]), mm.springs[k].law) for k in np.flatnonzero(~lin)])
+    return _Static(legv=legv, act_col=at[1, act], act_spring=act, is_force=_force_rows(mm),
+                   plate_end=[mm.leg_joint_ids[i]["plate_end"] for i in legs],
+                   anchors=np.array([a.translation for a in mm.anchor_placements]).T,
+                   frames0=np.array([a.rotation for a in mm.anchor_placements]), cds=mm.constraint_datas(),
+                   spring_at=(at[0], at[1]), sec_joints=[j for j, _ in sec],
+                   sec_z=[(n // 3, n % 3, z) for n, (_, z) in enumerate(sec) if z], lower=np.tril(np.ones((m, m)), -1),
+                   lin=lin, lin_mask=lin_mask,
+                   other=[(int(at[0, k]), int(at[1, k]), mm.springs[k].law) for k in np.flatnonzero(~lin)])
 
 
-@dataclass(frozen=True)
+@dataclass(frozen=True, kw_only=True)
 class _PoseModel:
     """What the Newton loop and the results read of the model at one pose: a fresh value per solve, with
     the calling thread's Pinocchio model (its stem placed for this pose)."""
@@ -259,7 +262,7 @@ class _PoseModel:
     legv: np.ndarray  # (n, m) v indices of the leg coordinates
 
 
-@dataclass
+@dataclass(kw_only=True)
 class _Problem:
     """Everything a solve needs that does not change during the iterations."""
 
@@ -293,11 +296,12 @@ def _problem(mm: _PoseModel, sc: _Static, pv: ModelPose, load: np.ndarray, offse
     f, m = load[:3].tolist(), load[3:].tolist()
     f_ref = max(math.hypot(*f), math.hypot(*m) / l_ref, f_pre)
     f_ref = f_ref if f_ref > 0 else 1.0
-    return _Problem(mm, load, k, rest_rel, sc.lin_mask, sc.other, sc.legv + 1, offsets, f_ref, l_ref, sc.legv,
-                    sc.act_col, sc.is_force, sc, np.where(sc.is_force, 1.0 / f_ref, 1.0 / (f_ref * l_ref)))
+    return _Problem(mm=mm, load=load, k=k, rest_rel=rest_rel, lin_mask=sc.lin_mask, other=sc.other, legq=sc.legv + 1,
+                    offsets=offsets, f_ref=f_ref, l_ref=l_ref, legv=sc.legv, act_col=sc.act_col, is_force=sc.is_force,
+                    sc=sc, inv_scale=np.where(sc.is_force, 1.0 / f_ref, 1.0 / (f_ref * l_ref)))
 
 
-@dataclass
+@dataclass(kw_only=True)
 class _State:
     q: np.ndarray
     s: np.ndarray  # (n, 6, m) leg twists
@@ -359,10 +363,11 @@ def _evaluate(pb: _Problem, q: np.ndarray, data: pin.Data, d_leg: np.ndarray | N
             ktan[i, cc] = law.tangent(x[i, cc])
     f, m = pb.load[:3], pb.load[3:]
     g_plate = -(sp.T @ np.concatenate([f, _cross3(pc, f) + m]))
-    return _State(q, s, sp, pe, pd, pc, rp, c, a, p, ja, jp, g_leg, g_plate, ktan)
+    return _State(q=q, s=s, sp=sp, pe=pe, pd=pd, pc=pc, rp=rp, c=c, a=a, p=p, ja=ja, jp=jp, g_leg=g_leg,
+                  g_plate=g_plate, ktan=ktan)
 
 
-@dataclass
+@dataclass(kw_only=True)
 class _Factor:
     """The KKT matrix [H J^T; J 0] factored by per-leg elimination and a 6x6 plate Schur complement."""
 
@@ -392,7 +397,8 @@ def _kkt_solve(st: _State, h_leg: np.ndarray, h_plate: np.ndarray, r_leg: np.nda
     for i in range(nl):  # direct LAPACK: numpy's batched linalg costs more on 35x35 blocks
         lu, piv, sol[i], info = _gesv(kkt[i], rhs[i])
         if info != 0:
-            raise SingularPoseError(f"leg {i + 1}'s elastic KKT block is singular (a leg mechanism has no stiffness)")
+            raise SingularPoseError(f"leg {i + 1}'s elastic KKT block is singular (a leg mechanism has no stiffness)",
+                                    pose_m=st.pc)
         lus.append((lu, piv))
     zz, z = sol[:, :, :6], sol[:, :, 6]
     pt = st.p.transpose(0, 2, 1)
@@ -401,11 +407,12 @@ def _kkt_solve(st: _State, h_leg: np.ndarray, h_plate: np.ndarray, r_leg: np.nda
         sv = _gesdd(schur, compute_uv=0)[1].tolist()
         if not all(map(math.isfinite, sv)) or sv[-1] <= 1e-13 * sv[0]:
             raise SingularPoseError("the plate stiffness is singular at this pose "
-                                    f"(condition {sv[0] / max(sv[-1], 1e-300):.3g})")
+                                    f"(condition {sv[0] / max(sv[-1], 1e-300):.3g})", pose_m=st.pc,
+                                    smallest_singular_value=sv[-1])
     lu, piv, info = _getrf(schur)
     if info != 0:
-        raise SingularPoseError("the plate stiffness is singular at this pose")
-    fa = _Factor(lus, zz, pt, (lu, piv), m)
+        raise SingularPoseError("the plate stiffness is singular at this pose", pose_m=st.pc)
+    fa = _Factor(lu=lus, zz=zz, pt=pt, schur=(lu, piv), m=m)
     dp = _getrs(lu, piv, r_plate - (pt @ z[:, m:, None]).sum(0)[:, 0])[0]
     sol = z + zz @ dp
     return sol[:, :m], dp, sol[:, m:], fa
@@ -446,7 +453,7 @@ def _dq(mm: _PoseModel, dq_leg: np.ndarray, dp: np.ndarray) -> np.ndarray:
 StepLimit = Callable[[np.ndarray], float]  # dv (model velocity coordinates) -> step factor in (0, 1]
 
 
-@dataclass
+@dataclass(kw_only=True)
 class _Worker:
     """One thread's own Pinocchio model (stem placed per solve), data and constraint datas."""
 
@@ -501,7 +508,7 @@ class EquilibriumSolver:
         w = getattr(self._local, "worker", None)
         if w is None:
             model = self.model.model.copy()
-            w = self._local.worker = _Worker(model, model.createData(), _static(self.model))
+            w = self._local.worker = _Worker(model=model, data=model.createData(), sc=_static(self.model))
         return w
 
     def solve(self, pose_m: np.ndarray, plate_wrench: np.ndarray, *,
@@ -553,8 +560,8 @@ class EquilibriumSolver:
         """The problem at one pose on this thread's model copy, its stem placed for the pose first."""
         w = self._worker()
         self.model.place_stem(w.model, pv.stem_lengths_m)
-        mm = _PoseModel(self.machine, w.model, self.model.constraint_models, self.model.plate_joint_id, pv.pose_m,
-                        pv.q0, w.sc.legv)
+        mm = _PoseModel(machine=self.machine, model=w.model, constraint_models=self.model.constraint_models,
+                        plate_joint_id=self.model.plate_joint_id, pose_m=pv.pose_m, q0=pv.q0, legv=w.sc.legv)
         return _problem(mm, w.sc, pv, load, offsets), w.data
 
 
@@ -626,14 +633,15 @@ def _check_physical(machine: Machine, eq: Equilibrium) -> None:
             f"no stable equilibrium {_where(eq)}: the tangent stiffness on the closure manifold has smallest "
             f"eigenvalue {s.min_eigenvalue_nm:.4g} N m (largest {s.max_eigenvalue_nm:.4g} N m) and the KKT matrix "
             f"{s.kkt_negative_eigenvalues} negative eigenvalues for {s.constraints} constraints: the load is "
-            "beyond the machine's buckling load")
+            "beyond the machine's buckling load", pose_m=eq.pose_m, load=eq.load)
     lengths = kinematics.inverse_kinematics(machine, eq.pose_m).lengths_m
     strain = np.abs(eq.actuator_forces_n) * machine.axial_compliance_m_per_n(lengths) / lengths
     if strain.max() > MAX_AXIAL_STRAIN:
         i = int(np.argmax(strain))
         raise UnstableEquilibriumError(f"leg {i + 1} {_where(eq)} changes length by {100 * strain[i]:.3g}% "
                                        f"(axial force {eq.actuator_forces_n[i]:.4g} N), beyond the "
-                                       f"{100 * MAX_AXIAL_STRAIN:g}% small-strain range of this linear-elastic model")
+                                       f"{100 * MAX_AXIAL_STRAIN:g}% small-strain range of this linear-elastic model",
+                                       leg=i + 1, pose_m=eq.pose_m, load=eq.load)
 
 
 def residual_tolerance(tol: float = NEWTON_TOL) -> float:
@@ -799,17 +807,20 @@ def _result(pb: _Problem, st: _State, lam: np.ndarray, q: np.ndarray, d_leg: np.
     fm = np.sqrt(np.array([plate[:3] @ plate[:3], plate[3:] @ plate[3:], machine[:3] @ machine[:3],
                            machine[3:] @ machine[3:]])) / (pb.f_ref * np.array([1, pb.l_ref, 1, pb.l_ref]))
     en = np.sqrt((e * e).reshape(nl, 2, 3).sum(2)).max(0)
-    res = Residuals(*fm.tolist(), *en.tolist(), float(stat), pb.f_ref, pb.l_ref)
+    res = Residuals(**dict(zip(RESIDUAL_NAMES, [*fm.tolist(), *en.tolist(), float(stat)], strict=True)),
+                    force_scale_n=pb.f_ref, length_scale_m=pb.l_ref)
     if linear:  # the free flyer's v is in its local frame; at q0 the plate is world-aligned
         disp, rot = dv[:3].copy(), dv[3:6].copy()
     else:
         disp, rot = pc - mm.pose_m, pin.log3(st.rp)
     stab = reduced_stability(*_tangent(pb, st, lam), st.ja, st.jp, pb.is_force, pb.l_ref)
-    return Equilibrium(mm.pose_m.copy(), pb.load.copy(), legs, act, disp, rot, q, lam.copy(),
-                       iterations, linear, res, stab, pb.offsets.copy())
+    return Equilibrium(pose_m=mm.pose_m.copy(), load=pb.load.copy(), legs=legs, actuator_forces_n=act,
+                       plate_displacement_m=disp, plate_rotation_rad=rot, q=q, multipliers=lam.copy(),
+                       iterations=iterations, linear=linear, residuals=res, stability=stab,
+                       preload_offsets_m=pb.offsets.copy())
 
 
-@dataclass(frozen=True)
+@dataclass(frozen=True, kw_only=True)
 class ReferenceTangent:
     """Dense tangent data of the linear reference state (for :func:`pressfit.mechanics.buckling.machine_buckling`),
     in the model's velocity coordinates (rad, m; plate: translation, rotation)."""
@@ -839,7 +850,8 @@ def reference_tangent(solver: EquilibriumSolver, pose_m: np.ndarray, plate_wrenc
         jac[6 * i:6 * i + 6, v], jac[6 * i:6 * i + 6, :6] = st.ja[i], st.jp[i]
     k_e = np.zeros((nv, nv))
     k_e[pb.legv, pb.legv] = st.ktan
-    return ReferenceTangent(k_e, full - k_e, jac, pb.legv, eq.actuator_forces_n)
+    return ReferenceTangent(elastic=k_e, geometric=full - k_e, jacobian=jac, leg_v=pb.legv,
+                            axial_forces_n=eq.actuator_forces_n)
 
 
 def _machine_residual(pb: _Problem, st: _State, g_leg: np.ndarray) -> np.ndarray:

@@ -458,7 +458,9 @@ def _fast_rows(plan: MonteCarloPlan, nominal: _Nominal, setups: list[_SampleLoad
     for j in range(n):
         sl = slice(j * m, (j + 1) * m)
         if strain[sl].max() > statics.MAX_AXIAL_STRAIN:
-            rows.append(UnstableEquilibriumError(f"a leg strains beyond {statics.MAX_AXIAL_STRAIN:g}"))
+            solve, leg = np.unravel_index(np.argmax(strain[sl]), strain[sl].shape)
+            rows.append(UnstableEquilibriumError(f"a leg strains beyond {statics.MAX_AXIAL_STRAIN:g}", leg=int(leg) + 1,
+                                                 pose_m=be.pose_m[sl][solve], load=be.load[sl][solve]))
             continue
         rows.append(_sample_row({k: v[sl] for k, v in q.items()}, internal[sl], res[sl].max(1), float(factors[j])))
     return rows

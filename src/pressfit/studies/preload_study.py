@@ -144,11 +144,12 @@ def preload_study(machine: Machine, pose_m: Any, clearances_m: Any, preloads: An
     gaps = np.array([float(c.gaps_m.mean()) for c in variants])
     if len({c.geometry for c in variants}) != 1:
         raise ClearanceError("a preload study compares clearances of one geometry, got "
-                             f"{sorted({c.geometry for c in variants})}")
+                             f"{sorted({c.geometry for c in variants})}", key="clearances_m")
     if pre.size == 0 or not np.all(np.isfinite(pre)):
-        raise ClearanceError("give at least one finite preload")
+        raise ClearanceError("give at least one finite preload", key="preloads")
     if not (load_max_n > 0 and steps >= 2):
-        raise ClearanceError("load_max_n must be positive and steps >= 2")
+        raise ClearanceError("load_max_n must be positive and steps >= 2",
+                             key="steps" if load_max_n > 0 else "load_max_n")
     loads = np.linspace(0.0, float(load_max_n), int(steps) + 1)
     small = np.array([0.0, SMALL_LOAD_FRACTION * float(load_max_n)])
     curves, secants, res = [], [], 0.0
@@ -192,9 +193,11 @@ def preload_study(machine: Machine, pose_m: Any, clearances_m: Any, preloads: An
 def study_from_case(case: Any) -> dict[str, Any]:
     """Keyword arguments of :func:`preload_study` (plus ``machine``) from a case with a ``[study]`` table."""
     if case.study is None:
-        raise ClearanceError(f"{case.path}: no [study] table")
+        raise ClearanceError(f"{case.path}: no [study] table", key="study", path=case.path)
     if case.loads.press_force_n is None or len(case.poses.array()) != 1:
-        raise ClearanceError(f"{case.path}: a preload study needs one pose in [poses] and [loads] press_force_n")
+        raise ClearanceError(f"{case.path}: a preload study needs one pose in [poses] and [loads] press_force_n",
+                             key="loads.press_force_n" if case.loads.press_force_n is None else "poses",
+                             path=case.path)
     machine = case.machine()
     return {"machine": machine, "pose_m": case.poses.array()[0], "clearances_m": list(case.study.clearances_m),
             "preloads": list(case.study.preloads), "load_max_n": case.loads.press_force_n,

@@ -39,7 +39,7 @@ from scipy.optimize import brentq
 from pressfit.errors import PressfitError
 
 
-@dataclass(frozen=True)
+@dataclass(frozen=True, kw_only=True)
 class DrivePort:
     r"""One leg's drive linearised about rest (deviations): x' = a x + b_command dN_cmd + b_rate v,
     dN = c x (N, tension), v (m/s) the rate of the coordinate the drive pushes on (the leg length, or for an

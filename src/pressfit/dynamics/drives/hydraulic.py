@@ -58,7 +58,7 @@ MAX_SUBSTEPS = 100_000  # a step that needs more is refused (dt above 10 s)
 LAMINAR_FRACTION = 1e-3  # laminar orifice below this fraction of the supply drop p_s - p_t
 
 
-@dataclass(frozen=True)
+@dataclass(frozen=True, kw_only=True)
 class HydraulicState:
     pressure_a_pa: np.ndarray  # chamber a (pulls the leg shorter), Pa
     pressure_b_pa: np.ndarray  # chamber b, Pa
@@ -124,7 +124,7 @@ class HydraulicDrive:
         leakage the pressure loop then takes a few milliseconds to find its steady opening)."""
         dp = np.clip(np.asarray(force_n, dtype=float), -self.force_limit_n, self.force_limit_n) / self.area_m2
         p0 = self.null_pressure_pa
-        return HydraulicState(p0 + dp / 2, p0 - dp / 2, 0 * dp)
+        return HydraulicState(pressure_a_pa=p0 + dp / 2, pressure_b_pa=p0 - dp / 2, spool=0 * dp)
 
     def _orifice(self, opening: np.ndarray, drop: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
         """Q = K_v x sqrt(dp) (laminar below dp_lam) and dQ/d(dp), m^3/s and m^3/(s Pa)."""
@@ -177,7 +177,7 @@ class HydraulicDrive:
             det = m00 * m11 - m01 * m10
             pa, pb = pa + h * (m11 * fa - m01 * fb) / det, pb + h * (m00 * fb - m10 * fa) / det
         self._check_pressures(pa, pb)
-        return HydraulicState(pa, pb, xv), self.area_m2 * (pa - pb)
+        return HydraulicState(pressure_a_pa=pa, pressure_b_pa=pb, spool=xv), self.area_m2 * (pa - pb)
 
     def _check_stroke(self, length: np.ndarray, rate: np.ndarray, dt_s: float) -> None:
         stroke = self.table.stroke_m

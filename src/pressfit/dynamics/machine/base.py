@@ -27,9 +27,8 @@ from typing import Literal, Protocol
 import numpy as np
 
 from pressfit.errors import PressfitError
+from pressfit.mechanics.statics import SECTION_COMPONENTS, SECTIONS
 
-SECTIONS = ("base", "actuator", "plate")
-SECTION_COMPONENTS = ("N", "V_x", "V_y", "M_x", "M_y", "T")
 DRIVE_KINDS = ("force", "position")
 
 
@@ -61,7 +60,7 @@ class DriveInput:
         return cls("position", lengths_m)
 
 
-@dataclass(frozen=True)
+@dataclass(frozen=True, kw_only=True)
 class MachineState:
     """The state of a dynamics model at ``time_s`` (s): configuration q (nq,) and velocity v (nv,) in the
     model's Pinocchio coordinates (plate free flyer first: q[0:3] the plate centre, m)."""
@@ -89,7 +88,7 @@ class SectionLoads:
                 for i in range(4)]
 
 
-@dataclass(frozen=True)
+@dataclass(frozen=True, kw_only=True)
 class Energy:
     """Mechanical energy at one instant, J: kinetic, elastic (the virtual springs, including the actuator
     springs of position drives) and gravitational potential (zero at y = 0)."""

@@ -320,8 +320,9 @@ class FlexibleMachine:
                 break
         else:
             raise ConvergenceError("flexible rest state (Newton)", float(np.max(np.abs(dx[:nv]))), tol, max_iter)
-        return self._consistent(FlexibleState(0.0, q, zero.copy(), zero.copy(), zero.copy(), lam, drive,
-                                              self._placed.copy(), it), wrench)
+        return self._consistent(FlexibleState(time_s=0.0, q=q, v=zero.copy(), acceleration=zero.copy(),
+                                              pseudo_acceleration=zero.copy(), multipliers=lam, drive=drive,
+                                              stem_lengths_m=self._placed.copy(), iterations=it), wrench)
 
     def with_velocity(self, state: FlexibleState, v: np.ndarray, plate_wrench: np.ndarray | None = None
                       ) -> FlexibleState:
@@ -329,8 +330,9 @@ class FlexibleMachine:
         v = np.asarray(v, dtype=float)
         if v.shape != (self.nv,) or not np.all(np.isfinite(v)):
             raise PressfitError(f"velocity must be {self.nv} finite numbers")
-        s = FlexibleState(state.time_s, state.q, v, state.acceleration, state.pseudo_acceleration, state.multipliers,
-                          state.drive, state.stem_lengths_m, state.iterations)
+        s = FlexibleState(time_s=state.time_s, q=state.q, v=v, acceleration=state.acceleration,
+                          pseudo_acceleration=state.pseudo_acceleration, multipliers=state.multipliers,
+                          drive=state.drive, stem_lengths_m=state.stem_lengths_m, iterations=state.iterations)
         return self._consistent(s, _wrench(plate_wrench))
 
     def _consistent(self, s: FlexibleState, wrench: np.ndarray) -> FlexibleState:
@@ -346,7 +348,9 @@ class FlexibleMachine:
         kkt[:nv, :nv], kkt[:nv, nv:], kkt[nv:, :nv] = mass, b.T, b
         sol = np.linalg.lstsq(kkt, np.concatenate([rhs, np.zeros(24)]), rcond=None)[0]
         acc = sol[:nv]
-        return FlexibleState(s.time_s, s.q, s.v, acc, acc.copy(), sol[nv:], s.drive, s.stem_lengths_m, s.iterations)
+        return FlexibleState(time_s=s.time_s, q=s.q, v=s.v, acceleration=acc, pseudo_acceleration=acc.copy(),
+                             multipliers=sol[nv:], drive=s.drive, stem_lengths_m=s.stem_lengths_m,
+                             iterations=s.iterations)
 
     def _external(self, q: np.ndarray, wrench: np.ndarray, drive: DriveInput) -> np.ndarray:
         """Generalised forces (nv,) of the plate wrench and of force drives."""
@@ -449,7 +453,9 @@ class FlexibleMachine:
         work = float(self._damping_force(q, v - v_r, rest, k, drive_input) @ pin.difference(self.model, q_n, q))
         if implicit:  # the drive at the last iterate: within drive_stiffness * NEWTON_TOL (~1e-5 N) of the end's
             drive_input = DriveInput.forces(tension)
-        return FlexibleState(state.time_s + h, q, v, acc, a_ps, lam, drive_input, self._placed.copy(), it, work)
+        return FlexibleState(time_s=state.time_s + h, q=q, v=v, acceleration=acc, pseudo_acceleration=a_ps,
+                             multipliers=lam, drive=drive_input, stem_lengths_m=self._placed.copy(), iterations=it,
+                             damping_work_j=work)
 
     def _damping_force(self, q: np.ndarray, rel: np.ndarray, rest: np.ndarray, k: np.ndarray,
                        drive_input: DriveInput) -> np.ndarray:
@@ -541,7 +547,7 @@ class FlexibleMachine:
             e[self.act] = 0.0
         kin = float(pin.computeKineticEnergy(self.model, self.data, state.q, state.v))
         pot = float(pin.computePotentialEnergy(self.model, self.data, state.q))
-        return Energy(kin, float(e.sum()), pot)
+        return Energy(kinetic_j=kin, elastic_j=float(e.sum()), potential_j=pot)
 
     def closure_wrenches(self, state: FlexibleState) -> np.ndarray:
         """(4, 6) the world wrench (force N, moment about the world origin N m) the plate exerts on each leg's
