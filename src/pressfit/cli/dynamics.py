@@ -177,7 +177,7 @@ def _echo_sizing(s: dict) -> None:
 def export_mjcf_cmd(x: float, y: float, z: float, timestep_s: float, out: Path | None, overwrite: bool,
                     model_path: Path) -> None:
     """The rigid-leg machine closed at the plate pose X Y Z (m) as a MuJoCo model (MJCF, SI units): bodies,
-    masses, gravity, the four loop closures as welds, a keyframe 'reference' at the pose."""
+    masses, gravity, the loop closures (one per leg) as welds, a keyframe 'reference' at the pose."""
     from pressfit.output.mjcf import export_mjcf
 
     text, path = export_mjcf(load_machine(model_path), [x, y, z], timestep_s, out, overwrite)

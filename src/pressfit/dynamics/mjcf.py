@@ -89,7 +89,7 @@ def machine_mjcf(rigid: RigidLegModel, timestep_s: float = 1e-4) -> str:
     if not (np.isfinite(timestep_s) and timestep_s > 0):
         raise PressfitError(f"MJCF export: timestep_s must be positive, got {timestep_s!r}")
     model = rigid.model
-    root = ET.Element("mujoco", model="pressfit 4-UPU rigid legs")
+    root = ET.Element("mujoco", model=f"pressfit {len(rigid.constraint_models)}-UPU rigid legs")
     ET.SubElement(root, "compiler", angle="radian", inertiafromgeom="false")
     option = ET.SubElement(root, "option", timestep=_num([timestep_s]), gravity=_num([0.0, -GRAVITY_M_PER_S2, 0.0]),
                            integrator="Euler", solver="Newton", iterations="200", tolerance="1e-12")
@@ -123,7 +123,7 @@ def mujoco_state(rigid: RigidLegModel, q: np.ndarray, v: np.ndarray) -> tuple[np
 class PassiveMotion:
     """One passive run (no actuator force, gravity on) of the rigid-leg machine in Pinocchio and in MuJoCo from
     the same state, sampled every time step (row 0 the initial state). Plate positions (m, world), plate
-    rotation angles (rad, from the unrotated plate), closure errors: the largest translation error of the four
+    rotation angles (rad, from the unrotated plate), closure errors: the largest translation error of the
     loop closures over the run (m), Pinocchio's Baumgarte-corrected drift and MuJoCo's soft-weld violation."""
 
     time_s: np.ndarray  # (n + 1,)
