@@ -1,24 +1,21 @@
 """Layers above mechanics still assume the paper's four legs: each refuses another leg count up front with a
 LegCountError naming the layer (issue 21 item 7), instead of arrays of the wrong shape. The machine is Tsai's
 3-UPU (models/tsai_3upu.toml); the case files are the shipped ones pointed at it. Modes, interference, the 3D
-scene, the load envelope, the preload and Monte Carlo studies and the simulation take n legs
-(tests/*/test_n_leg_*.py)."""
+scene, the load envelope, the preload and Monte Carlo studies, the simulation, pressfit check and the design
+study take n legs (tests/*/test_n_leg_*.py)."""
 
 from pathlib import Path
 
 import pytest
 
 from pressfit.description.cases import load_case
-from pressfit.description.machine import load_machine
 from pressfit.errors import LegCountError
-from pressfit.studies import design, limit_check, paper_tables
+from pressfit.studies import paper_tables
 
 ROOT = Path(__file__).resolve().parents[1]
 TSAI = ROOT / "models" / "tsai_3upu.toml"
 
 CASE_CALLS = {
-    "pressfit check": ("envelope/press_workspace.toml", limit_check.evaluate_envelope),
-    "the design study": ("studies/design_sections.toml", design.plan_from_case),
     "the paper's tables": ("paper/A.toml", paper_tables.solve_case),
 }
 

@@ -62,7 +62,7 @@ from pressfit.errors import (
     format_violation,
 )
 from pressfit.mechanics.clearance import clearance_from_case, load_deflection
-from pressfit.mechanics.preload import self_stress_forces_n
+from pressfit.mechanics.preload import ActuatorPreload, self_stress_forces_n
 
 # the machine's energies after the step and the Rayleigh damping's work over it (flexible model; 0 on the rigid one,
 # which has no elastic energy either), J: the energy balance of :mod:`pressfit.dynamics.sizing`
@@ -161,7 +161,8 @@ def _deflection(machine: Machine, case: Case, sim: Simulation, pin_pose: np.ndar
         return lambda pose: (*columns(pose), NO_TABLE)
     limit = max(4.0 * sim.controller.force_limit_n, sim.contact.stiffness_n_per_m * sim.interference_m)
     curve = load_deflection(machine, pin_pose, [0.0, 1.0, 0.0], np.linspace(0.0, limit, _CURVE_POINTS),
-                            clearance_from_case(case, machine), _load_preload(machine, case), unload=False)
+                            clearance_from_case(case, machine), ActuatorPreload.from_case(case.preload).a4,
+                            unload=False)
     table = (np.ascontiguousarray(curve.loads_n, dtype=float),
              np.ascontiguousarray(curve.loading.displacement_m - curve.loading.displacement_m[0], dtype=float))
     zero = np.zeros(3)
@@ -348,12 +349,6 @@ def preload_amplitudes_n(case: Case, machine: Machine) -> np.ndarray:
 def without_preload(case: Case) -> Case:
     """The case with no preload (the preload's cost: the same scenario with a = 0)."""
     return case.model_copy(update={"preload": case.preload.model_copy(update={"a4_n": 0.0, "amplitudes_n": None})})
-
-
-def _load_preload(machine: Machine, case: Case) -> float | tuple[float, ...]:
-    """The case's preload as the clearance statics take it (a4 on a redundancy-1 machine, else the amplitudes)."""
-    amplitudes = preload_amplitudes_n(case, machine)
-    return float(amplitudes[0]) if amplitudes.size == 1 else tuple(amplitudes.tolist())
 
 
 def check_preload(case: Case, machine: Machine, drives: drive_kinds.Drive, path_m: np.ndarray, key: str) -> None:

@@ -67,7 +67,7 @@ from pressfit.dynamics.machine.flexible import FlexibleMachine
 from pressfit.dynamics.modes import closure_jacobian, elastic_stiffness, mass_matrix, natural_modes, reduced_system
 from pressfit.dynamics.multibody import inverse_apparent_mass, rigid_leg_model
 from pressfit.errors import PressfitError
-from pressfit.mechanics.preload import self_stress_forces_n
+from pressfit.mechanics.preload import ActuatorPreload, self_stress_forces_n
 
 WARNING_RATIO = 0.2  # a loop pole within 20% of a structural mode's frequency is reported ...
 DRIVE_SHARE_THRESHOLD = 0.1  # ... when the drives hold at least this share of the mode's strain energy
@@ -465,11 +465,5 @@ def control_design(case: Case, model: Model = "flexible") -> ControlDesign:
              ("end", np.array(sim.end_m), None)]
     return ControlDesign(case=case.name, model=model,
                          poses=tuple(design_at(machine, sim.controller, p, n, con, model,
-                                               tensions_n=static_tensions_n(machine, p, _case_preload(case)))
+                                               tensions_n=static_tensions_n(machine, p, ActuatorPreload.from_case(case.preload).a4))
                                      for n, p, con in poses))
-
-
-def _case_preload(case: Case) -> float | tuple[float, ...]:
-    """The case's preload amplitudes (N) as :func:`static_tensions_n` takes them (a4, or the n - 3 amplitudes)."""
-    amplitudes = case.preload.amplitudes
-    return amplitudes[0] if len(amplitudes) == 1 else tuple(amplitudes)
