@@ -122,10 +122,8 @@ def test_the_cli_holds_no_physics(layer, path):
 KW_ONLY_EXEMPT = {
     "kinematics/closed_form.py", "kinematics/workspace.py",
     "mechanics/buckling.py", "mechanics/clearance.py", "mechanics/condensed.py", "mechanics/fast_statics.py",
-    "mechanics/model.py", "mechanics/stability.py", "mechanics/statics.py", "dynamics/insertion.py",
-    "dynamics/control.py", "dynamics/machine/base.py", "dynamics/machine/flexible.py",
-    "dynamics/drives/base.py", "dynamics/drives/hydraulic.py",
-    "dynamics/multibody.py:PoseCache",  # built positionally in dynamics/control.py
+    "mechanics/model.py", "mechanics/stability.py", "mechanics/statics.py",
+    "dynamics/machine/base.py", "dynamics/drives/base.py", "dynamics/drives/hydraulic.py",
 }
 
 

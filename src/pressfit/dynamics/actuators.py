@@ -11,10 +11,10 @@ give
 
 A^+ = A^T (A A^T)^-1 the Moore-Penrose inverse and V the preload basis (:func:`pressfit.kinematics.preload_basis`:
 n - 3 unit null vectors of A, amplitude k belonging to leg 3 + k; the 4-UPU's one vector is v_p with v_1 < 0,
-equations 9-10; none on 3 legs): -A N = W exactly and the preload changes no plate force. At one pose both come in closed form from the
-3 x 3 normal matrix A A^T (:func:`distribution`, compiled: about a microsecond; accurate to cond(A)^2 eps, and
-cond(A) <= 3.6 over the reachable workspace; the batched closed forms of :mod:`pressfit.kinematics` and numpy's
-SVD are the independent references of the tests).
+equations 9-10; none on 3 legs): -A N = W exactly and the preload changes no plate force. At one pose both come in
+closed form from the 3 x 3 normal matrix A A^T (:func:`distribution`, compiled: about a microsecond; accurate to
+cond(A)^2 eps, and cond(A) <= 3.6 over the reachable workspace; the batched closed forms of
+:mod:`pressfit.kinematics` and numpy's SVD are the independent references of the tests).
 
 Drive: each actuator tracks its command with a first-order force response of bandwidth f_bw (Hz),
 tau dN/dt = sat(N_cmd) - N, tau = 1 / (2 pi f_bw), the command saturated at +-``force_limit_n`` (the drive
@@ -39,8 +39,9 @@ SINGULAR_SIGMA = kernels.SINGULAR_SIGMA  # smallest singular value of A (entries
 
 def distribution(unit_vectors: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
     """A^+ (n, 3) and the preload basis V (n, n - 3) (v_p as its one column on the 4-UPU) at one pose from the leg
-    unit vectors e_i (n, 3) (rows of dl/dh, columns of A), in closed form (:func:`pressfit.dynamics.kernels.distribution`); SingularPoseError when A's smallest singular
-    value is below ``SINGULAR_SIGMA``."""
+    unit vectors e_i (n, 3) (rows of dl/dh, columns of A), in closed form
+    (:func:`pressfit.dynamics.kernels.distribution`); SingularPoseError when A's smallest singular value is below
+    ``SINGULAR_SIGMA``."""
     legs = len(unit_vectors)
     pinv, null = np.empty((legs, 3)), np.empty((legs, legs - 3))
     sigma = kernels.distribution(np.ascontiguousarray(unit_vectors, dtype=float), pinv, null)

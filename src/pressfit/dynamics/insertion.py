@@ -132,7 +132,8 @@ class InsertionResult:
     (+y on the tool) and interference, commanded and delivered actuator tensions, reference lift, closure
     drift, the legs' axial force at the plate cardan (:meth:`pressfit.dynamics.multibody.RigidLegModel.leg_loads`;
     its torsion and bending are left out: the rigid model's couples are not objective) and the internal force
-    (the preload amplitudes, N, :func:`internal_columns`) of the delivered tensions, the kinematic pose, leg lengths and rates, and the energies
+    (the preload amplitudes, N, :func:`internal_columns`) of the delivered tensions, the kinematic pose, leg
+    lengths and rates, and the energies
     (``ENERGY_COLUMNS``, J). ``summary`` is the JSON-ready digest (:func:`summarise`)."""
 
     limiter: bool
@@ -294,7 +295,8 @@ def plan_scenario(case: Case, machine: Machine | None = None, preload_key: str =
     if steps > WARN_STEPS:
         warnings.append(run_time_warning(steps, dt, trajectory.duration_s))
     return ScenarioPlan(trajectory=trajectory, steps=steps, path_m=path, warnings=tuple(warnings), rigid=rigid,
-                        simulation=sim, force_limits_n=np.full(len(trajectory.durations_s), sim.controller.force_limit_n),
+                        simulation=sim,
+                        force_limits_n=np.full(len(trajectory.durations_s), sim.controller.force_limit_n),
                         depth_limit_m=MAX_DEPTH_FACTOR * sim.interference_m)
 
 
@@ -709,7 +711,8 @@ def summarise(result: InsertionResult, case: Case, drives: drive_kinds.Drive) ->
     tool, plate, ref = _xyz(result, "tool"), _xyz(result, "plate"), _xyz(result, "ref")
     lateral = float(np.linalg.norm(tool[last, [0, 2]] - np.array(sim.contact.pin_position_m)))
     final = float(np.linalg.norm(tool[-1] - sim.end_m))
-    internal = result.series[:, [result.columns.index(c) for c in internal_columns(len(leg_columns(result.columns, "cmd_n")))]]
+    legs = len(leg_columns(result.columns, "cmd_n"))
+    internal = result.series[:, [result.columns.index(c) for c in internal_columns(legs)]]
     limit = sim.controller.force_limit_n
     settling, settled_row, why = settling_time_s(t, force, dwell)
     target = contact_force_n(sim.contact, sim.interference_m)

@@ -179,7 +179,8 @@ def control(params, estimate, units, rates, target, target_velocity, contact_for
     """Figure 12's loop at the estimate (m) with leg unit vectors ``units`` (:mod:`pressfit.dynamics.control`):
     fills ``pinv``, ``null`` (:func:`distribution`), the Cartesian force W (3,), N, into ``force`` and the tensions
     -A^+ W + V a (n,), N, into ``tension`` (a = ``preload`` (n - 3,), N: a4 v_p on the 4-UPU); updates
-    ``integral`` (m s) in place. With params[DEFLECTION] the error is taken against the estimate plus the predicted static deflection ``deflection`` (2, 3): row 0 per
+    ``integral`` (m s) in place. With params[DEFLECTION] the error is taken against the estimate plus the
+    predicted static deflection ``deflection`` (2, 3): row 0 per
     newton of ``contact_force`` (m/N), row 1 the weight's sag (m), computed at ``deflection_pose``. Returns
     (status, lift m, clamped, smallest singular value of A): status 1 when the gravity feed-forward ``gravity``
     (computed at ``gravity_pose``) is stale (the estimate moved more than params[GRAVITY_TOL] from it; nothing else
@@ -318,7 +319,8 @@ def internal_forces(null, tension, out):
 def rigid_pre_step(row, t, reference, lift, estimate, command, tension, null, tau, actuator_v, contact_tau, layout):
     """Before one rigid-leg step: the step's row at the columns ``layout`` names (ROW_TIME ...): time (s), the
     reference with its lift (m), the estimate (m), the commanded and delivered tensions (N), the lift (m) and the
-    internal forces (N, :func:`internal_forces`); and the joint forces ``tau``: -N on the actuators, ``contact_tau`` (N, the last
+    internal forces (N, :func:`internal_forces`); and the joint forces ``tau``: -N on the actuators,
+    ``contact_tau`` (N, the last
     step's contact force in the plate's local frame) on the plate."""
     row[layout[ROW_TIME]], row[layout[ROW_LIFT]] = t, lift
     for k in range(3):

@@ -463,7 +463,8 @@ def control_design(case: Case, model: Model = "flexible") -> ControlDesign:
     approach = pin_pose + np.array([0.0, sim.approach_height_m, 0.0])
     poses = [("pin", pin_pose, c), ("start", np.array(sim.start_m), None), ("approach", approach, None),
              ("end", np.array(sim.end_m), None)]
+    preload = ActuatorPreload.from_case(case.preload).a4
     return ControlDesign(case=case.name, model=model,
                          poses=tuple(design_at(machine, sim.controller, p, n, con, model,
-                                               tensions_n=static_tensions_n(machine, p, ActuatorPreload.from_case(case.preload).a4))
+                                               tensions_n=static_tensions_n(machine, p, preload))
                                      for n, p, con in poses))

@@ -17,8 +17,9 @@ rigid motion (the tool sees the rigid position plus C F).
 
 Accelerations: ``pin.constraintDynamics`` (proximal KKT; on n legs the closures are redundant, rank
 6n - (n - 3) of 6n: 23 of 24 on the 4-UPU, none redundant on the 3-UPU; the proximal iterations handle it) with
-Baumgarte stabilisation a_c = -Kp e - Kd e_dot of the closure error e, Kp = omega_b^2, Kd = 2 omega_b. Time stepping: semi-implicit (symplectic) Euler, v += a dt,
-q = q (+) v dt. The closure drift (largest translation error of the closures, m) is reported per step.
+Baumgarte stabilisation a_c = -Kp e - Kd e_dot of the closure error e, Kp = omega_b^2, Kd = 2 omega_b. Time
+stepping: semi-implicit (symplectic) Euler, v += a dt, q = q (+) v dt. The closure drift (largest translation
+error of the closures, m) is reported per step.
 
 Leg loads (:meth:`RigidLegModel.leg_loads`): the closure force of leg i (``data.lambda_c``, 6 per closure,
 in the frame of the leg's last body at the plate cardan centre) is the wrench the plate exerts on the leg

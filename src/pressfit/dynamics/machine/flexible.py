@@ -87,7 +87,6 @@ the consistent acceleration of [M B^T; B 0] with the term dB/dt v left out (exac
 from __future__ import annotations
 
 import dataclasses
-
 import math
 from collections.abc import Callable
 from dataclasses import dataclass
@@ -180,7 +179,8 @@ class FlexibleMachine:
         self._c1 = [cm.extract().joint1_placement for cm in self.cms]  # closure frames in the plate-end joints
         self.leg_v = [np.asarray(v) for v in mm.leg_v]
         # (joint whose subtree is the plate side, joint carrying the point, z offset) per leg and section
-        sec = [(j if z == 0.0 else j + 1, j, z) for i in range(self.legs) for j, z in (mm.sections[i][s] for s in SECTIONS)]
+        sec = [(j if z == 0.0 else j + 1, j, z) for i in range(self.legs)
+               for j, z in (mm.sections[i][s] for s in SECTIONS)]
         joints = sorted({j for t in sec for j in t[:2]})
         self._sec_joints = (joints, [t[0] for t in sec])
         self._sec_sub = np.array([joints.index(t[0]) for t in sec])
@@ -225,6 +225,9 @@ class FlexibleMachine:
 
     def _rest(self, drive: DriveInput) -> tuple[np.ndarray, np.ndarray]:
         """Rest values of the springs and their stiffness (0 on the actuators of force drives)."""
+        if drive.values.shape != (self.legs,):
+            raise PressfitError(f"drive input ({drive.kind}) must be one value per leg ({self.legs}), got "
+                                f"{drive.values.size}")
         rest, k = self.rest0.copy(), self._k.copy()
         if drive.kind == "position":
             rest[self.act] = drive.values
