@@ -196,7 +196,8 @@ def test_tsai_board_passes_its_pins_with_three_drives_sized(tmp_path):
     enforces it: ResidualError otherwise)."""
     text = (ROOT / "cases" / "paper" / "board.toml").read_text()
     grid = "x = { min_m = -0.20, max_m = 0.20, count = 5 }\nz = { min_m = -0.15, max_m = 0.15, count = 4 }"
-    text = text.replace(grid, "x = { min_m = -0.10, max_m = 0.10, count = 2 }\nz = { min_m = 0.0, max_m = 0.0, count = 1 }")
+    two = "x = { min_m = -0.10, max_m = 0.10, count = 2 }\nz = { min_m = 0.0, max_m = 0.0, count = 1 }"
+    text = text.replace(grid, two)
     text = text.replace("a4_n = 100.0", "a4_n = 0.0")
     path = tmp_path / "tsai_board.toml"
     path.write_text(f'model = "{TSAI}"\n' + text)
