@@ -10,8 +10,9 @@ Loop closures: one ``<weld>`` per leg between the plate (body1) and the leg's la
 cardan's outer body), ``relpose`` = the closure's anchor placement in the plate frame, so the weld holds the
 same 6D relative pose as Pinocchio's CONTACT_6D closure. A ``<connect>`` (3D, point-on-point) would leave the
 leg's last body free to spin relative to the plate: a spherical joint in place of the weld, a different
-mechanism with a spurious spin of each leg about its axis, so welds are used. The four welds are redundant
-(24 rows, rank 23), which MuJoCo's regularised solver accepts.
+mechanism with a spurious spin of each leg about its axis, so welds are used. The n welds are redundant on
+n >= 4 legs (6n rows, rank 6n - (n - 3): 24 rows, rank 23 on the 4-UPU), which MuJoCo's regularised solver
+accepts.
 
 MuJoCo's equality constraints are soft: the solver drives each constraint row's acceleration towards the
 reference a_ref = -k r - b r_dot (r the violation) with impedance d, a_c = (1 - d) a_free + d a_ref, so that
