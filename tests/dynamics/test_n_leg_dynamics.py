@@ -103,12 +103,16 @@ def _tsai_case(tmp_path, preload: str = "a4_n = 0.0"):
     return load_case(path)
 
 
-def test_tsai_presses_the_paper_pin_with_its_contact_force_settling_at_the_limit(tmp_path):
+@pytest.mark.parametrize("model", ["rigid", "flexible"])
+def test_tsai_presses_the_paper_pin_with_its_contact_force_settling_at_the_limit(tmp_path, model):
     """The paper's scenario (cases/paper/insertion.toml: 30 N limit, 2 mm commanded interference, ~100 N of
-    elastic contact unlimited) on Tsai's 3-UPU: the run completes, the steady contact force settles within 2% of
-    the 30 N limit (the limiter's steady state, paper section 4.2), the series has the 3-leg columns and no
-    internal force (no preload space)."""
-    result = simulate_insertion(_tsai_case(tmp_path))
+    elastic contact unlimited) on Tsai's 3-UPU, rigid legs and elastic legs: the run completes, the steady contact
+    force settles within 2% of the 30 N limit (the limiter's steady state, paper section 4.2), the series has the
+    3-leg columns and no internal force (no preload space); the flexible run's section loads are three legs'."""
+    case = _tsai_case(tmp_path)
+    case = case.model_copy(update={"simulation": case.simulation.model_copy(update={"model": model})})
+    result = simulate_insertion(case)
+    assert (result.sections is None) if model == "rigid" else result.sections.shape[1:] == (3, 3, 6)
     s = result.summary
     assert result.columns == series_columns(3) and result.series.shape[1] == len(series_columns(3))
     assert "cmd_n3" in result.columns and "cmd_n4" not in result.columns and "internal_force_n" not in result.columns
