@@ -120,10 +120,7 @@ def test_the_cli_holds_no_physics(layer, path):
 
 
 # modules (or module:Class) not yet converted to keyword-only results: the integrator shrinks this list
-KW_ONLY_EXEMPT = {
-    "dynamics/insertion.py", "dynamics/control.py", "dynamics/machine/flexible.py",
-    "dynamics/multibody.py:PoseCache",  # built positionally in dynamics/control.py
-}
+KW_ONLY_EXEMPT: set[str] = set()  # every module is converted (a new exemption needs its reason here)
 
 
 def _is_dataclass(node: ast.ClassDef) -> ast.expr | None:

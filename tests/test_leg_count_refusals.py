@@ -1,38 +1,23 @@
 """Layers above mechanics still assume the paper's four legs: each refuses another leg count up front with a
 LegCountError naming the layer (issue 21 item 7), instead of arrays of the wrong shape. The machine is Tsai's
 3-UPU (models/tsai_3upu.toml); the case files are the shipped ones pointed at it. Modes, interference, the 3D
-scene, the load envelope, the preload and Monte Carlo studies take n legs (tests/*/test_n_leg_*.py)."""
+scene, the load envelope, the preload and Monte Carlo studies, the simulation, pressfit check and the design
+study take n legs (tests/*/test_n_leg_*.py)."""
 
 from pathlib import Path
 
-import numpy as np
 import pytest
 
 from pressfit.description.cases import load_case
-from pressfit.description.machine import load_machine
-from pressfit.dynamics import multibody
 from pressfit.errors import LegCountError
-from pressfit.studies import design, limit_check, paper_tables
+from pressfit.studies import paper_tables
 
 ROOT = Path(__file__).resolve().parents[1]
 TSAI = ROOT / "models" / "tsai_3upu.toml"
-POSE = np.array([0.0, 0.6, 0.0])
 
-MACHINE_CALLS = {
-    "rigid-leg dynamics": lambda m: multibody.rigid_leg_model(m, POSE),
-}
 CASE_CALLS = {
-    "pressfit check": ("envelope/press_workspace.toml", limit_check.evaluate_envelope),
-    "the design study": ("studies/design_sections.toml", design.plan_from_case),
     "the paper's tables": ("paper/A.toml", paper_tables.solve_case),
 }
-
-
-@pytest.mark.parametrize("layer", MACHINE_CALLS)
-def test_machine_layers_refuse_three_legs(layer):
-    with pytest.raises(LegCountError) as info:
-        MACHINE_CALLS[layer](load_machine(TSAI))
-    assert info.value.legs == 3 and info.value.supported == (4,) and "4-leg machines only so far" in str(info.value)
 
 
 @pytest.mark.parametrize("layer", CASE_CALLS)

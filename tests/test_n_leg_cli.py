@@ -50,3 +50,21 @@ def test_study_preload(tmp_path):
     bad = CliRunner().invoke(main, ["study", "preload", "--model", TSAI, "--pose", *POSE, "--preload", "100",
                                     "--out", str(tmp_path / "t"), "--no-progress"])
     assert bad.exit_code == 2 and "no redundant actuation" in bad.output and len(bad.output.splitlines()) == 1
+
+
+def _tsai_insertion(tmp_path, preload: str) -> str:
+    text = (Path(__file__).resolve().parents[1] / "cases" / "paper" / "insertion.toml").read_text()
+    path = tmp_path / "tsai_insertion.toml"
+    path.write_text(f'model = "{TSAI}"\n' + text.replace("a4_n = 100.0", preload))
+    return str(path)
+
+
+def test_simulate(tmp_path):
+    """`pressfit simulate` on the 3-UPU: exit 0, the series' per-leg columns 1..3 (no leg 4, no internal force
+    column), the printed line names no preload; with a preload the case is refused up front (exit 2, one line)."""
+    out = run("simulate", _tsai_insertion(tmp_path, "a4_n = 0.0"), "--out", str(tmp_path / "s"), "--no-progress")
+    assert "commanded none: no preload space" in out
+    header = (tmp_path / "s" / "simulation.csv").read_text().splitlines()[0].split(",")
+    assert "act_n3" in header and "act_n4" not in header and not [c for c in header if c.startswith("internal")]
+    bad = CliRunner().invoke(main, ["simulate", _tsai_insertion(tmp_path, "a4_n = 50.0"), "--no-progress"])
+    assert bad.exit_code == 2 and "no redundant actuation" in bad.output and len(bad.output.splitlines()) == 1

@@ -2,6 +2,7 @@
 answer is known, a limit just below it FAILS and one just above passes, in the same report, JUnit and JSON as
 the static limits."""
 
+import dataclasses
 import json
 import math
 import tomllib
@@ -16,7 +17,7 @@ from pressfit.cli import main
 from pressfit.description.cases import load_case
 from pressfit.dynamics.actuators import ForceActuators
 from pressfit.dynamics.control import static_deflection_columns
-from pressfit.dynamics.insertion import SERIES_COLUMNS, InsertionResult, plan_scenario, simulate_insertion, summarise
+from pressfit.dynamics.insertion import InsertionResult, plan_scenario, series_columns, simulate_insertion, summarise
 from pressfit.mechanics.condensed import condensed_plate_compliance
 from pressfit.studies.limit_check import SIMULATION_LIMITS, simulation_lines
 
@@ -95,8 +96,9 @@ def synthetic(case, tmp_tau_s: float = 0.05) -> tuple[InsertionResult, dict[str,
     crests)."""
     sim = case.simulation
     t = np.arange(1, 4001) * 1e-3
-    rows = np.zeros((t.size, len(SERIES_COLUMNS)))
-    col = {c: k for k, c in enumerate(SERIES_COLUMNS)}
+    columns = series_columns(4)  # the 4-UPU's
+    rows = np.zeros((t.size, len(columns)))
+    col = {c: k for k, c in enumerate(columns)}
     rows[:, col["time_s"]] = t
     touch = 1.0
     rows[:, col["contact_force_n"]] = np.where(t >= touch, 30.0 * (1 - np.exp(-(t - touch + 1e-3) / tmp_tau_s)), 0.0)
@@ -109,7 +111,8 @@ def synthetic(case, tmp_tau_s: float = 0.05) -> tuple[InsertionResult, dict[str,
     rows[:, col["tool_y_m"]] = sim.contact.board_height_m
     rows[-1, [col["tool_x_m"], col["tool_y_m"], col["tool_z_m"]]] = sim.end_m
     phases = np.where(t < 3.0, 2, 5)  # the dwell, then the settle
-    result = InsertionResult(True, rows, phases, ("approach", "descent", "dwell", "retract", "move", "settle"))
+    result = InsertionResult(limiter=True, series=rows, columns=columns, phases=phases,
+                             phase_names=("approach", "descent", "dwell", "retract", "move", "settle"))
     known = {"max_settling_time_s": tmp_tau_s * math.log(50.0), "max_actuator_force_n": 250.0,
              "max_axial_force_n": 310.0}
     return result, known
@@ -129,7 +132,7 @@ def test_every_other_limit_against_a_constructed_run(free_run):
     sections = np.zeros((len(result.series), 4, 3, 6))
     sections[:, 2, 1, 5] = -14.0 * np.sin(np.linspace(0.0, 3.0, len(result.series)))  # peak |T| 14 N m, leg 3
     sections[:, 1, 0, 3], sections[:, 1, 0, 4] = 3.0, 4.0  # |M_b| = 5 N m at leg 2's base
-    flexible = InsertionResult(True, result.series, result.phases, result.phase_names, sections=sections)
+    flexible = dataclasses.replace(result, sections=sections)
     summary = summarise(flexible, case, ForceActuators.of(case.machine()))
     for key, value in {"max_torsion_nm": 14.0, "max_bending_nm": 5.0}.items():
         assert _verdicts(key, value, summary, 0.01) == (False, True), key
@@ -140,7 +143,7 @@ def test_every_other_limit_against_a_constructed_run(free_run):
 def test_no_contact_fails_the_settling_limit(free_run):
     case, _ = free_run
     result, _ = synthetic(case)
-    result.series[:, SERIES_COLUMNS.index("contact_force_n")] = 0.0
+    result.series[:, result.columns.index("contact_force_n")] = 0.0
     summary = summarise(result, case, ForceActuators.of(case.machine()))
     line = simulation_lines({"max_settling_time_s": 10.0}, summary, [0.10, -0.05], 0.60)[0]
     assert summary["settling_time_s"] is None and not line.passed

@@ -20,10 +20,10 @@ from pressfit.dynamics.contact import contact_force_n
 from pressfit.dynamics.insertion import (
     MAX_STEPS,
     MIN_SEGMENT_STEPS,
-    SERIES_COLUMNS,
     WARN_STEPS,
     InsertionResult,
     plan_scenario,
+    series_columns,
     simulate_insertion,
     step_stability,
     summarise,
@@ -34,6 +34,7 @@ from pressfit.studies.limit_check import simulation_lines
 ROOT = Path(__file__).resolve().parents[1]
 SHIPPED = ROOT / "cases/paper/insertion.toml"
 PHASES = ("approach", "descent", "dwell", "retract", "move", "settle")
+SERIES_COLUMNS = series_columns(4)  # the 4-UPU's
 COL = {c: k for k, c in enumerate(SERIES_COLUMNS)}
 
 
@@ -256,7 +257,8 @@ def constructed(case, force: np.ndarray, t: np.ndarray, phases: np.ndarray, limi
     sim = case.simulation
     rows[:, COL["tool_x_m"]], rows[:, COL["tool_z_m"]] = sim.contact.pin_position_m
     rows[-1, [COL["tool_x_m"], COL["tool_y_m"], COL["tool_z_m"]]] = sim.end_m
-    return summarise(InsertionResult(limiter, rows, phases, PHASES), case, ForceActuators.of(case.machine()))
+    return summarise(InsertionResult(limiter=limiter, series=rows, columns=SERIES_COLUMNS, phases=phases,
+                                     phase_names=PHASES), case, ForceActuators.of(case.machine()))
 
 
 def _dwell_grid():
@@ -407,7 +409,8 @@ def test_saturation_fraction_and_warning():
         rows = np.zeros((t.size, len(SERIES_COLUMNS)))
         rows[:, COL["time_s"]], rows[:, COL["contact_force_n"]] = t, force
         rows[:1500, COL["cmd_n3"]] = -over * limit
-        s = summarise(InsertionResult(True, rows, phases, PHASES), case, ForceActuators.of(case.machine()))
+        s = summarise(InsertionResult(limiter=True, series=rows, columns=SERIES_COLUMNS, phases=phases,
+                                      phase_names=PHASES), case, ForceActuators.of(case.machine()))
         assert s["actuator_saturation_fraction"] == pytest.approx(fraction if over > 1 else 0.0, abs=1e-12)
         assert any("saturated" in w for w in s["warnings"]) is (over > 1)
 
@@ -427,7 +430,7 @@ def _max_vp(case) -> float:
     cofactors the plan uses), at the plan's samples."""
     machine = case.machine()
     plan = plan_scenario(case)
-    return max(np.abs(distribution(kinematics.inverse_kinematics(machine, p).unit_vectors)[1]).max()
+    return max(np.abs(distribution(kinematics.inverse_kinematics(machine, p).unit_vectors)[1][:, 0]).max()
                for p in plan.path_m)
 
 

@@ -21,8 +21,8 @@ from pressfit.dynamics import drives as drive_kinds
 from pressfit.dynamics import insertion
 from pressfit.dynamics.actuators import distribution
 from pressfit.dynamics.control import gravity_feedforward_n
-from pressfit.dynamics.cycle import CYCLE_COLUMNS, plan_cycle, simulate_cycle, summarise_cycle
-from pressfit.dynamics.insertion import SERIES_COLUMNS, simulate_insertion
+from pressfit.dynamics.cycle import cycle_columns, plan_cycle, simulate_cycle, summarise_cycle
+from pressfit.dynamics.insertion import series_columns, simulate_insertion
 from pressfit.kinematics.profiles import s_curve_time_s
 from tests.readme import assert_printed, readme_fragment
 
@@ -91,7 +91,7 @@ def test_one_pin_quintic_board_reproduces_simulate(tmp_path, simulated):
     assert durations[:4] == pytest.approx([1.0, 1.0, 2.0, 1.0], abs=1e-12)
     assert [s.binding_limit for s in result.plan.segments[:2]] == ["speed", "speed"]
     rows = int(round(5.0 / 1e-3)) - 5  # approach, descent, dwell, retract: 5 s at 1 ms
-    np.testing.assert_allclose(result.series[:rows, :len(SERIES_COLUMNS)], simulated.series[:rows],
+    np.testing.assert_allclose(result.series[:rows, :len(series_columns(4))], simulated.series[:rows],
                                rtol=1e-9, atol=1e-9)
     pin = result.summary["pins"][0]
     for key in FIGURES:
@@ -225,7 +225,7 @@ def test_the_drive_force_limit_scales_a_hard_acceleration(tmp_path):
                 probe[k] = 1.0
                 inverse[:, k] = rigid.accelerations(q, np.zeros(rigid.model.nv), probe)[:3] - rest
             tension = -pinv @ (gravity_feedforward_n(rigid, p) + np.linalg.solve(inverse, sign * acc * u)) \
-                + case.preload.a4_n * null
+                + case.preload.a4_n * null[:, 0]
             tau[rigid.actuator_v] = -tension
             moved = rigid.accelerations(q, np.zeros(rigid.model.nv), tau)[:3]
             np.testing.assert_allclose(moved, sign * acc * u, atol=1e-6 * acc)
@@ -248,7 +248,7 @@ def test_pin_pass_fail_turns_at_its_limits_recomputed_from_the_csv(tmp_path):
     assert sorted(p.name for p in out.iterdir()) == ["cycle.csv", "cycle.json", "cycle_drives.png", "cycle_force.png",
                                                      "cycle_operating_points.png", "cycle_path.png"]
     header = (out / "cycle.csv").read_text().splitlines()[0].split(",")
-    assert tuple(header) == CYCLE_COLUMNS
+    assert tuple(header) == cycle_columns(4)
     series = np.loadtxt(out / "cycle.csv", delimiter=",", skiprows=1)
     col = {c: k for k, c in enumerate(header)}
     rows = np.flatnonzero(series[:, col["pin"]] == 1)

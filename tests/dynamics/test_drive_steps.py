@@ -115,7 +115,8 @@ def closed_valves(hydraulic):
     gravity off."""
     machine = hydraulic.with_overrides({"actuator": {"hydraulic": {
         "pressure_loop_gain_per_pa": 1e-300, "flow_feedforward": 0.0, "leakage_m3_per_s_pa": 0.0}}})
-    return machine, FlexibleMachine(machine, HOLD_POSE, damping=Rayleigh(0.0, 0.0), rho_inf=1.0, gravity=False)
+    return machine, FlexibleMachine(machine, HOLD_POSE, damping=Rayleigh(alpha_per_s=0.0, beta_s=0.0), rho_inf=1.0,
+                                    gravity=False)
 
 
 def _hold(machine, fm, implicit, duration_s=0.1):

@@ -16,7 +16,7 @@ from pressfit.mechanics.statics import solve_equilibrium
 
 POSE_A = np.array([0.0, 0.72, 0.0])
 OFF_CENTRE = np.array([0.05, 0.65, -0.08])
-UNDAMPED = Rayleigh(0.0, 0.0)
+UNDAMPED = Rayleigh(alpha_per_s=0.0, beta_s=0.0)
 H = 1e-3
 
 
@@ -89,7 +89,7 @@ def test_damping_table_is_strict(machine):
     with pytest.raises(ModelFileError, match="damping"):
         machine.with_overrides({"damping": {"modes": [1, 3], "beta_s": 1e-4}})
     m = machine.with_overrides({"damping": {"kind": "rayleigh", "alpha_per_s": 1.0, "beta_s": 1e-4}})
-    assert FlexibleMachine(m, POSE_A).damping == Rayleigh(1.0, 1e-4)
+    assert FlexibleMachine(m, POSE_A).damping == Rayleigh(alpha_per_s=1.0, beta_s=1e-4)
 
 
 def _energy_drift(machine, h, rho_inf=1.0, duration=0.3):

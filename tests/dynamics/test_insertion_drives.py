@@ -88,7 +88,7 @@ def test_electric_drive_below_the_needed_current_saturates_and_says_so(tmp_path)
     warning naming current_limit_a) and no delivered tension exceeds k_f i_max."""
     free = _short_electric(tmp_path, "free")
     assert free.summary["actuator_saturation_fraction"] == 0.0
-    peak = float(np.abs(free.series[:, [insertion.SERIES_COLUMNS.index(f"cmd_n{i}") for i in "1234"]]).max())
+    peak = float(np.abs(free.series[:, [free.columns.index(f"cmd_n{i}") for i in "1234"]]).max())
     el = load_machine(ROOT / "models/pressfit_4upu_electric.toml").actuator.electric
     k_f = 2 * math.pi * el.screw_efficiency * el.torque_constant_nm_per_a / el.lead_m  # N/A
     above = _short_electric(tmp_path, "above", 1.02 * peak / k_f)
@@ -99,7 +99,7 @@ def test_electric_drive_below_the_needed_current_saturates_and_says_so(tmp_path)
     assert s["actuator_force_limit_n"] == pytest.approx(0.98 * peak, rel=1e-12)
     assert s["actuator_saturation_fraction"] > 0.0 and s["actuator_saturation_time_s"] > 0.0
     assert any("the drives saturated" in w and "current_limit_a" in w for w in s["warnings"]), s["warnings"]
-    delivered = np.abs(below.series[:, [insertion.SERIES_COLUMNS.index(f"act_n{i}") for i in "1234"]])
+    delivered = np.abs(below.series[:, [below.columns.index(f"act_n{i}") for i in "1234"]])
     assert delivered.max() <= 0.98 * peak * (1 + 1e-12)
 
 
@@ -201,7 +201,7 @@ def both_models(tmp_path_factory):
 def _contact_deflection(result):
     """The contact's share of the structure's deflection (tool - kinematic pose) at the end of the dwell (against
     the last row before first contact), m, the contact force there, N, and the kinematic pose there, m."""
-    col = {c: k for k, c in enumerate(insertion.SERIES_COLUMNS)}
+    col = {c: k for k, c in enumerate(insertion.series_columns(4))}
     tool = result.series[:, [col[f"tool_{a}_m"] for a in "xyz"]]
     kinematic = result.series[:, [col[f"kinematic_{a}_m"] for a in "xyz"]]
     force = result.column("contact_force_n")

@@ -9,12 +9,12 @@ import pytest
 
 from pressfit import kinematics
 from pressfit.description.cases import load_case
-from pressfit.dynamics.insertion import SECTION_COLUMNS, SERIES_COLUMNS, VIBRATION_WINDOW_S, simulate_insertion
+from pressfit.dynamics.insertion import VIBRATION_WINDOW_S, section_columns, series_columns, simulate_insertion
 from pressfit.errors import ModelFileError
 from pressfit.output.simulation import write_simulation
 from tests.test_simulation_trust import write_case
 
-COL = {c: k for k, c in enumerate(SERIES_COLUMNS)}
+COL = {c: k for k, c in enumerate(series_columns(4))}  # the 4-UPU's
 SHORT = {"move_time_s": 0.25, "descent_time_s": 0.25, "dwell_s": 0.3, "settle_s": 0.25}
 
 
@@ -100,7 +100,7 @@ def test_summary_production_quantities_from_the_csv(runs, tmp_path):
     speed = np.abs(np.diff(lengths, axis=0) / np.diff(t)[:, None]).max(axis=0)
     np.testing.assert_allclose(s["peak_actuator_speed_m_per_s"], speed, rtol=0.02)
     with open(tmp_path / "out" / "sections.csv") as f:
-        assert next(csv.reader(f)) == list(SECTION_COLUMNS)
+        assert next(csv.reader(f)) == list(section_columns(4))
     sec = run.sections
     np.testing.assert_allclose(s["peak_leg_torsion_nm"], np.abs(sec[..., 5]).max(axis=(0, 2)), rtol=1e-12)
     np.testing.assert_allclose(run.column("axial_n1"), sec[:, 0, 2, 0], rtol=0, atol=0)

@@ -48,14 +48,15 @@ def test_distribution_is_the_svd_pseudo_inverse_and_null_vector(machine):
     assert len(poses) >= 20
     for pose in poses:
         units = kinematics.inverse_kinematics(machine, pose).unit_vectors
-        pinv, null = distribution(units)
+        pinv, basis = distribution(units)
+        null = basis[:, 0]  # v_p, the 4-UPU's one preload vector
         a = units.T
         _, s, vt = np.linalg.svd(a)
         reference = vt[3] if vt[3, 0] < 0 else -vt[3]
         assert np.abs(pinv - np.linalg.pinv(a)).max() < 1e-13
         assert np.abs(null - reference).max() < 1e-13
         assert np.abs(a @ null).max() < 1e-14 and null[0] < 0
-        assert kernels.distribution(units, np.empty((4, 3)), np.empty(4)) == pytest.approx(s[-1], abs=3e-11)
+        assert kernels.distribution(units, np.empty((4, 3)), np.empty((4, 1))) == pytest.approx(s[-1], abs=3e-11)
 
 
 @pytest.mark.parametrize(("sigma", "singular"), [(1.02e-6, False), (0.98e-6, True)])
@@ -73,6 +74,7 @@ def test_distribution_refuses_a_singular_a_just_below_the_limit(sigma, singular)
         assert exc.value.smallest_singular_value == pytest.approx(sigma, rel=1e-4)
     else:
         pinv, null = distribution(a.T)
+        null = null[:, 0]
         bound = 10 * (1.0 / sigma) ** 2 * np.finfo(float).eps
         assert np.abs(a @ pinv - np.eye(3)).max() < bound
         assert np.abs(a @ null).max() < 1e-11  # achieved 2.7e-12: the cofactors cancel to ~ sigma_1 sigma_2 sigma
@@ -156,7 +158,8 @@ def test_compiled_controller_is_figure_12(machine, rigid, limiter, compensation)
     (relative to forces of hundreds of N; achieved ~1e-13)."""
     gains = Controller(deflection_compensation=compensation)
     pose0 = np.array([0.1, 0.62, -0.05])
-    ctrl = ForceLimitedController(machine, rigid, gains, limiter, pose0.copy(), preload_n=40.0)
+    ctrl = ForceLimitedController(machine=machine, rigid=rigid, gains=gains, limiter=limiter, estimate_m=pose0.copy(),
+                                  preload_n=np.array([40.0]))
     state, clamps, lifted = (np.zeros(3), 0.0), 0, 0
     for k in range(400):
         pose = pose0 + RNG.normal(scale=2e-4, size=3) + [0.0, -1e-5 * k, 1e-5 * k]  # 5.6 mm: 5 feed-forward updates
@@ -186,7 +189,7 @@ def test_compiled_controller_is_figure_12(machine, rigid, limiter, compensation)
         assert np.abs(ctrl.integral_m_s - state[0]).max() < 1e-12 and ctrl.lift_m == pytest.approx(state[1], abs=1e-15)
         assert ctrl.clamped == clamped
         pinv, null = distribution(ctrl.units)
-        assert np.abs(ctrl.tension_n - (-pinv @ expected + 40.0 * null)).max() < 1e-9
+        assert np.abs(ctrl.tension_n - (-pinv @ expected + 40.0 * null[:, 0])).max() < 1e-9
         clamps, lifted = clamps + clamped, lifted + (state[1] > 0.0)
     assert (clamps > 10 and lifted > 100) if limiter else (clamps == 0 and lifted == 0)
 

@@ -117,15 +117,16 @@ def _simulated_step(case, pose, step_m, dt_s, duration_s):
     position per step (n, 3), m."""
     machine, sim = case.machine(), case.simulation
     rigid = rigid_leg_model(machine, pose, sim.baumgarte_rad_per_s)
-    ctrl = ForceLimitedController(machine, rigid, sim.controller, False, pose.copy())
+    ctrl = ForceLimitedController(machine=machine, rigid=rigid, gains=sim.controller, limiter=False,
+                                  estimate_m=pose.copy())
     drive = drives.of(machine)
     q, v, a4 = rigid.reference_q.copy(), np.zeros(rigid.model.nv), case.preload.a4_n
     force = ctrl.command(q[rigid.actuator_q], v[rigid.actuator_v], (pose, np.zeros(3)), 0.0, 0.0)
-    state = drive.initial_state(-ctrl.pinv @ force + a4 * ctrl.null, q[rigid.actuator_q])
+    state = drive.initial_state(-ctrl.pinv @ force + a4 * ctrl.null[:, 0], q[rigid.actuator_q])
     tau, out, reference = np.zeros(rigid.model.nv), [], (pose + step_m, np.zeros(3))
     for _ in range(int(round(duration_s / dt_s))):
         force = ctrl.command(q[rigid.actuator_q], v[rigid.actuator_v], reference, 0.0, dt_s)
-        state, tension = drive.step(state, -ctrl.pinv @ force + a4 * ctrl.null, q[rigid.actuator_q],
+        state, tension = drive.step(state, -ctrl.pinv @ force + a4 * ctrl.null[:, 0], q[rigid.actuator_q],
                                     v[rigid.actuator_v], dt_s)
         tau[rigid.actuator_v] = -tension
         q, v = rigid.step(q, v, tau, dt_s)

@@ -18,13 +18,13 @@ from pressfit.cli import main
 from pressfit.description.cases import load_case
 from pressfit.description.machine import load_machine
 from pressfit.dynamics import drives, sizing
-from pressfit.dynamics.insertion import SERIES_COLUMNS, simulate_insertion
+from pressfit.dynamics.insertion import series_columns, simulate_insertion
 from pressfit.dynamics.machine.flexible import FlexibleMachine
 from pressfit.errors import ModelFileError, ResidualError
 from tests.test_simulation_trust import write_case
 
 ROOT = Path(__file__).resolve().parents[2]
-COL = {c: k for k, c in enumerate(SERIES_COLUMNS)}
+COL = {c: k for k, c in enumerate(series_columns(4))}  # the 4-UPU's
 ELECTRIC = load_machine(ROOT / "models/pressfit_4upu_electric.toml")
 HYDRAULIC = load_machine(ROOT / "models/pressfit_4upu_hydraulic.toml")
 FORCE = load_machine(ROOT / "models/pressfit_4upu.toml")

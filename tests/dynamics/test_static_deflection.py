@@ -58,7 +58,8 @@ def test_the_extrapolated_columns_hold_over_the_update_distance():
     held_worst = 0.0
     for _ in range(30):
         pose = np.array([rng.uniform(-0.23, 0.23), rng.uniform(0.58, 0.66), rng.uniform(-0.23, 0.23)])
-        ctrl = ForceLimitedController(machine, rigid, Controller(deflection_compensation=True), True, pose)
+        ctrl = ForceLimitedController(machine=machine, rigid=rigid, gains=Controller(deflection_compensation=True),
+                                     limiter=True, estimate_m=pose)
         first = ctrl.deflection(pose).copy()
         step = rng.uniform(-1.0, 1.0, 3)
         query = pose + 0.999 * DEFLECTION_UPDATE_M * step / np.abs(step).max()  # within it, round-off aside

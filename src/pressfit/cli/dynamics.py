@@ -92,8 +92,9 @@ def simulate_cmd(case_path: Path, out_dir: Path | None, no_limiter: bool, overwr
                + ("did not settle" if settle is None else f"{settle:.3f} s")
                + "; release after the dwell " + ("never" if release is None else f"{release:.3f} s")
                + f", tool error at the end of the retract {s['retract_tool_error_m'] * 1e6:.1f} um")
-    click.echo(f"internal force along v_p {s['internal_force_range_n'][0]:.1f} .. {s['internal_force_range_n'][1]:.1f}"
-               f" N (commanded {s['commanded_preload_n']:g} N); peak leg axial force "
+    commanded = ", ".join(f"{a:g}" for a in s["commanded_preload_amplitudes_n"]) or "none: no preload space"
+    click.echo(f"internal force along the preload basis {s['internal_force_range_n'][0]:.1f} .. "
+               f"{s['internal_force_range_n'][1]:.1f} N (commanded {commanded} N); peak leg axial force "
                + " ".join(f"{x:.1f}" for x in s["peak_leg_axial_force_n"]) + " N")
     click.echo(f"model {s['model']}: tool lateral error at first contact "
                + ("(no contact)" if s["tool_lateral_error_at_first_contact_m"] is None else
@@ -177,7 +178,7 @@ def _echo_sizing(s: dict) -> None:
 def export_mjcf_cmd(x: float, y: float, z: float, timestep_s: float, out: Path | None, overwrite: bool,
                     model_path: Path) -> None:
     """The rigid-leg machine closed at the plate pose X Y Z (m) as a MuJoCo model (MJCF, SI units): bodies,
-    masses, gravity, the four loop closures as welds, a keyframe 'reference' at the pose."""
+    masses, gravity, the loop closures (one per leg) as welds, a keyframe 'reference' at the pose."""
     from pressfit.output.mjcf import export_mjcf
 
     text, path = export_mjcf(load_machine(model_path), [x, y, z], timestep_s, out, overwrite)

@@ -1,17 +1,20 @@
-r"""The four force-controlled actuators and the redundant force distribution (paper section 4.2, equation 5).
+r"""The force-controlled actuators (one per leg) and the redundant force distribution (paper section 4.2,
+equation 5).
 
 Forces are leg tensions N_i (N, positive = tension, the project's convention): leg i pulls the plate with
 -N_i e_i, so the actuators exert the Cartesian force -A N on the plate (A of equation 5, columns e_i).
 
-Distribution: a commanded Cartesian force W (N, on the plate) and a commanded preload a4 (N) give
+Distribution: a commanded Cartesian force W (N, on the plate) and commanded preload amplitudes a (n - 3,), N,
+give
 
-    N = -A^+ W + a4 v_p,
+    N = -A^+ W + V a      (on the 4-UPU: -A^+ W + a4 v_p),
 
-A^+ = A^T (A A^T)^-1 the Moore-Penrose inverse and v_p the unit null vector of A with v_1 < 0 (equations
-9-10): -A N = W exactly and the preload changes no plate force. At one pose both come in closed form from the
-3 x 3 normal matrix A A^T (:func:`distribution`, compiled: about a microsecond; accurate to cond(A)^2 eps, and
-cond(A) <= 3.6 over the reachable workspace; the batched closed forms of :mod:`pressfit.kinematics` and numpy's
-SVD are the independent references of the tests).
+A^+ = A^T (A A^T)^-1 the Moore-Penrose inverse and V the preload basis (:func:`pressfit.kinematics.preload_basis`:
+n - 3 unit null vectors of A, amplitude k belonging to leg 3 + k; the 4-UPU's one vector is v_p with v_1 < 0,
+equations 9-10; none on 3 legs): -A N = W exactly and the preload changes no plate force. At one pose both come in
+closed form from the 3 x 3 normal matrix A A^T (:func:`distribution`, compiled: about a microsecond; accurate to
+cond(A)^2 eps, and cond(A) <= 3.6 over the reachable workspace; the batched closed forms of
+:mod:`pressfit.kinematics` and numpy's SVD are the independent references of the tests).
 
 Drive: each actuator tracks its command with a first-order force response of bandwidth f_bw (Hz),
 tau dN/dt = sat(N_cmd) - N, tau = 1 / (2 pi f_bw), the command saturated at +-``force_limit_n`` (the drive
@@ -35,10 +38,12 @@ SINGULAR_SIGMA = kernels.SINGULAR_SIGMA  # smallest singular value of A (entries
 
 
 def distribution(unit_vectors: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
-    """A^+ (4, 3) and v_p (4,) at one pose from the leg unit vectors e_i (4, 3) (rows of dl/dh, columns of A),
-    in closed form (:func:`pressfit.dynamics.kernels.distribution`); SingularPoseError when A's smallest singular
-    value is below ``SINGULAR_SIGMA``."""
-    pinv, null = np.empty((4, 3)), np.empty(4)
+    """A^+ (n, 3) and the preload basis V (n, n - 3) (v_p as its one column on the 4-UPU) at one pose from the leg
+    unit vectors e_i (n, 3) (rows of dl/dh, columns of A), in closed form
+    (:func:`pressfit.dynamics.kernels.distribution`); SingularPoseError when A's smallest singular value is below
+    ``SINGULAR_SIGMA``."""
+    legs = len(unit_vectors)
+    pinv, null = np.empty((legs, 3)), np.empty((legs, legs - 3))
     sigma = kernels.distribution(np.ascontiguousarray(unit_vectors, dtype=float), pinv, null)
     if sigma < SINGULAR_SIGMA:
         raise singular_error(sigma)
@@ -51,11 +56,13 @@ def singular_error(sigma: float) -> SingularPoseError:
                              smallest_singular_value=float(sigma))
 
 
-def distribute(machine: Machine, pose_m: np.ndarray, plate_force_n: np.ndarray, preload_n: float) -> np.ndarray:
-    """Actuator tensions (4,), N, that exert the Cartesian force ``plate_force_n`` (3,), N, on the plate at
-    ``pose_m`` (m) with the preload ``preload_n`` (N) along v_p (module docstring)."""
+def distribute(machine: Machine, pose_m: np.ndarray, plate_force_n: np.ndarray,
+               preload_n: float | np.ndarray) -> np.ndarray:
+    """Actuator tensions (n,), N, that exert the Cartesian force ``plate_force_n`` (3,), N, on the plate at
+    ``pose_m`` (m) with the preload amplitudes ``preload_n`` (n - 3,), N (a4 along v_p on the 4-UPU; module
+    docstring)."""
     pinv, null = distribution(kinematics.inverse_kinematics(machine, np.asarray(pose_m, float)).unit_vectors)
-    return -pinv @ np.asarray(plate_force_n, dtype=float) + preload_n * null
+    return -pinv @ np.asarray(plate_force_n, dtype=float) + null @ np.atleast_1d(np.asarray(preload_n, float))
 
 
 @dataclass(frozen=True)

@@ -1,9 +1,9 @@
 r"""Figure 12's force-limited position control: pose estimate from the actuator lengths, a Cartesian PID
 position loop, a force-limiting loop on the measured contact force, and the reference trajectory.
 
-Estimate (forward kinematics of the redundant set): Gauss-Newton on the four lengths l_i(h) = |h + d_i - B_i|
+Estimate (forward kinematics of the redundant set): Gauss-Newton on the n leg lengths l_i(h) = |h + d_i - B_i|
 (equation 1), h <- h - J^+ (l(h) - l_measured), J = dl/dh (rows e_i, equations 2-3), a few iterations from
-the last estimate (least squares over the four lengths; exact for consistent lengths). The velocity
+the last estimate (least squares over the n lengths; exact for consistent lengths). The velocity
 estimate is J^+ l_dot from the measured length rates.
 
 Position loop: W = Kp e + Kd e_dot + Ki int(e) + G, e = h_ref - h_est (m), W the Cartesian force (N) that
@@ -43,12 +43,13 @@ from pressfit.description.machine import Machine
 from pressfit.dynamics import kernels
 from pressfit.dynamics.actuators import singular_error
 from pressfit.dynamics.multibody import PoseCache, RigidLegModel
+from pressfit.errors import PreloadError
 from pressfit.kinematics.profiles import quintic as _quintic
 from pressfit.mechanics.condensed import condensed_plate_compliance
 
 
 def _legs(machine: Machine, pose_m: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
-    """Leg lengths l_i (4,), m, and unit vectors e_i (4, 3) at one pose (equation 1)."""
+    """Leg lengths l_i (n,), m, and unit vectors e_i (n, 3) at one pose (equation 1)."""
     u = kinematics.leg_vectors(machine, pose_m)
     lengths = np.sqrt(np.einsum("ij,ij->i", u, u))
     return lengths, u / lengths[:, None]
@@ -56,19 +57,19 @@ def _legs(machine: Machine, pose_m: np.ndarray) -> tuple[np.ndarray, np.ndarray]
 
 def estimate_pose(machine: Machine, lengths_m: np.ndarray, guess_m: np.ndarray,
                   iterations: int = 2) -> tuple[np.ndarray, np.ndarray, float]:
-    """Plate position (3,), m, whose leg lengths best fit ``lengths_m`` (4,), m (Gauss-Newton from
-    ``guess_m``), the leg unit vectors there (4, 3) (rows of dl/dh) and the largest length residual (m)
+    """Plate position (3,), m, whose leg lengths best fit ``lengths_m`` (n,), m (Gauss-Newton from
+    ``guess_m``), the leg unit vectors there (n, 3) (rows of dl/dh) and the largest length residual (m)
     (:func:`pressfit.dynamics.kernels.gauss_newton`: the 3 x 3 normal equations by the adjugate; the normal
     matrix is well conditioned wherever A is, singular poses are refused by
     :func:`pressfit.dynamics.actuators.distribution`)."""
-    pose, units = np.array(guess_m, dtype=float), np.empty((4, 3))
+    pose, units = np.array(guess_m, dtype=float), np.empty((len(machine.legs), 3))
     residual = kernels.gauss_newton(_offsets(machine), np.asarray(lengths_m, dtype=float), pose, int(iterations),
                                     units)
     return pose, units, residual
 
 
 def _offsets(machine: Machine) -> np.ndarray:
-    """d_i - B_i (4, 3), m: u_i = h + d_i - B_i (equation 1)."""
+    """d_i - B_i (n, 3), m: u_i = h + d_i - B_i (equation 1)."""
     return np.ascontiguousarray(machine.plate_offsets_m - machine.base_points_m, dtype=float)
 
 
@@ -118,7 +119,7 @@ def _linearised_compliance(machine: Machine, pose_m: np.ndarray) -> tuple[np.nda
     return c[0], np.moveaxis((c[1:4] - c[4:7]) / (2.0 * DEFLECTION_GRADIENT_STEP_M), 0, -1)
 
 
-@dataclass
+@dataclass(kw_only=True)
 class DeflectionCache:
     """The deflection columns as rows (c0, c1) (2, 3) at a pose (m) (:func:`static_deflection_columns`), G from
     the gravity cache ``gravity``: the compliance and its gradient are computed where the pose moved more than
@@ -155,7 +156,7 @@ class Shape(Protocol):
     def fraction(self, t_s: float) -> tuple[float, float]: ...
 
 
-@dataclass(frozen=True)
+@dataclass(frozen=True, kw_only=True)
 class Trajectory:
     """Piecewise reference on straight segments through waypoints (m) with segment durations (s): each
     segment minimum-jerk (the quintic) unless ``shapes`` gives its time law (None: the quintic)."""
@@ -178,7 +179,8 @@ class Trajectory:
         points = np.array([sim.start_m, above, bottom, bottom, above, sim.end_m, sim.end_m])
         times = np.array([sim.move_time_s, sim.descent_time_s, sim.dwell_s, sim.descent_time_s, sim.move_time_s,
                           max(sim.settle_s, 1e-9)])
-        return cls(points, times, ("approach", "descent", "dwell", "retract", "move", "settle"))
+        return cls(waypoints_m=points, durations_s=times,
+                   phases=("approach", "descent", "dwell", "retract", "move", "settle"))
 
     @property
     def duration_s(self) -> float:
@@ -213,26 +215,27 @@ class Trajectory:
         return self.waypoints_m[k] + profile[:, None] * delta, rate[:, None] * delta
 
 
-@dataclass
+@dataclass(kw_only=True)
 class ForceLimitedController:
     """Figure 12's controller (module docstring); state: estimate, integral, reference lift delta. Each
-    :meth:`command` also leaves A^+ and v_p at the estimate (``pinv``, ``null``) and the tensions
-    -A^+ W + a4 v_p (``tension_n``, N, a4 = ``preload_n``) that distribute its force W."""
+    :meth:`command` also leaves A^+ and the preload basis V at the estimate (``pinv``, ``null``) and the tensions
+    -A^+ W + V a (``tension_n``, N, a = ``preload_n`` the n - 3 preload amplitudes; a4 v_p on the 4-UPU) that
+    distribute its force W."""
 
     machine: Machine
     rigid: RigidLegModel
     gains: Controller
     limiter: bool
     estimate_m: np.ndarray
-    preload_n: float = 0.0
+    preload_n: np.ndarray | None = None  # a (n - 3,), N; None: no preload
     integral_m_s: np.ndarray = field(default_factory=lambda: np.zeros(3))
     lift_m: float = 0.0
     clamped: bool = False
     estimate_residual_m: float = 0.0
     pinv: np.ndarray = field(init=False)  # A^+ (n, 3) at the estimate (n legs)
-    null: np.ndarray = field(init=False)  # v_p (n,) at the estimate
+    null: np.ndarray = field(init=False)  # V (n, n - 3) at the estimate (v_p on the 4-UPU)
     units: np.ndarray = field(init=False)  # e_i (n, 3) at the estimate
-    tension_n: np.ndarray = field(init=False)  # -A^+ W + a4 v_p (n,), N
+    tension_n: np.ndarray = field(init=False)  # -A^+ W + V a (n,), N
     gravity: PoseCache = field(init=False)
     deflection: DeflectionCache = field(init=False)  # (2, 3) rows c0 (m/N), c1 (m) at the last pose asked:
     # with deflection_compensation the error is taken against the estimate + c0 F + c1 (kernels.control)
@@ -243,16 +246,22 @@ class ForceLimitedController:
 
     def __post_init__(self) -> None:
         self.force_limit_n = self.gains.force_limit_n
-        self.gravity = PoseCache(lambda pose: gravity_feedforward_n(self.rigid, pose), GRAVITY_UPDATE_M)
-        self.deflection = DeflectionCache(self.machine, self.gravity)
+        self.gravity = PoseCache(function=lambda pose: gravity_feedforward_n(self.rigid, pose),
+                                 tolerance_m=GRAVITY_UPDATE_M)
+        self.deflection = DeflectionCache(machine=self.machine, gravity=self.gravity)
         self.estimate_m = np.array(self.estimate_m, dtype=float)
         self.offsets_m = _offsets(self.machine)
+        legs = len(self.offsets_m)
+        self.preload_n = np.zeros(legs - 3) if self.preload_n is None else np.array(self.preload_n, dtype=float)
+        if self.preload_n.shape != (legs - 3,):
+            raise PreloadError(f"the controller takes {legs - 3} preload amplitude(s) (n - 3), got "
+                               f"{self.preload_n.size}", self.machine.name, legs - 3)
         self.units, self.pinv = np.zeros_like(self.offsets_m), np.zeros_like(self.offsets_m)
-        self.null, self.tension_n = np.zeros(len(self.offsets_m)), np.zeros(len(self.offsets_m))
+        self.null, self.tension_n = np.zeros((legs, legs - 3)), np.zeros(legs)
         g = self.gains
         params = np.zeros(len(_PARAMS))
         params[list(_PARAMS)] = (g.kp_n_per_m, g.kd_n_s_per_m, g.ki_n_per_m_s, g.force_limit_n, g.backoff_m_per_s_n,
-                                 float(self.limiter), float(g.gravity_compensation), GRAVITY_UPDATE_M, self.preload_n,
+                                 float(self.limiter), float(g.gravity_compensation), GRAVITY_UPDATE_M,
                                  float(g.deflection_compensation), DEFLECTION_UPDATE_M)
         self._params, self._force = params, np.zeros(3)
 
@@ -283,7 +292,7 @@ class ForceLimitedController:
                 self._params, self.estimate_m, self.units, rates_m_per_s, reference[0], reference[1],
                 float(contact_force_n), float(dt_s), self.integral_m_s, float(self.lift_m),
                 *_held(gravity, _ZERO3), *_held(deflection, _ZERO23), self.pinv, self.null, self._force,
-                self.tension_n)
+                self.tension_n, self.preload_n)
             if status == 1:  # the estimate moved past GRAVITY_UPDATE_M: refresh the feed-forward
                 gravity(self.estimate_m)
             elif status == 3:  # past DEFLECTION_UPDATE_M: refresh the static deflection
@@ -301,5 +310,5 @@ def _held(cache: PoseCache | DeflectionCache, empty: np.ndarray) -> tuple[np.nda
 
 
 _PARAMS = (kernels.KP, kernels.KD, kernels.KI, kernels.FORCE_LIMIT, kernels.BACKOFF, kernels.LIMITER, kernels.GRAVITY,
-           kernels.GRAVITY_TOL, kernels.PRELOAD, kernels.DEFLECTION, kernels.DEFLECTION_TOL)
+           kernels.GRAVITY_TOL, kernels.DEFLECTION, kernels.DEFLECTION_TOL)
 _ZERO3, _ZERO23 = np.zeros(3), np.zeros((2, 3))

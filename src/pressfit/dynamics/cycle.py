@@ -49,12 +49,10 @@ from pressfit.dynamics.contact import contact_force_n
 from pressfit.dynamics.control import Trajectory, gravity_feedforward_n
 from pressfit.dynamics.insertion import (
     COMPLETION_FRACTION,
-    LEGS,
     MAX_DEPTH_FACTOR,
     MAX_STEPS,
     MIN_SEGMENT_STEPS,
     PATH_SAMPLE_M,
-    SERIES_COLUMNS,
     WARN_STEPS,
     ScenarioPlan,
     _check_steps,
@@ -64,18 +62,21 @@ from pressfit.dynamics.insertion import (
     check_oil_column,
     check_preload,
     drive_limit,
+    leg_columns,
     plate_mobility,
+    preload_amplitudes_n,
     require_force_preload,
     run_plan,
     run_time_warning,
+    series_columns,
     settling_time_s,
+    without_preload,
 )
 from pressfit.dynamics.multibody import rigid_leg_model
 from pressfit.dynamics.sizing import RunSizing, run_sizing
 from pressfit.errors import ModelFileError, PressfitError
 from pressfit.kinematics.profiles import Quintic, SCurve, quintic_move, s_curve
 
-CYCLE_COLUMNS = (*SERIES_COLUMNS, "pin", "segment")  # the simulate columns, the pin (0: none) and the segment
 FORCE_SAMPLES = 11  # points per segment where the drive speed and force bounds are evaluated
 PIN_PHASES = ("descent", "dwell", "retract")  # a pin's window: its figures are computed on these rows
 
@@ -178,7 +179,7 @@ def _scaled(case: Case, rigid: Any, machine: Machine, drives: drive_kinds.Drive,
     a_drive = math.inf
     for p, ep in zip(samples, _unit_legs(machine, a, b, FORCE_SAMPLES), strict=True):
         pinv, null = distribution(ep)
-        static = -pinv @ gravity_feedforward_n(rigid, p) + case.preload.a4_n * null
+        static = -pinv @ gravity_feedforward_n(rigid, p) + null @ preload_amplitudes_n(case, machine)
         per_acc = np.abs(pinv @ np.linalg.solve(plate_mobility(rigid, p), u))
         margin = drives.force_limit_n - np.abs(static)
         if np.any(margin <= 0.0):
@@ -293,17 +294,19 @@ def plan_cycle(case: Case, machine: Machine | None = None, model: str | None = N
 
 @dataclass(frozen=True, kw_only=True)
 class CycleResult:
-    """A simulated board: ``series`` (n, len(CYCLE_COLUMNS)), one row per step (the simulate columns, the pin
-    and the segment of the row), the plan, and ``summary`` (:func:`summarise_cycle`, JSON-ready)."""
+    """A simulated board: ``series`` (n, len(columns)), one row per step (``columns``: :func:`cycle_columns`, the
+    simulate columns, the pin and the segment of the row), the plan, and ``summary`` (:func:`summarise_cycle`,
+    JSON-ready)."""
 
     series: np.ndarray
+    columns: tuple[str, ...]
     plan: CyclePlan
     summary: dict[str, Any]
     sections: np.ndarray | None = None
     sizing: RunSizing | None = None
 
     def column(self, name: str) -> np.ndarray:
-        return self.series[:, CYCLE_COLUMNS.index(name)]
+        return self.series[:, self.columns.index(name)]
 
 
 def simulate_cycle(case: Case, model: str | None = None, progress: bool = False, sizing: bool = True,
@@ -326,27 +329,35 @@ def simulate_cycle(case: Case, model: str | None = None, progress: bool = False,
     summary = summarise_cycle(series, plan, drives)
     sized = None
     if sizing:
-        a4 = case.preload.a4_n
-        baseline = _Rows(series)
-        if a4 != 0.0 and preload_cost:
-            zero = plan.run_case.model_copy(update={"preload": case.preload.model_copy(update={"a4_n": 0.0})})
+        amplitudes, columns = case.preload.amplitudes, series_columns(len(machine.legs))
+        baseline = _Rows(series=series, columns=columns)
+        if any(amplitudes) and preload_cost:
             try:
-                baseline = _Rows(run(zero)[0])
+                baseline = _Rows(series=run(without_preload(plan.run_case))[0], columns=columns)
             except PressfitError as exc:
-                raise PressfitError(f"the preload's cost (the same board with [preload] a4_n = 0 instead of "
-                                    f"{a4:g} N) could not be simulated: {exc}") from None
-        sized = run_sizing(_Rows(series), drives, plan.scenario.simulation.time_step_s,
+                raise PressfitError(f"the preload's cost (the same board without the preload, instead of "
+                                    f"{', '.join(f'{a:g}' for a in amplitudes)} N) could not be simulated: {exc}"
+                                    ) from None
+        sized = run_sizing(_Rows(series=series, columns=columns), drives, plan.scenario.simulation.time_step_s,
                            baseline if preload_cost else None)
         sized.energy.require_closed(f"of the board of {case.path}", "cycle")
         summary.update(sized.to_dict())
-    return CycleResult(series=series, plan=plan, summary=summary, sections=sections, sizing=sized)
+    return CycleResult(series=series, columns=cycle_columns(len(machine.legs)), plan=plan, summary=summary,
+                       sections=sections, sizing=sized)
 
 
-@dataclass(frozen=True)
+@dataclass(frozen=True, kw_only=True)
 class _Rows:
-    """Rows whose first columns are :data:`pressfit.dynamics.insertion.SERIES_COLUMNS` (what run_sizing reads)."""
+    """Rows whose first columns are ``columns`` (:func:`pressfit.dynamics.insertion.series_columns`: what run_sizing
+    reads)."""
 
     series: np.ndarray
+    columns: tuple[str, ...]
+
+
+def cycle_columns(legs: int) -> tuple[str, ...]:
+    """The columns of an n-leg board's series: the simulate columns, the pin (0: none) and the segment."""
+    return (*series_columns(legs), "pin", "segment")
 
 
 def summarise_cycle(series: np.ndarray, plan: CyclePlan, drives: drive_kinds.Drive | None = None) -> dict[str, Any]:
@@ -359,7 +370,8 @@ def summarise_cycle(series: np.ndarray, plan: CyclePlan, drives: drive_kinds.Dri
     ``overshoot_n``, ``max_alignment_error_m`` on the lateral error) and ``passed`` (completed and every check
     holds). The cycle: ``cycle_time_s`` (:attr:`CyclePlan.cycle_time_s`), ``pins_per_minute``, ``segments``,
     ``slowest_segment`` (the longest segment but the settle, and its binding limit), the drives' saturation."""
-    col = {name: k for k, name in enumerate(CYCLE_COLUMNS)}
+    columns = cycle_columns(len(plan.scenario.rigid.machine.legs))
+    col = {name: k for k, name in enumerate(columns)}
     t, force = series[:, col["time_s"]], series[:, col["contact_force_n"]]
     tool = series[:, [col["tool_x_m"], col["tool_z_m"]]]
     segment = series[:, col["segment"]].astype(int)
@@ -414,7 +426,7 @@ def summarise_cycle(series: np.ndarray, plan: CyclePlan, drives: drive_kinds.Dri
         "segments": records,
     }
     if drives is not None:
-        commands = series[:, [col[f"cmd_n{i}"] for i in LEGS]]
+        commands = series[:, leg_columns(columns, "cmd_n")]
         saturated = drives.saturated(commands).any(axis=1)
         summary["actuator_saturation_time_s"] = float(saturated.sum() * plan.scenario.simulation.time_step_s)
         if saturated.any():

@@ -1,12 +1,13 @@
 r"""The insertion simulation of Figures 13-14: the closed-loop rigid-leg machine (Pinocchio constraint
-dynamics, :mod:`pressfit.dynamics.multibody`) driven by four force-controlled actuators
+dynamics, :mod:`pressfit.dynamics.multibody`) driven by one force-controlled actuator per leg
 (:mod:`pressfit.dynamics.actuators`) under Figure 12's force-limited position control
 (:mod:`pressfit.dynamics.control`), pressing a pin into a board (:mod:`pressfit.dynamics.contact`, the
 machine's compliance in series at the tool, quasi-statically).
 
 One time step dt (the controller runs every step, an ideal sampled controller at 1/dt):
 measure the actuator lengths and rates and the contact force of the last step -> controller -> Cartesian force
-W -> tensions N_cmd = -A^+ W + a4 v_p -> first-order saturated drives -> joint forces (-N_i on the prismatic
+W -> tensions N_cmd = -A^+ W + V a (a4 v_p on the 4-UPU; V the preload basis at the estimate, a the case's n - 3
+preload amplitudes, none on 3 legs) -> first-order saturated drives -> joint forces (-N_i on the prismatic
 joints, the contact force on the plate) -> one semi-implicit Euler step -> contact at the new position.
 The contact force acts on the plate centre (the tool tip), +y.
 
@@ -15,7 +16,8 @@ than ``MIN_SEGMENT_STEPS`` steps; the run would take more than ``MAX_STEPS`` ste
 waypoint above the pin or the bottom of the descent is unreachable, or any point of the planned path (sampled
 every ``PATH_SAMPLE_M``; the minimum-jerk reference moves on straight segments) breaks a joint limit (closed-form
 inverse kinematics); start or end is not above the board face (the contact is the infinite plane y = h_b);
-the preload alone saturates a drive (|a4| max |v_p| over the path > the drives' limit); the explicit step is
+the preload alone saturates a drive (max |V a| over the path > the drives' limit; a preload on a 3-leg machine or
+with another number of amplitudes than n - 3: PreloadError); the explicit step is
 unstable for the position loop or the closures' Baumgarte corrector (:func:`step_stability`). During the run it
 stops with one line naming the time and the likely keys when the state is not finite, the plate leaves the
 reachable set, or the loop-closure drift exceeds ``MAX_CLOSURE_DRIFT_M``.
@@ -23,6 +25,7 @@ reachable set, or the loop-closure drift exceeds ``MAX_CLOSURE_DRIFT_M``.
 
 from __future__ import annotations
 
+import dataclasses
 import math
 from collections.abc import Callable
 from dataclasses import dataclass, field
@@ -59,18 +62,43 @@ from pressfit.errors import (
     format_violation,
 )
 from pressfit.mechanics.clearance import clearance_from_case, load_deflection
+from pressfit.mechanics.preload import ActuatorPreload, self_stress_forces_n
 
-LEGS = ("1", "2", "3", "4")
 # the machine's energies after the step and the Rayleigh damping's work over it (flexible model; 0 on the rigid one,
 # which has no elastic energy either), J: the energy balance of :mod:`pressfit.dynamics.sizing`
 ENERGY_COLUMNS = ("kinetic_energy_j", "potential_energy_j", "elastic_energy_j", "damping_work_j")
-SERIES_COLUMNS = ("time_s", "ref_x_m", "ref_y_m", "ref_z_m", "est_x_m", "est_y_m", "est_z_m", "plate_x_m",
-                  "plate_y_m", "plate_z_m", "tool_x_m", "tool_y_m", "tool_z_m", "contact_force_n", "depth_m",
-                  *(f"cmd_n{i}" for i in LEGS), *(f"act_n{i}" for i in LEGS), "reference_lift_m", "closure_drift_m",
-                  *(f"axial_n{i}" for i in LEGS), "internal_force_n", "kinematic_x_m", "kinematic_y_m",
-                  "kinematic_z_m", *(f"length_m{i}" for i in LEGS), *(f"rate_m_per_s{i}" for i in LEGS),
-                  *ENERGY_COLUMNS)
-SECTION_COLUMNS = ("time_s", *(f"leg{i}_{s}_{c}" for i in LEGS for s in SECTIONS for c in SECTION_COMPONENTS))
+
+
+def internal_columns(legs: int) -> tuple[str, ...]:
+    """The internal force columns of an n-leg run: the preload amplitudes the delivered tensions carry
+    (:func:`pressfit.dynamics.kernels.internal_forces`): ``internal_force_n`` (v_p . N) with one redundant leg,
+    ``internal_force_n<3 + k>`` for amplitude k (of leg 3 + k) with more, none on 3 legs."""
+    if legs - 3 == 1:
+        return ("internal_force_n",)
+    return tuple(f"internal_force_n{j + 1}" for j in range(3, legs))
+
+
+def series_columns(legs: int) -> tuple[str, ...]:
+    """The columns of an n-leg run's series (:class:`InsertionResult`), per-leg columns numbered 1 .. n."""
+    names = [str(i + 1) for i in range(legs)]
+    return ("time_s", "ref_x_m", "ref_y_m", "ref_z_m", "est_x_m", "est_y_m", "est_z_m", "plate_x_m", "plate_y_m",
+            "plate_z_m", "tool_x_m", "tool_y_m", "tool_z_m", "contact_force_n", "depth_m",
+            *(f"cmd_n{i}" for i in names), *(f"act_n{i}" for i in names), "reference_lift_m", "closure_drift_m",
+            *(f"axial_n{i}" for i in names), *internal_columns(legs), "kinematic_x_m", "kinematic_y_m",
+            "kinematic_z_m", *(f"length_m{i}" for i in names), *(f"rate_m_per_s{i}" for i in names), *ENERGY_COLUMNS)
+
+
+def section_columns(legs: int) -> tuple[str, ...]:
+    """The columns of an n-leg flexible run's section resultants (``sections.csv``)."""
+    return ("time_s", *(f"leg{i + 1}_{s}_{c}" for i in range(legs) for s in SECTIONS for c in SECTION_COMPONENTS))
+
+
+def leg_columns(columns: tuple[str, ...], prefix: str) -> list[int]:
+    """The indices of the per-leg columns ``<prefix>1 .. <prefix>n`` in ``columns``, in leg order."""
+    legs = sum(c.startswith("cmd_n") for c in columns)
+    return [columns.index(f"{prefix}{i + 1}") for i in range(legs)]
+
+
 MOVE_PHASES = ("approach", "move")  # the structure's deflection during the moves: these phases (summarise)
 VIBRATION_WINDOW_S = 0.2  # residual vibration: the tool's peak-to-peak over the last 0.2 s of the final settle
 KINEMATIC_ITERATIONS = 3  # Gauss-Newton iterations of the kinematic pose from the last row's
@@ -96,25 +124,28 @@ _REACH_CHECK_STEPS = 10  # the plate's joint limits are checked every this many 
 _CURVE_POINTS = 41  # load steps of the clearance load-deflection curve
 
 
-@dataclass(frozen=True)
+@dataclass(frozen=True, kw_only=True)
 class InsertionResult:
-    """A simulated insertion (SI). ``series`` (n, len(SERIES_COLUMNS)) holds one row per time step:
+    """A simulated insertion (SI). ``series`` (n, len(columns)) holds one row per time step (``columns``:
+    :func:`series_columns` of the machine's leg count):
     reference, estimated and rigid plate positions, tool tip (rigid + series deflection), contact force
     (+y on the tool) and interference, commanded and delivered actuator tensions, reference lift, closure
     drift, the legs' axial force at the plate cardan (:meth:`pressfit.dynamics.multibody.RigidLegModel.leg_loads`;
     its torsion and bending are left out: the rigid model's couples are not objective) and the internal force
-    along v_p, v_p . N (N) of the delivered tensions, the kinematic pose, leg lengths and rates, and the energies
+    (the preload amplitudes, N, :func:`internal_columns`) of the delivered tensions, the kinematic pose, leg
+    lengths and rates, and the energies
     (``ENERGY_COLUMNS``, J). ``summary`` is the JSON-ready digest (:func:`summarise`)."""
 
     limiter: bool
     series: np.ndarray
+    columns: tuple[str, ...]
     phases: np.ndarray  # (n,) segment index of each row (see ``phase_names``)
     phase_names: tuple[str, ...]
     summary: dict[str, Any] = field(default_factory=dict)
-    sections: np.ndarray | None = None  # (n, 4, 3, 6) flexible model: section resultants (SECTION_COLUMNS)
+    sections: np.ndarray | None = None  # (n, legs, 3, 6) flexible model: section resultants (section_columns)
 
     def column(self, name: str) -> np.ndarray:
-        return self.series[:, SERIES_COLUMNS.index(name)]
+        return self.series[:, self.columns.index(name)]
 
 
 def _deflection(machine: Machine, case: Case, sim: Simulation, pin_pose: np.ndarray, columns: PoseCache
@@ -131,14 +162,15 @@ def _deflection(machine: Machine, case: Case, sim: Simulation, pin_pose: np.ndar
         return lambda pose: (*columns(pose), NO_TABLE)
     limit = max(4.0 * sim.controller.force_limit_n, sim.contact.stiffness_n_per_m * sim.interference_m)
     curve = load_deflection(machine, pin_pose, [0.0, 1.0, 0.0], np.linspace(0.0, limit, _CURVE_POINTS),
-                            clearance_from_case(case, machine), case.preload.a4_n, unload=False)
+                            clearance_from_case(case, machine), ActuatorPreload.from_case(case.preload).a4,
+                            unload=False)
     table = (np.ascontiguousarray(curve.loads_n, dtype=float),
              np.ascontiguousarray(curve.loading.displacement_m - curve.loading.displacement_m[0], dtype=float))
     zero = np.zeros(3)
     return lambda pose: (zero, columns(pose)[1], table)
 
 
-@dataclass(frozen=True)
+@dataclass(frozen=True, kw_only=True)
 class ScenarioPlan:
     """A validated scenario (:func:`plan_scenario`, or a board's :func:`pressfit.dynamics.cycle.plan_cycle`): its
     reference, the number of steps, the planned path samples (n, 3), m, the warnings to show before the run, the
@@ -262,9 +294,10 @@ def plan_scenario(case: Case, machine: Machine | None = None, preload_key: str =
     check_flexible_step(case, machine, sim, trajectory.waypoints_m, "[simulation] time_step_s")
     if steps > WARN_STEPS:
         warnings.append(run_time_warning(steps, dt, trajectory.duration_s))
-    return ScenarioPlan(trajectory, steps, path, tuple(warnings), rigid, sim,
-                        np.full(len(trajectory.durations_s), sim.controller.force_limit_n),
-                        MAX_DEPTH_FACTOR * sim.interference_m)
+    return ScenarioPlan(trajectory=trajectory, steps=steps, path_m=path, warnings=tuple(warnings), rigid=rigid,
+                        simulation=sim,
+                        force_limits_n=np.full(len(trajectory.durations_s), sim.controller.force_limit_n),
+                        depth_limit_m=MAX_DEPTH_FACTOR * sim.interference_m)
 
 
 def run_time_warning(steps: int, dt_s: float, duration_s: float) -> str:
@@ -308,14 +341,35 @@ def check_flexible_step(case: Case, machine: Machine, sim: Simulation, waypoints
                       f"{frequencies.min():.4g} Hz at the softest pose), got {sim.time_step_s:g} s")
 
 
+def preload_amplitudes_n(case: Case, machine: Machine) -> np.ndarray:
+    """The case's preload amplitudes a (n - 3,), N, along the machine's preload basis (a4 on the 4-UPU; zeros when
+    the case has no preload; :func:`check_preload` refuses a preload the machine cannot take)."""
+    amplitudes = np.asarray(case.preload.amplitudes, dtype=float)
+    return amplitudes if amplitudes.any() else np.zeros(machine.redundancy)
+
+
+def without_preload(case: Case) -> Case:
+    """The case with no preload (the preload's cost: the same scenario with a = 0)."""
+    return case.model_copy(update={"preload": case.preload.model_copy(update={"a4_n": 0.0, "amplitudes_n": None})})
+
+
 def check_preload(case: Case, machine: Machine, drives: drive_kinds.Drive, path_m: np.ndarray, key: str) -> None:
-    """The preload alone must not saturate a drive anywhere on the planned path (n, 3), m."""
-    a4 = case.preload.a4_n
-    vp = float(np.abs(kinematics.preload_vector(machine, path_m)).max())
-    if abs(a4) * vp > drives.force_limit_n:
+    """The preload alone must not saturate a drive anywhere on the planned path (n, 3), m: max |V a| at most the
+    drives' limit (|a4| max |v_p| on the 4-UPU); a preload on a 3-leg machine, or with another number of
+    amplitudes than n - 3, raises :class:`pressfit.errors.PreloadError`
+    (:func:`pressfit.mechanics.preload.self_stress_forces_n`)."""
+    amplitudes = np.asarray(case.preload.amplitudes, dtype=float)
+    forces = self_stress_forces_n(machine, path_m, amplitudes[0] if amplitudes.size == 1 else amplitudes)
+    peak = float(np.abs(forces).max())
+    if peak <= drives.force_limit_n:
+        return
+    if machine.redundancy == 1:
+        a4, vp = float(amplitudes[0]), float(np.abs(kinematics.preload_vector(machine, path_m)).max())
         raise _refuse(case, key, f"|a4| max|v_p| at most {drive_limit(drives)}: a4 = {a4:g} N with "
-                      f"max|v_p| = {vp:.4g} over the planned path "
-                      f"commands {abs(a4) * vp:.4g} N from the preload alone")
+                      f"max|v_p| = {vp:.4g} over the planned path commands {peak:.4g} N from the preload alone")
+    raise _refuse(case, key, f"max |V a| at most {drive_limit(drives)}: the amplitudes "
+                  f"({', '.join(f'{a:g}' for a in amplitudes)}) N command {peak:.4g} N over the planned path from "
+                  "the preload alone")
 
 
 _LIMIT_KEYS = {"force": "[actuator] force_limit_n",
@@ -379,16 +433,17 @@ def simulate_insertion(case: Case, limiter: bool = True, progress: bool = False)
     plan = plan_scenario(case, machine)
     drives = drive_kinds.of(machine)
     rows, phases, sections = run_plan(case, machine, plan, drives, limiter, progress)
-    result = InsertionResult(limiter, rows, phases, plan.trajectory.phases, sections=sections)
+    result = InsertionResult(limiter=limiter, series=rows, columns=series_columns(len(machine.legs)), phases=phases,
+                             phase_names=plan.trajectory.phases, sections=sections)
     summary = summarise(result, case, drives)
     summary["warnings"] = [*plan.warnings, *summary["warnings"]]
-    return InsertionResult(limiter, rows, phases, plan.trajectory.phases, summary, sections)
+    return dataclasses.replace(result, summary=summary)
 
 
 def run_plan(case: Case, machine: Machine, plan: ScenarioPlan, drives: drive_kinds.Drive, limiter: bool,
              progress: bool) -> tuple[np.ndarray, np.ndarray, np.ndarray | None]:
     """Run a validated plan on its model (``plan.simulation.model``): the series (one row per step,
-    ``SERIES_COLUMNS``), the segment index of each row and, with the flexible model, the section resultants."""
+    :func:`series_columns`), the segment index of each row and, with the flexible model, the section resultants."""
     run = _run_flexible if plan.simulation.model == "flexible" else _run_rigid
     return run(case, machine, plan, drives, limiter, progress)
 
@@ -400,18 +455,19 @@ class _Series:
 
     def __init__(self, machine: Machine, steps: int, start_m: np.ndarray) -> None:
         self.machine, self.steps, self.kinematic = machine, steps, np.asarray(start_m, float).copy()
-        self.chunks = [np.empty((min(steps, _CHUNK_ROWS), len(SERIES_COLUMNS)))]
+        self.width = len(series_columns(len(machine.legs)))
+        self.chunks = [np.empty((min(steps, _CHUNK_ROWS), self.width))]
 
     def add(self, k: int, row: tuple, lengths: np.ndarray, rates: np.ndarray, energy: tuple) -> None:
         self.kinematic = estimate_pose(self.machine, lengths, self.kinematic, KINEMATIC_ITERATIONS)[0]
         if k // _CHUNK_ROWS == len(self.chunks):
-            self.chunks.append(np.empty((min(self.steps - k, _CHUNK_ROWS), len(SERIES_COLUMNS))))
+            self.chunks.append(np.empty((min(self.steps - k, _CHUNK_ROWS), self.width)))
         self.chunks[-1][k % _CHUNK_ROWS] = (*row, *self.kinematic, *lengths, *rates, *energy)
 
     def row(self, k: int) -> np.ndarray:
         """Row k (the rows are filled in order) to fill in place; the kinematic pose is the caller's."""
         if k // _CHUNK_ROWS == len(self.chunks):
-            self.chunks.append(np.empty((min(self.steps - k, _CHUNK_ROWS), len(SERIES_COLUMNS))))
+            self.chunks.append(np.empty((min(self.steps - k, _CHUNK_ROWS), self.width)))
         return self.chunks[-1][k % _CHUNK_ROWS]
 
     def rows(self) -> np.ndarray:
@@ -459,8 +515,10 @@ def _run_rigid(case: Case, machine: Machine, plan: ScenarioPlan, drives: drive_k
     new lengths (the next step's controller estimate and, continued to ``KINEMATIC_ITERATIONS``, the row's
     kinematic pose) and the row; the energies (``ENERGY_COLUMNS``) from the rigid model."""
     sim, trajectory, steps, rigid = plan.simulation, plan.trajectory, plan.steps, plan.rigid
-    q, v, dt, a4 = rigid.reference_q.copy(), np.zeros(rigid.model.nv), sim.time_step_s, case.preload.a4_n
-    ctrl = ForceLimitedController(machine, rigid, sim.controller, limiter, np.asarray(sim.start_m, float).copy(), a4)
+    q, v, dt = rigid.reference_q.copy(), np.zeros(rigid.model.nv), sim.time_step_s
+    ctrl = ForceLimitedController(machine=machine, rigid=rigid, gains=sim.controller, limiter=limiter,
+                                  estimate_m=np.asarray(sim.start_m, float).copy(),
+                                  preload_n=preload_amplitudes_n(case, machine))
     deflection = _deflection(machine, case, sim, trajectory.waypoints_m[2], ctrl.deflection)
     act_q, act_v = rigid.actuator_q, rigid.actuator_v
     ctrl.command(q[act_q], v[act_v], trajectory.at(0.0), 0.0, 0.0)
@@ -472,12 +530,14 @@ def _run_rigid(case: Case, machine: Machine, plan: ScenarioPlan, drives: drive_k
     phases = trajectory.segments(times - 1e-12)
     params = contact_parameters(sim.contact)
     iterations = ctrl.gains.estimator_iterations
-    post = np.array([SERIES_COLUMNS.index(c) for c in ("plate_x_m", "tool_x_m", "contact_force_n", "depth_m",
+    columns = series_columns(len(machine.legs))
+    post = np.array([columns.index(c) for c in ("plate_x_m", "tool_x_m", "contact_force_n", "depth_m",
                                                        "axial_n1", "kinematic_x_m", "length_m1", "rate_m_per_s1")])
-    pre = np.array([SERIES_COLUMNS.index(c) for c in ("time_s", "ref_x_m", "est_x_m", "cmd_n1", "act_n1",
-                                                      "reference_lift_m", "internal_force_n")])
-    drift_column = SERIES_COLUMNS.index("closure_drift_m")
-    energy = slice(SERIES_COLUMNS.index(ENERGY_COLUMNS[0]), SERIES_COLUMNS.index(ENERGY_COLUMNS[-1]) + 1)
+    pre = np.array([columns.index(c) for c in ("time_s", "ref_x_m", "est_x_m", "cmd_n1", "act_n1",
+                                               "reference_lift_m")]
+                   + [columns.index("axial_n1") + len(machine.legs)])  # the internal forces follow the axial ones
+    drift_column = columns.index("closure_drift_m")
+    energy = slice(columns.index(ENERGY_COLUMNS[0]), columns.index(ENERGY_COLUMNS[-1]) + 1)
     series = _Series(machine, steps, sim.start_m)
     tau, contact_tau, u = np.zeros(rigid.model.nv), np.zeros(3), np.empty(3)
     column, sag, table = deflection(q[0:3])
@@ -536,27 +596,28 @@ def _flexible_steps(case: Case, machine: Machine, plan: ScenarioPlan, drives: dr
     model).
     Starts from the static equilibrium under gravity with the drives holding the start pose's lengths."""
     sim, trajectory, steps, rigid = plan.simulation, plan.trajectory, plan.steps, plan.rigid
-    dt, a4 = sim.time_step_s, case.preload.a4_n
+    dt, preload = sim.time_step_s, preload_amplitudes_n(case, machine)
     fm = FlexibleMachine(machine, np.asarray(sim.start_m, float))  # its step: check_flexible_step
     state = fm.rest_state()
-    ctrl = ForceLimitedController(machine, rigid, sim.controller, limiter, np.asarray(sim.start_m, float).copy())
+    ctrl = ForceLimitedController(machine=machine, rigid=rigid, gains=sim.controller, limiter=limiter,
+                                  estimate_m=np.asarray(sim.start_m, float).copy())
     lengths, rates = fm.leg_lengths_m(state), fm.leg_rates_m_per_s(state)  # what the drives measure
     force = ctrl.command(lengths, rates, trajectory.at(0.0), 0.0, 0.0)
-    tension = -ctrl.pinv @ force + a4 * ctrl.null
+    tension = -ctrl.pinv @ force + ctrl.null @ preload
     drive = drives.initial_state(tension, lengths)
     board, contact_force = sim.contact.board_height_m, 0.0
     depth = board - fm.tool_point_m(state)[1]
     series, phases = _Series(machine, steps, sim.start_m), np.empty(steps, dtype=int)
     placement, subtree = fm.section_state(state)  # per step; the section loads from them after the run (batched)
     placements, wrenches = np.empty((steps, *placement.shape)), np.empty((steps, *subtree.shape))
-    wrench, no_axial = np.zeros(6), (0.0,) * 4
+    wrench, no_axial, internal = np.zeros(6), (0.0,) * len(machine.legs), np.empty(machine.redundancy)
     for k in tqdm(range(steps), desc="simulate", unit="step", disable=not progress, mininterval=0.5):
         t = (k + 1) * dt
         reference = trajectory.at(t)
         ctrl.force_limit_n = plan.force_limits_n[trajectory.segment(t)]
         try:
             force = ctrl.command(lengths, rates, reference, contact_force, dt)
-            command = -ctrl.pinv @ force + a4 * ctrl.null
+            command = -ctrl.pinv @ force + ctrl.null @ preload
             wrench[1] = contact_force
             if drives.kind == "force":  # its tension does not follow the travel: stepped once, held over the step
                 drive, tension = drives.step(drive, command, lengths, rates, dt)
@@ -578,9 +639,10 @@ def _flexible_steps(case: Case, machine: Machine, plan: ScenarioPlan, drives: dr
             _check_depth(case, plan, depth, t)
             contact_force = contact_force_n(sim.contact, depth, (depth - previous) / dt)
             lengths, rates = fm.leg_lengths_m(state), fm.leg_rates_m_per_s(state)
+            kernels.internal_forces(ctrl.null, tension, internal)
             series.add(k, (t, *reference[0] + [0.0, ctrl.lift_m, 0.0], *ctrl.estimate_m, *tool, *tool,
                            contact_force, depth, *command, *tension, ctrl.lift_m, drift, *no_axial,
-                           ctrl.null @ tension), lengths, rates, _energies(fm.energy(state), state.damping_work_j))
+                           *internal), lengths, rates, _energies(fm.energy(state), state.damping_work_j))
         except UnreachablePoseError as exc:
             raise _diverged(case, t, f"the pose estimate left the reachable set: {exc}", plan.table) from None
         except ConvergenceError as exc:
@@ -590,7 +652,7 @@ def _flexible_steps(case: Case, machine: Machine, plan: ScenarioPlan, drives: dr
         phases[k] = trajectory.segment(t - 1e-12)
     sections = leg_frame_loads(fm.section_wrenches_from(placements, wrenches), machine.cardan_axes)[0]
     rows = series.rows()
-    rows[:, SERIES_COLUMNS.index("axial_n1"):SERIES_COLUMNS.index("axial_n4") + 1] = sections[:, :, 2, 0]  # plate
+    rows[:, leg_columns(series_columns(len(machine.legs)), "axial_n")] = sections[:, :, 2, 0]  # plate
     return rows, phases, sections
 
 
@@ -621,11 +683,11 @@ def settling_time_s(time_s: np.ndarray, force_n: np.ndarray, dwell: np.ndarray) 
 
 
 def _columns(result: InsertionResult, prefix: str) -> np.ndarray:
-    return result.series[:, [SERIES_COLUMNS.index(f"{prefix}{i}") for i in LEGS]]
+    return result.series[:, leg_columns(result.columns, prefix)]
 
 
 def _xyz(result: InsertionResult, prefix: str) -> np.ndarray:
-    return result.series[:, [SERIES_COLUMNS.index(f"{prefix}_{a}_m") for a in "xyz"]]
+    return result.series[:, [result.columns.index(f"{prefix}_{a}_m") for a in "xyz"]]
 
 
 def summarise(result: InsertionResult, case: Case, drives: drive_kinds.Drive) -> dict[str, Any]:
@@ -638,7 +700,8 @@ def summarise(result: InsertionResult, case: Case, drives: drive_kinds.Drive) ->
     dwell (``release_time_s``: from the end of the dwell until the contact force is zero, None if it never is;
     ``retract_tool_error_m``: the tool's 3D distance from the reference at the end of the retract, where the
     reference comes to rest above the pin), closure drift, actuator saturation time and fraction of the run,
-    peak tensions, the peak |axial force| of each leg, the internal force v_p . N. Every peak carries its time
+    peak tensions, the peak |axial force| of each leg, the range of the internal forces (the preload amplitudes the
+    delivered tensions carry, v_p . N on the 4-UPU, 0 on 3 legs). Every peak carries its time
     and plate pose (``<stem>_time_s``, ``<stem>_pose_m``; per leg for per-leg peaks). ``warnings``: saturation,
     an insertion that did not complete, a tool never released."""
     sim = case.simulation
@@ -648,7 +711,9 @@ def summarise(result: InsertionResult, case: Case, drives: drive_kinds.Drive) ->
     tool, plate, ref = _xyz(result, "tool"), _xyz(result, "plate"), _xyz(result, "ref")
     lateral = float(np.linalg.norm(tool[last, [0, 2]] - np.array(sim.contact.pin_position_m)))
     final = float(np.linalg.norm(tool[-1] - sim.end_m))
-    internal, limit = result.column("internal_force_n"), sim.controller.force_limit_n
+    legs = len(leg_columns(result.columns, "cmd_n"))
+    internal = result.series[:, [result.columns.index(c) for c in internal_columns(legs)]]
+    limit = sim.controller.force_limit_n
     settling, settled_row, why = settling_time_s(t, force, dwell)
     target = contact_force_n(sim.contact, sim.interference_m)
     target = min(target, limit) if result.limiter else target
@@ -711,7 +776,7 @@ def summarise(result: InsertionResult, case: Case, drives: drive_kinds.Drive) ->
             "peak_section_loads": [{s: {"axial_n": float(np.abs(sec[:, i, k, 0]).max()),
                                         "torsion_nm": float(torsion[:, i, k].max()),
                                         "bending_nm": float(bending[:, i, k].max())}
-                                    for k, s in enumerate(SECTIONS)} for i in range(4)],
+                                    for k, s in enumerate(SECTIONS)} for i in range(sec.shape[1])],
         })
     return {
         "case": case.name, "limiter": result.limiter, "force_limit_n": limit,
@@ -738,7 +803,8 @@ def summarise(result: InsertionResult, case: Case, drives: drive_kinds.Drive) ->
         "actuator_force_limit_n": drives.force_limit_n, "actuator_bandwidth_hz": drives.bandwidth_hz,
         "peak_leg_axial_force_n": axial.max(axis=0), **where("peak_leg_axial_force", axial.argmax(axis=0)),
         "commanded_preload_n": case.preload.a4_n,
-        "internal_force_range_n": [float(internal.min()), float(internal.max())],
+        "commanded_preload_amplitudes_n": list(case.preload.amplitudes) if internal.size else [],
+        "internal_force_range_n": [float(internal.min()), float(internal.max())] if internal.size else [0.0, 0.0],
         **production,
         "warnings": warnings,
     }

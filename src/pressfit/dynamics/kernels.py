@@ -1,14 +1,15 @@
 r"""The per-step arithmetic of the insertion loop, compiled (numba ``njit``): at the loop's sizes (3- and
-4-vectors) numpy's per-call overhead of about a microsecond costs more than the arithmetic, and the rigid-leg
+n-vectors) numpy's per-call overhead of about a microsecond costs more than the arithmetic, and the rigid-leg
 step itself (Pinocchio's constraint dynamics) takes about 30 us. Each kernel is the one implementation of its
 quantity; the Python functions of :mod:`pressfit.dynamics.control`, :mod:`pressfit.dynamics.actuators`,
 :mod:`pressfit.dynamics.contact` and :mod:`pressfit.dynamics.multibody` call them.
 
-* :func:`gauss_newton`: the pose estimate (equation 1, Gauss-Newton on the four lengths, the 3 x 3 normal
+* :func:`gauss_newton`: the pose estimate (equation 1, Gauss-Newton on the n lengths, the 3 x 3 normal
   equations by the adjugate);
-* :func:`distribution`: A^+ = E N^-1 and the unit null vector v_p of A = E^T (equations 5, 9-10) in closed form
-  from the normal matrix N = E^T E = A A^T, and A's smallest singular value sqrt(lambda_min(N)) (the closed-form
-  eigenvalues of a symmetric 3 x 3 matrix);
+* :func:`distribution`: A^+ = E N^-1 and the preload basis V of A = E^T (n legs: n - 3 unit null vectors by
+  cofactors, v_p of equations 9-10 on the 4-UPU; equation 5) in closed form from the normal matrix
+  N = E^T E = A A^T, and A's smallest singular value sqrt(lambda_min(N)) (the closed-form eigenvalues of a
+  symmetric 3 x 3 matrix); :func:`internal_forces`: the preload amplitudes a set of tensions carries;
 * :func:`control`: Figure 12's PID with the force limiter (:mod:`pressfit.dynamics.control`);
 * :func:`moved`: the pose caches' test (:class:`pressfit.dynamics.multibody.PoseCache`);
 * :func:`first_order`: the ideal force drive's step (:mod:`pressfit.dynamics.actuators`);
@@ -43,8 +44,9 @@ def _compiled(function):
 # contact laws (contact_law's ``law``): elastic, press fit with a linear or a saturating (tanh) fit force
 ELASTIC, FIT_LINEAR, FIT_TANH = 0, 1, 2
 # the controller's parameter vector (control's ``params``)
-KP, KD, KI, FORCE_LIMIT, BACKOFF, LIMITER, GRAVITY, GRAVITY_TOL, PRELOAD, DEFLECTION, DEFLECTION_TOL = range(11)
+KP, KD, KI, FORCE_LIMIT, BACKOFF, LIMITER, GRAVITY, GRAVITY_TOL, DEFLECTION, DEFLECTION_TOL = range(10)
 SINGULAR_SIGMA = 1e-6  # A is singular below this smallest singular value (entries O(1))
+SINGULAR_DET = 1e-12  # legs 1-3 do not span space below this |det(e_1, e_2, e_3)| (the preload basis' test)
 BISECTIONS = 60  # bisection steps of the contact solve (to 1e-9 of the bracket, module docstring of contact)
 # the contact's parameter vector (solve_contact's ``contact``)
 BOARD, STIFFNESS, DAMPING, LAW, FIT_STIFFNESS, FIT_FORCE, FIT_DEPTH = range(7)
@@ -66,7 +68,7 @@ def _legs(offsets, lengths, hx, hy, hz, units, residuals):
 
 @_compiled
 def gauss_newton(offsets, lengths, pose, iterations, units):
-    """Gauss-Newton on the four lengths (m) from ``pose`` (3,), m, updated in place; fills ``units`` (4, 3) with
+    """Gauss-Newton on the n leg lengths (m) from ``pose`` (3,), m, updated in place; fills ``units`` (n, 3) with
     the leg unit vectors at the result and returns the largest |length residual| there (m)."""
     hx, hy, hz = pose[0], pose[1], pose[2]
     legs = offsets.shape[0]
@@ -97,13 +99,24 @@ def gauss_newton(offsets, lengths, pose, iterations, units):
 
 
 @_compiled
+def _triple(units, i, j, k):
+    """det(e_i, e_j, e_k) of rows i, j, k of ``units``."""
+    return (units[i, 0] * (units[j, 1] * units[k, 2] - units[j, 2] * units[k, 1])
+            - units[i, 1] * (units[j, 0] * units[k, 2] - units[j, 2] * units[k, 0])
+            + units[i, 2] * (units[j, 0] * units[k, 1] - units[j, 1] * units[k, 0]))
+
+
+@_compiled
 def distribution(units, pinv, null):
-    """A^+ (4, 3) into ``pinv`` and v_p (4,) into ``null`` (v_1 < 0) from the leg unit vectors ``units`` (4, 3)
-    (rows e_i: A = E^T); returns A's smallest singular value. A^+ = A^T (A A^T)^-1 = E N^-1, N = E^T E by the
-    adjugate; v_p is the generalised cross product of A's three rows, (v_p)_j = (-1)^j det(A without column j),
-    normalised; lambda_min(N) by the trigonometric closed form of a symmetric 3 x 3 eigenproblem (accurate to
-    ~1e-16 absolute near a singular A, where lambda_min is far from the others; to ~1e-11 where two eigenvalues
-    nearly coincide, far from the 1e-12 of the singularity test)."""
+    """A^+ (n, 3) into ``pinv`` and the preload basis V (n, n - 3) into ``null`` from the leg unit vectors
+    ``units`` (n, 3) (rows e_i: A = E^T); returns A's smallest singular value (0 where, on n >= 5 legs, legs 1-3
+    do not span space and V is undefined). A^+ = A^T (A A^T)^-1 = E N^-1, N = E^T E by the adjugate; vector k of
+    V is the generalised cross product of the legs 1, 2, 3 and j = 3 + k (equations 9-10 on the 4-UPU, where it
+    is v_p, v_1 < 0): (-det(e_j, e_2, e_3), -det(e_1, e_j, e_3), -det(e_1, e_2, e_j), 0 ..., D at j, 0 ...),
+    D = det(e_1, e_2, e_3), made unit with component j > 0, as :func:`pressfit.kinematics.preload_basis`;
+    lambda_min(N) by the trigonometric closed form of a symmetric 3 x 3 eigenproblem (accurate to ~1e-16 absolute
+    near a singular A, where lambda_min is far from the others; to ~1e-11 where two eigenvalues nearly coincide,
+    far from the 1e-12 of the singularity test)."""
     legs = units.shape[0]
     a00 = a01 = a02 = a11 = a12 = a22 = 0.0
     for i in range(legs):
@@ -122,18 +135,22 @@ def distribution(units, pinv, null):
         pinv[i, 0] = (ex * c00 + ey * c01 + ez * c02) / det
         pinv[i, 1] = (ex * c01 + ey * c11 + ez * c12) / det
         pinv[i, 2] = (ex * c02 + ey * c12 + ez * c22) / det
-    norm = 0.0
-    # the null vector of a 3 x 4 A (one redundant leg, as the machine has: units.shape[0] == 4)
-    for j in range(legs):  # det of the 3 x 3 of rows e_k (k != j): A's columns without j, transposed
-        i0, i1, i2 = (1, 2, 3) if j == 0 else (0, 2, 3) if j == 1 else (0, 1, 3) if j == 2 else (0, 1, 2)
-        m = (units[i0, 0] * (units[i1, 1] * units[i2, 2] - units[i1, 2] * units[i2, 1])
-             - units[i0, 1] * (units[i1, 0] * units[i2, 2] - units[i1, 2] * units[i2, 0])
-             + units[i0, 2] * (units[i1, 0] * units[i2, 1] - units[i1, 1] * units[i2, 0]))
-        null[j] = -m if j % 2 else m
-        norm += null[j] * null[j]
-    scale = (-1.0 if null[0] >= 0.0 else 1.0) / math.sqrt(norm)
-    for j in range(legs):
-        null[j] *= scale
+    d = _triple(units, 0, 1, 2)
+    for k in range(legs - 3):
+        j = 3 + k
+        for i in range(legs):
+            null[i, k] = 0.0
+        null[0, k], null[1, k], null[2, k] = -_triple(units, j, 1, 2), -_triple(units, 0, j, 2), \
+            -_triple(units, 0, 1, j)
+        null[j, k] = d
+        norm = 0.0
+        for i in range(legs):
+            norm += null[i, k] * null[i, k]
+        scale = (-1.0 if d < 0.0 else 1.0) / math.sqrt(norm)
+        for i in range(legs):
+            null[i, k] *= scale
+    if legs - 3 > 1 and abs(d) < SINGULAR_DET:  # two or more vectors need legs 1-3 to span space
+        return 0.0
     q = (a00 + a11 + a22) / 3.0
     off = a01 * a01 + a02 * a02 + a12 * a12
     p = math.sqrt(((a00 - q) ** 2 + (a11 - q) ** 2 + (a22 - q) ** 2 + 2.0 * off) / 6.0)
@@ -158,11 +175,12 @@ def moved(pose, reference, tolerance):
 
 @_compiled
 def control(params, estimate, units, rates, target, target_velocity, contact_force, dt, integral, lift,
-            gravity_pose, gravity, deflection_pose, deflection, pinv, null, force, tension):
+            gravity_pose, gravity, deflection_pose, deflection, pinv, null, force, tension, preload):
     """Figure 12's loop at the estimate (m) with leg unit vectors ``units`` (:mod:`pressfit.dynamics.control`):
     fills ``pinv``, ``null`` (:func:`distribution`), the Cartesian force W (3,), N, into ``force`` and the tensions
-    -A^+ W + a4 v_p (n,), N, into ``tension``; updates ``integral`` (m s) in place. With params[DEFLECTION] the
-    error is taken against the estimate plus the predicted static deflection ``deflection`` (2, 3): row 0 per
+    -A^+ W + V a (n,), N, into ``tension`` (a = ``preload`` (n - 3,), N: a4 v_p on the 4-UPU); updates
+    ``integral`` (m s) in place. With params[DEFLECTION] the error is taken against the estimate plus the
+    predicted static deflection ``deflection`` (2, 3): row 0 per
     newton of ``contact_force`` (m/N), row 1 the weight's sag (m), computed at ``deflection_pose``. Returns
     (status, lift m, clamped, smallest singular value of A): status 1 when the gravity feed-forward ``gravity``
     (computed at ``gravity_pose``) is stale (the estimate moved more than params[GRAVITY_TOL] from it; nothing else
@@ -199,8 +217,9 @@ def control(params, estimate, units, rates, target, target_velocity, contact_for
         for j in range(3):
             force[j] = force[j] + gravity[j]
     for i in range(units.shape[0]):
-        tension[i] = -(pinv[i, 0] * force[0] + pinv[i, 1] * force[1] + pinv[i, 2] * force[2]) \
-            + params[PRELOAD] * null[i]
+        tension[i] = -(pinv[i, 0] * force[0] + pinv[i, 1] * force[1] + pinv[i, 2] * force[2])
+        for k in range(preload.shape[0]):
+            tension[i] += preload[k] * null[i, k]
     return 0, lift, clamped, sigma
 
 
@@ -277,22 +296,45 @@ def axial_forces(closure_forces, q, actuator_q, out):
 
 
 @_compiled
+def internal_forces(null, tension, out):
+    """The preload amplitudes a (n - 3,), N, that the tensions N (n,) carry, into ``out``: the coordinates of N's
+    projection on the preload space in the basis V (n, n - 3), (V^T V)^-1 V^T N (v_p . N on the 4-UPU, V's one
+    unit vector; nothing on 3 legs). For N = -A^+ W + V a it is a (A^+'s columns are orthogonal to V)."""
+    r = null.shape[1]
+    if r == 0:
+        return
+    gram, projection = np.empty((r, r)), np.empty(r)
+    for k in range(r):
+        projection[k] = 0.0
+        for i in range(tension.shape[0]):
+            projection[k] += null[i, k] * tension[i]
+        for m in range(r):
+            gram[k, m] = 0.0
+            for i in range(tension.shape[0]):
+                gram[k, m] += null[i, k] * null[i, m]
+    out[:] = np.linalg.solve(gram, projection)
+
+
+@_compiled
 def rigid_pre_step(row, t, reference, lift, estimate, command, tension, null, tau, actuator_v, contact_tau, layout):
     """Before one rigid-leg step: the step's row at the columns ``layout`` names (ROW_TIME ...): time (s), the
     reference with its lift (m), the estimate (m), the commanded and delivered tensions (N), the lift (m) and the
-    internal force v_p . N (N); and the joint forces ``tau``: -N on the actuators, ``contact_tau`` (N, the last
+    internal forces (N, :func:`internal_forces`); and the joint forces ``tau``: -N on the actuators,
+    ``contact_tau`` (N, the last
     step's contact force in the plate's local frame) on the plate."""
     row[layout[ROW_TIME]], row[layout[ROW_LIFT]] = t, lift
     for k in range(3):
         row[layout[ROW_REFERENCE] + k] = reference[k] + (lift if k == 1 else 0.0)
         row[layout[ROW_ESTIMATE] + k] = estimate[k]
         tau[k] = contact_tau[k]
-    internal = 0.0
     for i in range(actuator_v.shape[0]):
         row[layout[ROW_COMMAND] + i], row[layout[ROW_TENSION] + i] = command[i], tension[i]
-        internal += null[i] * tension[i]
         tau[actuator_v[i]] = -tension[i]
-    row[layout[ROW_INTERNAL]] = internal
+    r = null.shape[1]
+    internal = np.empty(r)
+    internal_forces(null, tension, internal)
+    for k in range(r):
+        row[layout[ROW_INTERNAL] + k] = internal[k]
 
 
 @_compiled

@@ -5,7 +5,7 @@ Plant (``model = "flexible"``, the default): the elastic VJM machine of :func:`p
 dq = basis z) with FORCE drives, as :mod:`pressfit.dynamics.machine.flexible` runs them: the actuator joints
 carry no spring and drive i puts -F_i (F_i > 0 tension) on its actuator joint,
 
-    M_r z'' + C_r z' + K_r z = -S^T F + p_y^T f,     S = basis[actuator rows] (4, r),  p_y = plate_map[1],
+    M_r z'' + C_r z' + K_r z = -S^T F + p_y^T f,     S = basis[actuator rows] (n, r),  p_y = plate_map[1],
 
 K_r = basis^T K basis with the actuator springs removed (three rigid-body modes remain: the plate's
 translations, held by the controller only), C_r the machine file's Rayleigh damping on the elastic motion
@@ -20,13 +20,13 @@ r v, N = c x_d, v the rate of the coordinate it pushes: force, tau N' = N_cmd - 
 loop with the back-EMF (whose integral makes it an added mass k_f K_t (2 pi / lead) / k_i below k_i / k_p),
 the rotor's reflected mass on its own coordinate u joined to the leg by the screw, nut and bearing in series
 (k (l - u)), the encoder reading u; hydraulic, the spool's lag, the chambers with K_q, K_c, leakage and the
-oil column (beta / V_a,b, A l_dot), the pressure loop and the flow feed-forward. Outputs: the four
+oil column (beta / V_a,b, A l_dot), the pressure loop and the flow feed-forward. Outputs: the n
 measured lengths l = S z (the actuator joint coordinates), their rates, the tool position (3) and the contact
 force.
 
 Controller (:mod:`pressfit.dynamics.control`), unclamped (limiter inactive, the contact force below the limit):
 the Gauss-Newton estimate is linear near the pose, dh_est = J^+ dl = (A^+)^T dl, likewise its rate;
-W = K_p (r - h_est) + K_d (r' - h_est') + K_i int(r - h_est); F_cmd = -A^+ W (the preload a4 v_p and the
+W = K_p (r - h_est) + K_d (r' - h_est') + K_i int(r - h_est); F_cmd = -A^+ W (the preload V a and the
 gravity feed-forward are constants of the equilibrium). Left out, stated: the pose dependence of A^+, v_p
 (distribution) and of A (the legs' static tensions turning with the legs): in statics they cancel exactly
 (-A(h) N(h) = W for every h), dynamically they differ by the drive lag; the gravity feed-forward's
@@ -67,6 +67,7 @@ from pressfit.dynamics.machine.flexible import FlexibleMachine
 from pressfit.dynamics.modes import closure_jacobian, elastic_stiffness, mass_matrix, natural_modes, reduced_system
 from pressfit.dynamics.multibody import inverse_apparent_mass, rigid_leg_model
 from pressfit.errors import PressfitError
+from pressfit.mechanics.preload import ActuatorPreload, self_stress_forces_n
 
 WARNING_RATIO = 0.2  # a loop pole within 20% of a structural mode's frequency is reported ...
 DRIVE_SHARE_THRESHOLD = 0.1  # ... when the drives hold at least this share of the mode's strain energy
@@ -79,15 +80,15 @@ AXES = ("x", "y", "z")
 
 @dataclass(frozen=True, kw_only=True)
 class Plant:
-    """The linear plant at a pose (module doc): state x = [z, z', F]; inputs the four force commands (N) and the
-    contact force (N, +y on the tool); ``c_lengths``, ``c_rates``, ``c_tool`` (4 / 4 / 3, n) the outputs, m and
-    m/s; ``c_contact`` (n,) the contact force (N, zero out of contact). A^+ (4, 3) at the pose."""
+    """The linear plant at a pose (module doc): state x = [z, z', F]; inputs the force commands (N, one per leg)
+    and the contact force (N, +y on the tool); ``c_lengths``, ``c_rates``, ``c_tool`` (legs / legs / 3, n) the
+    outputs, m and m/s; ``c_contact`` (n,) the contact force (N, zero out of contact). A^+ (legs, 3) at the pose."""
 
     model: str
     pose_m: np.ndarray
     in_contact: bool
     a: np.ndarray
-    b_command: np.ndarray  # (n, 4)
+    b_command: np.ndarray  # (n, legs)
     b_contact: np.ndarray  # (n,)
     c_lengths: np.ndarray
     c_rates: np.ndarray
@@ -96,19 +97,21 @@ class Plant:
     pinv: np.ndarray
     vertical_mass_kg: float  # 1 / (e_y^T M_h^-1 e_y) of the rigid model: the apparent vertical mass
     drive_kind: str = "force"
-    tensions_n: np.ndarray | None = None  # (4,) the drives' operating tensions, N
+    tensions_n: np.ndarray | None = None  # (legs,) the drives' operating tensions, N
 
     def system(self) -> ct.StateSpace:
-        """python-control state space, inputs n_cmd1..4, f_contact; outputs l1..4, tool_x..z, f_contact."""
+        """python-control state space, inputs n_cmd1..n, f_contact; outputs l1..n, tool_x..z, f_contact."""
         c = np.vstack([self.c_lengths, self.c_tool, self.c_contact])
         b = np.column_stack([self.b_command, self.b_contact])
-        return ct.ss(self.a, b, c, np.zeros((c.shape[0], 5)), inputs=[f"n_cmd{i}" for i in range(1, 5)] + ["f_contact"],
-                     outputs=[f"l{i}" for i in range(1, 5)] + ["tool_x", "tool_y", "tool_z", "f_contact"])
+        legs = range(1, self.b_command.shape[1] + 1)
+        return ct.ss(self.a, b, c, np.zeros((c.shape[0], b.shape[1])),
+                     inputs=[f"n_cmd{i}" for i in legs] + ["f_contact"],
+                     outputs=[f"l{i}" for i in legs] + ["tool_x", "tool_y", "tool_z", "f_contact"])
 
 
 def _assemble(mass: np.ndarray, damping: np.ndarray, stiffness: np.ndarray, drive_on: np.ndarray,
               contact_on: np.ndarray, ports: list[DrivePort]) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
-    """State matrix and input matrices (commands (n, 4), contact (n,)) over x = [q, q', drive states] of
+    """State matrix and input matrices (commands (n, legs), contact (n,)) over x = [q, q', drive states] of
     M q'' + C q' + K q = -drive_on^T N + contact_on f, N_i = c_i x_i, x_i' = a_i x_i + b_i N_cmd,i + r_i v_i with
     v = drive_on q' (the rate of the coordinate each drive pushes on)."""
     r = mass.shape[0]
@@ -116,8 +119,8 @@ def _assemble(mass: np.ndarray, damping: np.ndarray, stiffness: np.ndarray, driv
     nd = sum(sizes)
     n = 2 * r + nd
     a = np.zeros((n, n))
-    b = np.zeros((n, 4))
-    c_force = np.zeros((4, nd))
+    b = np.zeros((n, len(ports)))
+    c_force = np.zeros((len(ports), nd))
     off = 2 * r
     for i, p in enumerate(ports):
         sl = slice(off, off + sizes[i])
@@ -139,26 +142,25 @@ def _with_series(mass: np.ndarray, damping: np.ndarray, stiffness: np.ndarray, s
                  ports: list[DrivePort]) -> tuple[np.ndarray, ...]:
     """Add each drive's own coordinate u_i (its reflected mass, joined to the leg length l_i = s_i q by the
     series spring k_i) where the port has one: the reflected mass moves off the leg (it was its armature),
-    K gains k_i (s_i q - u_i)^2 / 2; returns mass, damping, stiffness, drive_on (4, n) (where the drives push),
-    the measured lengths (4, n) (the drive's own coordinate: a motor encoder reads u through the lead) and the
+    K gains k_i (s_i q - u_i)^2 / 2; returns mass, damping, stiffness, drive_on (legs, n) (where the drives push),
+    the measured lengths (legs, n) (the drive's own coordinate: a motor encoder reads u through the lead) and the
     tool rows (3, n)."""
     k = np.array([p.series_stiffness_n_per_m for p in ports])
     if np.all(np.isinf(k)):
         return mass, damping, stiffness, s, s, plate
     m_r = np.array([p.reflected_mass_kg for p in ports])
-    r = mass.shape[0]
-    big_m = np.zeros((r + 4, r + 4))
+    r, legs = mass.shape[0], len(ports)
+    big_m = np.zeros((r + legs, r + legs))
     big_m[:r, :r] = mass - s.T @ np.diag(m_r) @ s
     big_m[r:, r:] = np.diag(m_r)
-    big_c = np.zeros((r + 4, r + 4))
+    big_c = np.zeros((r + legs, r + legs))
     big_c[:r, :r] = damping
-    coupling = np.hstack([s, -np.eye(4)])  # l - u, (4, r + 4)
-    big_k = np.zeros((r + 4, r + 4))
+    coupling = np.hstack([s, -np.eye(legs)])  # l - u, (legs, r + legs)
+    big_k = np.zeros((r + legs, r + legs))
     big_k[:r, :r] = stiffness
     big_k += coupling.T @ np.diag(k) @ coupling
-    drive_on = np.hstack([np.zeros((4, r)), np.eye(4)])
-    pad = np.zeros((4, 4)), np.zeros((plate.shape[0], 4))
-    return big_m, big_c, big_k, drive_on, drive_on, np.hstack([plate, pad[1]])
+    drive_on = np.hstack([np.zeros((legs, r)), np.eye(legs)])
+    return big_m, big_c, big_k, drive_on, drive_on, np.hstack([plate, np.zeros((plate.shape[0], legs))])
 
 
 def _apparent_vertical_mass(machine: Machine, pose_m: np.ndarray) -> tuple[np.ndarray, float]:
@@ -168,19 +170,21 @@ def _apparent_vertical_mass(machine: Machine, pose_m: np.ndarray) -> tuple[np.nd
     return np.linalg.inv(inv), 1.0 / inv[1, 1]
 
 
-def static_tensions_n(machine: Machine, pose_m: np.ndarray, preload_n: float = 0.0) -> np.ndarray:
-    """The drives' tensions (4,), N, holding the pose at rest as the controller commands them: -A^+ G + a4 v_p
-    (G the gravity feed-forward, a4 = ``preload_n``)."""
+def static_tensions_n(machine: Machine, pose_m: np.ndarray, preload_n: float | np.ndarray = 0.0) -> np.ndarray:
+    """The drives' tensions (n,), N, holding the pose at rest as the controller commands them: -A^+ G + V a
+    (G the gravity feed-forward, a = ``preload_n`` the n - 3 preload amplitudes, N: a4 v_p on the 4-UPU; a zero
+    preload on any machine; PreloadError for a preload the machine cannot take,
+    :func:`pressfit.mechanics.preload.self_stress_forces_n`)."""
     pose = np.asarray(pose_m, dtype=float)
-    pinv, null = distribution(kinematics.inverse_kinematics(machine, pose).unit_vectors)
+    pinv, _ = distribution(kinematics.inverse_kinematics(machine, pose).unit_vectors)
     gravity = gravity_feedforward_n(rigid_leg_model(machine, pose), pose)
-    return -pinv @ gravity + preload_n * null
+    return -pinv @ gravity + self_stress_forces_n(machine, pose, preload_n)
 
 
 def linear_plant(machine: Machine, pose_m: np.ndarray, contact: Contact | None = None,
                  model: Model = "flexible", tensions_n: np.ndarray | None = None) -> Plant:
     """:class:`Plant` at the reachable pose ``pose_m`` (m); ``contact``: the contact spring engaged at the tool;
-    ``tensions_n`` (4,), N: the drives' operating point (default :func:`static_tensions_n` without preload)."""
+    ``tensions_n`` (n,), N: the drives' operating point (default :func:`static_tensions_n` without preload)."""
     if model not in ("flexible", "rigid"):
         raise PressfitError(f"model must be 'flexible' or 'rigid', got {model!r}")
     pose = kinematics.require_reachable(machine, np.asarray(pose_m, dtype=float))
@@ -191,7 +195,7 @@ def linear_plant(machine: Machine, pose_m: np.ndarray, contact: Contact | None =
     ports = [drive.linear_port(float(length), float(n)) for length, n in zip(legs.lengths_m, tensions, strict=True)]
     m_h, m_y = _apparent_vertical_mass(machine, pose)
     if model == "rigid":
-        s = legs.unit_vectors  # (4, 3): dl = A^T dh
+        s = legs.unit_vectors  # (n, 3): dl = A^T dh
         mass, damping, stiffness = m_h, np.zeros((3, 3)), np.zeros((3, 3))
         plate = np.eye(3)
     else:
@@ -201,7 +205,7 @@ def linear_plant(machine: Machine, pose_m: np.ndarray, contact: Contact | None =
         k_full[act, act] = 0.0  # the drives' own stiffness is their port (and an electric drive's series spring)
         basis = rs.basis
         stiffness = basis.T @ k_full @ basis
-        s = basis[act]  # (4, r)
+        s = basis[act]  # (n, r)
         plate = rs.plate_map[:3]
         ray = FlexibleMachine(machine, pose).damping
         damping = ray.beta_s * stiffness
@@ -209,8 +213,8 @@ def linear_plant(machine: Machine, pose_m: np.ndarray, contact: Contact | None =
             jac = closure_jacobian(rs.mm, rs.model, rs.data, rs.q)
             rigid = np.setdiff1d(np.arange(rs.model.nv), [sp.idx_v for sp in rs.mm.springs])
             br = jac[:, rigid]
-            v_r = np.zeros((rs.model.nv, 4))  # rigid machine velocity per unit actuator rate (flexible module)
-            v_r[act] = np.eye(4)
+            v_r = np.zeros((rs.model.nv, len(act)))  # rigid machine velocity per unit actuator rate (flexible module)
+            v_r[act] = np.eye(len(act))
             v_r[rigid] = -np.linalg.solve(br.T @ br, br.T @ jac[:, act])
             full_mass = mass_matrix(rs.model, rs.data, rs.q)
             damping = damping + ray.alpha_per_s * basis.T @ full_mass @ (basis - v_r @ s)
@@ -254,7 +258,7 @@ class Loop:
 def close_loop(plant: Plant, gains: Controller) -> Loop:
     """Figure 12's controller (unclamped) around ``plant`` (module doc)."""
     kp, kd, ki = gains.kp_n_per_m, gains.kd_n_s_per_m, gains.ki_n_per_m_s
-    est = plant.pinv.T  # (3, 4): dh_est = J^+ dl
+    est = plant.pinv.T  # (3, legs): dh_est = J^+ dl
     bw = plant.b_command @ (-plant.pinv)  # (n, 3): plant input per Cartesian command
     n = plant.a.shape[0]
     h, hd = est @ plant.c_lengths, est @ plant.c_rates  # (3, n) estimate and its rate
@@ -459,7 +463,8 @@ def control_design(case: Case, model: Model = "flexible") -> ControlDesign:
     approach = pin_pose + np.array([0.0, sim.approach_height_m, 0.0])
     poses = [("pin", pin_pose, c), ("start", np.array(sim.start_m), None), ("approach", approach, None),
              ("end", np.array(sim.end_m), None)]
+    preload = ActuatorPreload.from_case(case.preload).a4
     return ControlDesign(case=case.name, model=model,
                          poses=tuple(design_at(machine, sim.controller, p, n, con, model,
-                                               tensions_n=static_tensions_n(machine, p, case.preload.a4_n))
+                                               tensions_n=static_tensions_n(machine, p, preload))
                                      for n, p, con in poses))

@@ -10,8 +10,9 @@ Loop closures: one ``<weld>`` per leg between the plate (body1) and the leg's la
 cardan's outer body), ``relpose`` = the closure's anchor placement in the plate frame, so the weld holds the
 same 6D relative pose as Pinocchio's CONTACT_6D closure. A ``<connect>`` (3D, point-on-point) would leave the
 leg's last body free to spin relative to the plate: a spherical joint in place of the weld, a different
-mechanism with a spurious spin of each leg about its axis, so welds are used. The four welds are redundant
-(24 rows, rank 23), which MuJoCo's regularised solver accepts.
+mechanism with a spurious spin of each leg about its axis, so welds are used. The n welds are redundant on
+n >= 4 legs (6n rows, rank 6n - (n - 3): 24 rows, rank 23 on the 4-UPU), which MuJoCo's regularised solver
+accepts.
 
 MuJoCo's equality constraints are soft: the solver drives each constraint row's acceleration towards the
 reference a_ref = -k r - b r_dot (r the violation) with impedance d, a_c = (1 - d) a_free + d a_ref, so that
@@ -89,7 +90,7 @@ def machine_mjcf(rigid: RigidLegModel, timestep_s: float = 1e-4) -> str:
     if not (np.isfinite(timestep_s) and timestep_s > 0):
         raise PressfitError(f"MJCF export: timestep_s must be positive, got {timestep_s!r}")
     model = rigid.model
-    root = ET.Element("mujoco", model="pressfit 4-UPU rigid legs")
+    root = ET.Element("mujoco", model=f"pressfit {len(rigid.constraint_models)}-UPU rigid legs")
     ET.SubElement(root, "compiler", angle="radian", inertiafromgeom="false")
     option = ET.SubElement(root, "option", timestep=_num([timestep_s]), gravity=_num([0.0, -GRAVITY_M_PER_S2, 0.0]),
                            integrator="Euler", solver="Newton", iterations="200", tolerance="1e-12")
@@ -123,7 +124,7 @@ def mujoco_state(rigid: RigidLegModel, q: np.ndarray, v: np.ndarray) -> tuple[np
 class PassiveMotion:
     """One passive run (no actuator force, gravity on) of the rigid-leg machine in Pinocchio and in MuJoCo from
     the same state, sampled every time step (row 0 the initial state). Plate positions (m, world), plate
-    rotation angles (rad, from the unrotated plate), closure errors: the largest translation error of the four
+    rotation angles (rad, from the unrotated plate), closure errors: the largest translation error of the
     loop closures over the run (m), Pinocchio's Baumgarte-corrected drift and MuJoCo's soft-weld violation."""
 
     time_s: np.ndarray  # (n + 1,)

@@ -1,8 +1,8 @@
-r"""Closed-loop rigid-leg multibody dynamics of the 4-UPU with Pinocchio's constraint dynamics.
+r"""Closed-loop rigid-leg multibody dynamics of the n-UPU with Pinocchio's constraint dynamics.
 
 The model (:func:`rigid_leg_model`) is the VJM model of :mod:`pressfit.mechanics.model` with its elastic
 virtual joints frozen: plate free flyer, per leg base cardan (2 revolutes), the actuated prismatic joint
-(coordinate = leg length l_i, m), plate cardan (2 revolutes), closed on the plate by four 6D loop closures
+(coordinate = leg length l_i, m), plate cardan (2 revolutes), closed on the plate by one 6D loop closure per leg
 (``pin.RigidConstraintModel`` CONTACT_6D, the same anchor frames as the elastic model). Body inertias are
 those of :func:`pressfit.dynamics.inertia.inertial_model` lumped onto the rigid bodies (the stem's mass is
 that at the model's pose and moves with the plate cardan, like a rod sliding out of its cylinder), and the
@@ -15,21 +15,22 @@ responds quasi-statically, so its deflection under a tool force F is C F, C the 
 :mod:`pressfit.mechanics.condensed` at the current pose, which a contact model can put in series with the
 rigid motion (the tool sees the rigid position plus C F).
 
-Accelerations: ``pin.constraintDynamics`` (proximal KKT; the four closures are redundant, rank 23 of 24,
-and the proximal iterations handle it) with Baumgarte stabilisation a_c = -Kp e - Kd e_dot of the closure
-error e, Kp = omega_b^2, Kd = 2 omega_b. Time stepping: semi-implicit (symplectic) Euler, v += a dt,
-q = q (+) v dt. The closure drift (largest translation error of the four closures, m) is reported per step.
+Accelerations: ``pin.constraintDynamics`` (proximal KKT; on n legs the closures are redundant, rank
+6n - (n - 3) of 6n: 23 of 24 on the 4-UPU, none redundant on the 3-UPU; the proximal iterations handle it) with
+Baumgarte stabilisation a_c = -Kp e - Kd e_dot of the closure error e, Kp = omega_b^2, Kd = 2 omega_b. Time
+stepping: semi-implicit (symplectic) Euler, v += a dt, q = q (+) v dt. The closure drift (largest translation
+error of the closures, m) is reported per step.
 
 Leg loads (:meth:`RigidLegModel.leg_loads`): the closure force of leg i (``data.lambda_c``, 6 per closure,
 in the frame of the leg's last body at the plate cardan centre) is the wrench the plate exerts on the leg
 there: the plate section of :mod:`pressfit.mechanics.statics` with its conventions (leg frame e_z base ->
 plate; the bending magnitude needs no e_x): axial force N = f . e_z (> 0 tension), torsion T = m . e_z,
 bending |M_b| = |m - T e_z|. N differs from the actuator tension by the weight and inertia of
-the stem. The couples are statically indeterminate in the rigid model (the one self-stress of the closures,
-rank 23 of 24, is a set of couples along the legs' free couple axes, s the left null vector of the closure
+the stem. The couples are statically indeterminate in the rigid model (the n - 3 self-stresses of the closures,
+one on the 4-UPU, are sets of couples along the legs' free couple axes, S the left null space of the closure
 Jacobian); Pinocchio's proximal solver leaves an arbitrary, step-to-step varying amount of it in lambda, so
-the loads are taken from the minimum-norm closure force lambda - (s . lambda) s, the split of four legs equally
-stiff in torsion. s is recomputed when the plate moved 1 mm (``SELF_STRESS_UPDATE_M``): it turns by about
+the loads are taken from the minimum-norm closure force lambda - S S^T lambda, the split of legs equally
+stiff in torsion. S is recomputed when the plate moved 1 mm (``SELF_STRESS_UPDATE_M``): it turns by about
 1 mm / l (2e-3 rad, l ~ 0.5 m), which bounds the error of the couples at 0.2%.
 """
 
@@ -55,7 +56,7 @@ _JOINT_TYPES = {"RX": pin.JointModelRX, "RY": pin.JointModelRY, "PZ": pin.JointM
 SELF_STRESS_UPDATE_M = 1e-3  # the closures' self-stress direction is recomputed when the plate moved this far, m
 
 
-@dataclass
+@dataclass(kw_only=True)
 class PoseCache:
     """``function(pose)`` recomputed only when the pose (m) moved more than ``tolerance_m`` from the pose of
     the cached value (infinity norm); the caller states the error bound (|d function / d pose| tolerance)."""
@@ -81,9 +82,9 @@ class RigidLegModel:
     constraint_models: pin.StdVec_RigidConstraintModel
     constraint_datas: pin.StdVec_RigidConstraintData
     prox: pin.ProximalSettings
-    actuator_v: np.ndarray  # (4,) velocity indices of the prismatic (actuator) joints
-    actuator_q: np.ndarray  # (4,) their configuration indices: q[actuator_q] = leg lengths l_i (m)
-    sigma: np.ndarray  # (4,) sign of the b-revolutes against beta (as in the elastic model)
+    actuator_v: np.ndarray  # (n,) velocity indices of the prismatic (actuator) joints
+    actuator_q: np.ndarray  # (n,) their configuration indices: q[actuator_q] = leg lengths l_i (m)
+    sigma: np.ndarray  # (n,) sign of the b-revolutes against beta (as in the elastic model)
     reference_q: np.ndarray  # rigid configuration at the model's pose
     baumgarte_rad_per_s: float
     end_joints: tuple[int, ...] = ()  # the last joint of each leg (plate cardan a): joint1 of its closure
@@ -91,11 +92,13 @@ class RigidLegModel:
     _datas: tuple | None = field(default=None, init=False, repr=False)  # (constraint_datas, its elements)
 
     def __post_init__(self) -> None:
-        self.self_stress = PoseCache(self._self_stress, SELF_STRESS_UPDATE_M)
+        self.self_stress = PoseCache(function=self._self_stress, tolerance_m=SELF_STRESS_UPDATE_M)
 
     def _self_stress(self, pose_m: np.ndarray) -> np.ndarray:
-        """Unit left null vector (24,) of the closure Jacobian at the closed configuration of ``pose_m``."""
-        return np.linalg.svd(self.closure_jacobian(self.configuration_at(pose_m), scratch=True))[0][:, -1]
+        """Orthonormal left null space (6n, n - 3) of the closure Jacobian at the closed configuration of ``pose_m``
+        (the closures' n - 3 self-stresses, one per redundant leg: none on 3 legs)."""
+        u = np.linalg.svd(self.closure_jacobian(self.configuration_at(pose_m), scratch=True))[0]
+        return u[:, u.shape[0] - (len(self.machine.legs) - 3):]
 
     def configuration_at(self, pose_m: np.ndarray) -> np.ndarray:
         """Closed rigid configuration (nq,) at a reachable pose (m), from equation 1 (closed form)."""
@@ -106,7 +109,7 @@ class RigidLegModel:
         q = np.zeros(self.model.nq)
         q[0:3], q[6] = h, 1.0
         values = np.array([ik.alpha_rad, sigma * ik.beta_rad, ik.lengths_m, -sigma * ik.beta_rad, -ik.alpha_rad])
-        for i in range(4):
+        for i in range(len(self.actuator_q)):
             q[self.actuator_q[i] - 2:self.actuator_q[i] + 3] = values[:, i]
         return q
 
@@ -124,11 +127,11 @@ class RigidLegModel:
         return math.sqrt(max([x * x + y * y + z * z for x, y, z in errors]))
 
     def leg_loads(self) -> np.ndarray:
-        """(4, 3): axial force N (N, > 0 tension), torsion T (N m) and bending |M_b| (N m) of each leg at its
+        """(n, 3): axial force N (N, > 0 tension), torsion T (N m) and bending |M_b| (N m) of each leg at its
         plate cardan, from the closure forces of the last :meth:`accelerations` call (module docstring)."""
         lam = np.asarray(self.data.lambda_c)
         s = self.self_stress(np.array(self.data.oMi[1].translation))
-        lam = (lam - (s @ lam) * s).reshape(4, 2, 3)  # the minimum-norm split of the redundant couples
+        lam = (lam - s @ (s.T @ lam)).reshape(len(self.actuator_q), 2, 3)  # the minimum-norm split of the couples
         placements = [self.data.oMi[j] for j in self.end_joints]
         world = np.einsum("lij,lkj->lki", np.array([m.rotation for m in placements]), lam)  # (leg, f|m, xyz)
         axes = np.array([m.translation for m in placements]) - self.machine.base_points_m
@@ -138,11 +141,11 @@ class RigidLegModel:
         return np.column_stack([axial, np.sqrt(np.einsum("li,li->l", bent, bent))])
 
     def axial_forces_n(self, q: np.ndarray) -> np.ndarray:
-        """(4,): the axial force N (N, > 0 tension) of each leg at its plate cardan from the closure forces of the
+        """(n,): the axial force N (N, > 0 tension) of each leg at its plate cardan from the closure forces of the
         last :meth:`accelerations` call, made at ``q`` (the first column of :meth:`leg_loads`, without the couples'
         split: the self-stress is made of couples and leaves the forces alone; closed form from the plate cardan
         angles, :func:`pressfit.dynamics.kernels.axial_forces`)."""
-        out = np.empty(4)
+        out = np.empty(len(self.actuator_q))
         kernels.axial_forces(np.asarray(self.data.lambda_c), np.asarray(q, dtype=float), self.actuator_q, out)
         return out
 
@@ -152,7 +155,7 @@ class RigidLegModel:
                 float(pin.computePotentialEnergy(self.model, self.data, q)))
 
     def closure_jacobian(self, q: np.ndarray, scratch: bool = False) -> np.ndarray:
-        """The (24, nv) Jacobian of the four loop closures at q (``scratch``: in fresh Pinocchio datas, leaving
+        """The (6n, nv) Jacobian of the n loop closures at q (``scratch``: in fresh Pinocchio datas, leaving
         those of the last :meth:`accelerations` call intact)."""
         data = self.model.createData() if scratch else self.data
         datas = [cm.createData() for cm in self.constraint_models] if scratch else self.constraint_datas
@@ -177,7 +180,6 @@ class RigidLegModel:
 
 def rigid_leg_model(machine: Machine, pose_m: np.ndarray, baumgarte_rad_per_s: float = 200.0) -> RigidLegModel:
     """The rigid-leg model with the machine's masses at a reachable pose (m); Baumgarte rate omega_b (rad/s)."""
-    machine.require_legs("the rigid-leg dynamics (pressfit.dynamics: insertion, cycle, sizing, MJCF)", 4)
     if not (np.isfinite(baumgarte_rad_per_s) and baumgarte_rad_per_s > 0):
         raise PressfitError(f"baumgarte_rad_per_s must be positive, got {baumgarte_rad_per_s!r}")
     if machine.has_cardan_tilts:
@@ -209,7 +211,7 @@ def rigid_leg_model(machine: Machine, pose_m: np.ndarray, baumgarte_rad_per_s: f
                           sigma=mm.sigma.copy(), reference_q=np.zeros(model.nq),
                           baumgarte_rad_per_s=baumgarte_rad_per_s)
     rigid.reference_q = rigid.configuration_at(mm.pose_m)
-    rigid.end_joints = tuple(model.getJointId(f"leg{i + 1}.plate_cardan.a") for i in range(4))
+    rigid.end_joints = tuple(model.getJointId(f"leg{i + 1}.plate_cardan.a") for i in range(len(machine.legs)))
     data = model.createData()
     pin.forwardKinematics(model, data, rigid.reference_q)
     for j, body in owner.items():
@@ -217,7 +219,7 @@ def rigid_leg_model(machine: Machine, pose_m: np.ndarray, baumgarte_rad_per_s: f
     for i, ids in enumerate(mm.leg_joint_ids):  # an electric drive's reflected inertia (dynamics/inertia.py)
         model.armature[rigid.actuator_v[i]] = full.armature[full.joints[ids["actuator"]].idx_v]
     gains = pin.BaumgarteCorrectorParameters(baumgarte_rad_per_s**2, 2 * baumgarte_rad_per_s)
-    for i in range(4):
+    for i in range(len(machine.legs)):
         end = model.getJointId(f"leg{i + 1}.plate_cardan.a")
         cm = pin.RigidConstraintModel(pin.ContactType.CONTACT_6D, model, end, pin.SE3.Identity(), plate,
                                       mm.anchor_placements[i], pin.ReferenceFrame.LOCAL)

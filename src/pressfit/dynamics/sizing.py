@@ -314,9 +314,9 @@ class RunSizing:
 
 
 def _columns(result: Any, prefix: str) -> np.ndarray:
-    from pressfit.dynamics.insertion import LEGS, SERIES_COLUMNS
+    from pressfit.dynamics.insertion import leg_columns
 
-    return result.series[:, [SERIES_COLUMNS.index(f"{prefix}{i}") for i in LEGS]]
+    return result.series[:, leg_columns(result.columns, prefix)]
 
 
 def drive_losses_j(sizing: tuple[DriveSizing, ...]) -> float:
@@ -335,10 +335,8 @@ def run_sizing(result: Any, drive: drive_kinds.Drive, dt_s: float, without_prelo
     """Drive sizing and energy balance of an :class:`pressfit.dynamics.insertion.InsertionResult` stepped every
     ``dt_s`` (s); ``without_preload``: the same scenario run with a4 = 0 (the preload's cost,
     :func:`with_preload_cost`)."""
-    from pressfit.dynamics.insertion import SERIES_COLUMNS
-
     def col(name: str) -> np.ndarray:
-        return result.series[:, SERIES_COLUMNS.index(name)]
+        return result.series[:, result.columns.index(name)]
 
     tensions, rates = _columns(result, "act_n"), _columns(result, "rate_m_per_s")
     sizing = drive_sizing(tensions, rates, dt_s, drive)
@@ -355,17 +353,16 @@ def run_sizing(result: Any, drive: drive_kinds.Drive, dt_s: float, without_prelo
 def size_insertion(case: Any, result: Any, limiter: bool = True, progress: bool = False) -> RunSizing:
     """:func:`run_sizing` of a case's simulated insertion, the preload's cost from a second run of the same scenario
     with ``[preload] a4_n`` = 0 (``result`` itself when a4 is 0)."""
-    from pressfit.dynamics.insertion import simulate_insertion
+    from pressfit.dynamics.insertion import simulate_insertion, without_preload
 
-    a4 = case.preload.a4_n
+    amplitudes = case.preload.amplitudes
     baseline = result
-    if a4 != 0.0:
-        zero = case.model_copy(update={"preload": case.preload.model_copy(update={"a4_n": 0.0})})
+    if any(amplitudes):
         try:
-            baseline = simulate_insertion(zero, limiter, progress)
+            baseline = simulate_insertion(without_preload(case), limiter, progress)
         except PressfitError as exc:
-            raise PressfitError(f"the preload's cost (the same scenario with [preload] a4_n = 0 instead of "
-                                f"{a4:g} N) could not be simulated: {exc}") from None
+            raise PressfitError(f"the preload's cost (the same scenario without the preload, instead of "
+                                f"{', '.join(f'{a:g}' for a in amplitudes)} N) could not be simulated: {exc}") from None
     sizing = run_sizing(result, drive_kinds.of(case.machine()), case.simulation.time_step_s, baseline)
     sizing.energy.require_closed(f"of {case.path}")
     return sizing

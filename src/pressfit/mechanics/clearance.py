@@ -37,7 +37,7 @@ from pressfit.description.machine import Machine
 from pressfit.errors import ClearanceError, ConvergenceError
 from pressfit.mechanics import condensed
 from pressfit.mechanics.clearance_law import DEFAULT_SMOOTHING_M, ENDS, Clearance, _laws_force
-from pressfit.mechanics.preload import along_first_vector, rest_length_offsets
+from pressfit.mechanics.preload import Amplitudes, along_first_vector, rest_length_offsets
 
 NEWTON_TOL = 1e-10  # relative force residual of the small-displacement solve
 
@@ -323,11 +323,12 @@ def _sweep_nonlinear(machine: Machine, pose: np.ndarray, direction: np.ndarray, 
 
 
 def load_deflection(machine: Machine, pose_m: ArrayLike, direction: ArrayLike, loads_n: ArrayLike,
-                    clearance: Clearance | None = None, preload: float = 0.0, preload_mode: str = "force", *,
+                    clearance: Clearance | None = None, preload: Amplitudes = 0.0, preload_mode: str = "force", *,
                     method: str = "small",
                     unload: bool = True) -> LoadDeflection:
     """Load-deflection curve of the plate at a reachable pose (m) under loads_n (N, from 0, increasing)
-    along ``direction`` (world, at the plate centre), after the preload a4 (N, or m in length mode).
+    along ``direction`` (world, at the plate centre), after the preload a4 (N, or m in length mode; the n - 3
+    amplitudes on a machine with another redundancy than 1).
 
     ``clearance`` defaults to the machine's uniform clearance (:meth:`Clearance.uniform`); its geometry
     enters as the effective axial gaps at the pose. Loading, then (``unload``) unloading by continuation.
@@ -337,7 +338,7 @@ def load_deflection(machine: Machine, pose_m: ArrayLike, direction: ArrayLike, l
     d, loads = _direction(direction), _loads(loads_n)
     given = clearance or Clearance.uniform(machine)
     cl = given.at_pose(machine, pose)
-    offsets = rest_length_offsets(machine, pose, float(preload), preload_mode, cl)
+    offsets = rest_length_offsets(machine, pose, preload, preload_mode, cl)
     if method == "small":
         up, down = _sweep_small(machine, pose, d, loads, [cl], offsets[None], unload)
     elif method == "nonlinear":

@@ -12,7 +12,7 @@ from typing import Any
 import numpy as np
 
 from pressfit.description.cases import load_case
-from pressfit.dynamics.cycle import CYCLE_COLUMNS, CycleResult, simulate_cycle
+from pressfit.dynamics.cycle import CycleResult, simulate_cycle
 from pressfit.output import files as io
 from pressfit.output.plots import plt
 
@@ -111,11 +111,11 @@ def operating_points_figure(result: CycleResult) -> plt.Figure:
 
 
 def write_cycle(result: CycleResult, out_dir: Path | str, overwrite: bool = False) -> list[Path]:
-    """``cycle.csv`` (one row per time step, :data:`pressfit.dynamics.cycle.CYCLE_COLUMNS`), ``cycle.json``,
+    """``cycle.csv`` (one row per time step, :func:`pressfit.dynamics.cycle.cycle_columns`), ``cycle.json``,
     ``cycle_path.png``, ``cycle_force.png`` (and with the drive sizing ``cycle_drives.png``,
     ``cycle_operating_points.png``) into a fresh directory (through :func:`io.write_directory`)."""
     out = Path(out_dir)
-    paths = [io.write_csv(out / "cycle.csv", CYCLE_COLUMNS, result.series, overwrite),
+    paths = [io.write_csv(out / "cycle.csv", result.columns, result.series, overwrite),
              io.write_json(out / "cycle.json", result.summary, overwrite)]
     figures = [("cycle_path.png", path_figure), ("cycle_force.png", force_figure)]
     if "drives" in result.summary:

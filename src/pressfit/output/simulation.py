@@ -9,7 +9,7 @@ from typing import Any
 import numpy as np
 
 from pressfit.description.cases import load_case
-from pressfit.dynamics.insertion import LEGS, SECTION_COLUMNS, SERIES_COLUMNS, InsertionResult, simulate_insertion
+from pressfit.dynamics.insertion import InsertionResult, leg_columns, section_columns, simulate_insertion
 from pressfit.dynamics.sizing import RunSizing, size_insertion
 from pressfit.output import files as io
 from pressfit.output.plots import plt
@@ -33,7 +33,7 @@ def simulation_figure(result: InsertionResult, comparison: InsertionResult | Non
                      label="with limiter" if run.limiter else "without limiter")
     axes[1].axhline(result.summary["force_limit_n"], color="k", ls=":", label="insertion limit")
     axes[1].set(ylabel="force [N]", title="contact force")
-    for i in LEGS:
+    for i in range(1, len(leg_columns(result.columns, "cmd_n")) + 1):
         line, = axes[2].plot(t, result.column(f"act_n{i}"), lw=1.5, label=f"leg {i}")
         axes[2].plot(t, result.column(f"cmd_n{i}"), "--", lw=0.8, color=line.get_color())
         axes[3].plot(t, result.column(f"axial_n{i}"), lw=1.5, color=line.get_color(), label=f"leg {i}")
@@ -61,14 +61,14 @@ def write_simulation(result: InsertionResult, out_dir: Path | str, overwrite: bo
     """``simulation.csv`` (one row per time step of ``result``), ``simulation.json`` (its summary, with the
     comparison's under ``"comparison"`` and the drive sizing's records, :meth:`RunSizing.to_dict`),
     ``simulation.png``; with the flexible model ``sections.csv`` (the leg section resultants per step, N and N m,
-    :data:`pressfit.dynamics.insertion.SECTION_COLUMNS`)."""
+    :func:`pressfit.dynamics.insertion.section_columns`)."""
     out = Path(out_dir)
     summary = _summary(result, comparison, sizing)
-    paths = [io.write_csv(out / "simulation.csv", SERIES_COLUMNS, result.series, overwrite),
+    paths = [io.write_csv(out / "simulation.csv", result.columns, result.series, overwrite),
              io.write_json(out / "simulation.json", summary, overwrite)]
     if result.sections is not None:
         table = np.column_stack([result.column("time_s"), result.sections.reshape(len(result.series), -1)])
-        paths.append(io.write_csv(out / "sections.csv", SECTION_COLUMNS, table, overwrite))
+        paths.append(io.write_csv(out / "sections.csv", section_columns(result.sections.shape[1]), table, overwrite))
     fig = simulation_figure(result, comparison)
     try:
         paths.append(io.save_figure(fig, out / "simulation.png", overwrite))

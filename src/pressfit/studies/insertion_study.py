@@ -28,7 +28,7 @@ import numpy as np
 from tqdm import tqdm
 
 from pressfit.description.cases import Case, ClearanceSpec, Preload
-from pressfit.dynamics.insertion import SERIES_COLUMNS, InsertionResult, plan_scenario, simulate_insertion
+from pressfit.dynamics.insertion import InsertionResult, plan_scenario, simulate_insertion
 from pressfit.errors import PressfitError
 from pressfit.mechanics.clearance import clearance_from_case, critical_preload
 
@@ -54,8 +54,8 @@ class InsertionStudy:
 def _hidden_error_m(result: InsertionResult) -> np.ndarray:
     """tool - length-based estimate (3,), m, at the end of the dwell."""
     last = np.flatnonzero(result.phases == result.phase_names.index("dwell"))[-1]
-    tool = result.series[last, [SERIES_COLUMNS.index(f"tool_{a}_m") for a in "xyz"]]
-    estimate = result.series[last, [SERIES_COLUMNS.index(f"est_{a}_m") for a in "xyz"]]
+    tool = result.series[last, [result.columns.index(f"tool_{a}_m") for a in "xyz"]]
+    estimate = result.series[last, [result.columns.index(f"est_{a}_m") for a in "xyz"]]
     return tool - estimate
 
 

@@ -73,7 +73,7 @@ class LimitResult:
     unit: str
     limit: float
     worst: float
-    leg: int | None  # 1..4, None for plate or machine quantities
+    leg: int | None  # 1..n, None for plate or machine quantities
     pose_m: list[float]
     load: list[float]
     method: str
@@ -152,7 +152,7 @@ def _axial_quantities(n: np.ndarray, critical: np.ndarray) -> dict[str, np.ndarr
 
 
 def condensed_quantities(res: condensed.CondensedResult, critical: np.ndarray) -> dict[str, np.ndarray]:
-    """Per (pose, leg) arrays (P, 4), or (P,) for plate quantities, from the linear condensed solve."""
+    """Per (pose, leg) arrays (P, n), or (P,) for plate quantities, from the linear condensed solve."""
     m = res.leg_moments_nm  # (P, 4, 3): M_x, M_y, T in the leg frame
     out = _axial_quantities(res.axial_forces_n, critical)
     out.update({"max_bending_nm": np.hypot(m[..., 0], m[..., 1]), "max_torsion_nm": np.abs(m[..., 2]),
@@ -163,10 +163,10 @@ def condensed_quantities(res: condensed.CondensedResult, critical: np.ndarray) -
 
 def section_quantities(forces_n: np.ndarray, sections: np.ndarray, displacement_m: np.ndarray,
                        rotation_rad: np.ndarray, critical: np.ndarray) -> dict[str, np.ndarray]:
-    """The limit quantities of a batch of solves (leading shape b): actuator forces (b, 4) (N, > 0 tension),
-    section wrenches (b, 4, sections, 6) (N, V_x, V_y in N; M_x, M_y, T in N m), plate displacement (b, 3), m,
-    and rotation (b, 3), rad, Euler loads ``critical`` (N, broadcast to (b, 4)). Per (solve, leg) arrays
-    (b, 4), worst over the sections, or (b,) for the plate quantities."""
+    """The limit quantities of a batch of solves (leading shape b): actuator forces (b, n) (N, > 0 tension),
+    section wrenches (b, n, sections, 6) (N, V_x, V_y in N; M_x, M_y, T in N m), plate displacement (b, 3), m,
+    and rotation (b, 3), rad, Euler loads ``critical`` (N, broadcast to (b, n)). Per (solve, leg) arrays
+    (b, n), worst over the sections, or (b,) for the plate quantities."""
     out = _axial_quantities(forces_n, critical)
     out.update({"max_shear_n": np.hypot(sections[..., 1], sections[..., 2]).max(-1),
                 "max_bending_nm": np.hypot(sections[..., 3], sections[..., 4]).max(-1),
@@ -184,7 +184,7 @@ def equilibrium_quantities(eq: Equilibrium, critical: np.ndarray) -> dict[str, n
 
 
 def _worst(values: np.ndarray, sense: str) -> tuple[float, int, int | None]:
-    """Worst value, its pose index, and its leg (1-based) for (P, 4) arrays."""
+    """Worst value, its pose index, and its leg (1-based) for (P, n) arrays."""
     v = values if sense == "max" else -values
     flat = int(np.argmax(v))
     if values.ndim == 1:
@@ -204,7 +204,6 @@ def evaluate_case(case: Case, progress: bool = False) -> CaseResult:
 def evaluate_envelope(case: Case, progress: bool = False) -> CaseResult:
     """Evaluate every ``[envelope]`` limit of a case (module docstring for the method)."""
     machine = case.machine()
-    machine.require_legs("pressfit check (the limit check)", 4)
     poses_all, loads = case.poses.array(), case.loads.wrenches()
     ok = kinematics.is_reachable(machine, poses_all)
     unreachable = _unreachable(machine, poses_all[~ok])
@@ -224,7 +223,7 @@ def evaluate_envelope(case: Case, progress: bool = False) -> CaseResult:
                               case.solver.refine_worst) for key in wanted if LIMITS[key].load_dependent}
     refined = _refine(machine, poses, loads, sorted({c for key, (cands, _) in plans.items()
                                                       if key != "min_buckling_safety_factor" for c in cands}),
-                      case.solver.linear, case.preload.a4_n)
+                      case.solver.linear, _case_preload(case))
     unstable: dict[tuple[int, int], str] = {}  # (load, pose) -> why no stable equilibrium was found
     for key, (candidates, best) in plans.items():
         best = _refined_best(case, machine, key, candidates, best, refined, poses, loads, critical, unstable)
@@ -238,11 +237,17 @@ def evaluate_envelope(case: Case, progress: bool = False) -> CaseResult:
                       unreachable=unreachable, limits=lines)
 
 
+def _case_preload(case: Case) -> preload.Amplitudes:
+    """The case's force-mode preload as the statics take it: a4 (N) on a redundancy-1 machine, else the n - 3
+    amplitudes (checked against the machine where applied: PreloadError)."""
+    return preload.ActuatorPreload.from_case(case.preload).a4
+
+
 def _linear_sweep(case: Case, machine: Machine, poses: np.ndarray, loads: np.ndarray, critical: np.ndarray,
                   progress: bool) -> dict[str, np.ndarray]:
     """Every load-dependent quantity over every (load, pose) from the condensed linear model: (L, P, ...)."""
-    a4 = case.preload.a4_n
-    self_stress = preload.self_stress_forces_n(machine, poses, a4) if a4 else None
+    a4 = _case_preload(case)
+    self_stress = preload.self_stress_forces_n(machine, poses, a4) if np.any(a4) else None
     sweep: dict[str, list[np.ndarray]] = {}
     for w in tqdm(loads, desc=f"{case.name}: linear sweep", disable=not progress, unit="load"):
         res = condensed.solve_linear(machine, poses, w)
@@ -267,7 +272,7 @@ def _geometry_line(key: str, limit: float, machine: Machine, poses: np.ndarray, 
     return _line(key, spec, limit, worst, leg, poses[p], None, "exact at every pose")
 
 
-Best = tuple[float, int, int, int | None, str]  # worst value, load index, pose index, leg (1..4), method
+Best = tuple[float, int, int, int | None, str]  # worst value, load index, pose index, leg (1..n), method
 
 
 def _refined_best(case: Case, machine: Machine, key: str, candidates: list[tuple[int, int]], best: Best | None,
@@ -276,7 +281,7 @@ def _refined_best(case: Case, machine: Machine, key: str, candidates: list[tuple
                   unstable: dict[tuple[int, int], str]) -> Best | None:
     """The worse of the sweep's worst and the refined solves at ``candidates`` (with the case's clearances for
     the clearance-sensitive quantities); a refined pair without a stable equilibrium goes to ``unstable``."""
-    sense, a4, n = LIMITS[key].sense, case.preload.a4_n, len(candidates)
+    sense, a4, n = LIMITS[key].sense, _case_preload(case), len(candidates)
     solver = EquilibriumSolver(machine, pose_m=poses[candidates[0][1]]) \
         if key == "min_buckling_safety_factor" and candidates else None
     for j, p in candidates:
@@ -326,7 +331,7 @@ def _candidates(sense: str, lin: np.ndarray | None, stacked: dict[str, np.ndarra
 
 
 def _refine(machine: Machine, poses: np.ndarray, loads: np.ndarray, pairs: list[tuple[int, int]], linear: bool,
-            a4: float) -> dict[tuple[int, int], Equilibrium | str]:
+            a4: preload.Amplitudes) -> dict[tuple[int, int], Equilibrium | str]:
     """The refined solves of every (load, pose) pair in one batch (:mod:`pressfit.mechanics.fast_statics`,
     equal to the Pinocchio solve to 1e-9 linear, 1e-7 nonlinear), each with the reference's stability report;
     an unstable one maps to the reason. A batch the fast solver cannot finish (Newton diverging beyond
@@ -337,11 +342,11 @@ def _refine(machine: Machine, poses: np.ndarray, loads: np.ndarray, pairs: list[
     idx = np.array(pairs)
     out: dict[tuple[int, int], Equilibrium | str] = {}
     try:
-        batch = fast.solve_batch(poses[idx[:, 1]], loads[idx[:, 0]], preload=a4 or None, linear=linear)
+        batch = fast.solve_batch(poses[idx[:, 1]], loads[idx[:, 0]], preload=a4 if np.any(a4) else None, linear=linear)
         solve = lambda k, j, p: fast.equilibrium(batch, k)
     except (ConvergenceError, SingularPoseError):
         ref = EquilibriumSolver(fast.model)
-        solve = lambda k, j, p: ref.solve(poses[p], loads[j], linear=linear, preload=a4 or None)
+        solve = lambda k, j, p: ref.solve(poses[p], loads[j], linear=linear, preload=a4 if np.any(a4) else None)
     for k, (j, p) in enumerate(pairs):
         try:
             out[(j, p)] = solve(k, j, p)
@@ -388,11 +393,11 @@ def _unreachable(machine: Machine, poses: np.ndarray) -> list[dict[str, object]]
 
 
 def machine_buckling_factor(solver: EquilibriumSolver, pose: np.ndarray, load: np.ndarray,
-                            a4: float) -> tuple[float, int]:
+                            a4: preload.Amplitudes) -> tuple[float, int]:
     """The machine's linearised buckling load factor on ``load`` (force-mode preload a4 in N held fixed) and
-    the leg (1..4) holding most of the mode's energy (:func:`pressfit.mechanics.buckling.machine_buckling`),
+    the leg (1..n) holding most of the mode's energy (:func:`pressfit.mechanics.buckling.machine_buckling`),
     on a solver reused over the refined poses (building its model costs more than the eigenproblem)."""
-    offsets = preload.rest_length_offsets(solver.machine, pose, a4, "force") if a4 else None
+    offsets = preload.rest_length_offsets(solver.machine, pose, a4, "force") if np.any(a4) else None
     res = buckling.machine_buckling(solver, pose, load, preload_offsets_m=offsets)
     return res.load_factor, res.dominant_leg
 
@@ -405,7 +410,7 @@ def worse(value: float, best: tuple | None, sense: str) -> bool:
     return best is None or (value > best[0] if sense == "max" else value < best[0])
 
 
-def _with_clearance(case: Case, machine: Machine, pose: np.ndarray, load: np.ndarray, a4: float,
+def _with_clearance(case: Case, machine: Machine, pose: np.ndarray, load: np.ndarray, a4: preload.Amplitudes,
                     critical: np.ndarray, key: str, sense: str) -> tuple[float, int | None]:
     """A quantity at the full load with the case's cardan clearances: the preload, then the load in 20
     steps along its direction (lost motion and joints that open both change it). Play along the leg does not

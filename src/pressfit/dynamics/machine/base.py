@@ -34,8 +34,8 @@ DRIVE_KINDS = ("force", "position")
 
 @dataclass(frozen=True)
 class DriveInput:
-    """What the four drives impose during one step: forces (N, tension > 0) or positions (m, actuator spring
-    rest lengths). ``values`` (4,) are held over the step (zero-order hold)."""
+    """What the drives (one per leg) impose during one step: forces (N, tension > 0) or positions (m, actuator
+    spring rest lengths). ``values`` (n,) are held over the step (zero-order hold)."""
 
     kind: Literal["force", "position"]
     values: np.ndarray
@@ -44,9 +44,10 @@ class DriveInput:
         values = np.asarray(self.values, dtype=float)
         if self.kind not in DRIVE_KINDS:
             raise PressfitError(f"drive input kind must be one of {DRIVE_KINDS}, got {self.kind!r}")
-        if values.shape != (4,) or not np.all(np.isfinite(values)):
+        if values.ndim != 1 or values.size < 3 or not np.all(np.isfinite(values)):
             unit = "N" if self.kind == "force" else "m"
-            raise PressfitError(f"drive input ({self.kind}) must be 4 finite numbers in {unit}, got {self.values!r}")
+            raise PressfitError(f"drive input ({self.kind}) must be one finite number in {unit} per leg (3 or more), "
+                                f"got {self.values!r}")
         if self.kind == "position" and np.any(values <= 0):
             raise PressfitError(f"drive positions must be positive lengths (m), got {values.tolist()}")
         object.__setattr__(self, "values", values)

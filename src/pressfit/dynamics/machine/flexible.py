@@ -2,13 +2,13 @@ r"""The flexible machine: the elastic VJM legs of the statics in the closed-loop
 
 Model. The Pinocchio model of :mod:`pressfit.mechanics.model` (plate free flyer; per leg the base cardan, the
 cylinder and stem rotational springs, springs_per_segment from the machine file, the actuator joint, the plate
-cardan; four 6D frame-anchor loop closures) with the ``[mass]`` table's masses and inertias
+cardan; one 6D frame-anchor loop closure per leg) with the ``[mass]`` table's masses and inertias
 (:mod:`pressfit.dynamics.inertia`; gravity -9.81 m/s^2 along y, optional). Equations of motion (index 3):
 
     M(q) vdot + h(q, v) + f_s(q) + C (v_e - r_dot) - tau_d - J_p^T W + B(q)^T lambda = 0,    Phi(q) = 0,
 
 with M vdot + h = ``pin.rnea(q, v, vdot)`` (Coriolis, centrifugal and gravity terms included), f_s the virtual
-springs' forces (each spring law's ``force`` of its deflection q - rest), B the (24, nv) Jacobian of the
+springs' forces (each spring law's ``force`` of its deflection q - rest), B the (6n, nv) Jacobian of the
 closures Phi (Pinocchio's ``constraint_position_error``, log6 of the closure placement), lambda their forces,
 W the plate wrench (world, at the plate centre; J_p^T W = (R^T f, R^T m) on the free flyer) and tau_d the
 drives: a force drive puts -F_i (F_i > 0 tension) on actuator joint i, which then carries no spring; a position
@@ -22,7 +22,7 @@ of :meth:`pressfit.mechanics.clearance.Clearance.cardan_compliance`) adds its vi
 Damping: Rayleigh, f_d = alpha M (v - v_r) + beta K (v - v_r), acting on the elastic motion only: v_r is the
 velocity of the rigid machine (springs frozen) at the commanded leg rates (a position drive's rest-length
 rate, a force drive's actual actuator rate at the start of the step), from the closure Jacobian's rigid
-columns (least squares; the rigid closures are redundant, rank 23 of 24), so a commanded motion of the
+columns (least squares; the rigid closures are redundant, rank 6n - (n - 3) of 6n), so a commanded motion of the
 machine is not damped; M at the end of the step, where the other forces are evaluated (one ``rnea`` gives
 M (vdot + alpha (v - v_r)) + h), K the springs' tangents (zero on the cardans and the plate, and on the
 actuators of force drives). With the drives holding (v_r = 0) this is classical Rayleigh
@@ -86,6 +86,7 @@ the consistent acceleration of [M B^T; B 0] with the term dB/dt v left out (exac
 
 from __future__ import annotations
 
+import dataclasses
 import math
 from collections.abc import Callable
 from dataclasses import dataclass
@@ -110,7 +111,7 @@ STEM_UPDATE_M = 1e-5  # stem placements and stiffnesses follow the leg length to
 RHO_INF = 0.8  # default spectral radius at infinite frequency (numerical damping)
 
 
-@dataclass(frozen=True)
+@dataclass(frozen=True, kw_only=True)
 class Rayleigh:
     """Rayleigh coefficients of C = alpha M_e + beta K (module doc): alpha 1/s, beta s."""
 
@@ -118,11 +119,11 @@ class Rayleigh:
     beta_s: float
 
 
-@dataclass(frozen=True)
+@dataclass(frozen=True, kw_only=True)
 class FlexibleState(MachineState):
     """A state of :class:`FlexibleMachine`: besides (q, v), the true and the generalised-alpha accelerations
-    (nv,), the closure forces lambda (24,) (Pinocchio's constraint frames, N and N m), the drive input of the
-    last step, the stem lengths (4,) (m) the model was placed at, and the Newton iterations of the last step."""
+    (nv,), the closure forces lambda (6n,) (Pinocchio's constraint frames, N and N m), the drive input of the
+    last step, the stem lengths (n,) (m) the model was placed at, and the Newton iterations of the last step."""
 
     acceleration: np.ndarray
     pseudo_acceleration: np.ndarray
@@ -133,7 +134,7 @@ class FlexibleState(MachineState):
     damping_work_j: float = 0.0  # the Rayleigh forces' dissipation over the last step, f_d . (q_n+1 - q_n), J
 
 
-@dataclass(frozen=True)
+@dataclass(frozen=True, kw_only=True)
 class _Modes:
     frequencies_hz: np.ndarray
     shapes: np.ndarray  # (k, nv) mass-normalised
@@ -152,7 +153,7 @@ class FlexibleMachine:
                  rho_inf: float = RHO_INF, gravity: bool = True) -> None:
         if not (isinstance(rho_inf, int | float) and 0.0 <= rho_inf <= 1.0):
             raise PressfitError(f"rho_inf must be a number in [0, 1], got {rho_inf!r}")
-        self.machine = machine
+        self.machine, self.legs = machine, len(machine.legs)
         self.mm = mm = build_model(machine, pose_m, springs_per_segment=springs_per_segment,
                                    cardan_compliance=cardan_compliance)
         self.model = inertial_model(mm)
@@ -178,7 +179,8 @@ class FlexibleMachine:
         self._c1 = [cm.extract().joint1_placement for cm in self.cms]  # closure frames in the plate-end joints
         self.leg_v = [np.asarray(v) for v in mm.leg_v]
         # (joint whose subtree is the plate side, joint carrying the point, z offset) per leg and section
-        sec = [(j if z == 0.0 else j + 1, j, z) for i in range(4) for j, z in (mm.sections[i][s] for s in SECTIONS)]
+        sec = [(j if z == 0.0 else j + 1, j, z) for i in range(self.legs)
+               for j, z in (mm.sections[i][s] for s in SECTIONS)]
         joints = sorted({j for t in sec for j in t[:2]})
         self._sec_joints = (joints, [t[0] for t in sec])
         self._sec_sub = np.array([joints.index(t[0]) for t in sec])
@@ -189,7 +191,7 @@ class FlexibleMachine:
         self.gamma = 0.5 + self.alpha_f - self.alpha_m
         self.beta = 0.25 * (self.gamma + 0.5) ** 2
         self.rho_inf = float(rho_inf)
-        self._placed = np.full(4, np.nan)
+        self._placed = np.full(self.legs, np.nan)
         self._placed_key = b""
         self._closure_key: bytes | None = None  # the q (bytes) of ``_closure`` (B, Phi), None: stale
         self._closure: tuple = ()
@@ -211,7 +213,7 @@ class FlexibleMachine:
 
     # --- model -----------------------------------------------------------------------------------
     def _place(self, stem_lengths_m: np.ndarray) -> None:
-        """Stem placements and the pose-dependent stiffnesses (actuator, stem) for stem lengths (4,), m."""
+        """Stem placements and the pose-dependent stiffnesses (actuator, stem) for stem lengths (n,), m."""
         key = np.asarray(stem_lengths_m, dtype=float).tobytes()
         if key == self._placed_key:
             return
@@ -223,6 +225,9 @@ class FlexibleMachine:
 
     def _rest(self, drive: DriveInput) -> tuple[np.ndarray, np.ndarray]:
         """Rest values of the springs and their stiffness (0 on the actuators of force drives)."""
+        if drive.values.shape != (self.legs,):
+            raise PressfitError(f"drive input ({drive.kind}) must be one value per leg ({self.legs}), got "
+                                f"{drive.values.size}")
         rest, k = self.rest0.copy(), self._k.copy()
         if drive.kind == "position":
             rest[self.act] = drive.values
@@ -242,7 +247,7 @@ class FlexibleMachine:
         return f, kt
 
     def _jacobian(self, q: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
-        """Closure Jacobian B (24, nv) and error Phi (24,) at q; the last q's are kept (a step's end state is
+        """Closure Jacobian B (6n, nv) and error Phi (6n,) at q; the last q's are kept (a step's end state is
         asked for them again by the closure error, the section loads and the next step's rigid velocity)."""
         key = q.tobytes()
         if key == self._closure_key:
@@ -272,12 +277,12 @@ class FlexibleMachine:
         if w2[0] <= 0:
             raise PressfitError(f"the flexible machine has a mechanism at pose {tuple(self.mm.pose_m.tolist())} m "
                                 f"(lowest eigenvalue {w2[0]:.3g} s^-2)")
-        return _Modes(np.sqrt(w2) / (2 * np.pi), (basis @ x).T)
+        return _Modes(frequencies_hz=np.sqrt(w2) / (2 * np.pi), shapes=(basis @ x).T)
 
     def _fit(self, damping: Damping) -> Rayleigh:
         """Rayleigh coefficients for modal ratios at two modes (module doc); refused if one comes out negative."""
         if damping.kind == "rayleigh":
-            return Rayleigh(float(damping.alpha_per_s), float(damping.beta_s))
+            return Rayleigh(alpha_per_s=float(damping.alpha_per_s), beta_s=float(damping.beta_s))
         k = [m - 1 for m in damping.fit_modes]
         w = 2 * np.pi * self.modes.frequencies_hz[k]
         a = np.column_stack([1 / (2 * w), w / 2])
@@ -286,7 +291,7 @@ class FlexibleMachine:
             raise PressfitError(f"damping ratios {damping.fit_ratios} at modes {damping.fit_modes} "
                                 f"({w[0] / 2 / np.pi:.4g} and {w[1] / 2 / np.pi:.4g} Hz) need a negative Rayleigh "
                                 f"coefficient (alpha {alpha:.3g} 1/s, beta {beta:.3g} s): choose other modes or ratios")
-        return Rayleigh(float(alpha), float(beta))
+        return Rayleigh(alpha_per_s=float(alpha), beta_s=float(beta))
 
     def modal_damping_ratios(self) -> np.ndarray:
         """The Rayleigh damping's ratio at each computed mode (module doc), dimensionless."""
@@ -303,14 +308,14 @@ class FlexibleMachine:
             raise PressfitError("a rest state needs position drives: force drives hold no pose")
         wrench = _wrench(plate_wrench)
         rest, k = self._rest(drive)
-        q, lam, nv = self.q0.copy(), np.zeros(24), self.nv
+        q, lam, nv, nc = self.q0.copy(), np.zeros(6 * self.legs), self.nv, 6 * self.legs
         zero = np.zeros(nv)
         for it in range(1, max_iter + 1):  # noqa: B007 (the count is reported)
             b, phi = self._jacobian(q)
             f, kt = self._springs(q, rest, k, drive)
             r = np.array(pin.rnea(self.model, self.data, q, zero, zero)) + b.T @ lam - self._external(q, wrench, drive)
             r[self.sv] += f
-            kkt = np.zeros((nv + 24, nv + 24))
+            kkt = np.zeros((nv + nc, nv + nc))
             kkt[self.sv, self.sv] = kt
             kkt[:nv, nv:], kkt[nv:, :nv] = b.T, b
             dx = np.linalg.solve(kkt, -np.concatenate([r, phi]))
@@ -330,9 +335,7 @@ class FlexibleMachine:
         v = np.asarray(v, dtype=float)
         if v.shape != (self.nv,) or not np.all(np.isfinite(v)):
             raise PressfitError(f"velocity must be {self.nv} finite numbers")
-        s = FlexibleState(time_s=state.time_s, q=state.q, v=v, acceleration=state.acceleration,
-                          pseudo_acceleration=state.pseudo_acceleration, multipliers=state.multipliers,
-                          drive=state.drive, stem_lengths_m=state.stem_lengths_m, iterations=state.iterations)
+        s = dataclasses.replace(state, v=v, damping_work_j=0.0)
         return self._consistent(s, _wrench(plate_wrench))
 
     def _consistent(self, s: FlexibleState, wrench: np.ndarray) -> FlexibleState:
@@ -344,9 +347,10 @@ class FlexibleMachine:
         rhs = self._external(s.q, wrench, s.drive) - np.array(pin.nonLinearEffects(self.model, self.data, s.q, s.v))
         rhs[self.sv] -= f
         rhs -= self._damping_terms(s.v, np.zeros(nv), kt, mass if self.damping.alpha_per_s else None)
-        kkt = np.zeros((nv + 24, nv + 24))
+        nc = 6 * self.legs
+        kkt = np.zeros((nv + nc, nv + nc))
         kkt[:nv, :nv], kkt[:nv, nv:], kkt[nv:, :nv] = mass, b.T, b
-        sol = np.linalg.lstsq(kkt, np.concatenate([rhs, np.zeros(24)]), rcond=None)[0]
+        sol = np.linalg.lstsq(kkt, np.concatenate([rhs, np.zeros(nc)]), rcond=None)[0]
         acc = sol[:nv]
         return FlexibleState(time_s=s.time_s, q=s.q, v=s.v, acceleration=acc, pseudo_acceleration=acc.copy(),
                              multipliers=sol[nv:], drive=s.drive, stem_lengths_m=s.stem_lengths_m,
@@ -367,10 +371,10 @@ class FlexibleMachine:
              drive_stiffness_n_per_m: np.ndarray | None = None) -> FlexibleState:
         """One generalised-alpha step of ``dt_s`` (s) (module doc); the drive input and the plate wrench
         (6,) (N, N m, world, plate centre) are held over the step. With force drives, ``drive`` (optional) gives
-        the delivered tensions (4,), N, as a function of the actuator lengths (4,), m, at the step's end (a drive
+        the delivered tensions (n,), N, as a function of the actuator lengths (n,), m, at the step's end (a drive
         model stepped over the step at the mean rate they make): it is evaluated at every Newton iteration, so the
         drive's own stiffness (an oil column) is implicit in the step like the legs' springs (module doc, "Drives
-        in the step"); ``drive_stiffness_n_per_m`` (4,) its tangent -dN/dl for the iteration matrix (default 0;
+        in the step"); ``drive_stiffness_n_per_m`` (n,) its tangent -dN/dl for the iteration matrix (default 0;
         an approximate tangent only slows the modified Newton). The state records the tensions of the last
         iterate (``drive``'s last call: the caller's drive state is that call's).
         Refuses (PressfitError) a step longer than MAX_STEP_FRACTION of the first mode's period or one whose
@@ -409,7 +413,7 @@ class FlexibleMachine:
         acc, lam = acc_n.copy(), state.multipliers.copy()
         nv, sv, last, it = self.nv, self.sv, np.inf, 0
         scale, c_acc, c_old = 1.0 / (h * h * b * ca), (1 - af) / (1 - am), (af * acc_n - am * a_n) / (1 - am)
-        rhs = np.empty(nv + 24)
+        rhs = np.empty(nv + 6 * self.legs)
         alpha, beta = self.damping.alpha_per_s, self.damping.beta_s
         while True:
             a_ps = c_acc * acc + c_old
@@ -489,7 +493,7 @@ class FlexibleMachine:
         return out
 
     def _rigid_velocity(self, q: np.ndarray, rates: np.ndarray) -> np.ndarray:
-        """Velocity (nv,) of the rigid machine (springs frozen) at q with actuator rates (4,) (m/s)."""
+        """Velocity (nv,) of the rigid machine (springs frozen) at q with actuator rates (n,) (m/s)."""
         b, _ = self._jacobian(q)
         br = b[:, self.rigid]  # full column rank: with fixed lengths the rigid machine has no mechanism
         v = np.zeros(self.nv)
@@ -506,7 +510,7 @@ class FlexibleMachine:
         ca = (1 - self.alpha_f) / (1 - self.alpha_m)
         bj, _ = self._jacobian(q)
         _, kt = self._springs(q, rest, k, drive)
-        s = np.zeros((nv + 24, nv + 24))
+        s = np.zeros((nv + 6 * self.legs, nv + 6 * self.legs))
         s[:nv, :nv] = (1 / (b * ca * h * h) + g / (b * h) * self.damping.alpha_per_s) * self._mass(q)
         s[self.sv, self.sv] += (1 + g / (b * h) * self.damping.beta_s) * kt
         s[self.act_v, self.act_v] += self._drive_k  # an implicit force drive's tangent (step)
@@ -532,7 +536,7 @@ class FlexibleMachine:
     def closure_error(self, state: MachineState) -> tuple[float, float]:
         self._place(getattr(state, "stem_lengths_m", self._placed))
         _, phi = self._jacobian(state.q)
-        e = phi.reshape(4, 2, 3)
+        e = phi.reshape(self.legs, 2, 3)
         n = np.sqrt((e * e).sum(2)).max(0)
         return float(n[0]), float(n[1])
 
@@ -550,23 +554,23 @@ class FlexibleMachine:
         return Energy(kinetic_j=kin, elastic_j=float(e.sum()), potential_j=pot)
 
     def closure_wrenches(self, state: FlexibleState) -> np.ndarray:
-        """(4, 6) the world wrench (force N, moment about the world origin N m) the plate exerts on each leg's
+        """(n, 6) the world wrench (force N, moment about the world origin N m) the plate exerts on each leg's
         last body through its closure (module doc)."""
         self._place(state.stem_lengths_m)
         self._jacobian(state.q)  # the closure frames c1 at q
-        lam = state.multipliers.reshape(4, 6)
+        lam = state.multipliers.reshape(self.legs, 6)
         return np.array([cd.extract().oMc1.act(pin.Force(lam[i])).vector for i, cd in enumerate(self.cds)])
 
     def section_state(self, state: FlexibleState) -> tuple[np.ndarray, np.ndarray]:
         """What the section resultants need of a state (the Pinocchio part; :meth:`section_wrenches_from` the
         rest, batched): the placements (n, 3, 4) (rotation | translation, m) of the joints involved and the
-        wrench (12, 6) (force N, moment N m; local) each section's plate-side subtree receives from its parent."""
+        wrench (3n, 6) (force N, moment N m; local) each section's plate-side subtree receives from its parent."""
         self._place(state.stem_lengths_m)
         if self._fext is None:  # external forces per joint: zero but on the plate ends (set below)
             self._fext = pin.StdVec_Force()
             for _ in range(self.model.njoints):
                 self._fext.append(pin.Force.Zero())
-        fext, lam = self._fext, state.multipliers.reshape(4, 6)
+        fext, lam = self._fext, state.multipliers.reshape(self.legs, 6)
         for i, (j, c1) in enumerate(zip(self.plate_end, self._c1)):  # the closure force, in joint j's frame
             fext[j] = c1.act(pin.Force(lam[i]))
         pin.forwardKinematics(self.model, self.data, state.q)  # oMi: Pinocchio's rnea leaves them as they were
@@ -576,18 +580,18 @@ class FlexibleMachine:
         return (np.array([omi[j].homogeneous[:3] for j in joints]), np.array([f_sub[j].vector for j in subs]))
 
     def section_wrenches_from(self, placements: np.ndarray, wrenches: np.ndarray) -> np.ndarray:
-        """(..., 4, 3, 9) per leg and section (module doc): the section point (m), the force (N) and the moment
+        """(..., n, 3, 9) per leg and section (module doc): the section point (m), the force (N) and the moment
         about the point (N m) of the plate side on the base side, world axes, from :meth:`section_state`'s
-        arrays (..., n, 3, 4) and (..., 12, 6); batched."""
+        arrays (..., m, 3, 4) and (..., 3n, 6); batched."""
         hj, hs = placements[..., self._sec_j, :, :], placements[..., self._sec_sub, :, :]
         pts = hj[..., :, 3] + hj[..., :, 2] * self._sec_z[:, None]  # the section points
         force = -np.einsum("...sij,...sj->...si", hs[..., :3], wrenches[..., :3])  # plate side on base side
         moment = _cross(hs[..., :, 3] - pts, force) - np.einsum("...sij,...sj->...si", hs[..., :3], wrenches[..., 3:])
         out = np.concatenate([pts, force, moment], axis=-1)
-        return out.reshape(*out.shape[:-2], 4, 3, 9)
+        return out.reshape(*out.shape[:-2], self.legs, 3, 9)
 
     def section_wrenches(self, state: FlexibleState) -> np.ndarray:
-        """(4, 3, 9) the section wrenches of one state (:meth:`section_wrenches_from`); :func:`leg_frame_loads`
+        """(n, 3, 9) the section wrenches of one state (:meth:`section_wrenches_from`); :func:`leg_frame_loads`
         writes them in the leg frames."""
         return self.section_wrenches_from(*self.section_state(state))
 
@@ -600,14 +604,14 @@ class FlexibleMachine:
 def first_mode_hz(machine: Machine, pose_m: np.ndarray) -> float:
     """The first mode (Hz) of the flexible machine built at ``pose_m`` (m), the drives holding their lengths: the
     mode whose period MAX_STEP_FRACTION bounds the step by (module doc)."""
-    fm = FlexibleMachine(machine, pose_m, damping=Rayleigh(0.0, 0.0))
+    fm = FlexibleMachine(machine, pose_m, damping=Rayleigh(alpha_per_s=0.0, beta_s=0.0))
     return float(fm.modes.frequencies_hz[0])
 
 
 def leg_frame_loads(wrenches: np.ndarray, cardan_axes: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
-    """Section resultants (..., 4, 3, 6) (N, V_x, V_y in N; M_x, M_y, T in N m) in the deformed leg frames,
-    and the frames (..., 4, 3, 3) (columns e_x, e_y, e_z; :mod:`.base`), from the world section wrenches
-    (..., 4, 3, 9) of :meth:`FlexibleMachine.section_wrenches` and the cardan axes a_i (4, 3); batched."""
+    """Section resultants (..., n, 3, 6) (N, V_x, V_y in N; M_x, M_y, T in N m) in the deformed leg frames,
+    and the frames (..., n, 3, 3) (columns e_x, e_y, e_z; :mod:`.base`), from the world section wrenches
+    (..., n, 3, 9) of :meth:`FlexibleMachine.section_wrenches` and the cardan axes a_i (n, 3); batched."""
     pts, force, moment = wrenches[..., :3], wrenches[..., 3:6], wrenches[..., 6:]
     ez = pts[..., 2, :] - pts[..., 0, :]
     ez = ez / np.sqrt((ez * ez).sum(axis=-1))[..., None]
