@@ -204,7 +204,7 @@ def _envelope_section(page: _Page, c: ReportContent) -> None:
     names = list(LEG_QUANTITIES)
     for k, name in enumerate(names):
         e = env.entries[name]
-        fig.add_bar(x=[f"leg {i + 1}" for i in range(4)], y=e.value, visible=k == 0, name=name,
+        fig.add_bar(x=[f"leg {i + 1}" for i in range(len(e.value))], y=e.value, visible=k == 0, name=name,
                     customdata=np.hstack([e.pose_m, e.load_n]),
                     hovertemplate="%{y:.4g} " + LEG_QUANTITIES[name][0] + "<br>pose (%{customdata[0]:.3f}, "
                     "%{customdata[1]:.3f}, %{customdata[2]:.3f}) m<br>load (%{customdata[3]:.1f}, %{customdata[4]:.1f},"

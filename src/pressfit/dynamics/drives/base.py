@@ -2,7 +2,7 @@ r"""The drive interface: what the insertion loop (or any simulation) asks of an 
 
 A drive turns a commanded leg tension N_cmd (N, > 0 tension, the project's convention: leg i pulls the plate
 with -N_i e_i) into a delivered tension, given the leg's length l (m) and rate l_dot (m/s) from the multibody
-model, both held over the step. All arrays have the legs' shape (normally (4,), any shape broadcasts). A drive
+model, both held over the step. All arrays have the legs' shape ((n,) for n legs; any shape broadcasts). A drive
 object holds only constants (and per-step-size caches); its state is a separate frozen value, so one drive
 serves several runs.
 

@@ -80,13 +80,13 @@ class SectionLoads:
     frames: np.ndarray
 
     def axial_n(self, section: str = "plate") -> np.ndarray:
-        """(4,) axial force N at a section, N, > 0 tension."""
+        """(n,) axial force N at a section, N, > 0 tension (n legs)."""
         return self.values[:, SECTIONS.index(section), 0]
 
     def as_dicts(self) -> list[dict[str, dict[str, float]]]:
         """Per leg: section -> component -> value (JSON-ready)."""
         return [{s: dict(zip(SECTION_COMPONENTS, self.values[i, k].tolist())) for k, s in enumerate(SECTIONS)}
-                for i in range(4)]
+                for i in range(len(self.values))]
 
 
 @dataclass(frozen=True, kw_only=True)
@@ -121,11 +121,11 @@ class DynamicsModel(Protocol):
         ...
 
     def leg_lengths_m(self, state: MachineState) -> np.ndarray:
-        """(4,) what the drives measure: the actuator joint coordinates, m."""
+        """(n,) what the drives measure: the actuator joint coordinates, m (n legs)."""
         ...
 
     def leg_rates_m_per_s(self, state: MachineState) -> np.ndarray:
-        """(4,) their rates, m/s."""
+        """(n,) their rates, m/s."""
         ...
 
     def section_loads(self, state: MachineState) -> SectionLoads:
