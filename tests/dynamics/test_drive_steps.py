@@ -23,7 +23,7 @@ from pressfit.dynamics.modes import closure_jacobian, elastic_stiffness, mass_ma
 from pressfit.errors import DriveStepError, ModelFileError
 from tests.dynamics.test_insertion_drives import SHORT, drive_case
 from tests.dynamics.test_linearise_drives import _matrix_pencil
-from tests.test_simulation_trust import refused
+from tests.dynamics.test_simulation_trust import refused
 
 ROOT = Path(__file__).resolve().parents[2]
 

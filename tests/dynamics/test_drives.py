@@ -166,7 +166,8 @@ def test_vertical_stiffness_at_pose_a_uses_the_drive(path):
 @pytest.mark.parametrize("pose", [(0.2, 0.6, -0.15), (-0.25, 0.74, 0.25), (0.1, 0.5, 0.22)])
 def test_condensed_and_fast_paths_use_the_drive_stiffness(path, pose):
     """The condensed closed form and the batched fast solver against the Pinocchio linear solve (the
-    tests/test_condensed_vs_pinocchio.py cross-check) on a machine whose drive stiffness varies with the stroke."""
+    tests/mechanics/test_condensed_vs_pinocchio.py cross-check) on a machine whose drive stiffness varies with the
+    stroke."""
     machine = load_machine(path)
     load = (120.0, 650.0, -80.0, 10.0, -5.0, 15.0)
     eq = solve_equilibrium(machine, pose, load, linear=True)

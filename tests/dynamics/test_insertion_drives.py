@@ -20,7 +20,7 @@ from pressfit.dynamics.actuators import ForceActuators
 from pressfit.dynamics.machine.flexible import FlexibleMachine
 from pressfit.dynamics.multibody import rigid_leg_model
 from pressfit.mechanics.condensed import condensed_plate_compliance
-from tests.test_simulation_trust import refused, write_case
+from tests.dynamics.test_simulation_trust import refused, write_case
 
 ROOT = Path(__file__).resolve().parents[2]
 SHORT = {"move_time_s": 0.5, "descent_time_s": 0.6, "dwell_s": 1.5, "settle_s": 0.2}  # as tests/test_simulation_trust

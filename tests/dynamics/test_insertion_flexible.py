@@ -12,7 +12,7 @@ from pressfit.description.cases import load_case
 from pressfit.dynamics.insertion import VIBRATION_WINDOW_S, section_columns, series_columns, simulate_insertion
 from pressfit.errors import ModelFileError
 from pressfit.output.simulation import write_simulation
-from tests.test_simulation_trust import write_case
+from tests.dynamics.test_simulation_trust import write_case
 
 COL = {c: k for k, c in enumerate(series_columns(4))}  # the 4-UPU's
 SHORT = {"move_time_s": 0.25, "descent_time_s": 0.25, "dwell_s": 0.3, "settle_s": 0.25}
@@ -247,7 +247,7 @@ def test_readme_shipped_scenario_on_the_flexible_model():
     Drift protection for the printed digits; the bound that makes them right is the sag ratio test."""
     from readme import assert_printed, readme_fragment
 
-    from tests.test_simulation_trust import SHIPPED
+    from tests.dynamics.test_simulation_trust import SHIPPED
 
     case = load_case(SHIPPED)
     flexible = case.model_copy(update={"simulation": case.simulation.model_copy(update={"model": "flexible"})})
@@ -275,7 +275,7 @@ def test_flexible_step_bound_is_the_stiffest_pose_on_the_path(tmp_path):
     bound is the bottom's from natural_modes within 0.1% (the run's modes are at the build configuration, those of
     `pressfit modes` at the equilibrium under the weight: 1e-4 apart); 1.01 x it is refused, 0.99 x it plans."""
     from pressfit.dynamics.insertion import plan_scenario
-    from tests.test_simulation_trust import refused
+    from tests.dynamics.test_simulation_trust import refused
 
     base = load_case(write_case(tmp_path, "base.toml", simulation={"model": "flexible"}))
     start, bottom = _first_mode_bound_s(base, base.simulation.start_m), _first_mode_bound_s(base, [0.1, 0.598, -0.05])
@@ -300,7 +300,7 @@ def test_cardan_play_on_the_flexible_model_is_refused_before_the_run(tmp_path):
     stopped at t = 1 ms with the position correction cycling at 95 nm across one play's edge) and what to use; the
     rigid model plans it."""
     from pressfit.dynamics.insertion import plan_scenario
-    from tests.test_simulation_trust import refused
+    from tests.dynamics.test_simulation_trust import refused
 
     path = write_case(tmp_path, simulation={"model": "flexible", "clearance": True})
     refused(path, "[simulation] clearance", 'with model = "flexible"', "contact edge", 'use model = "rigid"')

@@ -165,7 +165,7 @@ def test_control_and_export_mjcf_run_on_tsai(tmp_path):
 def test_tsai_passive_motion_agrees_in_pinocchio_and_mujoco(tsai):
     """The 3-UPU thrown upwards, passive, 0.2 s in both engines (Pinocchio's constraint dynamics and the exported
     MJCF in MuJoCo): the plate trajectories differ by the integrators' first-order errors, which halve with the time
-    step (ratio 2 within 15%), and stay below 10 um (the 4-UPU's: 8 um over 0.5 s, tests/test_mjcf.py)."""
+    step (ratio 2 within 15%), and stay below 10 um (the 4-UPU's: 8 um over 0.5 s, tests/dynamics/test_mjcf.py)."""
     runs = [passive_motion(tsai, np.array([0.05, 0.62, -0.05]), (0.2, 2.0, -0.2), duration_s=0.2, timestep_s=h)
             for h in (1e-4, 5e-5)]
     coarse, fine = (run.deviation_m.max() for run in runs)

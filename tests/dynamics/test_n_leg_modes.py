@@ -8,7 +8,7 @@ moves faster than the plate: a point at s from the base cardan moves at sqrt(sin
 <= 1 per unit plate speed), so the vertical mode lies between sqrt(k_v / m_total) and sqrt(k_v / m_plate+tool);
 the legs' own flexibility moves it inside that bracket, not out of it (437 Hz against 413 Hz for the rigid-leg
 quotient on the 3-UPU). The n-fold rotational symmetry about y (n >= 3) makes the lateral modes pairs of equal
-frequency. The 4-UPU's frequencies are tests/test_modes.py's (unchanged)."""
+frequency. The 4-UPU's frequencies are tests/dynamics/test_modes.py's (unchanged)."""
 
 import math
 

@@ -21,7 +21,7 @@ from pressfit.dynamics import drives, sizing
 from pressfit.dynamics.insertion import series_columns, simulate_insertion
 from pressfit.dynamics.machine.flexible import FlexibleMachine
 from pressfit.errors import ModelFileError, ResidualError
-from tests.test_simulation_trust import write_case
+from tests.dynamics.test_simulation_trust import write_case
 
 ROOT = Path(__file__).resolve().parents[2]
 COL = {c: k for k, c in enumerate(series_columns(4))}  # the 4-UPU's

@@ -36,7 +36,7 @@ def test_pose_figures_are_the_pinocchio_statics_at_one_pose():
     Drive force: max |actuator force| over the press load and its 5 degree cone, each load solved here; bending:
     the sections' hypot(M_x, M_y); vertical stiffness 700 N / delta_y under the press load alone; the weakest
     stiffness: the smallest eigenvalue of the inverse of the 3 x 3 compliance assembled from three unit-load solves;
-    tilt |phi| under the press load. The two engines agree to ~1e-11 (tests/test_condensed_vs_pinocchio.py):
+    tilt |phi| under the press load. The two engines agree to ~1e-11 (tests/mechanics/test_condensed_vs_pinocchio.py):
     asserted to 1e-8."""
     machine = load_machine()
     f = pose_figures(machine, POSE[None])

@@ -31,7 +31,7 @@ from pressfit.dynamics.insertion import (
 from pressfit.errors import ModelFileError, PressfitError
 from pressfit.studies.limit_check import simulation_lines
 
-ROOT = Path(__file__).resolve().parents[1]
+ROOT = Path(__file__).resolve().parents[2]
 SHIPPED = ROOT / "cases/paper/insertion.toml"
 PHASES = ("approach", "descent", "dwell", "retract", "move", "settle")
 SERIES_COLUMNS = series_columns(4)  # the 4-UPU's

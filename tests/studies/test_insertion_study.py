@@ -17,7 +17,7 @@ from pressfit.description.cases import load_case
 from pressfit.mechanics.clearance import DEFAULT_SMOOTHING_M, Clearance, load_deflection
 from pressfit.studies.insertion_study import insertion_study
 
-ROOT = Path(__file__).resolve().parents[1]
+ROOT = Path(__file__).resolve().parents[2]
 GAP = 2e-5
 
 

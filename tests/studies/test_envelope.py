@@ -20,7 +20,7 @@ from pressfit.cli import main
 from pressfit.description.cases import load_case
 from pressfit.studies.limit_check import LIMITS, evaluate_case
 
-ROOT = Path(__file__).resolve().parents[1]
+ROOT = Path(__file__).resolve().parents[2]
 
 GRID = {"x": {"min_m": -0.25, "max_m": 0.25, "count": 3}, "y": {"min_m": 0.6, "max_m": 0.7, "count": 2},
         "z": {"min_m": -0.25, "max_m": 0.25, "count": 3}}

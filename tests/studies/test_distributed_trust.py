@@ -17,8 +17,8 @@ from pressfit.description.cases import load_case
 from pressfit.errors import ClusterError, OutputExistsError
 from pressfit.output import montecarlo_files as mcf
 from pressfit.studies import distributed, montecarlo
-from tests.test_distributed import TILT
-from tests.test_montecarlo import synthetic_case
+from tests.studies.test_distributed import TILT
+from tests.studies.test_montecarlo import synthetic_case
 
 ENV = os.environ | {"OMP_NUM_THREADS": "1", "OPENBLAS_NUM_THREADS": "1"}
 
@@ -302,7 +302,7 @@ def test_a_study_where_every_sample_fails_exits_2_with_the_reasons_counted(tmp_p
     from click.testing import CliRunner
 
     from pressfit.cli import main
-    from tests.test_montecarlo_trust import pose_a_case
+    from tests.studies.test_montecarlo_trust import pose_a_case
 
     path = pose_a_case(tmp_path, -120e3, samples=4, limit=0.5)
     result = CliRunner().invoke(main, ["study", "montecarlo", str(path), "--workers", "1", "--no-progress",

@@ -14,7 +14,7 @@ from pressfit.cli import main
 from pressfit.description.cases import discover, load_case
 from pressfit.errors import ModelFileError
 
-ROOT = Path(__file__).resolve().parents[1]
+ROOT = Path(__file__).resolve().parents[2]
 VALID = {
     "name": "fuzz",
     "poses": {"points_m": [[0.0, 0.6, 0.0]], "x": {"min_m": -0.1, "max_m": 0.1, "count": 3},

@@ -21,7 +21,7 @@ from pressfit.dynamics.insertion import InsertionResult, plan_scenario, series_c
 from pressfit.mechanics.condensed import condensed_plate_compliance
 from pressfit.studies.limit_check import SIMULATION_LIMITS, simulation_lines
 
-ROOT = Path(__file__).resolve().parents[1]
+ROOT = Path(__file__).resolve().parents[2]
 SHIPPED = ROOT / "cases/paper/insertion.toml"
 BOTTOM = np.array([0.10, 0.60, -0.05])  # the pin on the board face of the shipped scenario
 

@@ -1,6 +1,6 @@
 """The n-leg layers from the command line (issue 21): ``pressfit modes``, ``interference``, ``solve`` and
 ``study preload`` with ``--model models/tsai_3upu.toml`` exit 0 and report three legs (names leg1..leg3, no
-leg 4). The numbers behind them are tested in tests/dynamics/test_n_leg_modes.py, tests/test_interference.py,
+leg 4). The numbers behind them are tested in tests/dynamics/test_n_leg_modes.py, tests/geometry/test_interference.py,
 tests/mechanics/test_n_leg_mechanics.py and tests/studies/test_n_leg_studies.py; here the closed form
 F / (3 sin(alpha)) of the centred press load checks the printed actuator forces (tests/n_legs.py)."""
 
@@ -13,7 +13,7 @@ from n_legs import centred
 
 from pressfit.cli import main
 
-TSAI = str(Path(__file__).resolve().parents[1] / "models" / "tsai_3upu.toml")
+TSAI = str(Path(__file__).resolve().parents[2] / "models" / "tsai_3upu.toml")
 POSE = ["0", "0.6", "0"]
 
 
@@ -53,7 +53,7 @@ def test_study_preload(tmp_path):
 
 
 def _tsai_insertion(tmp_path, preload: str) -> str:
-    text = (Path(__file__).resolve().parents[1] / "cases" / "paper" / "insertion.toml").read_text()
+    text = (Path(__file__).resolve().parents[2] / "cases" / "paper" / "insertion.toml").read_text()
     path = tmp_path / "tsai_insertion.toml"
     path.write_text(f'model = "{TSAI}"\n' + text.replace("a4_n = 100.0", preload))
     return str(path)

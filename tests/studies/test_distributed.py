@@ -15,7 +15,7 @@ from pressfit.description.cases import load_case
 from pressfit.errors import ClusterError
 from pressfit.output import montecarlo_files as mcf
 from pressfit.studies import distributed, montecarlo
-from tests.test_montecarlo import synthetic_case
+from tests.studies.test_montecarlo import synthetic_case
 
 TILT = """[montecarlo.inputs.load_tilt_rad]
 distribution = "uniform"

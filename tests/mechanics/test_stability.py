@@ -3,7 +3,7 @@
 References: the second-order optimality condition of a constrained minimum (the KKT matrix of a stable
 minimum has exactly as many negative eigenvalues as constraints; Gould 1985), evaluated here on a DENSE
 matrix with numpy's eigvalsh, independently of the blockwise (Haynsworth) algorithm of stability.py; the
-machine's linearised buckling factor (tests/test_buckling.py checks it against Euler); central finite
+machine's linearised buckling factor (tests/mechanics/test_buckling.py checks it against Euler); central finite
 differences of the closure residual; the linearity of the small-displacement model (exact superposition).
 """
 

@@ -19,7 +19,7 @@ from pressfit.description.machine import DEFAULT_MODEL, load_machine, read_toml
 from pressfit.errors import ModelFileError, OutputExistsError, PressfitError
 from pressfit.output.files import LOCK_NAME, write_directory, write_text
 
-ROOT = Path(__file__).resolve().parents[1]
+ROOT = Path(__file__).resolve().parents[2]
 INSERTION = ROOT / "cases/paper/insertion.toml"
 
 

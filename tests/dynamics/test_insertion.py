@@ -24,7 +24,7 @@ from pressfit.dynamics.multibody import rigid_leg_model
 from pressfit.errors import ModelFileError
 from pressfit.mechanics.condensed import condensed_plate_compliance, solve_linear
 
-ROOT = Path(__file__).resolve().parents[1]
+ROOT = Path(__file__).resolve().parents[2]
 SHIPPED = ROOT / "cases/paper/insertion.toml"
 PIN = np.array([0.10, 0.60, -0.05])  # the shipped scenario's pin on the board face, m
 RNG_POSES = np.random.default_rng(7).uniform([-0.2, 0.5, -0.2], [0.2, 0.72, 0.2], (20, 3))

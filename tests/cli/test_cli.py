@@ -10,7 +10,7 @@ from click.testing import CliRunner
 
 from pressfit.cli import main
 
-ROOT = Path(__file__).resolve().parents[1]
+ROOT = Path(__file__).resolve().parents[2]
 SECTION_KEYS = {"N", "V_x", "V_y", "M_x", "M_y", "T"}
 
 
