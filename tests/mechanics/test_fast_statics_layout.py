@@ -4,7 +4,8 @@ reference Pinocchio solver (pressfit.mechanics.statics), an independent implemen
 that machine's own model.
 
 Tolerances: those of the fast-vs-reference tests (tests/mechanics/test_fast_statics.py, the issue's accuracy
-targets), 1e-9 (linear) and 1e-7 (nonlinear) of the largest force and moment; both solvers stop at 1e-10 relative stationarity.
+targets), 1e-9 (linear) and 1e-7 (nonlinear) of the largest force and moment; both solvers stop at 1e-10 relative
+stationarity.
 """
 
 import numpy as np
