@@ -306,6 +306,10 @@ def _preload_section(machine: Machine, out: Path, overwrite: bool, quick: bool, 
           "preload is the smallest that keeps every cardan closed up to 700 N.", ""]
     preloads = [0.0, 200.0, 400.0, 600.0] if quick else [0.0, 100.0, 200.0, 300.0, 400.0, 500.0, 600.0, 800.0,
                                                          1000.0, 1200.0]
+    if machine.redundancy == 0:
+        preloads = [0.0]
+        md += [f"{machine.name} has {len(machine.legs)} legs: no redundant actuation, so no internal preload; the "
+               "study shows the clearance alone.", ""]
     studies = []
     poses = (("pose_A", (0.0, 0.72, 0.0)),) + (() if quick else (("off_centre", (0.2, 0.6, -0.2)),))
     for name, pose in poses:
