@@ -96,3 +96,15 @@ def test_pose_a_machine_factor_is_independent_of_the_spring_count(machine):
     f = [machine_buckling(build_model(machine, POSE_A, springs_per_segment=n), POSE_A, [0, -700, 0, 0, 0, 0]
                           ).load_factor for n in (2, 4)]
     assert f[0] == pytest.approx(f[1], rel=1e-9)
+
+
+def test_a_machine_in_tension_does_not_buckle():
+    """At pose A the press reaction (+700 N y) stretches every leg (195.66 N of tension each): no load factor
+    exists, and the answer is inf, not the inverse of a round-off eigenvalue (1e17-1e20 before NO_BUCKLING_BEYOND,
+    varying with the BLAS thread count); the same load reversed compresses the legs and gives a finite factor."""
+    from pressfit.description.machine import load_machine
+
+    machine = load_machine()
+    pose = np.array([0.0, 0.72, 0.0])
+    assert machine_buckling(machine, pose, np.array([0.0, 700.0, 0.0, 0.0, 0.0, 0.0])).load_factor == math.inf
+    assert 1.0 < machine_buckling(machine, pose, np.array([0.0, -700.0, 0.0, 0.0, 0.0, 0.0])).load_factor < 1e6

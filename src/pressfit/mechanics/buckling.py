@@ -83,6 +83,13 @@ class BucklingResult:
         return int(np.argmax(self.leg_energy_share)) + 1
 
 
+# A load factor beyond this is no buckling (inf): the pencil's smallest eigenvalue mu = -1 / lambda is then below
+# 1e-6 of the load's own scale, where round-off decides its sign and size (a machine under tension alone gave
+# mu ~ -1e-18, "factors" of 1e17-1e20 that changed with the BLAS thread count); a million times the press load is
+# far beyond any material limit, so no verdict changes
+NO_BUCKLING_BEYOND = 1e6
+
+
 def machine_buckling(
     system: Machine | MachineModel | EquilibriumSolver,
     pose_m: np.ndarray,
@@ -123,7 +130,7 @@ def machine_buckling(
                                        f"(actuator offsets {offsets.tolist()} m)", pose_m=pose, load=np.zeros(6)
                                        ) from None
     phi = z @ vec[:, 0]
-    factors = -1.0 / mu[:12][mu[:12] < 0]
+    factors = -1.0 / mu[:12][mu[:12] < -1.0 / NO_BUCKLING_BEYOND]
     factor = float(factors[0]) if len(factors) else math.inf
     phi /= np.abs(phi).max()
     energy = np.array([phi[v] @ k_e[np.ix_(v, v)] @ phi[v] for v in pre.leg_v])

@@ -192,7 +192,7 @@ class BucklingBasis:
             except np.linalg.LinAlgError:  # K not positive definite
                 out[j] = 0.0
                 continue
-            out[j] = -1.0 / mu if mu < 0 else math.inf
+            out[j] = -1.0 / mu if mu < -1.0 / buckling.NO_BUCKLING_BEYOND else math.inf  # beyond: round-off
         return out
 
 
