@@ -30,7 +30,8 @@ CSV_COLUMNS = ("name", "kind", "legs", "source", "worst_drive_force_n", "worst_b
 
 def compare_figure(result: Comparison) -> plt.Figure:
     """One bar panel per figure (``PANELS``), a bar per machine; the lost-motion panel adds the preloaded bar."""
-    names = [m.name for m in result.machines]
+    names = [m.name if [x.name for x in result.machines].count(m.name) == 1 else f"{m.name} ({i + 1})"
+             for i, m in enumerate(result.machines)]  # bars by machine: two machines of one name stay apart
     fig, axes = plt.subplots(2, 4, figsize=(16, 7))
     for ax, (key, label, scale) in zip(axes.flat, PANELS, strict=True):
         values = np.array([getattr(m, key) for m in result.machines], dtype=float) * scale

@@ -249,6 +249,7 @@ def _compare_section(machine: Machine, out: Path, overwrite: bool, quick: bool, 
 
     others = [load_gantry(models_dir() / f) if f.startswith("gantry") else load_machine(models_dir() / f)
               for f in COMPARED]
+    others = [m for m in others if m.name != machine.name]  # a report on a baseline shows it once
     result = compare([machine, *others], progress=False, **({"heights": 2, "grid": 3} if quick else {}))
     parts["comparison"] = result
     write_compare(result, out / "compare", overwrite)
