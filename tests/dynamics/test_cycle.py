@@ -17,8 +17,8 @@ from click.testing import CliRunner
 from pressfit import kinematics
 from pressfit.cli import main
 from pressfit.description.cases import load_case
+from pressfit.dynamics import cycle, insertion
 from pressfit.dynamics import drives as drive_kinds
-from pressfit.dynamics import insertion
 from pressfit.dynamics.actuators import distribution
 from pressfit.dynamics.control import gravity_feedforward_n
 from pressfit.dynamics.cycle import cycle_columns, plan_cycle, simulate_cycle, summarise_cycle
@@ -348,3 +348,18 @@ def test_a_run_time_error_names_the_cycles_keys(tmp_path, monkeypatch):
     monkeypatch.setattr(insertion, "MAX_CLOSURE_DRIFT_M", 0.0)
     line = refused(board(tmp_path), "drifted open", "[cycle] baumgarte_rad_per_s", "[cycle.controller] gains")
     assert "[simulation" not in line
+
+
+def test_a_flexible_board_over_the_paths_step_bound_is_refused(tmp_path):
+    """The flexible step bound holds over the board's path, not only at its start: 2 ms is over the bound at the
+    pin (1.81 ms; 1.75 ms runs, the CLI test above), so the board is refused before the run naming [cycle]'s key."""
+    path = board(tmp_path, time_step_s=2e-3, model="flexible")
+    refused(path, "[cycle] time_step_s")
+
+
+def test_a_tool_deeper_than_the_boards_depth_limit_stops_the_run(tmp_path, monkeypatch):
+    """A board's run stops when the tool goes deeper below the face than MAX_DEPTH_FACTOR x its deepest pin's
+    interference: with the factor cut to 1e-3 (2 um) the first press stops the run with one line naming the depth,
+    never a result."""
+    monkeypatch.setattr(cycle, "MAX_DEPTH_FACTOR", 1e-3)
+    refused(board(tmp_path), "below the board face", "[cycle.controller] gains")
