@@ -11,7 +11,6 @@ from pathlib import Path
 
 import numpy as np
 import pytest
-import tomli_w
 from click.testing import CliRunner
 
 from pressfit import kinematics
@@ -24,6 +23,7 @@ from pressfit.dynamics.control import gravity_feedforward_n
 from pressfit.dynamics.cycle import cycle_columns, plan_cycle, simulate_cycle, summarise_cycle
 from pressfit.dynamics.insertion import series_columns, simulate_insertion
 from pressfit.kinematics.profiles import s_curve_time_s
+from tests.dynamics.test_simulation_trust import write_updated
 from tests.readme import assert_printed, readme_fragment
 
 ROOT = Path(__file__).resolve().parents[2]
@@ -43,15 +43,7 @@ def board(tmp_path: Path, name: str = "board.toml", top: dict | None = None, **c
     c = data["cycle"]
     del c["grid"]
     c.update({"pins": [dict(PIN)], "dwell_s": 2.0})
-    for key, value in cycle.items():
-        if isinstance(value, dict) and key != "grid":
-            c.setdefault(key, {}).update(value)
-        else:
-            c[key] = value
-    data.update(top or {})
-    path = tmp_path / name
-    path.write_text(tomli_w.dumps(data))
-    return path
+    return write_updated(tmp_path / name, data, "cycle", cycle, top, whole=("grid",))
 
 
 def run(*args: object):

@@ -42,15 +42,21 @@ def write_case(tmp_path: Path, name: str = "sim.toml", top: dict | None = None, 
     """The shipped scenario, shortened (same contact, gains and step), with [simulation] keys and sub-tables
     (``contact``, ``controller``, ``limits``) updated from ``tables['simulation']``; ``top``: other tables."""
     data = tomllib.loads(SHIPPED.read_text())
-    sim = data["simulation"]
-    sim.update({"move_time_s": 0.5, "descent_time_s": 0.6, "dwell_s": 1.5, "settle_s": 0.2})
-    for key, value in tables.get("simulation", {}).items():
-        if isinstance(value, dict):
-            sim.setdefault(key, {}).update(value)
+    data["simulation"].update({"move_time_s": 0.5, "descent_time_s": 0.6, "dwell_s": 1.5, "settle_s": 0.2})
+    return write_updated(tmp_path / name, data, "simulation", tables.get("simulation", {}), top)
+
+
+def write_updated(path: Path, data: dict, table: str, updates: dict, top: dict | None = None,
+                  whole: tuple[str, ...] = ()) -> Path:
+    """``data`` (a parsed case) with ``table``'s keys set from ``updates`` (a sub-table merged key by key, unless
+    named in ``whole``: replaced), ``top``'s tables set, written as TOML to ``path``."""
+    target = data[table]
+    for key, value in updates.items():
+        if isinstance(value, dict) and key not in whole:
+            target.setdefault(key, {}).update(value)
         else:
-            sim[key] = value
+            target[key] = value
     data.update(top or {})
-    path = tmp_path / name
     path.write_text(tomli_w.dumps(data))
     return path
 
