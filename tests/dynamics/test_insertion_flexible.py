@@ -292,16 +292,3 @@ def test_flexible_step_bound_is_the_stiffest_pose_on_the_path(tmp_path):
                 plan_scenario(case)
         else:
             plan_scenario(case)
-
-
-def test_cardan_play_on_the_flexible_model_is_refused_before_the_run(tmp_path):
-    """[simulation] clearance = true with model = "flexible": refused before any step, one line naming the key and
-    the reason (the step's Newton does not converge across a play's contact edge: measured, the shortened scenario
-    stopped at t = 1 ms with the position correction cycling at 95 nm across one play's edge) and what to use; the
-    rigid model plans it."""
-    from pressfit.dynamics.insertion import plan_scenario
-    from tests.dynamics.test_simulation_trust import refused
-
-    path = write_case(tmp_path, simulation={"model": "flexible", "clearance": True})
-    refused(path, "[simulation] clearance", 'with model = "flexible"', "contact edge", 'use model = "rigid"')
-    plan_scenario(load_case(write_case(tmp_path, "rigid.toml", simulation={"model": "rigid", "clearance": True})))

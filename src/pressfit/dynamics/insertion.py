@@ -53,6 +53,7 @@ from pressfit.dynamics.drives.steps import hydraulic_step_refusal
 from pressfit.dynamics.machine.base import SECTION_COMPONENTS, SECTIONS, DriveInput, Energy
 from pressfit.dynamics.machine.flexible import MAX_STEP_FRACTION, FlexibleMachine, first_mode_hz, leg_frame_loads
 from pressfit.dynamics.multibody import RigidLegModel, rigid_leg_model
+from pressfit.dynamics.play import DriveSide, LegPlay
 from pressfit.errors import (
     ConvergenceError,
     DriveStepError,
@@ -114,11 +115,6 @@ STABILITY_FRACTION = 0.5  # the explicit step is refused beyond this fraction of
 # the run stops when the tool goes deeper below the board face than this many times the commanded interference
 # (the reference's deepest point): the contact law models the pin-board stack down to it, the board face is solid
 MAX_DEPTH_FACTOR = 2.0
-FLEXIBLE_PLAY_REFUSAL = (  # why [simulation] clearance = true is refused with model = "flexible" (docs/dynamics.md)
-    'false with model = "flexible": the implicit step\'s Newton does not converge across a cardan play\'s contact '
-    "edge (a 1e9 N/m dead zone smoothed over 1 nm, far below the Newton steps, whose tangent inside the gap is ~0), "
-    'so the run would stop at its first steps; use model = "rigid" (the clearance statics\' load-deflection curve '
-    "in series at the tool)")
 _CHUNK_ROWS = 4096  # the series grows by this many rows at a time
 _REACH_CHECK_STEPS = 10  # the plate's joint limits are checked every this many steps (and at the last)
 _CURVE_POINTS = 41  # load steps of the clearance load-deflection curve
@@ -284,8 +280,6 @@ def plan_scenario(case: Case, machine: Machine | None = None, preload_key: str =
     free = np.isin(segment, [0, 4, 5])  # approach, move, settle: out of contact by design
     if np.any(path[free, 1] <= board):
         raise _refuse(case, "[simulation] start_m", "a planned approach and move above the board face")
-    if sim.clearance and sim.model == "flexible":
-        raise _refuse(case, "[simulation] clearance", FLEXIBLE_PLAY_REFUSAL)
     warnings = []
     check_preload(case, machine, drive_kinds.of(machine), path, preload_key)
     rigid = rigid_leg_model(machine, np.asarray(sim.start_m, float), sim.baumgarte_rad_per_s)
@@ -588,7 +582,9 @@ def _run_flexible(case: Case, machine: Machine, plan: ScenarioPlan, drives: driv
 def _flexible_steps(case: Case, machine: Machine, plan: ScenarioPlan, drives: drive_kinds.Drive, limiter: bool,
                     progress: bool) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
     """The flexible machine (:class:`pressfit.dynamics.machine.flexible.FlexibleMachine`, the machine file's
-    ``[damping]``; no cardan play: :data:`FLEXIBLE_PLAY_REFUSAL`): the machine's drives on the actuator joints, stepped
+    ``[damping]``; with ``clearance`` the cardan plays between the drives and the legs,
+    :mod:`pressfit.dynamics.play`, the drives' sensors zeroed at the start): the machine's drives on the actuator
+    joints, stepped
     inside the flexible step's Newton at the mean rate of the step (implicit, so that an oil column is stable:
     ``FlexibleMachine.step``'s ``drive``; the ideal force drive, which ignores the travel, once per step), the
     contact force on the elastic tool point (the plate centre), evaluated
@@ -597,13 +593,22 @@ def _flexible_steps(case: Case, machine: Machine, plan: ScenarioPlan, drives: dr
     Starts from the static equilibrium under gravity with the drives holding the start pose's lengths."""
     sim, trajectory, steps, rigid = plan.simulation, plan.trajectory, plan.steps, plan.rigid
     dt, preload = sim.time_step_s, preload_amplitudes_n(case, machine)
-    fm = FlexibleMachine(machine, np.asarray(sim.start_m, float))  # its step: check_flexible_step
+    start = np.asarray(sim.start_m, float)
+    plays = clearance_from_case(case, machine) if sim.clearance else None
+    implicit = drives.kind != "force"  # a drive whose tension follows its travel, stepped inside the step
+    fm = FlexibleMachine(machine, start,  # its step: check_flexible_step
+                         actuator_series_n_per_m=None if plays is None else 0.5 * plays.contact_stiffness_n_per_m,
+                         drive_mass_on_legs=plays is None or not implicit)  # behind the plays: on the drive side
     state = fm.rest_state()
     ctrl = ForceLimitedController(machine=machine, rigid=rigid, gains=sim.controller, limiter=limiter,
-                                  estimate_m=np.asarray(sim.start_m, float).copy())
+                                  estimate_m=start.copy())
     lengths, rates = fm.leg_lengths_m(state), fm.leg_rates_m_per_s(state)  # what the drives measure
     force = ctrl.command(lengths, rates, trajectory.at(0.0), 0.0, 0.0)
     tension = -ctrl.pinv @ force + ctrl.null @ preload
+    play = None if plays is None else LegPlay(machine, plays, start, tension, fm.drive_mass_kg)  # zeroed here
+    extension = np.zeros(len(machine.legs))
+    side = DriveSide(length_m=lengths.copy(), rate_m_per_s=rates.copy(), acceleration_m_per_s2=np.zeros_like(rates))
+    tool = fm.tool_point_m(state)
     drive = drives.initial_state(tension, lengths)
     board, contact_force = sim.contact.board_height_m, 0.0
     depth = board - fm.tool_point_m(state)[1]
@@ -624,9 +629,14 @@ def _flexible_steps(case: Case, machine: Machine, plan: ScenarioPlan, drives: dr
                 state = fm.step(state, DriveInput.forces(tension), wrench, dt)
             else:
                 stepped = DriveOverStep(drives, drive, command, lengths, dt)
-                state = fm.step(state, DriveInput.forces(tension), wrench, dt, stepped,
-                                drives.step_stiffness_n_per_m(lengths))
+                through, k_step = stepped, drives.step_stiffness_n_per_m(lengths)
+                if play is not None:
+                    through = play.over_step(stepped, tool, tension, k_step, side, dt)
+                    k_step = through.tangent_n_per_m
+                state = fm.step(state, DriveInput.forces(tension), wrench, dt, through, k_step)
                 drive, tension = stepped.result
+                if play is not None:
+                    side = through.side
             if not (np.all(np.isfinite(state.q)) and np.all(np.isfinite(state.v))):
                 raise _diverged(case, t, "the state is not finite", plan.table)
             drift = fm.closure_error(state)[0]
@@ -639,10 +649,17 @@ def _flexible_steps(case: Case, machine: Machine, plan: ScenarioPlan, drives: dr
             _check_depth(case, plan, depth, t)
             contact_force = contact_force_n(sim.contact, depth, (depth - previous) / dt)
             lengths, rates = fm.leg_lengths_m(state), fm.leg_rates_m_per_s(state)
+            if play is not None and implicit:  # the drives measure their own side of the plays
+                lengths, rates = side.length_m, side.rate_m_per_s
+            elif play is not None:  # a massless force drive: the legs' lengths less the plays' extension
+                before, extension = extension, play.extension_m(tool, tension)
+                lengths, rates = lengths - extension, rates - (extension - before) / dt
             kernels.internal_forces(ctrl.null, tension, internal)
             series.add(k, (t, *reference[0] + [0.0, ctrl.lift_m, 0.0], *ctrl.estimate_m, *tool, *tool,
                            contact_force, depth, *command, *tension, ctrl.lift_m, drift, *no_axial,
-                           *internal), lengths, rates, _energies(fm.energy(state), state.damping_work_j))
+                           *internal), lengths, rates,
+                       _energies(fm.energy(state), state.damping_work_j,
+                                 0.5 * fm.drive_mass_kg * float(side.rate_m_per_s @ side.rate_m_per_s)))
         except UnreachablePoseError as exc:
             raise _diverged(case, t, f"the pose estimate left the reachable set: {exc}", plan.table) from None
         except ConvergenceError as exc:
@@ -656,8 +673,11 @@ def _flexible_steps(case: Case, machine: Machine, plan: ScenarioPlan, drives: dr
     return rows, phases, sections
 
 
-def _energies(energy: Energy, damping_work_j: float) -> tuple[float, float, float, float]:
-    return energy.kinetic_j, energy.potential_j, energy.elastic_j, damping_work_j
+def _energies(energy: Energy, damping_work_j: float, drive_side_j: float = 0.0) -> tuple[float, float, float, float]:
+    """Kinetic (plus ``drive_side_j``, the drives' reflected masses behind the plays), potential and elastic
+    energy and the damping work, J."""
+    kinetic = energy.kinetic_j + drive_side_j
+    return kinetic, energy.potential_j, energy.elastic_j, damping_work_j
 
 
 def settling_time_s(time_s: np.ndarray, force_n: np.ndarray, dwell: np.ndarray) -> tuple[float | None, int | None, str]:
@@ -680,6 +700,22 @@ def settling_time_s(time_s: np.ndarray, force_n: np.ndarray, dwell: np.ndarray) 
                             f"last {100 * SETTLING_HOLD:g}% of the dwell, outside +-{100 * SETTLING_BAND:g}% of "
                             f"{final:.4g} N")
     return float(time_s[settled] - time_s[touching[0]]), settled, ""
+
+
+def _reversals_unseen(time_s: np.ndarray, tensions_n: np.ndarray) -> list[str]:
+    """The rigid model's clearance is the load-deflection curve at the pin under the contact force: a leg whose
+    tension changes sign during the run crosses its plays' gaps unseen (docs/dynamics.md, "Cardan play"). One
+    warning naming the legs and the first time of each."""
+    signs = np.sign(tensions_n)
+    flips = [(i, int(np.flatnonzero(signs[1:, i] * signs[:-1, i] < 0)[0]) + 1)
+             for i in range(signs.shape[1]) if np.any(signs[1:, i] * signs[:-1, i] < 0)]
+    if not flips:
+        return []
+    legs = ", ".join(f"{i + 1} (first at t = {time_s[k]:.4g} s)" for i, k in flips)
+    many = len(flips) > 1
+    return [f"with clearance = true the tension of leg{'s' * many} {legs} change{'' if many else 's'} sign: the "
+            "rigid model's clearance is the load-deflection curve at the pin under the contact force, so the lost "
+            f"motion across {'their' if many else 'its'} cardan plays is not in this run (model = \"flexible\" has it)"]
 
 
 def _columns(result: InsertionResult, prefix: str) -> np.ndarray:
@@ -735,6 +771,8 @@ def summarise(result: InsertionResult, case: Case, drives: drive_kinds.Drive) ->
         warnings.append(f"the insertion did not complete (the pin is not pressed): {why}")
     if release is None:
         warnings.append("the contact force never returned to zero after the dwell (the tool was not released)")
+    if sim.clearance and sim.model == "rigid":
+        warnings += _reversals_unseen(t, _columns(result, "act_n"))
 
     def where(stem: str, rows: Any) -> dict[str, Any]:
         return {f"{stem}_time_s": t[rows], f"{stem}_pose_m": plate[rows]}

@@ -36,7 +36,7 @@ from pressfit.description.cases import Case
 from pressfit.description.machine import Machine
 from pressfit.errors import ClearanceError, ConvergenceError
 from pressfit.mechanics import condensed
-from pressfit.mechanics.clearance_law import DEFAULT_SMOOTHING_M, ENDS, Clearance, _laws_force
+from pressfit.mechanics.clearance_law import DEFAULT_SMOOTHING_M, ENDS, Clearance, dead_zones
 from pressfit.mechanics.preload import Amplitudes, along_first_vector, rest_length_offsets
 
 NEWTON_TOL = 1e-10  # relative force residual of the small-displacement solve
@@ -80,7 +80,7 @@ class _Chain:
             d, x = zz[:, :3], zz[:, 3:].reshape(b, nl, 2)
             stretch = d @ self.u.T - x.sum(2) - offsets
             n = self.k * stretch
-            e, f, t = _laws_force(x, self.gaps, self.kc, self.w)
+            e, f, t = dead_zones(x, self.gaps, self.kc, self.w)
             energy = 0.5 * (n * stretch).sum(1) + e.sum((1, 2)) - (load * d).sum(1)
             grad = np.concatenate([n @ self.u - load, (f - n[:, :, None]).reshape(b, 2 * nl)], 1)
             return energy, grad, t.reshape(b, 2 * nl), n
@@ -219,8 +219,8 @@ class LoadDeflection:
         the load while closed) is extrapolated from the closed steps to the contact-edge force k_c w / 2."""
         cl, g = self.clearance, self.effective_gaps_m
         x = self.loading.joint_axial_m
-        f = np.abs(_laws_force(x, g, cl.contact_stiffness_n_per_m, cl.smoothing_m)[1])
-        edge = np.abs(_laws_force(g, g, cl.contact_stiffness_n_per_m, cl.smoothing_m)[1])
+        f = np.abs(dead_zones(x, g, cl.contact_stiffness_n_per_m, cl.smoothing_m)[1])
+        edge = np.abs(dead_zones(g, g, cl.contact_stiffness_n_per_m, cl.smoothing_m)[1])
         is_open, ld = ~self.closed(), self.loads_n
         out = np.full(g.shape, np.nan)
         for i, j in np.ndindex(*g.shape):

@@ -56,6 +56,7 @@ from pressfit.errors import ClearanceError, ConvergenceError
 
 ENDS = ("base", "plate")
 DEFAULT_SMOOTHING_M = 1e-9
+_EPS = float(np.finfo(float).eps)
 Geometry = Literal["axial", "box", "sphere"]
 GEOMETRY_DESCRIPTIONS: dict[str, str] = {
     "axial": "axial: +-g along the leg axis at each cardan",
@@ -100,8 +101,9 @@ class DeadZone:
         return self.stiffness * (_ds(x - self.gap, self.width) + _ds(-x - self.gap, self.width))
 
 
-def _laws_force(x: np.ndarray, g: np.ndarray, k: float, w: float) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
-    """Energy, force and tangent of dead zones with per-entry gaps g (same shape as x)."""
+def dead_zones(x: np.ndarray, g: np.ndarray, k: float, w: float) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    """Energy (J), force (N) and tangent (N/m) of dead zones of stiffness k (N/m) and smoothing width w (m) at
+    x (m), with per-entry gaps g (m, broadcast with x)."""
     a, b = x - g, -x - g
     return (k * (_big_s(a, w) + _big_s(b, w)), k * (_s(a, w) - _s(b, w)), k * (_ds(a, w) + _ds(b, w)))
 
@@ -114,9 +116,10 @@ def invert_law(force: np.ndarray, gap: np.ndarray, stiffness: float, width: floa
     lo, hi = -hi, hi.copy()
     x = np.sign(f) * (g + np.abs(f) / stiffness)
     for _ in range(200):
-        _, fx, tx = _laws_force(x, g, stiffness, width)
+        _, fx, tx = dead_zones(x, g, stiffness, width)
         r = fx - f
-        if np.all(np.abs(r) <= 1e-12 * (np.abs(f) + stiffness * width)):
+        # 1e-12 relative, or the force's float resolution at x (k eps |x|: 4e-12 N at 40 um on 5e8 N/m)
+        if np.all(np.abs(r) <= 1e-12 * (np.abs(f) + stiffness * width) + 4 * _EPS * stiffness * np.abs(x)):
             return x
         lo, hi = np.where(r < 0, x, lo), np.where(r > 0, x, hi)
         step = x - r / tx

@@ -106,6 +106,7 @@ from pressfit.mechanics.model import CardanComplianceSpec, LinearSpring, build_m
 NEWTON_TOL = 1e-12  # m or rad: largest position correction of the last Newton iteration
 MAX_ITERATIONS = 12  # with a freshly factored iteration matrix
 REFRESH_RATIO = 0.1  # refactor when one iteration shrinks the correction by less than 10x
+TANGENT_REFRESH = 0.05  # and again when a drive's tangent (a function) moved by more than this since the factoring
 MAX_STEP_FRACTION = 0.05  # dt at most 1/20 of the first mode's period
 STEM_UPDATE_M = 1e-5  # stem placements and stiffnesses follow the leg length to this, m
 RHO_INF = 0.8  # default spectral radius at infinite frequency (numerical damping)
@@ -144,13 +145,24 @@ class FlexibleMachine:
     """The elastic machine's dynamics (module doc), built at a reachable start pose (m).
 
     ``damping``: the machine file's ``[damping]`` (default) or explicit :class:`Rayleigh` coefficients;
-    ``rho_inf`` in [0, 1] the integrator's numerical damping; ``gravity`` on by default. Owns its Pinocchio
+    ``rho_inf`` in [0, 1] the integrator's numerical damping; ``gravity`` on by default;
+    ``actuator_series_n_per_m`` a stiffness in series with every actuator spring (N/m; the closed cardan plays
+    of :mod:`pressfit.dynamics.play`, k_c / 2: position drives, the modes and the Rayleigh fit see it);
+    ``drive_mass_on_legs`` False takes the drives' reflected mass (``drive_mass_kg``) off the actuator joints after
+    the modes and the fit (which keep it: plays closed), for a caller that carries it behind the plays. Owns
+    its Pinocchio
     model (stems placed per state) and data: one instance per thread.
     """
 
     def __init__(self, machine: Machine, pose_m: np.ndarray, *, springs_per_segment: int | None = None,
                  cardan_compliance: CardanComplianceSpec = None, damping: Damping | Rayleigh | None = None,
-                 rho_inf: float = RHO_INF, gravity: bool = True) -> None:
+                 rho_inf: float = RHO_INF, gravity: bool = True, actuator_series_n_per_m: float | None = None,
+                 drive_mass_on_legs: bool = True) -> None:
+        if actuator_series_n_per_m is not None and not (math.isfinite(actuator_series_n_per_m)
+                                                        and actuator_series_n_per_m > 0):
+            raise PressfitError(f"actuator_series_n_per_m must be a positive stiffness, N/m, got "
+                                f"{actuator_series_n_per_m!r}")
+        self._series = actuator_series_n_per_m
         if not (isinstance(rho_inf, int | float) and 0.0 <= rho_inf <= 1.0):
             raise PressfitError(f"rho_inf must be a number in [0, 1], got {rho_inf!r}")
         self.machine, self.legs = machine, len(machine.legs)
@@ -186,10 +198,7 @@ class FlexibleMachine:
         self._sec_sub = np.array([joints.index(t[0]) for t in sec])
         self._sec_j = np.array([joints.index(t[1]) for t in sec])
         self._sec_z = np.array([t[2] for t in sec])
-        self.alpha_m = (2 * rho_inf - 1) / (rho_inf + 1)
-        self.alpha_f = rho_inf / (rho_inf + 1)
-        self.gamma = 0.5 + self.alpha_f - self.alpha_m
-        self.beta = 0.25 * (self.gamma + 0.5) ** 2
+        self.alpha_m, self.alpha_f, self.gamma, self.beta = generalized_alpha(rho_inf)
         self.rho_inf = float(rho_inf)
         self._placed = np.full(self.legs, np.nan)
         self._placed_key = b""
@@ -205,11 +214,18 @@ class FlexibleMachine:
         self.modes = self._modes(self.q0, count)
         self.first_period_s = 1.0 / float(self.modes.frequencies_hz[0])
         self.damping = damping if isinstance(damping, Rayleigh) else self._fit(damping)
+        self.drive_mass_kg = 0.0  # the drives' reflected mass taken off the legs, kg (carried by the caller)
+        if not drive_mass_on_legs:  # after the modes and the fit, which see it on the legs (plays closed)
+            self.drive_mass_kg = float(machine.drive_reflected_mass_kg)
+            armature = np.array(self.model.armature)
+            armature[self.act_v] -= self.drive_mass_kg
+            self.model.armature = armature
         self.refreshes = 0  # iteration-matrix factorisations so far (a diagnostic)
         self._factor: tuple | None = None
         self._factor_key: tuple | None = None
         self._fext: pin.StdVec_Force | None = None  # section_loads' external forces
         self._drive_k = np.zeros(len(self.act))  # implicit force drives' tangent -dN/dl in the iteration matrix, N/m
+        self._drive_tangent: Callable[[], np.ndarray] | None = None
 
     # --- model -----------------------------------------------------------------------------------
     def _place(self, stem_lengths_m: np.ndarray) -> None:
@@ -221,6 +237,8 @@ class FlexibleMachine:
         self.mm.place_stem(self.model, stem_lengths_m)
         self._closure_key = None
         self._k = self.mm.spring_stiffness(stem_lengths_m + self.machine.cylinder.length_m)
+        if self._series is not None:  # a stiffness in series with each actuator spring (closed cardan plays)
+            self._k[self.act] = 1.0 / (1.0 / self._k[self.act] + 1.0 / self._series)
         self._placed = np.array(stem_lengths_m, dtype=float)
 
     def _rest(self, drive: DriveInput) -> tuple[np.ndarray, np.ndarray]:
@@ -368,14 +386,16 @@ class FlexibleMachine:
     # --- the step ------------------------------------------------------------------------------------
     def step(self, state: FlexibleState, drive_input: DriveInput, plate_wrench: np.ndarray, dt_s: float,
              drive: Callable[[np.ndarray], np.ndarray] | None = None,
-             drive_stiffness_n_per_m: np.ndarray | None = None) -> FlexibleState:
+             drive_stiffness_n_per_m: np.ndarray | Callable[[], np.ndarray] | None = None) -> FlexibleState:
         """One generalised-alpha step of ``dt_s`` (s) (module doc); the drive input and the plate wrench
         (6,) (N, N m, world, plate centre) are held over the step. With force drives, ``drive`` (optional) gives
         the delivered tensions (n,), N, as a function of the actuator lengths (n,), m, at the step's end (a drive
         model stepped over the step at the mean rate they make): it is evaluated at every Newton iteration, so the
         drive's own stiffness (an oil column) is implicit in the step like the legs' springs (module doc, "Drives
         in the step"); ``drive_stiffness_n_per_m`` (n,) its tangent -dN/dl for the iteration matrix (default 0;
-        an approximate tangent only slows the modified Newton). The state records the tensions of the last
+        an approximate tangent only slows the modified Newton), or a function giving it where ``drive``'s last
+        call left it (asked again at each refactoring: a cardan play's tangent changes across its contact edge).
+        The state records the tensions of the last
         iterate (``drive``'s last call: the caller's drive state is that call's).
         Refuses (PressfitError) a step longer than MAX_STEP_FRACTION of the first mode's period or one whose
         Newton does not converge."""
@@ -403,15 +423,16 @@ class FlexibleMachine:
         key = (h, drive_input.kind, self._placed.tobytes())
         fresh = False
         implicit = drive is not None and drive_input.kind == "force"
+        self._drive_tangent = drive_stiffness_n_per_m if implicit and callable(drive_stiffness_n_per_m) else None
         self._drive_k = np.zeros(len(self.act)) if drive_stiffness_n_per_m is None or not implicit else \
-            np.asarray(drive_stiffness_n_per_m, dtype=float)
+            np.asarray(drive_stiffness_n_per_m() if self._drive_tangent else drive_stiffness_n_per_m, dtype=float)
         if self._factor is None or self._factor_key[:2] != key[:2]:
             self._refresh(q_n, k, drive_input, rest, h)
             fresh = True
         tau_ext = self._external(q_n, wrench, drive_input)
         tension, held = drive_input.values, tau_ext[self.act_v] + drive_input.values  # without the drives
         acc, lam = acc_n.copy(), state.multipliers.copy()
-        nv, sv, last, it = self.nv, self.sv, np.inf, 0
+        nv, sv, last, it, since = self.nv, self.sv, np.inf, 0, 0  # since: iterations since the last factoring
         scale, c_acc, c_old = 1.0 / (h * h * b * ca), (1 - af) / (1 - am), (af * acc_n - am * a_n) / (1 - am)
         rhs = np.empty(nv + 6 * self.legs)
         alpha, beta = self.damping.alpha_per_s, self.damping.beta_s
@@ -441,11 +462,14 @@ class FlexibleMachine:
                                        NEWTON_TOL, it)
             if size <= NEWTON_TOL:
                 break
-            if size > REFRESH_RATIO * last and not fresh:
+            if size > REFRESH_RATIO * last and (not fresh or self._drive_tangent_moved()):
+                if self._drive_tangent is not None:  # the drive's tangent where its last call left it
+                    self._drive_k = np.asarray(self._drive_tangent(), dtype=float)
                 self._refresh(q, k, drive_input, rest, h)
-                fresh, last = True, np.inf
+                fresh, last, since = True, np.inf, 0
                 continue
-            if it >= MAX_ITERATIONS and fresh:
+            since += 1
+            if since >= MAX_ITERATIONS and fresh:
                 raise ConvergenceError(f"flexible step at t = {state.time_s + h:.6g} s (Newton, position correction "
                                        "in m or rad)", size, NEWTON_TOL, it)
             if it >= 3 * MAX_ITERATIONS:
@@ -460,6 +484,15 @@ class FlexibleMachine:
         return FlexibleState(time_s=state.time_s + h, q=q, v=v, acceleration=acc, pseudo_acceleration=a_ps,
                              multipliers=lam, drive=drive_input, stem_lengths_m=self._placed.copy(), iterations=it,
                              damping_work_j=work)
+
+    def _drive_tangent_moved(self) -> bool:
+        """Whether a drive tangent given as a function moved by more than TANGENT_REFRESH of the factored one
+        (a play crossed its contact edge within the step: the factored matrix then converges too slowly)."""
+        if self._drive_tangent is None:
+            return False
+        now = np.asarray(self._drive_tangent(), dtype=float)
+        scale = np.maximum(np.abs(now), np.abs(self._drive_k))
+        return bool(np.any(np.abs(now - self._drive_k) > TANGENT_REFRESH * scale))
 
     def _damping_force(self, q: np.ndarray, rel: np.ndarray, rest: np.ndarray, k: np.ndarray,
                        drive_input: DriveInput) -> np.ndarray:
@@ -599,6 +632,14 @@ class FlexibleMachine:
         """Leg section resultants at the three sections (module doc, :mod:`.base`)."""
         values, frames = leg_frame_loads(self.section_wrenches(state), self.machine.cardan_axes)
         return SectionLoads(values, frames)
+
+
+def generalized_alpha(rho_inf: float) -> tuple[float, float, float, float]:
+    """(alpha_m, alpha_f, gamma, beta) of the generalised-alpha scheme for the spectral radius rho_inf in [0, 1]
+    (module doc; Chung & Hulbert 1993)."""
+    alpha_m, alpha_f = (2 * rho_inf - 1) / (rho_inf + 1), rho_inf / (rho_inf + 1)
+    gamma = 0.5 + alpha_f - alpha_m
+    return alpha_m, alpha_f, gamma, 0.25 * (gamma + 0.5) ** 2
 
 
 def first_mode_hz(machine: Machine, pose_m: np.ndarray) -> float:
