@@ -6,7 +6,8 @@ with and without the limiter on the rigid model, and the bare closed-loop rigid-
 (:meth:`pressfit.dynamics.multibody.RigidLegModel.step`, passive, no controller or contact) in steps per
 second, the rigid insertion's cost in passive steps per step (CPU time, best of three: a ratio that a
 loaded machine scales out of; the goal's 100 us per step is 3.2 at a quiet core's 31 us step), and the wall
-time of ``pressfit response`` (:func:`pressfit.dynamics.response.tool_response`, median of three). Steady
+time of ``pressfit response`` (:func:`pressfit.dynamics.response.tool_response`, median of three), and the
+cardan plays' cost on the flexible model (:func:`_plays_cost`). Steady
 state: the rigid model runs once untimed first, its line reporting that first run (numba loading the compiled
 kernels of :mod:`pressfit.dynamics.kernels` from its cache, or compiling them in a fresh install).
 Not a test: timings depend on the machine.
@@ -66,6 +67,24 @@ def _passive_steps_per_step(case: object) -> float:
     return min(ratios)
 
 
+def _plays_cost() -> None:
+    """The flexible model with the cardan plays (``[simulation] clearance = true``) against without, on the
+    shipped force and electric cases: CPU time, the two alternated three times in one run, medians and their
+    ratio (the plays' cost: the force drive's sensors only, the electric drive's solve behind the plays)."""
+    for name in ("insertion", "insertion_electric"):
+        base = load_case(cases_dir() / "paper" / f"{name}.toml")
+        cpu: dict[bool, list[float]] = {False: [], True: []}
+        for _ in range(3):
+            for clearance in (False, True):
+                sim = base.simulation.model_copy(update={"model": "flexible", "clearance": clearance})
+                start = time.process_time()
+                simulate_insertion(base.model_copy(update={"simulation": sim}))
+                cpu[clearance].append(time.process_time() - start)
+        off, on = float(np.median(cpu[False])), float(np.median(cpu[True]))
+        print(f"{name} flexible, plays off / on: {off:.2f} / {on:.2f} s CPU (median of 3, alternated), "
+              f"ratio {on / off:.2f}")
+
+
 def main() -> None:
     case = load_case(cases_dir() / "paper" / "insertion.toml")
     rigid_case = case.model_copy(update={"simulation": case.simulation.model_copy(update={"model": "rigid"})})
@@ -101,6 +120,7 @@ def main() -> None:
         t0 = time.perf_counter()
         control_design(case, model)
         print(f"control {model} (shipped case, 4 poses): {time.perf_counter() - t0:.1f} s wall")
+    _plays_cost()
 
 
 if __name__ == "__main__":

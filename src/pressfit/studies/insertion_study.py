@@ -59,9 +59,10 @@ def _hidden_error_m(result: InsertionResult) -> np.ndarray:
     return tool - estimate
 
 
-def _variant(case: Case, preload_n: float, gap_m: float) -> Case:
+def _variant(case: Case, preload_n: float, gap_m: float, legs: int) -> Case:
+    """The case with every one of its machine's 2 ``legs`` cardans given the play gap_m (m) and the preload (N)."""
     sim = case.simulation.model_copy(update={"clearance": True})
-    spec = (case.clearance or ClearanceSpec()).model_copy(update={"gaps_m": [gap_m] * 8, "random_m": None})
+    spec = (case.clearance or ClearanceSpec()).model_copy(update={"gaps_m": [gap_m] * (2 * legs), "random_m": None})
     return case.model_copy(update={"simulation": sim, "clearance": spec,
                                    "preload": Preload(mode="force", a4_n=preload_n)})
 
@@ -77,16 +78,18 @@ def insertion_study(case: Case, preloads_n: list[float], clearances_m: list[floa
     pose = np.array([*case.simulation.contact.pin_position_m[:1], case.simulation.contact.board_height_m
                      - case.simulation.interference_m, case.simulation.contact.pin_position_m[1]])
     grid = [(p, g) for g in [0.0, *clearances_m] for p in preloads_n]
+    legs = len(machine.legs)
     for p in preloads_n:  # refused up front (a preload that saturates the drives, ...), not as a failed run
-        plan_scenario(_variant(case, p, 0.0), machine, preload_key=f"the study's preload {p:g} N ([preload] a4_n)")
+        plan_scenario(_variant(case, p, 0.0, legs), machine,
+                      preload_key=f"the study's preload {p:g} N ([preload] a4_n)")
     results = {}
     for p, g in tqdm(grid, desc="insertion study", unit="run", disable=not progress):
-        variant = _variant(case, p, g)
+        variant = _variant(case, p, g, legs)
         results[p, g] = simulate_insertion(variant, limiter=True)
     rows = []
     limit_n = case.simulation.controller.force_limit_n
     for g in clearances_m:
-        clearance = clearance_from_case(_variant(case, 0.0, g), machine)
+        clearance = clearance_from_case(_variant(case, 0.0, g, legs), machine)
         critical = critical_preload(machine, pose, [0.0, 1.0, 0.0], limit_n, clearance).preload if g > 0 else 0.0
         for p in preloads_n:
             s, hidden = results[p, g].summary, _hidden_error_m(results[p, g])
