@@ -19,6 +19,7 @@ from tests.dynamics.test_insertion_flexible import SHORT
 from tests.dynamics.test_simulation_trust import write_case
 
 ROOT = Path(__file__).resolve().parents[2]
+README = (ROOT / "README.md").read_text()
 MACHINE = load_machine(ROOT / "models/pressfit_4upu.toml")
 POSE = np.array([0.1, 0.6, -0.05])  # the shipped pin
 K = 0.5 * MACHINE.joints.cardan_contact_stiffness_n_per_m  # two plays in series, N/m
@@ -176,6 +177,10 @@ def test_lost_motion_at_the_pin_is_the_kinematics_of_the_reversed_plays(pairs):
     0.3 s 1.3 um of the lost motion is still to come, 0.23 um at 1 s)."""
     for key in (100.0, "electric", "hydraulic"):
         _check_lost_motion(*pairs[key, False], pairs[key, True][1])
+    fragment = "with 20 um plays the tool sits 156 um off the pin laterally"
+    assert fragment in README
+    moved = _lost_motion(*pairs[100.0, False], pairs[100.0, True][1])[1]
+    assert f"{1e6 * np.hypot(moved[0], moved[2]):.0f}" == "156"  # the closed form, at the printed precision
 
 
 def _check_lost_motion(case, free, played):
@@ -297,3 +302,32 @@ def test_the_rigid_model_warns_when_a_legs_tension_changes_sign_with_the_plays_o
     (line,) = warned(100.0, True, 0.6)
     assert "legs 2 (first at" in line and ", 4 (first at" in line and 'model = "flexible"' in line
     assert warned(100.0, False, 0.6) == [] and warned(400.0, True, 0.6) == []
+
+
+def test_the_insertion_study_on_the_flexible_model_reports_the_plays_closed_form(pairs, tmp_path):
+    """``study insertion`` on the flexible model (issue 19: it works on either model): its play share
+    ``play_error_m`` (|tool - estimate| with the plays less without, at the end of the dwell) is |E^+ dx| of the
+    reversed plays (x, z from the tool, y from the estimate: 158 um), within 1 um."""
+    from pressfit.studies.insertion_study import insertion_study
+
+    case, free = pairs[100.0, False]
+    moved = _lost_motion(case, free, pairs[100.0, True][1])[1]
+    study = insertion_study(case, [100.0], [MACHINE.joints.cardan_axial_clearance_m])
+    assert study.column("play_error_m")[0] == pytest.approx(np.linalg.norm(moved), abs=1e-6)
+    assert np.linalg.norm(moved) > 1.5e-4
+
+
+def test_the_play_solve_converges_with_an_underestimated_drive_tangent():
+    """The drive's step stiffness is only a tangent hint (``Drive.step_stiffness_n_per_m``): a 1.5e9 N/m spring
+    drive given as 0 makes Newton overshoot by (k + 1.5e9) / k = 4 in contact and oscillate outwards; the
+    bracket's bisection still reaches the series-spring closed form x = (k G + kd (q - l0)) / (k + kd) (2 pm:
+    the smoothing), leg by leg (stretched, pushed)."""
+    play = _play()
+    kd = np.full(4, 1.5e9)
+    l0 = 0.7
+    q = l0 + np.array([6e-5, -7e-5, 5e-5, -5e-5])
+    through = play.over_step(_LinearDrive(kd, l0), POSE, np.zeros(4), np.zeros(4), _at_rest(q), 1e-3)
+    through(q)
+    sign = np.sign(q - l0)
+    expected = sign * (K * G + kd * np.abs(q - l0)) / (K + kd)
+    assert through.extension_m == pytest.approx(expected, abs=2e-12)

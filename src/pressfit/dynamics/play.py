@@ -25,10 +25,11 @@ the tensions -- as the rigid model's load-deflection curve does from zero contac
   (D the drive over the step as a function of its end length, k_d its step stiffness, a_d the end acceleration
   of the generalised-alpha scheme with rho_inf = ``DRIVE_SIDE_RHO_INF``, k_i = m_d (1 - alpha_m) / ((1 - alpha_f)
   beta h^2)) is solved at every Newton iteration of the flexible step (:class:`PlayedDrive`: safeguarded Newton
-  on a bracket, to ``PLAY_TOL``), which returns the play's force f(x) on the leg. The step's iteration matrix
-  gets the series tangent k_e f' / (k_e + f'), k_e = k_d + k_i, where the last solve left it, or the chord of
-  the last two solves where they straddle a contact edge (Newton cycles across a kink; the chord interpolates
-  it). The sensors read the drive side's length and rate (:class:`DriveSide`).
+  on a bracket, halving it where Newton leaves it or does not halve its last step, to ``PLAY_TOL``), which
+  returns the play's force f(x) on the leg. The step's iteration matrix gets the series tangent
+  k_e f' / (k_e + f'), k_e = k_d + k_i, where the last solve left it, or the chord of the last two solves where
+  they straddle a contact edge (Newton cycles across a kink; the chord interpolates it). The sensors read the
+  drive side's length and rate (:class:`DriveSide`).
   Why rho_inf = 0 there: the play's contact against the drive's mass, sqrt(k_c / 2 / m_d) = 904 Hz on the
   electric drive, is not resolved at 1 ms, and an unresolved impact on a stiff contact is where an implicit
   scheme's energy goes wrong: measured on a 15.5 kg drive side dropped across the gap by 5 N and bouncing
@@ -176,6 +177,7 @@ class PlayedDrive:
         x = self.x.copy()
         lo, hi = np.full(x.shape, -np.inf), np.full(x.shape, np.inf)
         trust = 2.0 * g + 10.0 * w + 1e-6  # m: the largest step before a bracket is known
+        previous = np.full(x.shape, np.inf)  # the last step's size: Newton must halve it, or the bracket is halved
         for _ in range(PLAY_ITERATIONS):
             end = lengths_m - x + self.play.zero_m
             tension = self.drive(end)
@@ -183,8 +185,10 @@ class PlayedDrive:
             r = f - tension - self._inertia_n(end)
             lo, hi = np.where(r <= 0, np.maximum(lo, x), lo), np.where(r >= 0, np.minimum(hi, x), hi)
             newton = np.clip(x - r / np.maximum(t + self.kd, 1e-300), x - trust, x + trust)
-            bisect = ((newton < lo) | (newton > hi)) & np.isfinite(lo) & np.isfinite(hi)
+            slow = (newton < lo) | (newton > hi) | (np.abs(newton - x) > 0.5 * previous)
+            bisect = slow & np.isfinite(lo) & np.isfinite(hi)
             step = np.where(bisect, 0.5 * (lo + hi), newton) - x
+            previous = np.abs(step)
             if np.all(np.abs(step) <= PLAY_TOL):
                 if self._last is not None:
                     self._previous = (*self._last, self._point_tangent(self.x))

@@ -16,7 +16,10 @@ reports, per pair, that offset, its difference from the same preload with g = 0 
 the norm of the vector difference), the lateral
 tool error at the pin, the peak contact force and its overshoot over the limit. The weight of the moving parts
 is not in the clearance curve (it starts from the unloaded, preloaded state), so the lost motion is that from
-centred joints: an upper bound on the closed-joint case, half the end-to-end play.
+centred joints: an upper bound on the closed-joint case, half the end-to-end play. On the flexible model
+(``[simulation] model = "flexible"``) the plays sit between the drives and the legs instead
+(:mod:`pressfit.dynamics.play`, the sensors zeroed at the start), so the play's share also counts the legs whose
+tension changes sign along the path (gravity, inertia), which the rigid model's curve does not see.
 """
 
 from __future__ import annotations
