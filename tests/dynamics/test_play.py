@@ -140,6 +140,13 @@ def pairs(tmp_path_factory):
             case = load_case(write_case(tmp, f"{a4:g}{clearance}.toml", top={"preload": {"a4_n": a4}},
                                         simulation={**PLAYED, "clearance": clearance}))
             out[a4, clearance] = case, simulate_insertion(case)
+    case = out[100.0, True][0]
+    sim = case.simulation
+    mirror = {**PLAYED, "clearance": True, "start_m": [-sim.start_m[0], *sim.start_m[1:]],
+              "end_m": [-sim.end_m[0], *sim.end_m[1:]],
+              "contact": {"pin_position_m": [-sim.contact.pin_position_m[0], sim.contact.pin_position_m[1]]}}
+    mirrored = load_case(write_case(tmp, "mirror.toml", simulation=mirror))
+    out["mirror", True] = mirrored, simulate_insertion(mirrored)
     for kind in ("electric", "hydraulic"):
         for clearance in (False, True):
             (tmp / f"{kind}{clearance}").mkdir()
@@ -331,3 +338,15 @@ def test_the_play_solve_converges_with_an_underestimated_drive_tangent():
     sign = np.sign(q - l0)
     expected = sign * (K * G + kd * np.abs(q - l0)) / (K + kd)
     assert through.extension_m == pytest.approx(expected, abs=2e-12)
+
+
+def test_the_mirror_image_scenario_with_the_plays_is_the_mirror_image(pairs):
+    """x -> -x (start, end, pin): the 4-UPU is symmetric about the y-z plane, so the tool path with the plays is
+    the mirror image, to 1e-9 m (the plays' solves and the step's Newton converge to 1e-14 and 1e-12 m; the
+    crossing of legs 2 and 4 is mirrored onto the other pair)."""
+    _, played = pairs[100.0, True]
+    _, mirrored = pairs["mirror", True]
+    tool, image = _xyz(played, "tool"), _xyz(mirrored, "tool")
+    assert np.abs(image[:, 0] + tool[:, 0]).max() < 1e-9
+    assert np.abs(image[:, 1:] - tool[:, 1:]).max() < 1e-9
+    assert np.abs(tool[:, 0]).max() > 0.1  # the scenario moves in x: not a vacuous mirror

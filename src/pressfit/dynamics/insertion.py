@@ -599,7 +599,12 @@ def _flexible_steps(case: Case, machine: Machine, plan: ScenarioPlan, drives: dr
     fm = FlexibleMachine(machine, start,  # its step: check_flexible_step
                          actuator_series_n_per_m=None if plays is None else 0.5 * plays.contact_stiffness_n_per_m,
                          drive_mass_on_legs=plays is None or not implicit)  # behind the plays: on the drive side
-    state = fm.rest_state()
+    try:
+        state = fm.rest_state()
+    except ConvergenceError as exc:
+        series = ", with the plays' [clearance] contact_stiffness_n_per_m in series" if plays is not None else ""
+        raise PressfitError(f"{case.path}: the flexible machine's rest state at [{plan.table}] start_m under gravity "
+                            f"failed ({exc}): its legs{series} do not hold the weight") from None
     ctrl = ForceLimitedController(machine=machine, rigid=rigid, gains=sim.controller, limiter=limiter,
                                   estimate_m=start.copy())
     lengths, rates = fm.leg_lengths_m(state), fm.leg_rates_m_per_s(state)  # what the drives measure

@@ -70,12 +70,14 @@ GEOMETRY_DESCRIPTIONS: dict[str, str] = {
 def _s(u: np.ndarray, w: float) -> np.ndarray:
     """(u + sqrt(u^2 + w^2)) / 2 without cancellation for u < 0."""
     r = np.sqrt(u * u + w * w)
-    return np.where(u >= 0, 0.5 * (u + r), 0.5 * w * w / (r - u))
+    with np.errstate(divide="ignore"):  # the branch np.where drops may divide by an underflowed r - u
+        return np.where(u >= 0, 0.5 * (u + r), 0.5 * w * w / (r - u))
 
 
 def _ds(u: np.ndarray, w: float) -> np.ndarray:
     r = np.sqrt(u * u + w * w)
-    return np.where(u >= 0, 0.5 * (1.0 + u / r), 0.5 * w * w / (r * (r - u)))
+    with np.errstate(divide="ignore"):
+        return np.where(u >= 0, 0.5 * (1.0 + u / r), 0.5 * w * w / (r * (r - u)))
 
 
 def _big_s(u: np.ndarray, w: float) -> np.ndarray:
