@@ -137,3 +137,17 @@ def test_frequency_responses_by_laubs_method_hold_against_a_refined_solve():
             sol = sol + np.linalg.solve(m, residual.astype(complex))
         exact = (sys.C @ sol + sys.D)[0, 0]
         assert abs(value - exact) <= 1e-4 * abs(exact), (x, value, exact)
+
+
+def test_control_with_the_plays_on_says_it_linearises_without_them(tmp_path):
+    """[simulation] clearance = true: the linearised loop has no dead zone in it, and says so (a warning at the
+    pin pose); without clearance no such line (the rest of the design is the same either way)."""
+    text = SHIPPED.read_text().replace("clearance = false", "clearance = true")
+    assert text != SHIPPED.read_text()
+    case = tmp_path / "plays.toml"
+    case.write_text(text)
+    r = CliRunner().invoke(main, ["control", str(case), "--model", "rigid"])
+    assert r.exit_code == 0, r.output
+    assert "linearised without the cardan plays" in r.output
+    plain = CliRunner().invoke(main, ["control", str(SHIPPED), "--model", "rigid"])
+    assert "linearised without the cardan plays" not in plain.output

@@ -49,6 +49,7 @@ mode's strain energy (below it the loop neither excites nor damps the mode).
 
 from __future__ import annotations
 
+import dataclasses
 import math
 from dataclasses import dataclass
 from typing import Any, Literal
@@ -464,7 +465,11 @@ def control_design(case: Case, model: Model = "flexible") -> ControlDesign:
     poses = [("pin", pin_pose, c), ("start", np.array(sim.start_m), None), ("approach", approach, None),
              ("end", np.array(sim.end_m), None)]
     preload = ActuatorPreload.from_case(case.preload).a4
-    return ControlDesign(case=case.name, model=model,
-                         poses=tuple(design_at(machine, sim.controller, p, n, con, model,
-                                               tensions_n=static_tensions_n(machine, p, preload))
-                                     for n, p, con in poses))
+    designs = [design_at(machine, sim.controller, p, n, con, model, tensions_n=static_tensions_n(machine, p, preload))
+               for n, p, con in poses]
+    if sim.clearance:  # a dead zone has no linearisation at its edge: say what the loop leaves out
+        designs[0] = dataclasses.replace(designs[0], warnings=(
+            "linearised without the cardan plays of [simulation] clearance = true (a dead zone has no linearisation "
+            "at its edge): where the preload keeps a leg in one sign its closed plays add k_c / 2 in series with it; "
+            "a leg changing sign loses 2 G of position (`pressfit simulate` shows it)", *designs[0].warnings))
+    return ControlDesign(case=case.name, model=model, poses=tuple(designs))
