@@ -152,7 +152,7 @@ class PlayedDrive:
         dq = q1 - q0
         across = (np.abs(point - k0) > 0.5 * np.maximum(point, k0)) & (np.abs(dq) > 0)
         with np.errstate(divide="ignore", invalid="ignore"):
-            return np.where(across, np.clip((f1 - f0) / dq, 0.0, np.maximum(point, k0)), point)
+            return np.where(across, (f1 - f0) / dq, point)  # in [0, max(point, k0)]: f(q_a) is monotone
 
     @property
     def extension_m(self) -> np.ndarray:
