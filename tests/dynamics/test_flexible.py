@@ -244,3 +244,17 @@ def test_bad_inputs_are_refused(machine):
         FlexibleMachine(machine, POSE_A, rho_inf=1.5)
     with pytest.raises(PressfitError, match="force drives hold no pose"):
         fm.rest_state(drive=DriveInput.forces(np.zeros(4)))
+
+
+def test_a_stiffness_in_series_with_the_actuators_softens_the_vertical_press_by_the_closed_form(machine):
+    """``actuator_series_n_per_m`` k_s (the closed cardan plays, k_c / 2) in series with every actuator spring: at
+    pose A a vertical press F loads the four legs alike, N = F / (4 sin alpha), each leg lengthens by N / k_s more,
+    and the plate moves down by that over sin alpha: du_y = F / (4 k_s sin^2 alpha), sin^2 alpha = 0.8 (tan alpha
+    = 2 at pose A). With F = 700 N, k_s = 5e7 N/m: 4.375 um, the two rest states (no gravity) to 1e-3 of it."""
+    force, ks = 700.0, 5e7
+    wrench = np.array([0.0, -force, 0.0, 0.0, 0.0, 0.0])
+    tools = [FlexibleMachine(machine, POSE_A, gravity=False, actuator_series_n_per_m=series) for series in (None, ks)]
+    y = [fm.tool_point_m(fm.rest_state(wrench))[1] for fm in tools]
+    assert y[0] - y[1] == pytest.approx(force / (4 * ks * 0.8), rel=1e-3)
+    with pytest.raises(PressfitError, match="actuator_series_n_per_m"):
+        FlexibleMachine(machine, POSE_A, actuator_series_n_per_m=-1.0)
