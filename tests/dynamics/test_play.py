@@ -350,3 +350,18 @@ def test_the_mirror_image_scenario_with_the_plays_is_the_mirror_image(pairs):
     assert np.abs(image[:, 0] + tool[:, 0]).max() < 1e-9
     assert np.abs(image[:, 1:] - tool[:, 1:]).max() < 1e-9
     assert np.abs(tool[:, 0]).max() > 0.1  # the scenario moves in x: not a vacuous mirror
+
+
+def test_the_sensed_rates_integrate_to_the_sensed_lengths(pairs):
+    """What the drives measure is one signal: the rate columns summed over the steps (rectangle rule, h = 1 ms)
+    give the length columns' change from the start to the end of the dwell, with the plays' jumps (legs 2 and 4
+    cross 80 um) in both, to 1 um (the legs' own rates integrate to O(h |v|), under 0.1 um here: the machine is at
+    rest at both ends)."""
+    for clearance in (False, True):
+        run = pairs[100.0, clearance][1]
+        end = int(np.flatnonzero(run.phases == run.phase_names.index("dwell"))[-1])
+        lengths = run.series[:, [COL[f"length_m{i}"] for i in "1234"]]
+        rates = run.series[:, [COL[f"rate_m_per_s{i}"] for i in "1234"]]
+        change = rates[1:end + 1].sum(0) * 1e-3
+        assert change == pytest.approx(lengths[end] - lengths[0], abs=1e-6)
+    assert np.abs(lengths[end] - lengths[0]).max() > 1e-2  # the legs move: not vacuous
