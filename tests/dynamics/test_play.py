@@ -286,12 +286,13 @@ def test_positioning_verdict_with_the_plays_just_over_and_under_the_kinematic_cl
     assert verdicts == [False, True]
 
 
-def test_the_rigid_model_warns_when_a_legs_tension_changes_sign_with_the_plays_on(tmp_path):
+def test_the_rigid_model_warns_when_a_legs_tension_changes_sign_with_the_plays_on(tmp_path, pairs):
     """The rigid model's clearance is the load-deflection curve at the pin: a leg changing sign crosses its plays
     unseen, so the run warns, naming the legs and when. Known answers: constructed tensions (leg 2 crosses zero
     between the rows at 0.2 and 0.3 s, leg 3 touches zero without crossing), and the shipped scenario at 100 N of
     preload (legs 2 and 4 change sign, the flexible model's lost motion above) warned, at 400 N with 0.6 s moves
-    (no leg changes sign, checked on the flexible runs above) not, and without clearance never."""
+    (no leg changes sign, checked on the flexible runs above) not, and without clearance never; the flexible model,
+    which has the lost motion, never."""
     from pressfit.dynamics.insertion import _reversals_unseen
 
     t = np.array([0.1, 0.2, 0.3, 0.4])
@@ -309,6 +310,8 @@ def test_the_rigid_model_warns_when_a_legs_tension_changes_sign_with_the_plays_o
     (line,) = warned(100.0, True, 0.6)
     assert "legs 2 (first at" in line and ", 4 (first at" in line and 'model = "flexible"' in line
     assert warned(100.0, False, 0.6) == [] and warned(400.0, True, 0.6) == []
+    flexible = pairs[100.0, True][1].summary["warnings"]  # the same reversals, in the flexible model's lost motion
+    assert not [w for w in flexible if "change sign" in w or "changes sign" in w]
 
 
 def test_the_insertion_study_on_the_flexible_model_reports_the_plays_closed_form(pairs, tmp_path):
