@@ -47,15 +47,16 @@ Newton: the unknowns are vdot_{n+1} and lambda; the iteration matrix, in positio
 
 is factored at a configuration and kept (modified Newton; the geometric and inertial tangents are left out:
 with spring stiffnesses of 1e4-1e7 they slow convergence by a factor of about 1e-3 per iteration); it is
-refactored when an iteration contracts by less than REFRESH_RATIO (once per step, or again while a drive
-tangent given as a function moves by more than TANGENT_REFRESH: a cardan play crossing its contact edge,
-:mod:`pressfit.dynamics.play`), and a step whose freshly factored Newton does not reach NEWTON_TOL (m and rad,
-the largest position correction) in MAX_ITERATIONS since its last factoring is refused (ConvergenceError).
-Per iteration one ``computeJointJacobians`` (B and Phi) and one ``rnea``; B and Phi at the end state are kept for the closure error and the next step's rigid velocity; ``crba`` only when refactoring;
-the factor is applied by LAPACK ``getrs`` directly (scipy's checks cost more than the solve). A step longer
-than MAX_STEP_FRACTION of the first mode's period (at the build pose, the drives holding) is refused too: the
-rocking mode then has fewer than 20 steps per period, its period error (omega h)^2 / 12 passes 0.8%. No finite
-differences: M (``crba``), the spring tangents and B (``getConstraintsJacobian``) are Pinocchio's or analytic.
+refactored when an iteration contracts by less than REFRESH_RATIO (once per step, or again while a drive tangent
+given as a function moves by more than TANGENT_REFRESH: a cardan play crossing its contact edge,
+:mod:`pressfit.dynamics.play`), and a step whose freshly factored Newton does not reach NEWTON_TOL (m and rad, the
+largest position correction) in MAX_ITERATIONS since its last factoring is refused (ConvergenceError). Per
+iteration one ``computeJointJacobians`` (B and Phi) and one ``rnea``; B and Phi at the end state are kept for the
+closure error and the next step's rigid velocity; ``crba`` only when refactoring; the factor is applied by LAPACK
+``getrs`` directly (scipy's checks cost more than the solve). A step longer than MAX_STEP_FRACTION of the first
+mode's period (at the build pose, the drives holding) is refused too: the rocking mode then has fewer than 20
+steps per period, its period error (omega h)^2 / 12 passes 0.8%. No finite differences: M (``crba``), the spring
+tangents and B (``getConstraintsJacobian``) are Pinocchio's or analytic.
 
 Drives in the step: a force drive model (:mod:`pressfit.dynamics.drives`) is not a held force. Its
 delivered tension depends on the leg's motion over the step (a hydraulic drive's chambers compress by the
