@@ -59,10 +59,17 @@ def test_box_geometry_gaps_follow_the_pose():
     assert np.allclose(_play().gaps_m(POSE), axial, rtol=1e-15)
 
 
-def test_rotation_plays_are_refused():
-    """The flexible model's play is axial only: a clearance with rotation plays is refused, naming them."""
+def test_rotation_plays_and_bad_parameters_are_refused():
+    """The flexible model's play is axial only: a clearance with rotation plays is refused, naming them; so are a
+    negative or NaN drive mass and a spectral radius outside [0, 1], each naming its parameter."""
     with pytest.raises(PressfitError, match="rotation_gaps_rad"):
         _play(rotation_gaps_rad=1e-4)
+    for bad in (-1.0, float("nan")):
+        with pytest.raises(PressfitError, match="drive_mass_kg"):
+            _play(mass_kg=bad)
+    for bad in (-0.1, 1.5, float("nan")):
+        with pytest.raises(PressfitError, match="rho_inf"):
+            LegPlay(MACHINE, Clearance.uniform(MACHINE), POSE, np.zeros(4), 1.0, bad)
 
 
 class _LinearDrive:

@@ -89,6 +89,8 @@ class LegPlay:
                                 "(rotation_gaps_rad) are not modelled on it")
         if not (np.isfinite(drive_mass_kg) and drive_mass_kg >= 0):
             raise PressfitError(f"drive_mass_kg must be a mass >= 0, kg, got {drive_mass_kg!r}")
+        if not 0.0 <= rho_inf <= 1.0:
+            raise PressfitError(f"rho_inf must be a number in [0, 1], got {rho_inf!r}")
         self.machine, self.clearance, self.drive_mass_kg = machine, clearance, float(drive_mass_kg)
         self.scheme = generalized_alpha(rho_inf)  # (alpha_m, alpha_f, gamma, beta)
         self.stiffness_n_per_m = 0.5 * clearance.contact_stiffness_n_per_m
