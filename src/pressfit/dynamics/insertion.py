@@ -616,7 +616,7 @@ def _flexible_steps(case: Case, machine: Machine, plan: ScenarioPlan, drives: dr
     tool = fm.tool_point_m(state)
     drive = drives.initial_state(tension, lengths)
     board, contact_force = sim.contact.board_height_m, 0.0
-    depth = board - fm.tool_point_m(state)[1]
+    depth = board - tool[1]
     series, phases = _Series(machine, steps, sim.start_m), np.empty(steps, dtype=int)
     placement, subtree = fm.section_state(state)  # per step; the section loads from them after the run (batched)
     placements, wrenches = np.empty((steps, *placement.shape)), np.empty((steps, *subtree.shape))
@@ -712,8 +712,8 @@ def _reversals_unseen(time_s: np.ndarray, tensions_n: np.ndarray) -> list[str]:
     tension changes sign during the run crosses its plays' gaps unseen (docs/dynamics.md, "Cardan play"). One
     warning naming the legs and the first time of each."""
     signs = np.sign(tensions_n)
-    flips = [(i, int(np.flatnonzero(signs[1:, i] * signs[:-1, i] < 0)[0]) + 1)
-             for i in range(signs.shape[1]) if np.any(signs[1:, i] * signs[:-1, i] < 0)]
+    crossed = signs[1:] * signs[:-1] < 0  # (rows - 1, legs)
+    flips = [(i, int(crossed[:, i].argmax()) + 1) for i in np.flatnonzero(crossed.any(0))]
     if not flips:
         return []
     legs = ", ".join(f"{i + 1} (first at t = {time_s[k]:.4g} s)" for i, k in flips)
