@@ -61,10 +61,10 @@ def test_box_geometry_gaps_follow_the_pose():
 
 def test_rotation_plays_and_bad_parameters_are_refused():
     """The flexible model's play is axial only: a clearance with rotation plays is refused, naming them; so are a
-    negative or NaN drive mass and a spectral radius outside [0, 1], each naming its parameter."""
+    negative, NaN or infinite drive mass and a spectral radius outside [0, 1], each naming its parameter."""
     with pytest.raises(PressfitError, match="rotation_gaps_rad"):
         _play(rotation_gaps_rad=1e-4)
-    for bad in (-1.0, float("nan")):
+    for bad in (-1.0, float("nan"), float("inf")):
         with pytest.raises(PressfitError, match="drive_mass_kg"):
             _play(mass_kg=bad)
     for bad in (-0.1, 1.5, float("nan")):

@@ -207,3 +207,17 @@ def test_study_case_and_cli(machine, tmp_path):
     assert runner.invoke(main, args + ["--overwrite", "--json"]).exit_code == 0
     bad = runner.invoke(main, ["study", "preload", "--pose", "0", "0.72", "0", "--preload", "a,b"])
     assert bad.exit_code == 2
+
+
+def test_the_dead_zone_far_from_its_edges_warns_nothing_at_a_tiny_smoothing():
+    """With w = 1e-15 m the branch np.where drops divides by an underflowed r - u (0) far from an edge: no
+    RuntimeWarning reaches the user, and the force and tangent are the sharp law's there (k (x - g), k)."""
+    import warnings
+
+    from pressfit.mechanics.clearance_law import DeadZone
+
+    law = DeadZone(gap=2e-5, stiffness=5e8, width=1e-15)
+    with warnings.catch_warnings():
+        warnings.simplefilter("error")
+        assert float(law.force(1e-3)) == pytest.approx(5e8 * (1e-3 - 2e-5), rel=1e-12)
+        assert float(law.tangent(1e-3)) == pytest.approx(5e8, rel=1e-12)

@@ -121,3 +121,17 @@ def test_critical_preload_agrees_with_the_closed_form(machine, case, study):
     opposed = n * v < 0
     closed_form = float(np.max((np.abs(n[opposed]) + kc * w / 2) / np.abs(v[opposed])))
     assert study.column("critical_preload_n")[1] == pytest.approx(closed_form, abs=0.05)
+
+
+def test_the_studys_clearance_has_one_play_per_cardan_of_the_machine(case):
+    """A study variant gives every one of the machine's 2 n cardans the play: 6 on Tsai's 3-UPU
+    (models/tsai_3upu.toml), 8 on the 4-UPU, each resolved by the machine's own clearance (a count for another
+    machine is refused there)."""
+    from pressfit.description.machine import load_machine
+    from pressfit.mechanics.clearance import clearance_from_case
+    from pressfit.studies.insertion_study import _variant
+
+    for name, legs in (("tsai_3upu", 3), ("pressfit_4upu", 4)):
+        machine = load_machine(ROOT / f"models/{name}.toml")
+        clearance = clearance_from_case(_variant(case, 0.0, GAP, legs), machine)
+        assert clearance.gaps_m.shape == (legs, 2) and np.all(clearance.gaps_m == GAP)
