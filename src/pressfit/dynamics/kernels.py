@@ -20,25 +20,42 @@ quantity; the Python functions of :mod:`pressfit.dynamics.control`, :mod:`pressf
 
 Compiled with ``error_model="numpy"`` (a division by zero gives inf or nan, which the callers' finiteness
 checks refuse, rather than an exception from inside a kernel) and ``cache=True``: the first call in a fresh
-install compiles (about 10 s of CPU, once; numba keeps the result beside this file, or in the user's cache
-directory when the install is read-only; with neither writable, each process compiles, :func:`_compiled`).
+install compiles (about 10 s of CPU, once) and numba keeps the result in the user's cache directory
+(:func:`cache_directory`, created on demand), never in the installed package's directory (a leftover
+``__pycache__`` there outlives ``pip uninstall`` and shadows a later editable install as a namespace package);
+where that directory is not writable, each process compiles (:func:`_compiled`).
 """
 
 from __future__ import annotations
 
 import math
+import os
+from pathlib import Path
 
 import numpy as np
-from numba import njit
+import platformdirs
+from numba import config, njit
+
+
+def cache_directory() -> Path:
+    """The compiled kernels' cache: numba's own ``NUMBA_CACHE_DIR`` when the user set it, else
+    ``<user cache dir>/pressfit/numba`` (platformdirs: ``$XDG_CACHE_HOME/pressfit/numba`` on Linux)."""
+    return Path(os.environ.get("NUMBA_CACHE_DIR") or platformdirs.user_cache_path("pressfit", appauthor=False) / "numba")
 
 
 def _compiled(function):
-    """``njit`` with the cache (module docstring); without it where numba finds no writable place for it (a
-    read-only install and a read-only home: numba refuses ``cache=True`` there), compiled in each process."""
+    """``njit`` with the cache in :func:`cache_directory` only (numba's user-provided locator, the other
+    locators, which fall back to the package's ``__pycache__``, switched off while this kernel is declared);
+    where that directory cannot be created or written, numba finds no locator and the kernel is compiled in each
+    process instead."""
+    saved = config.CACHE_DIR, config.CACHE_LOCATOR_CLASSES
+    config.CACHE_DIR, config.CACHE_LOCATOR_CLASSES = str(cache_directory()), "UserProvidedCacheLocator"
     try:
         return njit(cache=True, error_model="numpy")(function)
     except RuntimeError:  # numba: "cannot cache function ...: no locator available"
         return njit(error_model="numpy")(function)
+    finally:
+        config.CACHE_DIR, config.CACHE_LOCATOR_CLASSES = saved
 
 
 # contact laws (contact_law's ``law``): elastic, press fit with a linear or a saturating (tanh) fit force
