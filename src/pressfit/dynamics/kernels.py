@@ -40,7 +40,8 @@ from numba import config, njit
 def cache_directory() -> Path:
     """The compiled kernels' cache: numba's own ``NUMBA_CACHE_DIR`` when the user set it, else
     ``<user cache dir>/pressfit/numba`` (platformdirs: ``$XDG_CACHE_HOME/pressfit/numba`` on Linux)."""
-    return Path(os.environ.get("NUMBA_CACHE_DIR") or platformdirs.user_cache_path("pressfit", appauthor=False) / "numba")
+    own = os.environ.get("NUMBA_CACHE_DIR")
+    return Path(own) if own else platformdirs.user_cache_path("pressfit", appauthor=False) / "numba"
 
 
 def _compiled(function):
