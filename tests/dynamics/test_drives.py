@@ -2,14 +2,18 @@
 here: reflected inertia J (2 pi / lead)^2, ball-screw stiffness E A / L in series with nut and bearing, the oil
 column's k_h = beta A^2 (1/V_a + 1/V_b) and its natural frequency against a simulated free oscillation, the
 force loops' -3 dB points from simulated sines against the bandwidth their gains give, saturation at the
-current and pressure limits, the force kind bit-identical to ForceActuators, and the statics using the drive's
+current and pressure limits, the force kind's first-order lag in closed form, and the statics using the drive's
 stiffness (vertical stiffness at pose A against 4 k_leg sin^2 alpha)."""
 
+import json
 import math
+import tomllib
+from pathlib import Path
 
 import numpy as np
 import pinocchio as pin
 import pytest
+import tomli_w
 from click.testing import CliRunner
 from readme import assert_printed, readme_fragment
 
@@ -17,9 +21,9 @@ from pressfit.cli import main
 from pressfit.description.cases import load_case
 from pressfit.description.machine import Machine, load_machine, read_toml
 from pressfit.dynamics import drives
-from pressfit.dynamics.actuators import ForceActuators
 from pressfit.dynamics.inertia import inertial_model
 from pressfit.errors import DriveStepError, ModelFileError
+from pressfit.kinematics.closed_form import leg_vectors
 from pressfit.mechanics import condensed
 from pressfit.mechanics.fast_statics import FastEquilibriumSolver
 from pressfit.mechanics.model import build_model
@@ -183,30 +187,39 @@ def test_condensed_and_fast_paths_use_the_drive_stiffness(path, pose):
         np.testing.assert_allclose(getattr(fast, name), ref, atol=1e-9 * np.linalg.norm(ref))
 
 
-def test_force_kind_statics_unchanged(machine):
-    """The force kind's leg compliance is the same float expression as before drives existed."""
-    lengths = np.linspace(0.5, 1.0, 7)
+def test_force_kind_leg_compliance_is_the_integral_along_the_leg(machine):
+    """A force-kind leg's axial compliance against a second formulation: the actuator's spring in series with
+    int_0^l ds / (E A(s)), integrated numerically over the stepped section (the cylinder tube from the base
+    cardan for its length, the stem beyond it), at lengths on both sides of the tube's end."""
     e, lc = machine.material.youngs_modulus_pa, machine.cylinder.length_m
-    before = (1.0 / machine.actuator.axial_stiffness_n_per_m + lc / (e * machine.cylinder_section.area_m2)
-              + (lengths - lc) / (e * machine.stem_section.area_m2))
-    assert np.array_equal(machine.axial_compliance_m_per_n(lengths), before)
+    area = lambda s: np.where(s < lc, machine.cylinder_section.area_m2, machine.stem_section.area_m2)
+    for length in (0.55, 0.7, 1.0):
+        s = np.linspace(0.0, length, 400001)
+        integral = float(np.sum(0.5 * (1 / area(s[1:]) + 1 / area(s[:-1])) * np.diff(s))) / e
+        expected = 1.0 / machine.actuator.axial_stiffness_n_per_m + integral
+        assert machine.axial_compliance_m_per_n(np.array([length]))[0] == pytest.approx(expected, rel=1e-5)
 
 
 # --- the force kind ------------------------------------------------------------------------------------------
-def test_force_kind_is_bit_identical_to_force_actuators(machine):
-    drive, reference = drives.of(machine), ForceActuators.of(machine)
+def test_force_kind_is_the_first_order_lag_in_closed_form(machine):
+    """tau dN/dt = sat(N_cmd) - N held over a step (zero-order hold) has the exact solution
+    N(t) = s + (N0 - s) exp(-t / tau) with tau = 1 / (2 pi f_bw) and s the command clipped at +-force_limit_n:
+    after k steps of dt, N0 relaxes by exp(-k dt / tau), whatever the split of the time into steps."""
+    drive = drives.of(machine)
     assert isinstance(drive, drives.ForceDrive)
-    assert (drive.bandwidth_hz, drive.force_limit_n, drive.time_constant_s) == (
-        reference.bandwidth_hz, reference.force_limit_n, reference.time_constant_s)
-    rng = np.random.default_rng(19)
-    tension = rng.normal(0, 300, 4)
-    state = drive.initial_state(tension, np.full(4, 0.7))
-    for _ in range(2000):
-        command, dt = rng.normal(0, 900, 4), float(rng.choice([1e-3, 5e-4, 2e-3]))
-        tension = reference.step(tension, command, dt)
-        state, force = drive.step(state, command, np.full(4, 0.7), rng.normal(0, 0.1, 4), dt)
-        assert np.array_equal(force, tension) and np.array_equal(state.force_n, tension)
-        assert np.array_equal(drive.saturated(command), reference.saturated(command))
+    a = machine.actuator
+    tau = 1.0 / (2 * math.pi * a.force_bandwidth_hz)
+    limit = a.force_limit_n
+    n0 = np.array([-200.0, 0.0, 150.0, 400.0])
+    command = np.array([0.5 * limit, -3.0 * limit, 2.0 * limit, -0.25 * limit])  # two inside, two clipped
+    target = np.clip(command, -limit, limit)
+    state, lengths, rates = drive.initial_state(n0, np.full(4, 0.7)), np.full(4, 0.7), np.zeros(4)
+    elapsed = 0.0
+    for dt in (1e-4, 3e-4, 2e-3, 5e-4, 1e-3) * 4:
+        state, force = drive.step(state, command, lengths, rates, dt)
+        elapsed += dt
+        np.testing.assert_allclose(force, target + (n0 - target) * math.exp(-elapsed / tau), rtol=1e-12, atol=1e-9)
+    np.testing.assert_array_equal(drive.saturated(command), np.abs(command) > limit)
 
 
 # --- electric --------------------------------------------------------------------------------------------------
@@ -431,10 +444,41 @@ def test_shipped_insertion_cases_load_and_check(kind):
     # simulate runs these cases on the drive seam: tests/dynamics/test_insertion_drives.py
 
 
-@pytest.mark.parametrize("path", [ELECTRIC, HYDRAULIC], ids=["electric", "hydraulic"])
-def test_modes_command_on_a_drive_machine(path):
-    result = CliRunner().invoke(main, ["modes", "0", "0.72", "0", "--model", str(path), "--json"])
+def _modes_json(path_or_machine, tmp_path=None):
+    if tmp_path is not None:  # a machine object: through its file, as a user would
+        path_or_machine = tmp_path / "machine.toml"
+    result = CliRunner().invoke(main, ["modes", "0", "0.72", "0", "--model", str(path_or_machine), "--json",
+                                       "--count", "12"])
     assert result.exit_code == 0, result.output
+    return np.array(json.loads(result.output)["frequencies_hz"])
+
+
+def _as_force_kind(path, tmp_path, stiffness_n_per_m):
+    """The machine file with its drive table replaced by the force kind's spring of the given stiffness."""
+    data = tomllib.loads(Path(path).read_text())
+    data["actuator"] = {"kind": "force", "axial_stiffness_n_per_m": float(stiffness_n_per_m)}
+    (tmp_path / "machine.toml").write_text(tomli_w.dumps(data))
+
+
+def test_modes_of_a_hydraulic_machine_are_those_of_its_equivalent_spring(hydraulic, tmp_path):
+    """A second formulation of the hydraulic machine's modes: at the centre pose every leg has one length, so the
+    oil column is one spring k_h(l) (no reflected mass: the piston's mass is in [mass]); the force kind with
+    axial_stiffness_n_per_m = k_h(l) is the same linear system and must give the same frequencies."""
+    length = float(np.linalg.norm(leg_vectors(hydraulic, np.array([0.0, 0.72, 0.0]))[0]))
+    _as_force_kind(HYDRAULIC, tmp_path, hydraulic.drive_stiffness_n_per_m(np.array([length]))[0])
+    np.testing.assert_allclose(_modes_json(HYDRAULIC), _modes_json(None, tmp_path), rtol=1e-6)
+
+
+def test_an_electric_drives_reflected_mass_lowers_every_mode(electric, tmp_path):
+    """The electric drive is its screw's spring plus a reflected mass on each leg's prismatic joint. The same
+    spring without the mass (the force kind) has a mass matrix smaller by a positive semi-definite term and the
+    same stiffness, so by Courant-Fischer every natural frequency of the electric machine is lower or equal,
+    and the plunge mode (the prismatic joints move) strictly lower."""
+    length = float(np.linalg.norm(leg_vectors(electric, np.array([0.0, 0.72, 0.0]))[0]))
+    _as_force_kind(ELECTRIC, tmp_path, electric.drive_stiffness_n_per_m(np.array([length]))[0])
+    with_mass, without = _modes_json(ELECTRIC), _modes_json(None, tmp_path)
+    assert np.all(with_mass <= without * (1 + 1e-9)), (with_mass, without)
+    assert np.min(with_mass / without) < 0.95, (with_mass, without)
 
 
 def test_readme_drive_numbers(electric, hydraulic):

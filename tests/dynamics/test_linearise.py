@@ -2,6 +2,8 @@
 
 from __future__ import annotations
 
+import csv
+import json
 from pathlib import Path
 
 import numpy as np
@@ -76,12 +78,32 @@ def test_unstable_controller_is_reported_not_refused(tmp_path):
 
 
 def test_control_writes_its_files(tmp_path):
+    """What the files hold, against closed forms: each pole s = sigma + j omega_d in poles.csv has
+    frequency |s| / (2 pi) and damping -sigma / |s|; one pole of each conjugate pair is listed (a real system);
+    a pose called stable in control.json has every pole in the open left half-plane; control.json's poles are
+    the CSV's; bode.png is an image. A second run into the same directory is refused (exit 2), the files kept."""
     out = tmp_path / "out"
     r = CliRunner().invoke(main, ["control", str(SHIPPED), "--model", "rigid", "--out", str(out)])
     assert r.exit_code == 0, r.output
     assert sorted(p.name for p in out.iterdir()) == ["bode.png", "control.json", "poles.csv"]
+    rows = list(csv.DictReader((out / "poles.csv").open()))
+    summary = json.loads((out / "control.json").read_text())
+    assert {row["pose"] for row in rows} == {p["name"] for p in summary["poses"]}
+    for pose in summary["poses"]:
+        mine = [row for row in rows if row["pose"] == pose["name"]]
+        s = np.array([float(row["real_per_s"]) + 1j * float(row["imag_rad_per_s"]) for row in mine])
+        np.testing.assert_allclose([float(row["frequency_hz"]) for row in mine], np.abs(s) / (2 * np.pi), rtol=1e-12)
+        np.testing.assert_allclose([float(row["damping"]) for row in mine], -s.real / np.abs(s), rtol=1e-12)
+        assert np.all(s.imag >= 0)  # a real system: one pole of each conjugate pair is listed
+        assert pose["stable"] == bool(np.all(s.real < 0)), pose["name"]
+        loop = [row for row in mine if row["loop_pole"] == "1"]
+        np.testing.assert_allclose(sorted(float(row["real_per_s"]) for row in loop),
+                                   sorted(p["real_per_s"] for p in pose["loop_poles"]), rtol=1e-12)
+    assert (out / "bode.png").read_bytes()[:8] == b"\x89PNG\r\n\x1a\n"
+    before = (out / "control.json").read_bytes()
     again = CliRunner().invoke(main, ["control", str(SHIPPED), "--model", "rigid", "--out", str(out)])
-    assert again.exit_code == 2
+    assert again.exit_code == 2 and "error:" in again.output and "--overwrite" in again.output, again.output
+    assert (out / "control.json").read_bytes() == before
 
 
 def test_drives_hold_most_of_the_axial_mode_and_little_of_the_rocking_pair(machine):
