@@ -1,11 +1,19 @@
-"""Shared fixtures: the shipped machine, Tsai's 3-UPU and a 5-leg machine."""
+"""Shared fixtures: the shipped machine, Tsai's 3-UPU, a 5-leg machine, and the suite's expensive artefacts, each
+built once per test run (``--dist loadfile``: a module's tests run on one xdist worker, so a module fixture is
+built once; the session's report is used by one module only).
+Tests that use an expensive artefact are marked ``slow`` here; the edit-test loop is
+``pytest -m "not slow and not browser"`` (docs/testing.md)."""
 
+import json
 import os
 from pathlib import Path
 
 import pytest
+from click.testing import CliRunner
 from n_legs import ring
+from study_front import STUDY_FRONT
 
+from pressfit.cli import main
 from pressfit.description.machine import load_machine
 
 if "MUTANT_UNDER_TEST" in os.environ and not hasattr(pytest.Item, "_nodeid"):
@@ -29,3 +37,29 @@ def tsai():
 def five(machine):
     """The shipped machine with five legs at 72 degrees about y, leg 1 at -z (same p, r, sections, masses)."""
     return machine.with_overrides({"legs": ring(5)})
+
+
+#: expensive fixtures (module- or session-scoped simulations, studies, clusters, installs): their tests are slow
+EXPENSIVE = {"quick_report", "pairs", "both_models", "runs", "slow_and_fast", "measured", "short_runs", "sized",
+             "free_run", "simulated", "rigid_runs", "study", "small_study", "every_pair", "loose_result", "cluster",
+             "installed", "paper_fit", "report_dir"}
+
+
+@pytest.fixture(scope="session")
+def quick_report(tmp_path_factory):
+    """``pressfit report --quick`` as a user runs it, with a cycle study's front (tests/output/test_html_report.py
+    reads its report.md and report.html): built once per test run."""
+    out, study = tmp_path_factory.mktemp("report"), tmp_path_factory.mktemp("study")
+    (study / "summary.json").write_text(json.dumps({"samples": 4, "front": STUDY_FRONT}))
+    result = CliRunner().invoke(main, ["report", "--out", str(out), "--quick", "--cycle-study", str(study)])
+    assert result.exit_code == 0, result.output
+    return out
+
+
+def pytest_collection_modifyitems(config, items):
+    """A test driving chromium is ``browser``; a test using an expensive fixture is ``slow``."""
+    for item in items:
+        if {"browser", "page"} & set(item.fixturenames):
+            item.add_marker(pytest.mark.browser)
+        if EXPENSIVE & set(item.fixturenames):
+            item.add_marker(pytest.mark.slow)

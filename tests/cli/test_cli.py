@@ -57,16 +57,6 @@ def test_tables_json_and_files(tmp_path):
     assert run("tables", "--out", tmp_path).exit_code == 2  # no silent overwrite
 
 
-def test_report_quick_writes_every_section(tmp_path):
-    res = run("report", "--out", tmp_path, "--quick")
-    assert res.exit_code == 0, res.output
-    text = (tmp_path / "report.md").read_text()
-    for n in range(1, 8):  # tables, kinematics, envelope, stiffness, preload, interference, insertion
-        assert f"## {n}." in text
-    for link in [line.split("](")[1][:-1] for line in text.splitlines() if line.startswith("![")]:
-        assert (tmp_path / link).exists(), link
-
-
 def test_list_shows_models_and_every_shipped_case():
     res = run("list")
     assert res.exit_code == 0, res.output

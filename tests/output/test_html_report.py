@@ -14,9 +14,9 @@ import numpy as np
 import pinocchio as pin
 import pytest
 from PIL import Image
+from study_front import STUDY_FRONT
 
 from pressfit.mechanics.statics import solve_equilibrium
-from pressfit.output.report import write_report
 from pressfit.output.scene3d import MAGNIFICATIONS, SceneCase, scene_figure
 
 CHROMIUM = "/usr/bin/chromium"
@@ -24,22 +24,10 @@ ARGS = ["--headless", "--no-sandbox", "--disable-gpu", "--disable-quic", "--no-f
         "--disable-background-networking", "--disable-component-update", "--disable-sync"]
 
 
-# a throughput study's summary.json as `pressfit study cycle` writes it (two front samples, known values)
-STUDY_FRONT = [{"sample": 2, "speed_scale": 4.0, "acceleration_scale": 1.0, "jerk_scale": 1.0, "descent_scale": 10.0,
-                "kp_scale": 2.0, "kd_scale": 1.0, "ki_scale": 1.0, "a4_n": 100.0,
-                "cycle_time_s": 3.5, "worst_alignment_error_m": 4e-5, "worst_overshoot_n": 7.0, "within_limits": False},
-               {"sample": 0, "speed_scale": 4.0, "acceleration_scale": 1.0, "jerk_scale": 1.0, "descent_scale": 1.0,
-                "kp_scale": 1.0, "kd_scale": 1.0, "ki_scale": 1.0, "a4_n": 0.0,
-                "cycle_time_s": 6.25, "worst_alignment_error_m": 1e-6, "worst_overshoot_n": 0.5, "within_limits": True}]
-
-
 @pytest.fixture(scope="module")
-def report_dir(tmp_path_factory, machine):
-    out = tmp_path_factory.mktemp("report")
-    study = tmp_path_factory.mktemp("study")
-    (study / "summary.json").write_text(json.dumps({"samples": 4, "front": STUDY_FRONT}))
-    write_report(machine, out, quick=True, progress=False, cycle_study=study)
-    return out
+def report_dir(quick_report):
+    """The suite's one quick report (tests/conftest.py), with a cycle study's front in its board section."""
+    return quick_report
 
 
 @pytest.fixture(scope="module")
@@ -255,3 +243,13 @@ def test_compare_cells_equal_the_compare_json(page, report_dir):
     md = (report_dir / "report.md").read_text()
     assert "## 9. The machines compared" in md and all(c["claim"] in md for c in js["claims"])
     assert {c["verdict"] for c in js["claims"]} <= {"confirmed", "refuted"}  # all three measured
+
+
+def test_report_quick_writes_every_section(report_dir):
+    """`pressfit report --quick`'s report.md: every section, every figure it links exists."""
+    tmp_path = report_dir
+    text = (tmp_path / "report.md").read_text()
+    for n in range(1, 8):  # tables, kinematics, envelope, stiffness, preload, interference, insertion
+        assert f"## {n}." in text
+    for link in [line.split("](")[1][:-1] for line in text.splitlines() if line.startswith("![")]:
+        assert (tmp_path / link).exists(), link
