@@ -97,7 +97,8 @@ def test_one_pin_s_curve_board_at_the_papers_speeds_agrees_with_simulate(tmp_pat
     T = 4 T_j + 2 T_c = 1 s; the descent (7 mm) at v = 10 mm/s, a = 0.05, j = 0.5: T = D/v + v/a + a/j = 1 s.
     The shapes differ (the S-curve cruises into the board at 10 mm/s, the quintic passes 5 mm of 7 at 8.7 mm/s),
     so the figures agree to what the shape changes: measured 0.17% on the peak force, 0.006% on the steady one
-    (the limiter sets both: 30 N plus the overshoot), 3 ms on the settling, 33 ms on the first contact; the
+    (the limiter sets both: 30 N plus the overshoot; asserted at 3x: 0.5%, 0.02%), 3 ms on the settling, 33 ms on
+    the first contact; the
     lateral error at first contact is the approach move's residual (both ~1 um: 0.65 and 0.97 um), which the
     profile's shape sets: within a factor 2."""
     d = float(np.linalg.norm(ABOVE - START))
@@ -108,7 +109,7 @@ def test_one_pin_s_curve_board_at_the_papers_speeds_agrees_with_simulate(tmp_pat
     pin = simulate_cycle(load_case(path)).summary["pins"][0]
     s = simulated.summary
     assert pin["peak_contact_force_n"] == pytest.approx(s["peak_contact_force_n"], rel=5e-3)
-    assert pin["steady_insertion_force_n"] == pytest.approx(s["steady_insertion_force_n"], rel=1e-3)
+    assert pin["steady_insertion_force_n"] == pytest.approx(s["steady_insertion_force_n"], rel=2e-4)
     assert pin["settling_time_s"] == pytest.approx(s["settling_time_s"], abs=0.01)
     assert pin["first_contact_time_s"] == pytest.approx(s["first_contact_time_s"], abs=0.1)
     ratio = pin["tool_lateral_error_at_first_contact_m"] / s["tool_lateral_error_at_first_contact_m"]
