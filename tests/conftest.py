@@ -12,6 +12,7 @@ import pytest
 from click.testing import CliRunner
 from n_legs import ring
 from study_front import STUDY_FRONT
+from threadpoolctl import threadpool_limits
 
 from pressfit.cli import main
 from pressfit.description.machine import load_machine
@@ -20,6 +21,13 @@ if "MUTANT_UNDER_TEST" in os.environ and not hasattr(pytest.Item, "_nodeid"):
     # mutmut 3.7.0 (the newest that accepts the pinned click 8.4.0; docs/testing.md) reads Item._nodeid,
     # which pytest 9 no longer has: alias it, under a mutation run only
     pytest.Item._nodeid = property(lambda self: self.nodeid)
+
+
+def pytest_configure(config):
+    """Under xdist, one BLAS thread per worker: two workers on two cores, each with a BLAS pool the size of the
+    machine, oversubscribe the cores (an eigen-solve then waits on its own threads)."""
+    if os.environ.get("PYTEST_XDIST_WORKER"):
+        config._blas_limit = threadpool_limits(limits=1)
 
 
 @pytest.fixture(scope="session")
