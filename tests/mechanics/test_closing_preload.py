@@ -22,7 +22,7 @@ from pressfit.mechanics.closing_preload import RELATIVE_TOL, closing_preload
 from pressfit.mechanics.preload import closing_direction
 
 sys.path.insert(0, str(Path(__file__).resolve().parents[1]))
-from n_legs import ring_machine_file  # noqa: E402
+from n_legs import ring_machine_file
 
 PLAY = 20e-6
 LOW_CORNER = np.array([-0.25, 0.48775004, -0.25])  # the shipped 4-UPU's box: its lowest height, a corner
