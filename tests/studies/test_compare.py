@@ -25,6 +25,8 @@ from pressfit.studies.compare import (
     claims,
     compare_box,
     pose_figures,
+    precision_claim,
+    verdict,
 )
 
 ROOT = Path(__file__).resolve().parents[2]
@@ -36,7 +38,8 @@ def test_pose_figures_are_the_pinocchio_statics_at_one_pose():
     Drive force: max |actuator force| over the press load and its 5 degree cone, each load solved here; bending:
     the sections' hypot(M_x, M_y); vertical stiffness 700 N / delta_y under the press load alone; the weakest
     stiffness: the smallest eigenvalue of the inverse of the 3 x 3 compliance assembled from three unit-load solves;
-    tilt |phi| under the press load. The two engines agree to ~1e-11 (tests/mechanics/test_condensed_vs_pinocchio.py):
+    tilt |phi|, worst over the press load and its cone. The two engines agree to ~1e-11
+    (tests/mechanics/test_condensed_vs_pinocchio.py):
     asserted to 1e-8."""
     machine = load_machine()
     f = pose_figures(machine, POSE[None])
@@ -52,7 +55,7 @@ def test_pose_figures_are_the_pinocchio_statics_at_one_pose():
     np.testing.assert_allclose(f.bending_nm[0], bending, rtol=1e-8)
     press = solves[0]
     assert f.vertical_stiffness_n_per_m[0] == pytest.approx(700.0 / press.plate_displacement_m[1], rel=1e-8)
-    assert f.tilt_rad[0] == pytest.approx(np.linalg.norm(press.plate_rotation_rad), rel=1e-8)
+    assert f.tilt_rad[0] == pytest.approx(max(np.linalg.norm(e.plate_rotation_rad) for e in solves), rel=1e-8)
     compliance = np.column_stack([solve_equilibrium(machine, POSE, [*e, 0, 0, 0], linear=True).plate_displacement_m
                                   for e in np.eye(3)])
     weakest = np.linalg.eigvalsh(np.linalg.inv(0.5 * (compliance + compliance.T)))[0]
@@ -93,27 +96,42 @@ def test_the_box_is_the_required_workspace_and_refused_when_short():
 
 
 def _figures(**over: object) -> MachineFigures:
+    """One-pose figures (the per-pose arrays of length 1 follow the scalars unless given)."""
     base = dict(name="m", source="m.toml", kind="upu", legs=4, heights_m=(0.5, 0.6), poses=1,
                 worst_drive_force_n=500.0, drive_force_limit_n=1000.0,
                 worst_drive_force_pose_m=np.zeros(3), worst_bending_nm=20.0, worst_bending_member="leg 1",
                 weakest_stiffness_worst_n_per_m=1e6, weakest_stiffness_median_n_per_m=2e6,
                 vertical_stiffness_worst_n_per_m=5e6, vertical_stiffness_median_n_per_m=6e6, tilt_worst_rad=1e-3,
                 tilt_median_rad=5e-4, first_frequency_lowest_hz=25.0, first_frequency_median_hz=30.0,
-                moving_mass_kg=40.0, lost_motion_m=50e-6, lost_motion_preloaded_m=0.0, best_preload_n=400.0,
-                preload_note="", max_relative_residual=1e-16)
-    return MachineFigures(**{**base, **over})
+                moving_mass_kg=40.0, lost_motion_m=50e-6, lost_motion_preloaded_m=0.0, critical_preload_worst_n=400.0,
+                critical_preload_worst_pose_m=np.zeros(3), preloaded_drive_force_n=900.0, preload_note="",
+                max_relative_residual=1e-16, poses_m=np.zeros((1, 3)))
+    base.update(over)
+    per_pose = dict(pose_weakest_stiffness_n_per_m="weakest_stiffness_worst_n_per_m",
+                    pose_vertical_stiffness_n_per_m="vertical_stiffness_worst_n_per_m", pose_tilt_rad="tilt_worst_rad",
+                    pose_bending_nm="worst_bending_nm", pose_lost_motion_m="lost_motion_m",
+                    pose_critical_preload_n="critical_preload_worst_n",
+                    pose_preloaded_drive_force_n="preloaded_drive_force_n",
+                    pose_preloaded_lost_motion_m="lost_motion_preloaded_m")
+    for key, scalar in per_pose.items():
+        value = base[scalar]
+        base.setdefault(key, np.array([np.nan if value is None else float(value)]))
+    return MachineFigures(**base)
 
 
 def test_claims_turn_just_across_their_thresholds():
-    """Each verdict from figures just on either side of its rule (module docstring of studies/compare.py): the
-    4-UPU's worst member moment 1e-9 below / above the gantry's; its weakest stiffness just above / below; its
-    preloaded lost motion just below / above BACKLASH_COMPENSATED of the 3-UPU's; a missing baseline: not measured."""
+    """Each verdict from one-pose figures just on either side of its rule (studies/compare.py): the 4-UPU's member
+    moment 1e-9 below / above the gantry's worst; its weakest stiffness just above / below; a tie; the tilt alone;
+    its preloaded lost motion just below / above BACKLASH_COMPENSATED of the 3-UPU's smallest; the drive forces
+    computed with the pose's preload just within / over the limit; no critical preload; a missing baseline."""
     upu4 = _figures(name="four")
     gantry = _figures(name="gantry", kind="gantry", legs=None, worst_bending_nm=20.0 * (1 + 1e-9),
                       weakest_stiffness_worst_n_per_m=1e6 * (1 - 1e-9), vertical_stiffness_worst_n_per_m=1e6,
                       tilt_worst_rad=2e-3, lost_motion_m=float("nan"), lost_motion_preloaded_m=None)
-    upu3 = _figures(name="three", legs=3, lost_motion_m=50e-6, lost_motion_preloaded_m=None, best_preload_n=None)
-    assert [c.verdict for c in claims([upu4, gantry, upu3])] == ["confirmed"] * 3
+    upu3 = _figures(name="three", legs=3, lost_motion_m=50e-6, lost_motion_preloaded_m=None,
+                    critical_preload_worst_n=None, preloaded_drive_force_n=None)
+    got = claims([upu4, gantry, upu3])
+    assert [c.verdict for c in got] == ["confirmed"] * 3 and [c.holds_fraction for c in got] == [1.0] * 3
     over = dataclasses.replace(gantry, worst_bending_nm=20.0 * (1 - 1e-9),
                                weakest_stiffness_worst_n_per_m=1e6 * (1 + 1e-9))
     assert [c.verdict for c in claims([upu4, over, upu3])][:2] == ["refuted", "refuted"]
@@ -122,15 +140,55 @@ def test_claims_turn_just_across_their_thresholds():
     tilted = dataclasses.replace(gantry, tilt_worst_rad=1e-3 * (1 - 1e-9))  # stiffer 4-UPU, but the gantry tilts less
     assert claims([upu4, tilted, upu3])[0].verdict == "refuted"
     limit = BACKLASH_COMPENSATED * upu3.lost_motion_m
-    below = dataclasses.replace(upu4, lost_motion_preloaded_m=limit * (1 - 1e-9))
-    above = dataclasses.replace(upu4, lost_motion_preloaded_m=limit * (1 + 1e-9))
+    below = _figures(name="four", lost_motion_preloaded_m=limit * (1 - 1e-9))
+    above = _figures(name="four", lost_motion_preloaded_m=limit * (1 + 1e-9))
     assert claims([below, upu3])[-1].verdict == "confirmed" and claims([above, upu3])[-1].verdict == "refuted"
-    assert claims([dataclasses.replace(upu4, lost_motion_preloaded_m=limit), upu3])[-1].verdict == "refuted"  # at it
-    # the drives must carry the preload on their worst press force: 500 N + 400 N against a limit just below 900 N
-    weak = dataclasses.replace(below, drive_force_limit_n=900.0 * (1 - 1e-9))
+    assert claims([_figures(name="four", lost_motion_preloaded_m=limit), upu3])[-1].verdict == "refuted"  # at it
+    # the drive forces computed with the pose's critical preload against the limit: 900 N against just below / at it
+    weak = _figures(name="four", drive_force_limit_n=900.0 * (1 - 1e-9))
     assert claims([weak, upu3])[-1].verdict == "refuted"
-    assert claims([dataclasses.replace(weak, drive_force_limit_n=900.0), upu3])[-1].verdict == "confirmed"
+    assert claims([_figures(name="four", drive_force_limit_n=900.0), upu3])[-1].verdict == "confirmed"
+    none = _figures(name="four", pose_critical_preload_n=np.array([np.nan]))  # no preload closes every cardan
+    assert claims([none, upu3])[-1].verdict == "refuted"
     assert [c.verdict for c in claims([upu4])] == ["not measured"] * 3
+
+
+def test_a_claim_holding_at_some_poses_says_where():
+    """Two poses, the claim holding at one: "holds on 50% of the box", the worst pose named (the one where the
+    drives carry 1000 N + 1e-6 with the pose's critical preload, the limit 1000 N); "confirmed" only at both."""
+    poses = np.array([[0.1, 0.5, 0.0], [-0.25, 0.49, -0.25]])
+    two = _figures(name="four", poses=2, poses_m=poses, pose_critical_preload_n=np.array([400.0, 1300.0]),
+                   pose_preloaded_drive_force_n=np.array([900.0, 1000.0 + 1e-6]),
+                   pose_preloaded_lost_motion_m=np.zeros(2))
+    upu3 = _figures(name="three", legs=3, lost_motion_preloaded_m=None, critical_preload_worst_n=None,
+                    preloaded_drive_force_n=None)
+    got = claims([two, upu3])[-1]
+    assert got.verdict == "holds on 50% of the box" and got.holds_fraction == 0.5
+    assert got.worst_pose_m == tuple(poses[1]) and "1 of 2 poses" in got.evidence
+    both = dataclasses.replace(two, pose_preloaded_drive_force_n=np.array([900.0, 1000.0]))
+    assert claims([both, upu3])[-1].verdict == "confirmed"
+    assert verdict(np.array([False, False])) == ("refuted", 0.0)
+
+
+def test_the_precision_verdict_turns_at_the_closed_form_of_the_centred_pose():
+    """The 4-UPU at its centred pose (0, 0.6, 0) alone: its vertical stiffness is 4 k_a sin^2(alpha) in closed form
+    (tests/n_legs.py); a gantry whose worst vertical stiffness is that closed form times (1 -+ 1e-6), with the
+    other two figures in the 4-UPU's favour, turns the computed precision verdict from "confirmed" to "refuted"."""
+    import sys
+
+    sys.path.insert(0, str(ROOT / "tests"))
+    from n_legs import centred
+
+    machine = load_machine()
+    f = pose_figures(machine, np.array([[0.0, 0.6, 0.0]]))
+    sin_alpha, k_a = centred(machine, 0.6)
+    closed_form = 4 * k_a * sin_alpha**2
+    upu = _figures(name="four", pose_weakest_stiffness_n_per_m=f.weakest_stiffness_n_per_m,
+                   pose_vertical_stiffness_n_per_m=f.vertical_stiffness_n_per_m, pose_tilt_rad=f.tilt_rad)
+    for factor, expected in ((1 - 1e-6, "confirmed"), (1 + 1e-6, "refuted")):
+        gantry = _figures(name="gantry", kind="gantry", legs=None, weakest_stiffness_worst_n_per_m=1.0,
+                          vertical_stiffness_worst_n_per_m=closed_form * factor, tilt_worst_rad=1.0)
+        assert precision_claim(upu, gantry).verdict == expected
 
 
 def run(*args: object):

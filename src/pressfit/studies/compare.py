@@ -263,6 +263,12 @@ def _pose(h: np.ndarray) -> str:
     return "(" + ", ".join(f"{c:.4g}" for c in h) + ") m"
 
 
+def _span(values: np.ndarray, scale: float, fmt: str) -> str:
+    """min..max of the finite values times scale, or "none"."""
+    ok = values[np.isfinite(values)] * scale
+    return "none" if ok.size == 0 else f"{format(ok.min(), fmt)}..{format(ok.max(), fmt)}"
+
+
 def _not_measured(claim: str, baseline: str, evidence: str) -> Claim:
     return Claim(claim=claim, baseline=baseline, verdict="not measured", holds_fraction=None, worst_pose_m=None,
                  evidence=evidence)
@@ -321,7 +327,7 @@ def preload_claim(upu: MachineFigures, upu3: MachineFigures) -> Claim:
         f"over the cone: lost motion {base * 1e6:.3g}..{np.nanmax(upu3.pose_lost_motion_m) * 1e6:.3g} um "
         f"({upu3.name}: {upu3.preload_note}) against {np.nanmin(upu.pose_lost_motion_m) * 1e6:.3g}.."
         f"{upu.lost_motion_m * 1e6:.3g} um without preload ({upu.name}); its pose-wise critical preload "
-        f"{np.nanmin(crit):.4g}..{np.nanmax(crit):.4g} N; worst pose {_pose(upu.poses_m[i])}: {at}, against the "
+        f"{_span(crit, 1.0, '.4g')} N; worst pose {_pose(upu.poses_m[i])}: {at}, against the "
         f"drives' {upu.drive_force_limit_n:.4g} N limit"))
 
 
