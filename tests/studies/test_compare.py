@@ -31,6 +31,7 @@ from pressfit.studies.compare import (
 
 ROOT = Path(__file__).resolve().parents[2]
 POSE = np.array([0.15, 0.55, -0.1])
+PLAY = 20e-6
 
 
 def test_pose_figures_are_the_pinocchio_statics_at_one_pose():
@@ -384,3 +385,26 @@ def test_the_readme_table_is_what_compare_computes(shipped):
     for h in holds:
         assert f"**{verdict(h)[0]}**" in section
     assert f"at {int(np.sum(~holds[2]))} of the 75 poses" in section
+
+
+@pytest.mark.parametrize("legs", [5, 6, 12])
+def test_compare_runs_on_machines_of_more_legs(tmp_path, legs):
+    """UPU rings of 5, 6 and 12 legs (tests/n_legs.py) on a 2 x 2 x 2 box: every pose gets a critical preload along a
+    direction that loads every leg, which leaves no lost motion, the drive forces computed with it stay above the
+    press-only ones (the preload adds) and below press-only plus the whole preload; it was "clearance equilibrium
+    did not converge" (the studies' preload leaves legs 5..n without force, and its bisection doubled forever)."""
+    import sys
+
+    sys.path.insert(0, str(ROOT / "tests"))
+    from n_legs import ring_machine_file
+
+    from pressfit.studies.compare import upu_figures
+
+    machine = load_machine(ring_machine_file(tmp_path / f"ring{legs}.toml", legs))
+    f = upu_figures(machine, heights=2, grid=2, modes=False)
+    crit = f.pose_critical_preload_n
+    assert np.all(np.isfinite(crit)) and np.all(crit > 0) and np.all(np.abs(f.pose_preloaded_lost_motion_m) < 1e-8)
+    press_only = pose_figures(machine, f.poses_m).drive_force_n.max(1)
+    assert np.all(f.pose_preloaded_drive_force_n > press_only)
+    assert np.all(f.pose_preloaded_drive_force_n < press_only + crit)
+    assert 2 * PLAY / 1.0 < f.lost_motion_m < 4 * PLAY / 0.5  # 2 g / sin(alpha) and more: some legs slacken
