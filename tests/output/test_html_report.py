@@ -236,13 +236,14 @@ def test_compare_cells_equal_the_compare_json(page, report_dir):
     js = json.loads((report_dir / "compare" / "compare.json").read_text())
     keys = ("name", "legs", "worst_drive_force_n", "worst_bending_nm", "weakest_stiffness_worst_n_per_m",
             "vertical_stiffness_worst_n_per_m", "tilt_worst_rad", "first_frequency_lowest_hz", "moving_mass_kg",
-            "lost_motion_m", "lost_motion_preloaded_m", "best_preload_n")
+            "lost_motion_m", "lost_motion_preloaded_m", "critical_preload_worst_n")
     assert [m["name"] for m in js["machines"]] == ["pressfit-4upu", "tsai-3upu", "gantry-cartesian",
                                                    "pressfit-4upu-rotated45"]
     _check_table(page, "compare-machines", [{k: m[k] for k in keys} for m in js["machines"]])
     md = (report_dir / "report.md").read_text()
     assert "## 9. The machines compared" in md and all(c["claim"] in md for c in js["claims"])
-    assert {c["verdict"] for c in js["claims"]} <= {"confirmed", "refuted"}  # all three measured
+    assert all(c["verdict"] in ("confirmed", "refuted") or c["verdict"].startswith("holds on ")
+               for c in js["claims"])  # all three measured
 
 
 def test_report_quick_writes_every_section(report_dir):

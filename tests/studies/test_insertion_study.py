@@ -135,3 +135,30 @@ def test_the_studys_clearance_has_one_play_per_cardan_of_the_machine(case):
         machine = load_machine(ROOT / f"models/{name}.toml")
         clearance = clearance_from_case(_variant(case, 0.0, GAP, legs), machine)
         assert clearance.gaps_m.shape == (legs, 2) and np.all(clearance.gaps_m == GAP)
+
+
+@pytest.mark.slow
+@pytest.mark.parametrize("machine_file", ["tsai", 5])
+def test_the_study_runs_machines_without_a_critical_preload(tmp_path, machine_file):
+    """Tsai's 3-leg machine with --preload 0 (no redundant actuation, which `simulate` runs) and a 5-leg ring (the
+    studies' preload along the first basis vector leaves leg 5 without force): the study runs, exit 0, and the
+    critical preload is NaN with the reason printed (it was exit 2: "no redundant actuation" and "clearance
+    equilibrium did not converge"). The play's share of the tool error is the rigid model's lost motion: a few um
+    to tens of um for 10 um of play."""
+    import sys
+
+    sys.path.insert(0, str(ROOT / "tests"))
+    from n_legs import ring_machine_file
+
+    model = ROOT / "models/tsai_3upu.toml" if machine_file == "tsai" else ring_machine_file(tmp_path / "ring.toml", 5)
+    data = tomllib.loads(short_case(tmp_path).read_text())
+    data["model"], data["preload"] = str(model), {"a4_n": 0.0}
+    path = tmp_path / "case.toml"
+    path.write_text(tomli_w.dumps(data))
+    res = CliRunner().invoke(main, ["study", "insertion", str(path), "--preload", "0", "--clearance", "1e-5", "--out",
+                                    str(tmp_path / "out"), "--no-progress"])
+    assert res.exit_code == 0, res.output
+    lines = res.output.splitlines()
+    row = lines[1].split()
+    assert row[:3] == ["0", "10", "nan"] and 1.0 < float(row[3]) < 100.0  # play error, um
+    assert "critical nan: no critical preload (3 legs" in res.output

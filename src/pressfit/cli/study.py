@@ -150,6 +150,10 @@ def study_insertion_cmd(case_file: Path, preloads: list[float] | None, clearance
     for r in study.rows:
         click.echo(f"{r[0]:>11.4g}  {r[1] * 1e6:>14.4g}  {r[2]:>12.4g}  {r[4] * 1e6:>15.3f}  {r[5] * 1e6:>12.3f}  "
                    f"{r[6]:>8.3f}  {r[7]:>13.3f}")
+    if any(c != c for c in study.column("critical_preload_n")):  # NaN
+        from pressfit.studies.preload_study import NO_CRITICAL_PRELOAD
+
+        click.echo(f"critical nan: {NO_CRITICAL_PRELOAD}")
     echo_written(written)
 
 

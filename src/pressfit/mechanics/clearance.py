@@ -37,15 +37,34 @@ from pressfit.description.machine import Machine
 from pressfit.errors import ClearanceError, ConvergenceError
 from pressfit.mechanics import condensed
 from pressfit.mechanics.clearance_law import DEFAULT_SMOOTHING_M, ENDS, Clearance, dead_zones
-from pressfit.mechanics.preload import Amplitudes, along_first_vector, rest_length_offsets
+from pressfit.mechanics.preload import Amplitudes, along_first_vector, rest_length_offsets, self_stress_forces_n
 
 NEWTON_TOL = 1e-10  # relative force residual of the small-displacement solve
 
 
 # --- small-displacement solver, batched --------------------------------------------------------------------
+def _newton_step(u: np.ndarray, k: np.ndarray, t: np.ndarray, grad: np.ndarray) -> np.ndarray:
+    """The Newton step -H^-1 grad (B, 3 + 2 n) of :meth:`_Chain.solve`, the joint block eliminated leg by leg: leg
+    i's two plays (tangents t_b, t_p) and its spring k_i form a 2 x 2 block [[k + t_b, k], [k, k + t_p]] coupled to
+    the plate by -k u_i on both, so the Schur complement on the plate is sum_i k_s,i u_i u_i^T with k_s the three
+    springs in series, k t_b t_p / det, det = k (t_b + t_p) + t_b t_p (no cancellation when a play is open)."""
+    b, nl = k.shape
+    gd, gx = grad[:, :3], grad[:, 3:].reshape(b, nl, 2)
+    tb, tp = t[..., 0], t[..., 1]
+    det = k * (tb + tp) + tb * tp
+    m = (tp * gx[..., 0] + tb * gx[..., 1]) / det  # 1^T M g_i
+    schur = np.einsum("bi,bij,bik->bjk", k * tb * tp / det, u, u)
+    dd = np.linalg.solve(schur, (-gd - np.einsum("bi,bi,bij->bj", k, m, u))[:, :, None])[:, :, 0]
+    c = k * np.einsum("bj,bij->bi", dd, u)  # dx_i = M_i (c 1 - g_i)
+    dxb = (c * tp - (k + tp) * gx[..., 0] + k * gx[..., 1]) / det
+    dxp = (c * tb + k * gx[..., 0] - (k + tb) * gx[..., 1]) / det
+    return np.concatenate([dd, np.stack([dxb, dxp], -1).reshape(b, 2 * nl)], 1)
+
+
 @dataclass(frozen=True, kw_only=True)
 class _Chain:
-    """One decoupled block: n legs with direction u_i (n, 3), spring k_i (n,) in series with two plays."""
+    """One decoupled block: n legs with direction u_i (n, 3) and spring k_i (n,), or per batch member (B, n, 3)
+    and (B, n) (many poses at once), in series with two plays."""
 
     u: np.ndarray
     k: np.ndarray
@@ -59,30 +78,25 @@ class _Chain:
 
         Returns z = (d, x flattened) (B, 3 + 2 n), the spring forces (B, n) and the worst relative residual.
         """
-        b, nl = load.shape[0], len(self.k)
+        b, nl = load.shape[0], self.k.shape[-1]
+        u = np.broadcast_to(self.u, (b, nl, 3))
+        k = np.broadcast_to(self.k, (b, nl))
         nz = 3 + 2 * nl
-        kuu = np.einsum("i,ij,ik->jk", self.k, self.u, self.u)
+        kuu = np.einsum("bi,bij,bik->bjk", k, u, u)
         if self.gaps is None:
-            d = np.linalg.solve(kuu, (load + np.einsum("bi,i,ij->bj", offsets, self.k, self.u)).T).T
-            return d, self.k * (d @ self.u.T - offsets), 0.0
+            d = np.linalg.solve(kuu, (load + np.einsum("bi,bi,bij->bj", offsets, k, u))[:, :, None])[:, :, 0]
+            return d, k * (np.einsum("bj,bij->bi", d, u) - offsets), 0.0
         z = np.zeros((b, nz)) if z0 is None else z0.copy()
-        hess = np.zeros((b, nz, nz))
-        hess[:, :3, :3] = kuu
-        ku = -(self.k[:, None] * self.u)  # (n, 3)
-        idx = np.arange(2 * nl)
-        hess[:, :3, 3:] = np.repeat(ku, 2, 0).T
-        hess[:, 3:, :3] = np.repeat(ku, 2, 0)
-        blk = np.kron(np.eye(nl), np.ones((2, 2))) * np.repeat(self.k, 2)[:, None]
-        f_ref = np.maximum(np.linalg.norm(load, axis=1), np.abs(offsets) @ self.k / nl + 1.0)
+        f_ref = np.maximum(np.linalg.norm(load, axis=1), (np.abs(offsets) * k).sum(1) / nl + 1.0)
         radius = max(0.5 * float(self.gaps.max()), 100 * self.w)
 
         def parts(zz: np.ndarray) -> tuple[np.ndarray, ...]:
             d, x = zz[:, :3], zz[:, 3:].reshape(b, nl, 2)
-            stretch = d @ self.u.T - x.sum(2) - offsets
-            n = self.k * stretch
+            stretch = np.einsum("bj,bij->bi", d, u) - x.sum(2) - offsets
+            n = k * stretch
             e, f, t = dead_zones(x, self.gaps, self.kc, self.w)
             energy = 0.5 * (n * stretch).sum(1) + e.sum((1, 2)) - (load * d).sum(1)
-            grad = np.concatenate([n @ self.u - load, (f - n[:, :, None]).reshape(b, 2 * nl)], 1)
+            grad = np.concatenate([np.einsum("bi,bij->bj", n, u) - load, (f - n[:, :, None]).reshape(b, 2 * nl)], 1)
             return energy, grad, t.reshape(b, 2 * nl), n
 
         energy, grad, t, n = parts(z)
@@ -90,9 +104,7 @@ class _Chain:
             res = np.max(np.abs(grad), 1) / f_ref
             if np.all(res <= tol):
                 return z, n, float(res.max())
-            hess[:, 3:, 3:] = blk
-            hess[:, 3 + idx, 3 + idx] += t
-            dz = -np.linalg.solve(hess, grad[:, :, None])[:, :, 0]
+            dz = _newton_step(u, k, t.reshape(b, nl, 2), grad)
             alpha = np.minimum(1.0, radius / np.maximum(np.max(np.abs(dz[:, 3:]), 1), 1e-300))
             slope = (grad * dz).sum(1)
             for _ in range(60):  # backtracking on the convex energy (Armijo), per batch member
@@ -372,6 +384,16 @@ def _all_closed(machine: Machine, pose: np.ndarray, d: np.ndarray, loads: np.nda
     return np.array([np.all(np.abs(s["joint_axial_m"]) >= gaps, axis=(1, 2)) for s in up]).all(0)
 
 
+def _loads_every_leg(machine: Machine, pose: np.ndarray) -> bool:
+    """Whether the studies' one-number preload (:func:`pressfit.mechanics.preload.along_first_vector`) puts a force
+    on every leg at ``pose``: never on a 3-leg machine (no preload) nor on one of five or more legs (legs 5..n carry
+    none), whose cardans then stay open at no load whatever the amplitude."""
+    if machine.redundancy != 1:
+        return False
+    v = np.abs(self_stress_forces_n(machine, pose, 1.0))
+    return bool(v.min() > 1e-9 * v.max())
+
+
 def critical_preloads(machine: Machine, pose_m: ArrayLike, direction: ArrayLike, press_load_n: float,
                       clearances: list[Clearance], preload_mode: str = "force", steps: int = 50,
                       tol: float | None = None) -> list[CriticalPreload]:
@@ -387,6 +409,11 @@ def critical_preloads(machine: Machine, pose_m: ArrayLike, direction: ArrayLike,
     lo, hi = np.zeros(nb), np.full(nb, scale)
     n_eval = 0
     closed0 = _all_closed(machine, pose, d, loads, clearances, lo, preload_mode)
+    if not np.all(closed0) and not _loads_every_leg(machine, pose):
+        nan = float("nan")  # no amplitude closes a leg the preload leaves without force: nothing to bisect
+        return [CriticalPreload(preload=0.0 if c else nan, lower=0.0 if c else nan, tolerance=0.0 if c else nan,
+                                preload_mode=preload_mode, press_load_n=float(press_load_n), evaluations=1)
+                for c in closed0]
     for _ in range(30):  # grow the upper bound until every joint stays closed
         ok = _all_closed(machine, pose, d, loads, clearances, hi, preload_mode)
         n_eval += 1
@@ -412,7 +439,10 @@ def critical_preload(machine: Machine, pose_m: ArrayLike, direction: ArrayLike, 
     """The smallest preload a4 (N in force mode, m in length mode) that keeps every cardan closed
     (|x| >= its effective gap) at each of ``steps`` load steps up to press_load_n (N) along ``direction``;
     on a machine of five or more legs a4 is the amplitude along the first preload basis vector
-    (:func:`pressfit.mechanics.preload.along_first_vector`); a 3-leg machine has none (PreloadError).
+    (:func:`pressfit.mechanics.preload.along_first_vector`), which leaves legs 5..n without force, and a 3-leg
+    machine has no preload: on both the answer is NaN (0 where the load alone keeps every cardan closed), never a
+    bisection of ever larger preloads that the solver cannot follow (:mod:`pressfit.mechanics.closing_preload`
+    finds the critical preload of such machines along a direction that loads every leg).
 
     Bisection on the small-displacement model; ``tol`` (default 1e-4 of the press load in N, or of the
     press load times the largest axial compliance in m) is the final bracket width. The smoothing adds a

@@ -126,3 +126,27 @@ def with_axial_preload(result: CondensedResult, extra_forces_n: np.ndarray) -> C
         result, axial_forces_n=result.axial_forces_n + extra_forces_n,
         force_residual_n=result.force_residual_n - extra.sum(-2),
         moment_residual_nm=result.moment_residual_nm - cross(result.plate_offsets_m, extra).sum(-2))
+
+
+def closing_direction(machine: Machine, poses_m: np.ndarray) -> np.ndarray:
+    """The unit leg-force direction (..., n) of the preload that closes every leg's cardans, at poses (..., 3), m.
+
+    Redundancy 1 (the 4-UPU): v_p itself (Table 4, v_1 < 0). Redundancy >= 2: of the preload space's projections of
+    the 2^(n-1) leg sign patterns (s_1 = -1), the unit vector whose smallest leg share min_i |v_i| is largest, so
+    every leg carries a share (the studies' :func:`along_first_vector` leaves legs 5..n without any); v_1 < 0. NaN
+    where the basis is. PreloadError on a 3-leg machine (no redundant actuation)."""
+    k = machine.redundancy
+    if k == 0:
+        raise PreloadError("a 3-leg machine has no redundant actuation: no internal preload", machine.name, k)
+    basis = kinematics.preload_basis(machine, np.asarray(poses_m, dtype=float))
+    if k == 1:
+        return basis[..., 0]
+    n = len(machine.legs)
+    signs = np.array(np.meshgrid(*([[-1.0]] + [[-1.0, 1.0]] * (n - 1)), indexing="ij")).reshape(n, -1)  # (n, P)
+    q, _ = np.linalg.qr(np.nan_to_num(basis))  # (..., n, k) orthonormal
+    proj = q @ (np.swapaxes(q, -1, -2) @ signs)  # (..., n, P)
+    proj /= np.maximum(np.linalg.norm(proj, axis=-2, keepdims=True), 1e-300)
+    best = np.argmax(np.abs(proj).min(axis=-2), axis=-1)  # (...,)
+    v = np.take_along_axis(proj, best[..., None, None], axis=-1)[..., 0]
+    v = np.where(v[..., :1] > 0, -v, v)
+    return np.where(np.isnan(basis).any(axis=(-1, -2))[..., None], np.nan, v)

@@ -20,12 +20,13 @@ PANELS = (("worst_drive_force_n", "worst drive force [N]", 1.0),
           ("tilt_worst_rad", "tool tilt under 700 N, worst [mrad]", 1e3),
           ("first_frequency_lowest_hz", "first natural frequency, lowest [Hz]", 1.0),
           ("moving_mass_kg", "moving mass [kg]", 1.0),
-          ("lost_motion_m", "lost motion, 20 um play [um]", 1e6))
+          ("lost_motion_m", "lost motion, 20 um play, worst over the box [um]", 1e6))
 CSV_COLUMNS = ("name", "kind", "legs", "source", "worst_drive_force_n", "worst_bending_nm", "worst_bending_member",
                "weakest_stiffness_worst_n_per_m", "weakest_stiffness_median_n_per_m",
                "vertical_stiffness_worst_n_per_m", "vertical_stiffness_median_n_per_m", "tilt_worst_rad",
                "tilt_median_rad", "first_frequency_lowest_hz", "first_frequency_median_hz", "moving_mass_kg",
-               "lost_motion_m", "lost_motion_preloaded_m", "best_preload_n", "max_relative_residual")
+               "lost_motion_m", "lost_motion_preloaded_m", "critical_preload_worst_n", "preloaded_drive_force_n",
+               "max_relative_residual")
 
 
 def compare_figure(result: Comparison) -> plt.Figure:
@@ -39,7 +40,7 @@ def compare_figure(result: Comparison) -> plt.Figure:
         if key == "lost_motion_m":
             pre = np.array([np.nan if m.lost_motion_preloaded_m is None else max(m.lost_motion_preloaded_m, 0.0)
                             for m in result.machines]) * scale
-            ax.bar(names, pre, color="tab:orange", width=0.4, label="with the best preload")
+            ax.bar(names, pre, color="tab:orange", width=0.4, label="with each pose's critical preload")
             ax.legend(fontsize=7)
         ax.set_title(label, fontsize=9)
         ax.tick_params(axis="x", labelrotation=20, labelsize=7)

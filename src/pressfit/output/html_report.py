@@ -374,7 +374,8 @@ COMPARE_COLUMNS = (("name", "machine"), ("legs", "legs"), ("worst_drive_force_n"
                    ("first_frequency_lowest_hz", "first frequency, lowest [Hz]"),
                    ("moving_mass_kg", "moving mass [kg]"),
                    ("lost_motion_m", "lost motion, 20 um play [m]"),
-                   ("lost_motion_preloaded_m", "lost motion, best preload [m]"), ("best_preload_n", "best preload [N]"))
+                   ("lost_motion_preloaded_m", "lost motion, critical preload [m]"),
+                   ("critical_preload_worst_n", "critical preload, worst pose [N]"))
 
 
 def _compare_section(page: _Page, c: ReportContent) -> None:

@@ -26,11 +26,16 @@ residual enforced):
 * the first natural frequency (:func:`pressfit.dynamics.modes.natural_modes`, the drives holding their lengths)
   at the box's centre and its four corners at mid height, lowest and median, Hz; the moving mass (every body of
   the inertial model: the plate, the tool, the legs, which swing), kg;
-* with ``PLAY_M`` (20 um) of play in every cardan (the machine's clearance law and geometry), at the box's centre
-  under the press load: the lost motion without preload and, for a redundant machine, with the best preload (the
-  critical preload that keeps every cardan closed up to the press load, :func:`pressfit.mechanics.clearance.
-  critical_preloads`), from :func:`pressfit.studies.preload_study.preload_study`; a machine with n = 3 legs has no
-  preload (None, with the reason).
+* with ``PLAY_M`` (20 um) of play in every cardan (the machine's clearance law and geometry), at every pose of the
+  box and every load direction of the cone, from the whole load path (:mod:`pressfit.mechanics.closing_preload`):
+  the lost motion without preload (the deflection the play adds at the press load, wherever along the path it is
+  taken up) and, for a redundant machine, the pose's critical preload (the smallest that keeps every cardan closed
+  along the whole path for every direction), the drive forces computed with it and the lost motion left; a machine
+  with n = 3 legs has no preload (None, with the reason).
+
+The claims (:func:`claims`) are decided pose by pose over the 4-UPU's box and cone: the verdict is "confirmed"
+only where the claim holds at every pose, "holds on X% of the box" where it holds at some, "refuted" where at none,
+with the worst pose and its figures.
 """
 
 from __future__ import annotations
@@ -81,11 +86,22 @@ class MachineFigures:
     first_frequency_lowest_hz: float
     first_frequency_median_hz: float
     moving_mass_kg: float
-    lost_motion_m: float  # with PLAY_M of play, no preload, at the box's centre under the press load
-    lost_motion_preloaded_m: float | None  # the same with the best preload (None: no redundant actuation)
-    best_preload_n: float | None
-    preload_note: str  # why there is no preload, or how the best one was found
+    lost_motion_m: float  # with PLAY_M of play, no preload: worst over the box and the cone, m
+    lost_motion_preloaded_m: float | None  # the same with each pose's critical preload (None: no redundant actuation)
+    critical_preload_worst_n: float | None  # the largest pose-wise critical preload over the box (NaN: none at a pose)
+    critical_preload_worst_pose_m: np.ndarray | None
+    preloaded_drive_force_n: float | None  # max |N_i| over the box, cone and path with each pose's critical preload
+    preload_note: str  # why there is no preload, or how it was found
     max_relative_residual: float  # the worst equilibrium residual of the solves behind these figures
+    poses_m: np.ndarray  # (k, 3) the box; the per-pose figures below decide the claims
+    pose_weakest_stiffness_n_per_m: np.ndarray  # (k,)
+    pose_vertical_stiffness_n_per_m: np.ndarray  # (k,)
+    pose_tilt_rad: np.ndarray  # (k,) worst over the cone
+    pose_bending_nm: np.ndarray  # (k,) worst member, over the cone
+    pose_lost_motion_m: np.ndarray  # (k,) no preload, worst over the cone (NaN: not computed)
+    pose_critical_preload_n: np.ndarray  # (k,) NaN: none (or no redundant actuation)
+    pose_preloaded_drive_force_n: np.ndarray  # (k,) the worst drive with the pose's critical preload
+    pose_preloaded_lost_motion_m: np.ndarray  # (k,)
 
     def to_dict(self) -> dict[str, Any]:
         return {k: (v.tolist() if isinstance(v, np.ndarray) else v) for k, v in self.__dict__.items()}
@@ -115,7 +131,7 @@ class PoseFigures:
     bending_nm: np.ndarray  # (k, n) max leg bending over the loads
     weakest_stiffness_n_per_m: np.ndarray  # (k,) smallest eigenvalue of the tool's translational stiffness
     vertical_stiffness_n_per_m: np.ndarray  # (k,) 1 / C_yy
-    tilt_rad: np.ndarray  # (k,) |phi| under the press load (+y)
+    tilt_rad: np.ndarray  # (k,) |phi|, worst over the press load and its cone
     max_relative_residual: float
 
 
@@ -123,20 +139,20 @@ def pose_figures(machine: Machine, poses_m: np.ndarray) -> PoseFigures:
     """:class:`PoseFigures` at ``poses_m`` (k, 3), m, from the condensed model (its residual enforced)."""
     poses = np.atleast_2d(np.asarray(poses_m, dtype=float))
     loads = press_loads(PRESS_LOAD_N, CONE_HALF_ANGLE_RAD, CONE_DIRECTIONS)  # the first: the press load alone
-    forces, bending, tilt, residual = [], [], None, 0.0
+    forces, bending, tilt, residual = [], [], [], 0.0
     for load in loads:
         res = condensed.solve_linear(machine, poses, np.broadcast_to(load, poses.shape))
         residual = max(residual, float(res.relative_residual().max()))
         forces.append(np.abs(res.axial_forces_n))
         bending.append(res.bending_nm)
-        tilt = res.tilt_rad if tilt is None else tilt
+        tilt.append(res.tilt_rad)
     if residual > CONDENSED_RESIDUAL_TOL:
         raise ResidualError("compare: condensed solve", "relative equilibrium residual", residual,
                             CONDENSED_RESIDUAL_TOL)
     compliance = condensed.condensed_plate_compliance(machine, poses)[:, :3, :3]
     return PoseFigures(poses_m=poses, drive_force_n=np.max(forces, axis=0), bending_nm=np.max(bending, axis=0),
                        weakest_stiffness_n_per_m=np.linalg.eigvalsh(np.linalg.inv(compliance))[:, 0],
-                       vertical_stiffness_n_per_m=1.0 / compliance[:, 1, 1], tilt_rad=tilt,
+                       vertical_stiffness_n_per_m=1.0 / compliance[:, 1, 1], tilt_rad=np.max(tilt, axis=0),
                        max_relative_residual=residual)
 
 
@@ -145,7 +161,6 @@ def upu_figures(machine: Machine, heights: int = COMPARE_HEIGHTS, grid: int = CO
     """The comparison figures of a UPU machine (module docstring) over :func:`compare_box`; ``modes``/``play``
     False leave those figures NaN (a quick look)."""
     from pressfit.dynamics.modes import natural_modes
-    from pressfit.studies.preload_study import preload_study
 
     poses = compare_box(machine, heights, grid)
     f = pose_figures(machine, poses)
@@ -158,9 +173,11 @@ def upu_figures(machine: Machine, heights: int = COMPARE_HEIGHTS, grid: int = CO
         corners = box[heights // 2][[0, 0, -1, -1], [0, -1, 0, -1]]
         found = [natural_modes(machine, p, count=1) for p in (centre, *corners)]
         frequencies, mass = np.array([m.frequencies_hz[0] for m in found]), found[0].total_mass_kg
-    lost, lost_pre, best, note = float("nan"), None, None, "not computed"
-    if play:
-        lost, lost_pre, best, note = _lost_motion(machine, centre, preload_study)
+    backlash = _backlash(machine, poses) if play else None
+    nan = np.full(len(poses), np.nan)
+    redundant = machine.redundancy > 0 and backlash is not None
+    crit = backlash.critical_preload_n if backlash is not None else nan
+    worst = int(np.argmax(np.where(np.isnan(crit), np.inf, crit))) if redundant else None
     return MachineFigures(
         name=machine.name, source=str(machine.source or machine.name), kind="upu", legs=len(machine.legs),
         heights_m=(float(poses[0, 1]), float(poses[-1, 1])), poses=len(poses),
@@ -173,35 +190,53 @@ def upu_figures(machine: Machine, heights: int = COMPARE_HEIGHTS, grid: int = CO
         vertical_stiffness_median_n_per_m=float(np.median(f.vertical_stiffness_n_per_m)),
         tilt_worst_rad=float(f.tilt_rad.max()), tilt_median_rad=float(np.median(f.tilt_rad)),
         first_frequency_lowest_hz=float(frequencies.min()), first_frequency_median_hz=float(np.median(frequencies)),
-        moving_mass_kg=mass, lost_motion_m=lost, lost_motion_preloaded_m=lost_pre, best_preload_n=best,
-        preload_note=note, max_relative_residual=f.max_relative_residual)
+        moving_mass_kg=mass,
+        lost_motion_m=float("nan") if backlash is None else float(backlash.lost_motion_unpreloaded_m.max()),
+        lost_motion_preloaded_m=float(np.max(backlash.lost_motion_m)) if redundant else None,
+        critical_preload_worst_n=float(crit[worst]) if redundant else None,
+        critical_preload_worst_pose_m=poses[worst] if redundant else None,
+        preloaded_drive_force_n=float(np.max(backlash.drive_forces_n)) if redundant else None,
+        preload_note=_preload_note(machine, play), max_relative_residual=max(
+            f.max_relative_residual, 0.0 if backlash is None else backlash.max_relative_residual),
+        poses_m=poses, pose_weakest_stiffness_n_per_m=f.weakest_stiffness_n_per_m,
+        pose_vertical_stiffness_n_per_m=f.vertical_stiffness_n_per_m, pose_tilt_rad=f.tilt_rad,
+        pose_bending_nm=f.bending_nm.max(1),
+        pose_lost_motion_m=nan if backlash is None else backlash.lost_motion_unpreloaded_m,
+        pose_critical_preload_n=crit,
+        pose_preloaded_drive_force_n=backlash.drive_forces_n.max(1) if redundant else nan,
+        pose_preloaded_lost_motion_m=backlash.lost_motion_m if redundant else nan)
 
 
-def _lost_motion(machine: Machine, pose: np.ndarray, study: Any) -> tuple[float, float | None, float | None, str]:
-    """Lost motion (m) with PLAY_M of cardan play at ``pose`` under the press load: without preload, with the
-    critical preload (N), the preload, and a note."""
-    from pressfit.mechanics.clearance import Clearance, critical_preloads
+def _backlash(machine: Machine, poses: np.ndarray) -> Any:
+    """:func:`pressfit.mechanics.closing_preload.closing_preload` over the box and the cone, PLAY_M of play."""
+    from pressfit.mechanics.clearance import Clearance
+    from pressfit.mechanics.closing_preload import closing_preload
 
-    play = Clearance.uniform(machine).with_gap(PLAY_M)
-    if len(machine.legs) <= 3:
-        s = study(machine, pose, [play], [0.0], PRESS_LOAD_N, progress=False)
-        return float(s.lost_motion_m[0, 0]), None, None, (f"{len(machine.legs)} legs: no redundant actuation, no "
-                                                          "internal preload")
-    crit = critical_preloads(machine, pose, [0.0, 1.0, 0.0], PRESS_LOAD_N, [play])[0].preload
-    s = study(machine, pose, [play], [crit], PRESS_LOAD_N, progress=False)
-    k = int(np.flatnonzero(s.preloads == crit)[0])
-    return (float(s.lost_motion_m[0, 0]), float(s.lost_motion_m[0, k]), float(crit),
-            "the critical preload: the smallest that keeps every cardan closed up to the press load")
+    return closing_preload(machine, poses, press_loads(1.0, CONE_HALF_ANGLE_RAD, CONE_DIRECTIONS), PRESS_LOAD_N,
+                           Clearance.uniform(machine).with_gap(PLAY_M))
+
+
+def _preload_note(machine: Machine, play: bool) -> str:
+    if not play:
+        return "not computed"
+    if machine.redundancy == 0:
+        return f"{len(machine.legs)} legs: no redundant actuation, no internal preload"
+    return ("each pose's critical preload: the smallest along " + ("v_p" if machine.redundancy == 1 else
+            "the preload space's direction that loads every leg most evenly") + " that keeps every cardan closed "
+            "along the whole load path for every direction of the cone")
 
 
 @dataclass(frozen=True, kw_only=True)
 class Claim:
-    """One of the paper's two claims against its baseline: ``verdict`` "confirmed", "refuted" or "not measured"
-    (the baseline is not among the machines compared), with the numbers that decide it."""
+    """One of the paper's claims against its baseline, decided pose by pose over the 4-UPU's box (:func:`verdict`):
+    ``verdict`` "confirmed", "holds on X% of the box", "refuted" or "not measured" (the baseline is not among the
+    machines compared), the fraction of the box where it holds, the worst pose (m) and the numbers that decide it."""
 
     claim: str  # the paper's words
     baseline: str  # what it is measured against
     verdict: str
+    holds_fraction: float | None  # of the box's poses (None: not measured)
+    worst_pose_m: tuple[float, float, float] | None
     evidence: str
 
 
@@ -215,55 +250,106 @@ PRELOAD_CLAIM = ("\"thanks to the additional leg, the proposed solution allows a
 BACKLASH_COMPENSATED = 0.01  # the preload compensates the backlash when it leaves < 1% of the 3-UPU's lost motion
 
 
+def verdict(holds: np.ndarray) -> tuple[str, float]:
+    """The verdict of a claim that holds at the poses where ``holds`` (k,) is True, and the fraction: "confirmed"
+    at every pose, "refuted" at none, else "holds on X% of the box"."""
+    fraction = float(np.mean(holds))
+    if fraction == 1.0:
+        return "confirmed", fraction
+    return ("refuted", fraction) if fraction == 0.0 else (f"holds on {100 * fraction:.3g}% of the box", fraction)
+
+
+def _pose(h: np.ndarray) -> str:
+    return "(" + ", ".join(f"{c:.4g}" for c in h) + ") m"
+
+
+def _span(values: np.ndarray, scale: float, fmt: str) -> str:
+    """min..max of the finite values times scale, or "none"."""
+    ok = values[np.isfinite(values)] * scale
+    return "none" if ok.size == 0 else f"{format(ok.min(), fmt)}..{format(ok.max(), fmt)}"
+
+
+def _not_measured(claim: str, baseline: str, evidence: str) -> Claim:
+    return Claim(claim=claim, baseline=baseline, verdict="not measured", holds_fraction=None, worst_pose_m=None,
+                 evidence=evidence)
+
+
+def _decided(claim: str, baseline: str, holds: np.ndarray, worst: int, poses: np.ndarray, evidence: str) -> Claim:
+    v, fraction = verdict(holds)
+    return Claim(claim=claim, baseline=baseline, verdict=v, holds_fraction=fraction,
+                 worst_pose_m=tuple(float(c) for c in poses[worst]),
+                 evidence=f"holds at {int(np.sum(holds))} of {len(holds)} poses of the box; " + evidence)
+
+
+def precision_claim(upu: MachineFigures, gantry: MachineFigures) -> Claim:
+    """Precision at a pose of the UPU's box: its weakest and vertical tool stiffness higher than the gantry's worst
+    over its own box, and its tilt (worst over the cone) lower than the gantry's worst."""
+    w, v, t = upu.pose_weakest_stiffness_n_per_m, upu.pose_vertical_stiffness_n_per_m, upu.pose_tilt_rad
+    holds = ((w > gantry.weakest_stiffness_worst_n_per_m) & (v > gantry.vertical_stiffness_worst_n_per_m)
+             & (t < gantry.tilt_worst_rad))
+    margin = np.minimum(np.minimum(w / gantry.weakest_stiffness_worst_n_per_m,
+                                   v / gantry.vertical_stiffness_worst_n_per_m), gantry.tilt_worst_rad / t)
+    i = int(np.argmin(margin))
+    return _decided(PRECISION_CLAIM, gantry.name, holds, i, upu.poses_m, (
+        f"worst pose {_pose(upu.poses_m[i])}: weakest tool stiffness {w[i]:.4g} N/m, vertical {v[i]:.4g} N/m, tilt "
+        f"{t[i]:.3g} rad ({upu.name}) against the gantry's worst {gantry.weakest_stiffness_worst_n_per_m:.4g} N/m, "
+        f"{gantry.vertical_stiffness_worst_n_per_m:.4g} N/m, {gantry.tilt_worst_rad:.3g} rad ({gantry.name}); "
+        f"over the box {upu.weakest_stiffness_worst_n_per_m:.4g}..{w.max():.4g} N/m weakest; moving mass "
+        f"{upu.moving_mass_kg:.4g} against {gantry.moving_mass_kg:.4g} kg"))
+
+
+def member_claim(upu: MachineFigures, gantry: MachineFigures) -> Claim:
+    """The members at a pose of the UPU's box: its worst member bending (over the cone) below the gantry's worst."""
+    holds = upu.pose_bending_nm < gantry.worst_bending_nm
+    i = int(np.argmax(upu.pose_bending_nm))
+    return _decided(MEMBER_CLAIM, gantry.name, holds, i, upu.poses_m, (
+        f"worst member bending moment {upu.pose_bending_nm[i]:.4g} N m at {_pose(upu.poses_m[i])} ({upu.name}, "
+        f"{upu.worst_bending_member}) against {gantry.worst_bending_nm:.4g} N m ({gantry.name}, "
+        f"{gantry.worst_bending_member})"))
+
+
+def preload_claim(upu: MachineFigures, upu3: MachineFigures) -> Claim:
+    """The backlash at a pose of the 4-UPU's box: a critical preload exists there (every cardan closed along the
+    whole load path for every direction of the cone), it leaves less than ``BACKLASH_COMPENSATED`` of the 3-UPU's
+    smallest lost motion over its own box (which no preload can change), and the drive forces computed with it stay
+    within the drive force limit."""
+    crit, drive = upu.pose_critical_preload_n, upu.pose_preloaded_drive_force_n
+    left = np.maximum(upu.pose_preloaded_lost_motion_m, 0.0)
+    base = float(np.nanmin(upu3.pose_lost_motion_m))
+    with np.errstate(invalid="ignore"):
+        holds = np.isfinite(crit) & (left < BACKLASH_COMPENSATED * base) & (drive <= upu.drive_force_limit_n)
+    i = int(np.argmax(np.where(np.isfinite(crit), drive, np.inf)))
+    at = ("no preload up to the bracket's closes every cardan" if not np.isfinite(crit[i]) else
+          f"critical preload {crit[i]:.4g} N, the drives carry up to {drive[i]:.4g} N with it, lost motion "
+          f"{left[i] * 1e6:.3g} um")
+    return _decided(PRELOAD_CLAIM, upu3.name, holds, i, upu.poses_m, (
+        f"with {PLAY_M * 1e6:g} um of play in every cardan, along the whole load path to {PRESS_LOAD_N:g} N and "
+        f"over the cone: lost motion {base * 1e6:.3g}..{np.nanmax(upu3.pose_lost_motion_m) * 1e6:.3g} um "
+        f"({upu3.name}: {upu3.preload_note}) against {np.nanmin(upu.pose_lost_motion_m) * 1e6:.3g}.."
+        f"{upu.lost_motion_m * 1e6:.3g} um without preload ({upu.name}); its pose-wise critical preload "
+        f"{_span(crit, 1.0, '.4g')} N; worst pose {_pose(upu.poses_m[i])}: {at}, against the "
+        f"drives' {upu.drive_force_limit_n:.4g} N limit"))
+
+
 def claims(figures: list[MachineFigures]) -> list[Claim]:
     """The paper's claims decided from the compared machines, the redundant 4-UPU being the first UPU machine with 4
-    legs: against the first gantry, precision (confirmed when the 4-UPU's weakest and vertical tool stiffness, worst
-    over the box, are both higher and its worst tilt lower) and the members (confirmed when its worst member bending
-    moment is lower); against the first 3-leg UPU, the backlash (confirmed when the 4-UPU's lost motion with its
-    best preload is below ``BACKLASH_COMPENSATED`` of the 3-UPU's, which no preload can change, and the drives
-    carry that preload on top of their worst press force: a4 + the worst drive force within the drive force limit,
-    a4 bounding each leg's share |a4 v_i|). "not measured" when the baseline is not among the machines."""
+    legs, pose by pose over its box (:func:`precision_claim` and :func:`member_claim` against the first gantry,
+    :func:`preload_claim` against the first 3-leg UPU); "not measured" when the baseline is not among the
+    machines."""
     upu4 = next((f for f in figures if f.kind == "upu" and f.legs == 4), None)
     gantry = next((f for f in figures if f.kind == "gantry"), None)
     upu3 = next((f for f in figures if f.kind == "upu" and f.legs == 3), None)
     out = []
     if upu4 is None or gantry is None:
-        out += [Claim(claim=c, baseline="a Cartesian gantry", verdict="not measured",
-                      evidence="compare a 4-leg UPU machine and a gantry machine file")
+        out += [_not_measured(c, "a Cartesian gantry", "compare a 4-leg UPU machine and a gantry machine file")
                 for c in (PRECISION_CLAIM, MEMBER_CLAIM)]
     else:
-        better = (upu4.weakest_stiffness_worst_n_per_m > gantry.weakest_stiffness_worst_n_per_m
-                  and upu4.vertical_stiffness_worst_n_per_m > gantry.vertical_stiffness_worst_n_per_m
-                  and upu4.tilt_worst_rad < gantry.tilt_worst_rad)
-        out.append(Claim(
-            claim=PRECISION_CLAIM, baseline=gantry.name, verdict="confirmed" if better else "refuted",
-            evidence=(f"weakest tool stiffness (worst over the box) {upu4.weakest_stiffness_worst_n_per_m:.4g} N/m "
-                      f"({upu4.name}) against {gantry.weakest_stiffness_worst_n_per_m:.4g} N/m ({gantry.name}); "
-                      f"vertical {upu4.vertical_stiffness_worst_n_per_m:.4g} against "
-                      f"{gantry.vertical_stiffness_worst_n_per_m:.4g} N/m; tool tilt under the press load (worst) "
-                      f"{upu4.tilt_worst_rad:.3g} against {gantry.tilt_worst_rad:.3g} rad; moving mass "
-                      f"{upu4.moving_mass_kg:.4g} against {gantry.moving_mass_kg:.4g} kg")))
-        out.append(Claim(
-            claim=MEMBER_CLAIM, baseline=gantry.name,
-            verdict="confirmed" if upu4.worst_bending_nm < gantry.worst_bending_nm else "refuted",
-            evidence=(f"worst member bending moment {upu4.worst_bending_nm:.4g} N m ({upu4.name}, "
-                      f"{upu4.worst_bending_member}) against {gantry.worst_bending_nm:.4g} N m ({gantry.name}, "
-                      f"{gantry.worst_bending_member})")))
+        out += [precision_claim(upu4, gantry), member_claim(upu4, gantry)]
     if upu4 is None or upu3 is None or upu4.lost_motion_preloaded_m is None or not np.isfinite(upu3.lost_motion_m):
-        out.append(Claim(claim=PRELOAD_CLAIM, baseline="a 3-leg UPU", verdict="not measured",
-                         evidence="compare a 4-leg and a 3-leg UPU machine file with the play figures"))
+        out.append(_not_measured(PRELOAD_CLAIM, "a 3-leg UPU",
+                                 "compare a 4-leg and a 3-leg UPU machine file with the play figures"))
     else:
-        left = max(upu4.lost_motion_preloaded_m, 0.0)
-        carried = upu4.best_preload_n + upu4.worst_drive_force_n
-        ok = left < BACKLASH_COMPENSATED * upu3.lost_motion_m and carried <= upu4.drive_force_limit_n
-        out.append(Claim(
-            claim=PRELOAD_CLAIM, baseline=upu3.name, verdict="confirmed" if ok else "refuted",
-            evidence=(f"with {PLAY_M * 1e6:g} um of play in every cardan, at the box's centre under the press load: "
-                      f"lost motion {upu3.lost_motion_m * 1e6:.3g} um ({upu3.name}: {upu3.preload_note}) against "
-                      f"{upu4.lost_motion_m * 1e6:.3g} um without preload and {left * 1e6:.3g} um with a preload of "
-                      f"{upu4.best_preload_n:.4g} N ({upu4.name}); with it the drives carry up to {carried:.4g} N "
-                      f"({upu4.best_preload_n:.4g} N of preload on their {upu4.worst_drive_force_n:.4g} N worst press "
-                      f"force) against their {upu4.drive_force_limit_n:.4g} N limit")))
+        out.append(preload_claim(upu4, upu3))
     return out
 
 
@@ -275,7 +361,7 @@ class Comparison:
     claims: list[Claim]
 
     def to_dict(self) -> dict[str, Any]:
-        return {"machines": [m.to_dict() for m in self.machines], "claims": [c.__dict__ for c in self.claims],
+        return {"machines": [m.to_dict() for m in self.machines], "claims": [dict(c.__dict__) for c in self.claims],
                 "play_m": PLAY_M, "press_load_n": PRESS_LOAD_N, "cone_half_angle_rad": CONE_HALF_ANGLE_RAD}
 
 
@@ -294,9 +380,7 @@ def gantry_figures(gantry: Gantry, heights: int = COMPARE_HEIGHTS, grid: int = C
     m = gantry_metrics(gantry, poses, np.column_stack([loads, np.zeros_like(loads)]))
     vertical = np.array([1.0 / np.linalg.inv(build_gantry_model(gantry, p).tool_stiffness_n_per_m())[1, 1]
                          for p in poses])
-    tilt = np.array([np.linalg.norm(build_gantry_model(gantry, p).solve(np.array([0.0, PRESS_LOAD_N, 0.0, 0.0, 0.0,
-                                                                                   0.0])).tool_rotation_rad)
-                     for p in poses])
+    nan = np.full(len(poses), np.nan)
     return MachineFigures(
         name=gantry.name, source=str(gantry.source or gantry.name), kind="gantry", legs=None,
         heights_m=(float(y[0]), float(y[-1])), poses=len(poses), worst_drive_force_n=m.worst_drive_force_n,
@@ -305,11 +389,14 @@ def gantry_figures(gantry: Gantry, heights: int = COMPARE_HEIGHTS, grid: int = C
         worst_bending_member=m.worst_bending_member, weakest_stiffness_worst_n_per_m=m.min_tool_stiffness_n_per_m,
         weakest_stiffness_median_n_per_m=m.median_tool_stiffness_n_per_m,
         vertical_stiffness_worst_n_per_m=float(vertical.min()),
-        vertical_stiffness_median_n_per_m=float(np.median(vertical)), tilt_worst_rad=float(tilt.max()),
-        tilt_median_rad=float(np.median(tilt)), first_frequency_lowest_hz=m.first_frequency_hz,
+        vertical_stiffness_median_n_per_m=float(np.median(vertical)), tilt_worst_rad=m.max_tool_tilt_rad,
+        tilt_median_rad=m.median_tool_tilt_rad, first_frequency_lowest_hz=m.first_frequency_hz,
         first_frequency_median_hz=float("nan"), moving_mass_kg=m.moving_mass_kg, lost_motion_m=float("nan"),
-        lost_motion_preloaded_m=None, best_preload_n=None,
-        preload_note="the gantry's guides and screws have no play model", max_relative_residual=m.worst_residual)
+        lost_motion_preloaded_m=None, critical_preload_worst_n=None, critical_preload_worst_pose_m=None,
+        preloaded_drive_force_n=None, preload_note="the gantry's guides and screws have no play model",
+        max_relative_residual=m.worst_residual, poses_m=poses, pose_weakest_stiffness_n_per_m=nan,
+        pose_vertical_stiffness_n_per_m=vertical, pose_tilt_rad=nan, pose_bending_nm=nan, pose_lost_motion_m=nan,
+        pose_critical_preload_n=nan, pose_preloaded_drive_force_n=nan, pose_preloaded_lost_motion_m=nan)
 
 
 def compare(machines: list[Machine | Gantry], progress: bool = True, heights: int = COMPARE_HEIGHTS,
