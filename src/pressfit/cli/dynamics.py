@@ -226,14 +226,15 @@ def response_cmd(x: float, y: float, z: float, force_n: tuple[float, float, floa
 
 @click.command("control")
 @click.argument("case_path", type=click.Path(path_type=Path))
-@click.option("--model", "plant_model", type=click.Choice(["flexible", "rigid"]), default="flexible",
-              show_default=True, help="The machine linearised: elastic VJM legs or rigid legs (fast).")
+@click.option("--model", "plant_model", type=click.Choice(["flexible", "rigid"]), default=None,
+              help="The machine linearised: elastic VJM legs or rigid legs (fast); default: the case's "
+                   "[simulation] model.")
 @click.option("--out", "out_dir", type=click.Path(path_type=Path), default=None,
               help="Directory for control.json, poles.csv and bode.png (nothing written without it).")
 @OVERWRITE_OPTION
 @click.option("--json", "as_json", is_flag=True, help="Print the summary as JSON.")
 @user_errors
-def control_cmd(case_path: Path, plant_model: str, out_dir: Path | None, overwrite: bool, as_json: bool) -> None:
+def control_cmd(case_path: Path, plant_model: str | None, out_dir: Path | None, overwrite: bool, as_json: bool) -> None:
     """The case's insertion loop (machine, drives, controller) linearised at the pin and the waypoints: margins,
     closed-loop poles, -3 dB bandwidth, structural modes and the drives' share of each."""
     from pressfit.output.control import run_control
