@@ -26,6 +26,7 @@ from pressfit.description.machine import (
     Vector3,
     load_machine,
     read_toml,
+    refuse_wrong_kind,
     validation_error,
 )
 from pressfit.errors import ModelFileError
@@ -718,6 +719,7 @@ class Case(StrictModel):
 def load_case(path: Path | str) -> Case:
     """Read and validate one case file."""
     data = read_toml(path)
+    refuse_wrong_kind(path, data, "case")
     try:
         return Case.model_validate({**data, "path": str(path)})
     except ValidationError as exc:
