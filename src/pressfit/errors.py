@@ -130,6 +130,19 @@ class PreloadError(PressfitError):
         super().__init__(f"{machine}: {message}" if machine else message)
 
 
+class CasePreloadError(PreloadError):
+    """A case file's ``[preload]`` that does not fit its machine's leg count: ``path`` the case file, ``key`` the
+    preload key (``[preload] a4_n``, ...), ``machine`` and ``redundancy`` as :class:`PreloadError`."""
+
+    def __init__(self, path: object, key: str, message: str, machine: str, redundancy: int) -> None:
+        super().__init__(message, machine, redundancy)
+        self.path, self.key = str(path), key
+        self.args = (f"{self.path}: key '{key}': {message}",)
+
+    def __str__(self) -> str:
+        return str(self.args[0])
+
+
 class LegCountError(PressfitError):
     """A layer that supports only some numbers of legs got a machine with another: ``machine`` its name,
     ``legs`` its leg count, ``supported`` the counts the layer takes, ``layer`` the layer's name."""
