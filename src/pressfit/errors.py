@@ -17,6 +17,18 @@ class ModelFileError(PressfitError):
         super().__init__(f"{self.path}: key '{key}': {expected}")
 
 
+class WrongFileKindError(PressfitError):
+    """A file of one kind given where another is read (a machine file as a case, a case as a machine): ``path``,
+    ``kind`` (what the file is: "machine", "case") and ``expected`` (what was read)."""
+
+    HOW = {"machine": "give it with --model (or as a case file's model key)",
+           "case": "give it where a case file is read (a command's CASE argument)"}
+
+    def __init__(self, path: object, kind: str, expected: str) -> None:
+        self.path, self.kind, self.expected = str(path), kind, expected
+        super().__init__(f"{self.path} is a {kind} file, not a {expected} file: {self.HOW.get(kind, '')}".rstrip(": "))
+
+
 def format_violation(leg: int, quantity: str, value: float, limit: str) -> str:
     """The one text of a broken limit: "leg 2: alpha [rad] = 1.57081 breaks maximum 1.5708" (no "leg"
     part for leg 0, a pose-wide limit). ``limit`` is "<minimum|maximum> <number>[ ...]"; the value gets
@@ -116,6 +128,19 @@ class PreloadError(PressfitError):
     def __init__(self, message: str, machine: str = "", redundancy: int | None = None) -> None:
         self.machine, self.redundancy = machine, redundancy
         super().__init__(f"{machine}: {message}" if machine else message)
+
+
+class CasePreloadError(PreloadError):
+    """A case file's ``[preload]`` that does not fit its machine's leg count: ``path`` the case file, ``key`` the
+    preload key (``[preload] a4_n``, ...), ``machine`` and ``redundancy`` as :class:`PreloadError`."""
+
+    def __init__(self, path: object, key: str, message: str, machine: str, redundancy: int) -> None:
+        super().__init__(message, machine, redundancy)
+        self.path, self.key = str(path), key
+        self.args = (f"{self.path}: key '{key}': {message}",)
+
+    def __str__(self) -> str:
+        return str(self.args[0])
 
 
 class LegCountError(PressfitError):

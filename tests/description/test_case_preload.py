@@ -43,3 +43,25 @@ def test_five_leg_case_solved(tmp_path):
     (eq,) = statics.solve_case(case)
     v = kinematics.preload_basis(case.machine(), [0.05, 0.62, -0.05])
     np.testing.assert_allclose(eq.actuator_forces_n, v @ [300.0, -150.0], rtol=1e-6)
+
+
+@pytest.mark.parametrize(("model", "preload", "fragments"), [
+    (TSAI, "a4_n = 100.0", ("key '[preload] a4_n'", "3-leg machine tsai-3upu", "tsai_3upu.toml",
+                            "no redundant actuation", "got 1: 100")),
+    (TSAI.parent / "pressfit_4upu.toml", "amplitudes_n = [100.0, 50.0]",
+     ("key '[preload] amplitudes_n'", "give 1 preload amplitude (n - 3)", "4-leg machine", "got 2: 100, 50")),
+])
+def test_a_preload_against_the_leg_count_names_the_case_file_and_the_key(tmp_path, model, preload, fragments):
+    """issue 28 item 8: a case whose [preload] does not fit its machine's leg count: one `error:` line (exit 2)
+    naming the case file, the [preload] key, the machine's file and its leg count."""
+    from click.testing import CliRunner
+
+    from pressfit.cli import main
+
+    path = tmp_path / "wrong_preload.toml"
+    path.write_text(f'name = "x"\nmodel = "{model}"\n[poses]\npoints_m = [[0.0, 0.62, 0.0]]\n[loads]\n'
+                    f'force_n = [0.0, 30.0, 0.0]\n[preload]\n{preload}\n')
+    res = CliRunner().invoke(main, ["solve", str(path)])
+    assert res.exit_code == 2 and len(res.output.strip().splitlines()) == 1, res.output
+    line = res.output.strip()
+    assert line.startswith(f"error: {path}: ") and all(f in line for f in fragments), line

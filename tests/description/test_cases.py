@@ -109,3 +109,19 @@ def test_bad_toml_and_missing_file(tmp_path):
         load_case(bad)
     with pytest.raises(ModelFileError, match="does not exist"):
         discover([tmp_path / "missing.toml"])
+
+
+def test_a_shipped_case_that_promises_pressfit_check_has_limits_to_check():
+    """issue 28 item 8: a shipped case whose description says `pressfit check` verifies it has limits the check
+    evaluates (a non-empty [envelope], [simulation.limits] or [cycle.limits]); cases/paper/board.toml says so."""
+    promising = []
+    for path in discover([ROOT / "cases"]):
+        case = load_case(path)
+        if "pressfit check" not in " ".join(case.description.split()):
+            continue
+        promising.append(path.name)
+        limits = case.envelope.model_dump(exclude_none=True) or (
+            case.simulation is not None and case.simulation.limits.model_dump(exclude_none=True)) or (
+            case.cycle is not None and case.cycle.limits.model_dump(exclude_none=True))
+        assert limits, f"{path} promises `pressfit check` but has no limits to check"
+    assert "board.toml" in promising

@@ -82,3 +82,28 @@ def test_missing_file(tmp_path):
 def test_wrong_scalar_type_is_rejected(tmp_path, value):
     with pytest.raises(ModelFileError, match="base_half_side_m"):
         load_machine(_write(tmp_path, "base_half_side_m = 0.442", f"base_half_side_m = {value}"))
+
+
+_ROOT = DEFAULT_MODEL.parents[1]
+
+
+@pytest.mark.parametrize(("args", "what"), [
+    (["check", "models/pressfit_4upu.toml"], "models/pressfit_4upu.toml is a machine file, not a case file"),
+    (["simulate", "models/tsai_3upu.toml"], "models/tsai_3upu.toml is a machine file, not a case file"),
+    (["cycle", "models/gantry_cartesian.toml"], "models/gantry_cartesian.toml is a machine file, not a case file"),
+    (["solve", "--model", "cases/paper/A.toml", "0", "0.65", "0", "--load", "0", "30", "0"],
+     "cases/paper/A.toml is a case file, not a machine file"),
+    (["compare", "cases/paper/board.toml"], "cases/paper/board.toml is a case file, not a machine file"),
+])
+def test_the_wrong_kind_of_file_gets_a_plain_refusal(monkeypatch, args, what):
+    """issue 28 item 8: a machine file given as a case, or a case as a machine: one `error:` line saying what the
+    file is and where it goes, exit 2; not the schema's first complaint ("key 'model': Input should be ...")."""
+    from click.testing import CliRunner
+
+    from pressfit.cli import main
+
+    monkeypatch.chdir(_ROOT)
+    res = CliRunner().invoke(main, args)
+    lines = [line for line in res.output.strip().splitlines() if line.startswith("error:")]
+    assert res.exit_code == 2 and len(lines) == 1 and what in lines[0], res.output
+    assert "key '" not in res.output and "Traceback" not in res.output

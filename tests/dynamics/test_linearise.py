@@ -173,3 +173,20 @@ def test_control_with_the_plays_on_says_it_linearises_without_them(tmp_path):
     assert "linearised without the cardan plays" in r.output
     plain = CliRunner().invoke(main, ["control", str(SHIPPED), "--model", "rigid"])
     assert "linearised without the cardan plays" not in plain.output
+
+
+@pytest.mark.parametrize(("name", "expected"), [("insertion.toml", "rigid"), ("insertion_fast.toml", "flexible")])
+def test_control_defaults_to_the_cases_model(monkeypatch, name, expected):
+    """issue 28 item 8: without --model, `pressfit control` linearises the case's [simulation] model (insertion.toml:
+    rigid, insertion_fast.toml: flexible, as their files say), at every pose; the design says which."""
+    import types
+
+    from pressfit.dynamics import linearise
+
+    seen = []
+    monkeypatch.setattr(linearise, "design_at", lambda *a, **k: seen.append(a[5]) or types.SimpleNamespace())
+    case = load_case(SHIPPED.parent / name)
+    design = linearise.control_design(case)
+    assert case.simulation.model == expected and design.model == expected and seen == [expected] * 4
+    assert linearise.control_design(case, "rigid").model == "rigid" and seen[-1] == "rigid"
+    assert "default: the case's [simulation] model" in CliRunner().invoke(main, ["control", "--help"]).output

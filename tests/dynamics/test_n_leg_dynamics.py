@@ -145,11 +145,11 @@ def test_tsai_rigid_closed_loop_poles_are_the_closed_form(tsai):
 
 
 def test_control_and_export_mjcf_run_on_tsai(tmp_path):
-    """`pressfit control` (flexible plant, the default) and `pressfit export-mjcf` on the 3-UPU case: exit 0, the
+    """`pressfit control` (flexible plant, --model flexible) and `pressfit export-mjcf` on the 3-UPU case: exit 0, the
     plant's inputs and outputs are the three drives and lengths, the loop stable, the MJCF has three welds."""
     case = _tsai_case(tmp_path)
     out = tmp_path / "control"
-    result = CliRunner().invoke(main, ["control", str(case.path), "--out", str(out)])
+    result = CliRunner().invoke(main, ["control", str(case.path), "--model", "flexible", "--out", str(out)])
     assert result.exit_code == 0, result.output
     summary = json.loads((out / "control.json").read_text())
     assert all(pose["stable"] for pose in summary["poses"])

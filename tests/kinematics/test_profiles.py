@@ -98,3 +98,43 @@ def test_properties(d, v, a, j):
     if d > 0:
         jerk = np.abs(np.diff(acc) / np.diff(t))
         assert jerk.max() <= j * (1 + 1e-6)
+
+
+def closed_form_time_s(d, v, a, j):
+    """The S-curve's minimum time, written here from the textbook cases (the module docstring's derivation)."""
+    if v * j >= a * a:
+        t_a = v / a + a / j
+    else:
+        t_a = 2 * math.sqrt(v / j)
+    if d >= v * t_a:
+        return d / v + t_a
+    if d >= 2 * a**3 / j**2:
+        vp = (math.sqrt(a**4 / j**2 + 4 * a * d) - a * a / j) / 2
+        if vp * j >= a * a:
+            return 2 * (vp / a + a / j)
+    return 4 * (d / (2 * j)) ** (1 / 3)
+
+
+@pytest.mark.parametrize(("d", "v", "a", "j", "binding"), [
+    (0.26, 0.5, 2.0, 20.0, "speed"),       # the board's approach: a 0.17 s cruise, 0.4 s of jerk phases
+    (2.0, 0.5, 2.0, 20.0, "speed"),        # a long cruise
+    (0.51125, 0.5, 0.5, 40.0, "acceleration"),  # a 0.01 s cruise, 2 T_c = 1.975 s at constant acceleration
+    (0.1, 0.5, 2.0, 40.0, "acceleration"),  # no cruise, a reached for most of the move
+    (0.1, 0.5, 2.0, 20.0, "jerk"),          # the board's traverse: no cruise, a reached only briefly
+    (0.004, 0.5, 2.0, 40.0, "jerk"),        # jerk only: a never reached
+])
+def test_the_binding_limit_is_the_one_whose_relaxation_saves_the_most_time(d, v, a, j, binding):
+    """issue 28 item 8: the time saved per relative relaxation of each limit, -dT/dln(limit), against a central
+    difference (1e-6) of the closed-form time written above (agreement ~1e-9 s: tolerance 1e-7 s), and the binding
+    label is the largest; the board's approach cruises at the speed limit and is "speed" (it read "jerk")."""
+    profile = s_curve(d, v, a, j)
+    assert profile.duration_s == pytest.approx(closed_form_time_s(d, v, a, j), rel=1e-12)
+    h = 1e-6
+    limits = {"speed": 0, "acceleration": 1, "jerk": 2}
+    for name, k in limits.items():
+        up, down = [v, a, j], [v, a, j]
+        up[k] *= math.exp(h)
+        down[k] *= math.exp(-h)
+        expected = -(closed_form_time_s(d, *up) - closed_form_time_s(d, *down)) / (2 * h)
+        assert profile.time_saved_s[name] == pytest.approx(expected, abs=1e-7), name
+    assert profile.binding_limit == binding

@@ -110,6 +110,7 @@ def test_study_on_a_local_cluster_writes_the_front_and_a_fastest_case_that_passe
     fastest = s["fastest_within_limits"]
     assert (fastest["speed_scale"], fastest["descent_scale"]) == (4.0, 1.0)
     assert fastest["cycle_time_s"] == min(table["cycle_time_s"][i] for i in ok)
+    assert "plus its max_overshoot_n" in s["limits_judged"][1]
     assert (out / "front.png").stat().st_size > 10_000
     written = load_case(out / "fastest.toml")  # loads, and its board passes when run again here
     assert written.cycle.study is None
@@ -143,3 +144,46 @@ def test_no_study_table_is_refused(tmp_path):
     path.write_text(tomli_w.dumps(data))
     res = run("study", "cycle", path, "--workers", 1, "--out", tmp_path / "out")
     assert res.exit_code == 2 and "[cycle.study]" in res.output, res.output
+
+
+def pin_result(case, overshoot_n, lateral_m, completed=True):
+    """A cycle summary of ``case``'s pins, each with this overshoot over its force limit (N, peak minus limit) and
+    lateral error at first contact (m): the fields :func:`within_limits` reads, as summarise_cycle writes them."""
+    pins = case.cycle.resolved_pins()
+    return {"pin_count": len(pins), "pins_passed": len(pins) if completed else 0, "pins": [
+        {"index": p.index, "overshoot_n": overshoot_n, "tool_lateral_error_at_first_contact_m": lateral_m,
+         "insertion_completed": completed, "peak_contact_force_n": p.force_limit_n + overshoot_n} for p in pins]}
+
+
+@pytest.mark.parametrize(("overshoot_n", "expected"), [(0.0, True), (0.01, False), (31.0, False)])
+def test_a_pins_force_limit_is_a_limit_without_an_overshoot_allowance(tmp_path, overshoot_n, expected):
+    """No max_overshoot_n anywhere: a peak of the force limit itself is within, 0.01 N over it (just over) and the
+    issue's 61 N on a 30 N limit are not, whatever the alignment (no alignment limit: not judged, said so)."""
+    from pressfit.studies.cycle_study import judged_limits, within_limits
+
+    case = load_case(board(tmp_path, pins=PINS, study=GRID))
+    assert within_limits(case, pin_result(case, overshoot_n, 654e-6)) is expected
+    judged = "; ".join(judged_limits(case))
+    assert "force_limit_n (no max_overshoot_n: none allowed over it)" in judged
+    assert "alignment error not judged" in judged
+
+
+@pytest.mark.parametrize(("overshoot_n", "lateral_m", "expected"), [
+    (0.99, 0.99e-4, True), (1.01, 0.99e-4, False), (0.99, 1.01e-4, False), (0.99, None, False)])
+def test_overshoot_and_alignment_limits_just_under_and_just_over(tmp_path, overshoot_n, lateral_m, expected):
+    """max_overshoot_n = 1 N on the board, max_alignment_error_m = 100 um in [cycle.limits]: 1 % under both is
+    within, 1 % over either is not, a pin never touched (no lateral error) is not."""
+    from pressfit.studies.cycle_study import judged_limits, within_limits
+
+    case = load_case(board(tmp_path, pins=PINS, max_overshoot_n=1.0, limits={"max_alignment_error_m": 1e-4},
+                           study=GRID))
+    assert within_limits(case, pin_result(case, overshoot_n, lateral_m)) is expected
+    judged = "; ".join(judged_limits(case))
+    assert "plus its max_overshoot_n" in judged and "alignment error at most max_alignment_error_m" in judged
+
+
+def test_an_incomplete_insertion_is_never_within(tmp_path):
+    from pressfit.studies.cycle_study import within_limits
+
+    case = load_case(board(tmp_path, pins=PINS, study=GRID))
+    assert not within_limits(case, pin_result(case, 0.0, 0.0, completed=False))

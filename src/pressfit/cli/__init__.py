@@ -62,7 +62,8 @@ def _terminate(signum: int, frame: object) -> None:
 @click.group(cls=_Group)
 @click.version_option(package_name="pressfit")
 def main() -> None:
-    """Structural load and compliance analyzer for the 4-UPU press-fit manipulator (SI units)."""
+    """Structural load, compliance and dynamics analyzer for parallel-kinematic press-fit machines (UPU machines of
+    any leg count; the paper's 4-UPU by default) and their Cartesian gantry (SI units)."""
 
 
 for command in (pose.kinematics_cmd, listing.list_cmd, pose.solve_cmd, paper.tables_cmd, check.check_cmd,

@@ -72,7 +72,7 @@ def simulate_cmd(case_path: Path, out_dir: Path | None, no_limiter: bool, overwr
 
     summary, paths = run_simulation(case_path, out_dir, not no_limiter, overwrite, progress)
     s = summary
-    for warning in dict.fromkeys([*s["warnings"], *s.get("comparison", {}).get("warnings", [])]):
+    for warning in run_warnings(s):
         click.echo(f"warning: {warning}", err=True)
     if as_json:
         click.echo(to_json(summary))
@@ -119,6 +119,17 @@ def simulate_cmd(case_path: Path, out_dir: Path | None, no_limiter: bool, overwr
         click.echo(f"without the limiter: peak {c['peak_contact_force_n']:.2f} N, steady "
                    f"{c['steady_insertion_force_n']:.2f} N")
     echo_written(paths)
+
+
+def run_warnings(summary: dict) -> list[str]:
+    """The warnings of a simulation summary: the run's, then those of its comparison run (the other limiter
+    setting) that the run does not give, each saying it is about the comparison run."""
+    own = list(dict.fromkeys(summary["warnings"]))
+    comparison = summary.get("comparison")
+    if not comparison:
+        return own
+    label = f"the comparison run (limiter {'on' if comparison['limiter'] else 'off'}, not the main run)"
+    return own + [f"{label}: {w}" for w in dict.fromkeys(comparison["warnings"]) if w not in own]
 
 
 def _each(drives: list[dict], key: str, fmt: str) -> str:
@@ -226,14 +237,15 @@ def response_cmd(x: float, y: float, z: float, force_n: tuple[float, float, floa
 
 @click.command("control")
 @click.argument("case_path", type=click.Path(path_type=Path))
-@click.option("--model", "plant_model", type=click.Choice(["flexible", "rigid"]), default="flexible",
-              show_default=True, help="The machine linearised: elastic VJM legs or rigid legs (fast).")
+@click.option("--model", "plant_model", type=click.Choice(["flexible", "rigid"]), default=None,
+              help="The machine linearised: elastic VJM legs or rigid legs (fast); default: the case's "
+                   "[simulation] model.")
 @click.option("--out", "out_dir", type=click.Path(path_type=Path), default=None,
               help="Directory for control.json, poles.csv and bode.png (nothing written without it).")
 @OVERWRITE_OPTION
 @click.option("--json", "as_json", is_flag=True, help="Print the summary as JSON.")
 @user_errors
-def control_cmd(case_path: Path, plant_model: str, out_dir: Path | None, overwrite: bool, as_json: bool) -> None:
+def control_cmd(case_path: Path, plant_model: str | None, out_dir: Path | None, overwrite: bool, as_json: bool) -> None:
     """The case's insertion loop (machine, drives, controller) linearised at the pin and the waypoints: margins,
     closed-loop poles, -3 dB bandwidth, structural modes and the drives' share of each."""
     from pressfit.output.control import run_control

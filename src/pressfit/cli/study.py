@@ -200,8 +200,9 @@ def study_cycle_cmd(case_file: Path, plant_model: str | None, workers: int | Non
                     dashboard: bool, out_dir: Path, overwrite: bool, as_json: bool, progress: bool) -> None:
     """Throughput: the board's motion limits (and optionally its controller gains and preload) swept over the case's
     [cycle.study] grid on a Dask cluster (one board run per sample); the Pareto front of cycle time against the
-    worst alignment error and the worst overshoot, and the fastest setting within every pin's limits, written as a
-    case file (SI units)."""
+    worst alignment error and the worst overshoot, and the fastest setting within the pins' limits (the force limit,
+    the overshoot and alignment limits where given; the limits judged are printed), written as a case file (SI
+    units)."""
     from pressfit.output.cycle_study import run_cycle_study
     from pressfit.studies.cycle_study import FACTOR_LABELS, FACTORS
 
@@ -214,8 +215,9 @@ def study_cycle_cmd(case_file: Path, plant_model: str | None, workers: int | Non
         click.echo(to_json(s | {"outputs": [str(p) for p in written]}))
         return
     click.echo(f"{s['case']}: {s['samples']} samples (model {s['model']}), {s['failed']} refused or failed, "
-               f"{s['within_limits']} within every pin's limits; Pareto front of cycle time, worst alignment error, "
+               f"{s['within_limits']} within the limits; Pareto front of cycle time, worst alignment error, "
                f"worst overshoot: {len(s['front'])} samples")
+    click.echo("limits judged: " + "; ".join(s["limits_judged"]))
     varied = [k for k in FACTORS if len({r[k] for r in s["front"]}) > 1] or list(FACTORS[:1])  # the ones that vary
     click.echo("".join(f"{FACTOR_LABELS[k]:>15}" for k in varied)
                + "  cycle [s]  alignment [um]  overshoot [N]  within")

@@ -26,9 +26,10 @@ from pressfit.description.machine import (
     Vector3,
     load_machine,
     read_toml,
+    refuse_wrong_kind,
     validation_error,
 )
-from pressfit.errors import ModelFileError
+from pressfit.errors import CasePreloadError, ModelFileError
 from pressfit.spatial import cone_directions
 
 MAX_FORCE_N = 1e7  # a press-fit machine load above 10 MN is a typo, not a load case
@@ -711,13 +712,31 @@ class Case(StrictModel):
         """The case's machine, with its overrides applied (errors name the case file)."""
         base = (Path(self.path).parent / self.model) if self.model else DEFAULT_MODEL
         machine = load_machine(base)
-        return machine.with_overrides(self.model_overrides, source=f"{self.path} [model_overrides]") \
+        machine = machine.with_overrides(self.model_overrides, source=f"{self.path} [model_overrides]") \
             if self.model_overrides else machine
+        self._preload_fits(machine)
+        return machine
+
+    def _preload_fits(self, machine: Machine) -> None:
+        """A non-zero ``[preload]`` must have the machine's redundancy n - 3 of amplitudes: CasePreloadError
+        naming the case file, the key and the machine's leg count otherwise."""
+        p = self.preload
+        amplitudes, k, n = p.amplitudes, machine.redundancy, len(machine.legs)
+        if not any(amplitudes) or len(amplitudes) == k:
+            return
+        unit = "m" if p.mode == "length" else "n"
+        key = f"[preload] {'a4' if len(amplitudes) == 1 else 'amplitudes'}_{unit}"
+        got = f"got {len(amplitudes)}: " + ", ".join(f"{a:g}" for a in amplitudes)
+        where = f"the {n}-leg machine {machine.name} ({machine.source})"
+        message = (f"{where} has no redundant actuation: no internal preload; {got}" if k == 0 else
+                   f"give {k} preload amplitude{'s' if k > 1 else ''} (n - 3) for {where}; {got}")
+        raise CasePreloadError(self.path, key, message, machine.name, k)
 
 
 def load_case(path: Path | str) -> Case:
     """Read and validate one case file."""
     data = read_toml(path)
+    refuse_wrong_kind(path, data, "case")
     try:
         return Case.model_validate({**data, "path": str(path)})
     except ValidationError as exc:

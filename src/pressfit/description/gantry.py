@@ -32,6 +32,7 @@ from pressfit.description.machine import (
     StrictModel,
     _merge,
     read_toml,
+    refuse_wrong_kind,
     validation_error,
 )
 from pressfit.errors import UnreachablePoseError
@@ -288,6 +289,7 @@ def is_gantry_file(data: dict[str, Any]) -> bool:
 def load_gantry(path: Path | str, overrides: dict[str, Any] | None = None) -> Gantry:
     """Load and validate a gantry description, optionally with nested parameter overrides."""
     data = read_toml(path)
+    refuse_wrong_kind(path, data, "machine")
     if overrides:
         data = _merge(data, overrides)
     return _validate(data, str(path))

@@ -17,7 +17,7 @@ import numpy as np
 from pydantic import BaseModel, ConfigDict, Field, ValidationError, ValidationInfo, field_validator, model_validator
 
 from pressfit.description import drive_stiffness
-from pressfit.errors import LegCountError, ModelFileError
+from pressfit.errors import LegCountError, ModelFileError, WrongFileKindError
 from pressfit.shipped import default_model
 
 DEFAULT_MODEL = default_model()  # the paper's machine, shipped inside the package
@@ -712,6 +712,25 @@ def validation_error(path: Path | str, exc: ValidationError) -> ModelFileError:
 MAX_INPUT_BYTES = 10_000_000  # a machine or case file is a few kB; anything larger is not one
 
 
+CASE_TABLES = ("poses", "loads", "cycle", "simulation")  # a case file's tables (a machine file has none of them)
+
+
+def file_kind(data: dict[str, Any]) -> str | None:
+    """What a parsed TOML file is: "machine" (a UPU machine's [geometry] or a gantry's ``kind = "gantry"``),
+    "case" (any of ``CASE_TABLES``), or None (neither: left to the schema's error)."""
+    if "geometry" in data or data.get("kind") == "gantry":
+        return "machine"
+    return "case" if any(k in data for k in CASE_TABLES) else None
+
+
+def refuse_wrong_kind(path: Path | str, data: dict[str, Any], expected: str) -> None:
+    """:class:`WrongFileKindError` when ``data`` (parsed from ``path``) is a file of another kind than
+    ``expected`` ("machine" or "case")."""
+    kind = file_kind(data)
+    if kind is not None and kind != expected:
+        raise WrongFileKindError(path, kind, expected)
+
+
 def read_toml(path: Path | str) -> dict[str, Any]:
     """Parse a TOML file; a missing, special (FIFO, device), oversized or malformed file becomes a
     :class:`ModelFileError` (checked with ``stat`` before opening, so nothing blocks or reads forever)."""
@@ -738,6 +757,7 @@ def read_toml(path: Path | str) -> dict[str, Any]:
 def load_machine(path: Path | str = DEFAULT_MODEL, overrides: dict[str, Any] | None = None) -> Machine:
     """Load and validate a machine description, optionally with nested parameter overrides."""
     data = read_toml(path)
+    refuse_wrong_kind(path, data, "machine")
     if overrides:
         data = _merge(data, overrides)
     return _validate(data, str(path))

@@ -21,7 +21,7 @@ straight move):
   time is reported).
 
 Each segment reports the limit that binds it: "speed", "acceleration" or "jerk" (the profile's
-:attr:`pressfit.kinematics.profiles.SCurve.binding_limit`, the reached limit that holds it longest; the quintic's
+:attr:`pressfit.kinematics.profiles.SCurve.binding_limit`, the limit whose relaxation saves the most time; the quintic's
 largest of its three times), "drive speed" or "drive force" when that limit is the drives' scaled one, "dwell"
 or "settle" for a hold.
 

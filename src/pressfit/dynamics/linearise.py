@@ -452,12 +452,13 @@ class ControlDesign:
                 "poses": [p.to_dict() for p in self.poses]}
 
 
-def control_design(case: Case, model: Model = "flexible") -> ControlDesign:
+def control_design(case: Case, model: Model | None = None) -> ControlDesign:
     """The case's loop (``[simulation]``, ``[simulation.controller]``) linearised at the pin (contact engaged)
-    and at the waypoints start, approach (above the pin) and end."""
+    and at the waypoints start, approach (above the pin) and end, on ``model`` (default: ``[simulation] model``)."""
     sim = case.simulation
     if sim is None:
         raise PressfitError(f"{case.path}: no [simulation] table: pressfit control needs the insertion scenario")
+    model = model or sim.model
     machine = case.machine()
     c = sim.contact
     pin_pose = np.array([c.pin_position_m[0], c.board_height_m, c.pin_position_m[1]])

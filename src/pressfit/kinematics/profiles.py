@@ -64,15 +64,32 @@ class SCurve:
                                                  True), strict=True) if on)
 
     @property
+    def time_saved_s(self) -> dict[str, float]:
+        """Per limit, the time the move saves per relative relaxation of it, -dT/d(ln limit) (s): with a cruise
+        (T = D/v + v/a + a/j, or D/v + 2 sqrt(v/j) when a is not reached) speed T_v + T_j, acceleration T_c,
+        jerk T_j; without a cruise but with a reached (T = 2 (v_p/a + a/j)) speed 0, acceleration (3 e - 1) T
+        and jerk (1 - 2 e) T, e = dlnT/dlnD = 2 D / (T (2 v_p + a^2/j)) (from the scalings T(kD, ka, kj) = T
+        and T(D, a/k^2, j/k^3) = k T); jerk only (T = 4 (D / 2j)^(1/3)): jerk T/3. All 0 for D = 0."""
+        t, tj, tc, tv = self.duration_s, self.jerk_time_s, self.constant_acceleration_time_s, self.cruise_time_s
+        if self.distance_m <= 0.0:
+            return dict.fromkeys(LIMITS, 0.0)
+        if tv > 0.0:
+            return {"speed": tv + tj, "acceleration": tc, "jerk": tj}
+        if tc > 0.0:
+            a, j = self.acceleration_m_per_s2, self.jerk_m_per_s3
+            e = 2.0 * self.distance_m / (t * (2.0 * self.peak_speed_m_per_s + a * a / j))
+            return {"speed": 0.0, "acceleration": (3.0 * e - 1.0) * t, "jerk": (1.0 - 2.0 * e) * t}
+        return {"speed": 0.0, "acceleration": 0.0, "jerk": t / 3.0}
+
+    @property
     def binding_limit(self) -> str:
-        """The limit that holds the move longest: of the reached ones, the one whose phases take the largest share
-        of T (the cruise T_v: "speed"; the constant-acceleration phases 2 T_c: "acceleration"; the jerk phases
-        4 T_j: "jerk"); "" for D = 0."""
+        """The limit that binds the move most: the one whose relaxation saves the most time
+        (:attr:`time_saved_s`; "speed" on a move that cruises long enough, "acceleration" or "jerk" otherwise);
+        "" for D = 0."""
         if self.distance_m <= 0.0:
             return ""
-        shares = {"speed": self.cruise_time_s, "acceleration": 2.0 * self.constant_acceleration_time_s,
-                  "jerk": 4.0 * self.jerk_time_s}
-        return max(self.limits_reached, key=shares.__getitem__)
+        saved = self.time_saved_s
+        return max(LIMITS, key=saved.__getitem__)
 
     def at(self, t_s: np.ndarray | float) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
         """Position (m, from 0 to D), speed (m/s) and acceleration (m/s^2) at ``t_s`` (s; clamped to [0, T])."""

@@ -52,7 +52,7 @@ def write_control(design: ControlDesign, out: Path) -> list[Path]:
     return paths
 
 
-def run_control(case_path: Path | str, model: Model, out_dir: Path | None,
+def run_control(case_path: Path | str, model: Model | None, out_dir: Path | None,
                 overwrite: bool = False) -> tuple[ControlDesign, list[Path]]:
     """:func:`pressfit.dynamics.linearise.control_design` of a case file and, with ``out_dir``, its files
     (checked before computing, written atomically)."""

@@ -15,7 +15,7 @@ from pressfit.description.cases import Case, load_case
 from pressfit.description.machine import read_toml
 from pressfit.output import files as io
 from pressfit.output.plots import plt
-from pressfit.studies.cycle_study import FACTOR_LABELS, FACTORS, CycleStudyResult, cycle_study, variant
+from pressfit.studies.cycle_study import FACTOR_LABELS, FACTORS, CycleStudyResult, cycle_study, judged_limits, variant
 
 
 def front_figure(result: CycleStudyResult) -> plt.Figure:
@@ -61,7 +61,8 @@ def fastest_case_toml(result: CycleStudyResult) -> str | None:
         data["model"] = str((Path(case.path).parent / data["model"]).resolve())
     data["name"] = f"{case.name}-fastest"
     time_s = result.columns["cycle_time_s"][result.fastest]
-    data["description"] = (f"The fastest setting of `pressfit study cycle` on {case.path} within every pin's limits: "
+    data["description"] = (f"The fastest setting of `pressfit study cycle` on {case.path} within the limits judged ("
+                           + "; ".join(judged_limits(case)) + "): "
                            + ", ".join(f"{FACTOR_LABELS[k]} {v:g}" for k, v in zip(FACTORS, setting, strict=True))
                            + f"; cycle time {time_s:.6g} s.")
     return tomli_w.dumps(data)

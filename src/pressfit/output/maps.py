@@ -100,12 +100,8 @@ def write_kinematic_maps(machine: Machine, out_dir: Path | str, heights_m: Itera
             if not figures:
                 bar.update()
                 continue
-            fig = plots.xz_map_figure(pm.x_m, pm.z_m, fields, f"4-UPU maps at y_h = {y:g} m "
-                                      "(magenta: required square, also at 45 deg)")
+            fig = plane_map_figure(machine, pm, fields, squares)
             try:
-                for ax, name in zip(fig.axes, fields, strict=False):
-                    for sq in squares if name.startswith("F_") else squares[:1]:
-                        ax.plot(sq[:, 0], sq[:, 1], "m--", linewidth=1.2)
                 written.append(io.save_figure(fig, out / f"maps_y{y:.3f}.png", overwrite))
             finally:
                 plots.plt.close(fig)
@@ -114,6 +110,18 @@ def write_kinematic_maps(machine: Machine, out_dir: Path | str, heights_m: Itera
         written.append(io.write_json(out / "summary.json", result, overwrite))
         bar.update()
     return result, written, plane_maps
+
+
+def plane_map_figure(machine: Machine, pm: PlaneMap, fields: dict[str, np.ndarray], squares: list[np.ndarray]
+                     ) -> plt.Figure:
+    """The kinematic maps of one plane (:func:`pressfit.output.plots.xz_map_figure`), titled with the machine's
+    name and leg count, the required square (m; and at 45 degrees on the force maps) drawn on each."""
+    fig = plots.xz_map_figure(pm.x_m, pm.z_m, fields, f"{machine.name} ({len(machine.legs)}-UPU) maps at y_h = "
+                              f"{pm.y_m:g} m (magenta: required square, also at 45 deg)")
+    for ax, name in zip(fig.axes, fields, strict=False):
+        for sq in squares if name.startswith("F_") else squares[:1]:
+            ax.plot(sq[:, 0], sq[:, 1], "m--", linewidth=1.2)
+    return fig
 
 
 # --- output ---------------------------------------------------------------------------------------

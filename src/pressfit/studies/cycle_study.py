@@ -8,8 +8,10 @@ controller's three gains, and of the commanded preloads. Each sample is
 one board run (:func:`pressfit.dynamics.cycle.simulate_cycle`, the case's model, without the drive sizing) and
 reports the planned cycle time (s), the worst pin's lateral alignment error at first contact (m; infinite for a
 pin never touched) and the worst overshoot over its insertion limit (N). A setting keeps every pin within its
-limits when every pin passes (insertion completed, the pin's ``max_overshoot_n`` and ``max_alignment_error_m``)
-and, when given, ``[cycle.limits]`` ``max_overshoot_n`` and ``max_alignment_error_m`` hold on the worst pin. A
+limits (:func:`pin_within_limits`) when every pin completes its insertion, its peak contact force stays within its
+force limit plus the overshoot allowed (the pin's or ``[cycle.limits]``' ``max_overshoot_n``; none when not
+given: a pin's force limit is a limit), and its alignment error within the pin's or ``[cycle.limits]``'
+``max_alignment_error_m`` where one is given; :func:`judged_limits` says which limits a board is judged on. A
 sample the planner refuses (a scaled move the drives cannot follow, ...) or whose run fails is recorded with its
 reason, not on the front. Every variant is validated before the cluster starts (the scaled limits must satisfy
 :class:`pressfit.description.cases.MotionLimits`; an error names ``[cycle.study]``, the factor and the file).
@@ -25,7 +27,7 @@ from typing import Any
 import numpy as np
 from pydantic import ValidationError
 
-from pressfit.description.cases import Case, MotionLimits
+from pressfit.description.cases import Case, MotionLimits, ResolvedPin
 from pressfit.errors import ModelFileError, PressfitError
 
 FACTORS = ("speed_scale", "acceleration_scale", "jerk_scale", "descent_scale", "kp_scale", "kd_scale", "ki_scale",
@@ -75,13 +77,46 @@ def variant(case: Case, setting: Setting) -> Case:
 
 
 def within_limits(case: Case, summary: dict[str, Any]) -> bool:
-    """Every pin passes and ``[cycle.limits]``' pin limits hold on the worst pin (module docstring)."""
+    """Every pin completes its insertion and holds its limits (:func:`pin_within_limits`)."""
+    pins = {p.index: p for p in case.cycle.resolved_pins()}
+    return all(pin_within_limits(case, pins[p["index"]], p) for p in summary["pins"])
+
+
+def pin_within_limits(case: Case, pin: ResolvedPin, result: dict[str, Any]) -> bool:
+    """One pin of a run (``result``: its entry of the cycle summary's ``pins``) within its limits: the insertion
+    completed; its force limit is a limit: the peak contact force at most ``force_limit_n`` plus the overshoot
+    allowed (the pin's ``max_overshoot_n``, ``[cycle.limits]``' if lower; 0 N when neither is given); and the
+    lateral alignment error at first contact at most the pin's or ``[cycle.limits]``' ``max_alignment_error_m``
+    (the lower; a pin never touched fails), unjudged when neither is given (:func:`judged_limits` says so)."""
+    allowed = [x for x in (pin.max_overshoot_n, case.cycle.limits.max_overshoot_n) if x is not None]
+    if not result["insertion_completed"] or result["overshoot_n"] > min(allowed, default=0.0):
+        return False
+    alignment = [x for x in (pin.max_alignment_error_m, case.cycle.limits.max_alignment_error_m) if x is not None]
+    lateral = result["tool_lateral_error_at_first_contact_m"]
+    return not alignment or (lateral is not None and lateral <= min(alignment))
+
+
+def judged_limits(case: Case) -> list[str]:
+    """What :func:`within_limits` judges on this board, in words (printed and written with the study)."""
     limits = case.cycle.limits
-    worst = _worst(summary)
-    return (summary["pins_passed"] == summary["pin_count"]
-            and (limits.max_overshoot_n is None or worst["worst_overshoot_n"] <= limits.max_overshoot_n)
-            and (limits.max_alignment_error_m is None
-                 or worst["worst_alignment_error_m"] <= limits.max_alignment_error_m))
+    pins = case.cycle.resolved_pins()
+    overshoot = [p.index for p in pins if p.max_overshoot_n is not None or limits.max_overshoot_n is not None]
+    aligned = [p.index for p in pins if p.max_alignment_error_m is not None or limits.max_alignment_error_m is not None]
+    out = ["insertion completed on every pin",
+           "peak contact force at most the pin's force_limit_n" + (
+               " plus its max_overshoot_n" if len(overshoot) == len(pins) else
+               " (no max_overshoot_n: none allowed over it)" if not overshoot else
+               f" plus its max_overshoot_n on pins {_pin_list(overshoot)}, none allowed on the others")]
+    if not aligned:
+        out.append("alignment error not judged (no max_alignment_error_m on the pins or in [cycle.limits])")
+    else:
+        out.append("alignment error at most max_alignment_error_m" + (
+            "" if len(aligned) == len(pins) else f" on pins {_pin_list(aligned)} (the others not judged)"))
+    return out
+
+
+def _pin_list(indices: list[int]) -> str:
+    return ", ".join(str(k) for k in indices)
 
 
 def _worst(summary: dict[str, Any]) -> dict[str, float]:
@@ -142,7 +177,7 @@ class CycleStudyResult:
 
         return {"case": self.case.name, "model": self.model, "samples": len(c["cycle_time_s"]),
                 "failed": int(sum(bool(e) for e in c["error"])), "within_limits": int(c["within_limits"].sum()),
-                "front": [row(int(i)) for i in self.front],
+                "limits_judged": judged_limits(self.case), "front": [row(int(i)) for i in self.front],
                 "fastest_within_limits": None if self.fastest is None else row(self.fastest)}
 
 
