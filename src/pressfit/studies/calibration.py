@@ -33,16 +33,26 @@ from __future__ import annotations
 
 import math
 from dataclasses import dataclass, field
+from pathlib import Path
 from typing import Any
 
 import numpy as np
 from scipy import stats
 from scipy.optimize import least_squares
 
-from pressfit.description.machine import Machine
+from pressfit.description.machine import Machine, load_machine
 from pressfit.errors import CalibrationError, MeasurementFileError, ModelFileError, PressfitError
-from pressfit.studies.calibration_model import Data, FitKey, machine_with, predict, sensitivities, values_of
+from pressfit.studies.calibration_model import (
+    Data,
+    FitKey,
+    machine_with,
+    parse_fit_keys,
+    predict,
+    sensitivities,
+    values_of,
+)
 from pressfit.studies.measurement_plan import separating_measurement
+from pressfit.studies.measurements import read_deflections, read_frequencies
 
 CORRELATION_LIMIT = 0.95  # |rho| above which two keys are reported as not separately identifiable
 CONDITION_LIMIT = 1e8  # condition number of the column-scaled information matrix: near-singular above
@@ -190,3 +200,15 @@ def _unidentifiable(machine: Machine, keys: list[FitKey], theta: np.ndarray, cor
     return [{"keys": [keys[i].key, keys[j].key], "correlation": float(corr[i, j]),
              "separated_by": separating_measurement(fitted, [keys[i], keys[j]], info[np.ix_([i, j], [i, j])],
                                                     sigma_m)} for i, j in pairs]
+
+
+def calibrate_files(machine_path: str | Path, measurements_path: str | Path, fit: list[str],
+                    modes_path: str | Path | None = None) -> Calibration:
+    """``pressfit calibrate``: load the machine, read and check the measurements (and modes), check the keys
+    (:func:`pressfit.studies.calibration_model.parse_fit_keys`), fit. Every bad input is a PressfitError naming
+    the file, the row and the column or key."""
+    machine = load_machine(machine_path)
+    keys = parse_fit_keys(machine, fit)
+    deflections = read_deflections(machine, measurements_path)
+    modes = None if modes_path is None else read_frequencies(machine, modes_path)
+    return calibrate(machine, keys, Data(deflections=deflections, frequencies=modes))

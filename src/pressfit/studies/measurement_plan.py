@@ -20,15 +20,16 @@ most log det to their (2 x 2) information from the data (the same criterion), an
 from __future__ import annotations
 
 from dataclasses import dataclass
+from pathlib import Path
 from typing import Any
 
 import numpy as np
 
-from pressfit.description.machine import Machine
+from pressfit.description.machine import Machine, load_machine
 from pressfit.errors import PressfitError
 from pressfit.kinematics.workspace import square_height_range, workspace_square
 from pressfit.mechanics.condensed import PRESS_LOAD_N
-from pressfit.studies.calibration_model import Data, FitKey, sensitivities
+from pressfit.studies.calibration_model import Data, FitKey, parse_fit_keys, sensitivities
 from pressfit.studies.measurements import Deflections
 
 DEFAULT_SIGMA_M = 1e-6  # a dial gauge's or a laser tracker's repeatability, order of magnitude
@@ -130,3 +131,10 @@ def separating_measurement(machine: Machine, keys: list[FitKey], information: np
     return {"pose_m": pose[best].tolist(), "load_direction": (load[best] / np.linalg.norm(load[best])).tolist(),
             "load_n": float(load_n), "log_det_gain": float(gain[best]),
             "correlation_after": float(cov[0, 1] / np.sqrt(cov[0, 0] * cov[1, 1]))}
+
+
+def plan_from_file(machine_path: str | Path, fit: list[str], poses: int = 12, load_n: float = PRESS_LOAD_N,
+                   sigma_m: float = DEFAULT_SIGMA_M) -> MeasurementPlan:
+    """``pressfit calibrate --plan``: the machine file's keys checked, then :func:`plan_measurements`."""
+    machine = load_machine(machine_path)
+    return plan_measurements(machine, parse_fit_keys(machine, fit), poses, load_n, sigma_m)
