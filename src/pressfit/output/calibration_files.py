@@ -170,3 +170,24 @@ def read_calibration(directory: Path | str) -> dict[str, Any]:
     except (OSError, ValueError, KeyError, TypeError) as exc:
         raise PressfitError(f"{path}: not the results.json of a pressfit calibrate run ({exc})") from None
     return data
+
+
+def report_section(results: dict[str, Any], directory: Path | str) -> list[str]:
+    """The report's calibration section (``pressfit report --calibration DIR``) from a run's results.json."""
+    md = ["## Calibration (issue 31: `pressfit calibrate`)", "",
+          f"The machine fitted to the measurements `{results.get('measurements')}` (run directory `{directory}`); "
+          f"model: {results.get('model')}. Sigma: {results.get('sigma')}.", "",
+          "| key | start | fitted | standard error | 95% interval |", "|---|---|---|---|---|"]
+    md += [f"| `{e['key']}` | {e['start']:.6g} | {e['value']:.6g} | {e['standard_error']:.3g} | "
+           f"[{e['interval_95'][0]:.6g}, {e['interval_95'][1]:.6g}] |" for e in results["estimates"]]
+    sigma = results.get("rms_sigma_m")
+    p = results.get("p_value")
+    md += ["", f"{results.get('rows')} rows, {results.get('degrees_of_freedom')} degrees of freedom; RMS translation "
+           f"residual {results.get('rms_residual_m', float('nan')):.3g} m"
+           + ("" if sigma is None else f" against a stated RMS sigma of {sigma:.3g} m")
+           + f"; chi-square {results['chi_square']:.4g}" + ("" if p is None else f" (p-value {p:.3g})") + ". "
+           f"Residuals per row: `{Path(directory) / RESIDUALS}`; predicted against measured: "
+           f"`{Path(directory) / PLOT}`.", ""]
+    md += [f"Not separately identifiable: {u['keys'][0]} and {u['keys'][1]} (correlation {u['correlation']:+.4f})."
+           for u in results.get("not_separately_identifiable", [])]
+    return md + [""]
