@@ -11,7 +11,8 @@ sigma, 3 x k, :func:`pressfit.studies.calibration_model.sensitivities`). The pla
 from a small ridge (1e-9 of the largest candidate information's trace), repeatedly add the candidate that
 maximises log det of the information (D-optimality: the smallest volume of the keys' confidence ellipsoid;
 with the matrix determinant lemma each step is one k x k solve per candidate). A candidate is used once.
-The predicted standard errors are sqrt(diag(I^-1)) in theta (relative, for log keys).
+The predicted standard errors are sqrt(diag(I^-1)) in theta (relative, for log keys), I the chosen measurements'
+information without the ridge (a pseudo-inverse if they do not determine every key).
 
 :func:`separating_measurement`: for two keys that the data cannot tell apart, the one candidate that adds the
 most log det to their (2 x 2) information from the data (the same criterion), and their correlation after it.
@@ -99,7 +100,8 @@ def plan_measurements(machine: Machine, keys: list[FitKey], poses: int = 12, loa
         raise PressfitError(f"--poses must be in [1, {len(pose)}] (the candidate measurements), got {poses}")
     per = np.einsum("cik,cil->ckl", g, g)  # each candidate's information, (c, k, k)
     k = len(keys)
-    info = 1e-9 * np.trace(per, axis1=1, axis2=2).max() * np.eye(k)
+    ridge = 1e-9 * np.trace(per, axis1=1, axis2=2).max() * np.eye(k)
+    info = ridge
     chosen: list[int] = []
     for _ in range(poses):
         inv = np.linalg.inv(info)
@@ -109,7 +111,8 @@ def plan_measurements(machine: Machine, keys: list[FitKey], poses: int = 12, loa
         best = int(np.argmax(gain))
         chosen.append(best)
         info = info + per[best]
-    cov = np.linalg.inv(info)
+    info = info - ridge  # the ridge only starts the selection; the plan's own information
+    cov = np.linalg.pinv(info)
     se = np.sqrt(np.diag(cov))
     return MeasurementPlan(keys=[kk.key for kk in keys], log_space=[kk.log for kk in keys], pose_m=pose[chosen],
                            load_n=load[chosen], sigma_m=sigma_m, standard_error_theta=se,
