@@ -155,3 +155,43 @@ def test_a_fit_that_does_not_converge_says_so_with_its_last_residual(machine, la
     with pytest.raises(CalibrationError) as err:
         calibrate(machine, parse_fit_keys(machine, KEYS), Data(deflections=deflections(*layout, perturbed[1])))
     assert "did not converge" in str(err.value) and np.isfinite(err.value.residual) and err.value.residual > 0
+
+
+def test_rotation_columns_are_fitted_with_their_own_sigma(machine, layout):
+    """Measured plate rotations (VJM) with sigma_rad join the translations: the built values are recovered
+    within their intervals and the residual count doubles."""
+    keys = parse_fit_keys(machine, KEYS)
+    pose, load = layout[0][::3], layout[1][::3]
+    wrench = np.concatenate([load, np.zeros_like(load)], 1)
+    batch = FastEquilibriumSolver(machine_with(machine, keys, TRUTH)).solve_batch(pose, wrench, linear=True)
+    rng = np.random.default_rng(7)
+    d = Deflections(path="<test>", pose_m=pose, load_n=load,
+                    translation_m=batch.plate_displacement_m + rng.normal(0, SIGMA_M, pose.shape),
+                    rotation_rad=batch.plate_rotation_rad + rng.normal(0, 1e-6, pose.shape),
+                    sigma_m=np.full(len(pose), SIGMA_M), sigma_rad=np.full(len(pose), 1e-6), lines=np.arange(len(pose)))
+    c = calibrate(machine, keys, Data(deflections=d))
+    assert c.residual_count == 6 * len(pose) and c.rotation_residuals_rad.shape == (len(pose), 3)
+    for e, t in zip(c.estimates, TRUTH, strict=True):
+        assert e.interval_low < t < e.interval_high, e
+
+
+@pytest.mark.slow  # about a dozen modal solves of the VJM model, ~1 s each
+def test_a_measured_first_frequency_joins_the_fit(machine):
+    """The tube's wall thickness from three deflections (VJM) and the first frequency at pose A (the rocking pair,
+    held by the legs' torsion: sensitive to the wall) of the built machine: recovered within its interval, the
+    frequency residual at the noise level."""
+    from pressfit.dynamics.modes import natural_modes
+    from pressfit.studies.measurements import Frequencies
+
+    keys = parse_fit_keys(machine, ["cylinder.wall_thickness_m"])
+    built = machine_with(machine, keys, [0.0046])
+    pose = np.array([[0.2, 0.6, -0.2]] * 3)
+    load = np.eye(3) * 150.0
+    f1 = natural_modes(built, [0.0, 0.72, 0.0], count=1).frequencies_hz
+    freq = Frequencies(path="<modes>", pose_m=np.array([[0.0, 0.72, 0.0]]), frequency_hz=f1 + 0.01,
+                       sigma_hz=np.array([0.05]), lines=np.array([2]))
+    data = Data(deflections=deflections(pose, load, vjm_deflections(built, pose, load)), frequencies=freq)
+    c = calibrate(machine, keys, data)
+    (e,) = c.estimates
+    assert e.interval_low < 0.0046 < e.interval_high
+    assert abs(c.frequency_residuals_hz[0]) < 0.05

@@ -100,14 +100,36 @@ class Calibration:
     data: Data | None = None
 
 
-def _fit(machine: Machine, keys: list[FitKey], data: Data) -> tuple[np.ndarray, Any]:
+class _Evaluations:
+    """The fit's predictions and sensitivities, each computed once per theta (a modal solve costs ~1 s: the
+    identifiability check, the optimiser and the statistics share them). Owned by one calibrate call."""
+
+    def __init__(self, machine: Machine, keys: list[FitKey], data: Data) -> None:
+        self.machine, self.keys, self.data = machine, keys, data
+        self._pred: dict[bytes, np.ndarray] = {}
+        self._sens: dict[bytes, np.ndarray] = {}
+
+    def prediction(self, theta: np.ndarray) -> np.ndarray:
+        key = np.asarray(theta, dtype=float).tobytes()
+        if key not in self._pred:
+            self._pred[key] = predict(machine_with(self.machine, self.keys, values_of(self.keys, theta)), self.data)
+        return self._pred[key]
+
+    def sensitivities(self, theta: np.ndarray) -> np.ndarray:
+        key = np.asarray(theta, dtype=float).tobytes()
+        if key not in self._sens:
+            self._sens[key] = sensitivities(self.machine, self.keys, np.asarray(theta, dtype=float), self.data)
+        return self._sens[key]
+
+
+def _fit(machine: Machine, keys: list[FitKey], data: Data, ev: _Evaluations) -> tuple[np.ndarray, Any]:
     w, y = data.weights(), data.measured()
 
     def residual(theta: np.ndarray) -> np.ndarray:
-        return w * (predict(machine_with(machine, keys, values_of(keys, theta)), data) - y)
+        return w * (ev.prediction(theta) - y)
 
     def jacobian(theta: np.ndarray) -> np.ndarray:
-        return w[:, None] * sensitivities(machine, keys, theta, data)
+        return w[:, None] * ev.sensitivities(theta)
 
     lo = np.array([float(k.to_theta(k.low)) if not (k.log and k.low == 0) else -np.inf for k in keys])
     hi = np.array([float(k.to_theta(k.high)) for k in keys])
@@ -134,21 +156,23 @@ def calibrate(machine: Machine, keys: list[FitKey], data: Data) -> Calibration:
         raise MeasurementFileError(data.deflections.path, None, None, f"{n_res} measured numbers for {len(keys)} "
                                    "fitted keys: give more rows than keys (at least one degree of freedom)")
     x0 = np.array([float(k.to_theta(k.start)) for k in keys])
-    j0 = sensitivities(machine, keys, x0, data)
+    ev = _Evaluations(machine, keys, data)
+    j0 = ev.sensitivities(x0)
     for k, col in zip(keys, j0.T, strict=True):
         if not np.any(np.abs(col) > 1e-12 * np.abs(j0).max()):
             raise ModelFileError(machine.source, k.key, "a key the static model's predictions depend on (the "
                                  "condensed model does not use it: it cannot be fitted from these data)")
-    theta, sol = _fit(machine, keys, data)
-    return _statistics(machine, keys, data, theta, sol)
+    theta, sol = _fit(machine, keys, data, ev)
+    return _statistics(machine, keys, data, theta, sol, ev)
 
 
-def _statistics(machine: Machine, keys: list[FitKey], data: Data, theta: np.ndarray, sol: Any) -> Calibration:
+def _statistics(machine: Machine, keys: list[FitKey], data: Data, theta: np.ndarray, sol: Any,
+                ev: _Evaluations) -> Calibration:
     fitted = machine_with(machine, keys, values_of(keys, theta))
     w, y = data.weights(), data.measured()
-    pred = predict(fitted, data)
+    pred = ev.prediction(theta)
     r = w * (pred - y)
-    jac = w[:, None] * sensitivities(machine, keys, theta, data)
+    jac = w[:, None] * ev.sensitivities(theta)
     n, k = r.size, len(keys)
     dof = n - k
     chi2 = float(r @ r)
