@@ -129,3 +129,18 @@ def test_the_plan_proposes_distinct_measurements_in_the_measurement_file_format(
 
 def test_plan_takes_no_measurement_file():
     assert_one_line_exit_2(run("calibrate", "--plan", MACHINE, EXAMPLE, *FIT), "--plan takes MACHINE.toml only")
+
+
+@pytest.mark.parametrize(("rows", "words"), [
+    (["0,0.72,0,-3"], ["row 2", "'frequency_hz'", "positive"]),
+    (["0,5.0,0,18"], ["row 2", "x_m,y_m,z_m", "out of reach"]),
+])
+def test_a_bad_modes_file_names_the_file_row_and_column(tmp_path, rows, words):
+    modes = tmp_path / "modes.csv"
+    modes.write_text("\n".join(["x_m,y_m,z_m,frequency_hz", *rows]) + "\n")
+    assert_one_line_exit_2(run("calibrate", MACHINE, EXAMPLE, *FIT, "--modes", modes), str(modes), *words)
+
+
+def test_rotation_columns_without_sigma_rad_are_refused(tmp_path):
+    path = csv_file(tmp_path, ROW + ",1e-6,0,0", header=HEADER + ",rx_rad,ry_rad,rz_rad")
+    assert_one_line_exit_2(run("calibrate", MACHINE, path, *FIT), str(path), "'sigma_rad'")
