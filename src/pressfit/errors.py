@@ -241,3 +241,23 @@ class WorkspaceError(PressfitError):
                          f"in steps of {scan_step_m:g} m)" if not heights_m else
                          f"the heights where the square rotated by {angle_deg:g} deg is reachable do not form one "
                          f"interval: {heights_m} m")
+
+
+class MeasurementFileError(PressfitError):
+    """A calibration measurement file (or one of its rows) is unusable: ``path``, ``row`` (the 1-based line
+    number in the file, header = 1; None for the whole file), ``column`` (a column name, or None) and
+    ``reason``."""
+
+    def __init__(self, path: object, row: int | None, column: str | None, reason: str) -> None:
+        self.path, self.row, self.column, self.reason = str(path), row, column, reason
+        where = ", ".join(([f"row {row}"] if row is not None else []) + ([f"column '{column}'"] if column else []))
+        super().__init__(f"{self.path}: {where + ': ' if where else ''}{reason}")
+
+
+class CalibrationError(PressfitError):
+    """A calibration fit failed: ``what`` happened, ``residual`` the last weighted residual norm reached
+    (dimensionless when sigma is given, else m), ``keys`` the fitted keys."""
+
+    def __init__(self, what: str, *, residual: float, keys: Iterable[str]) -> None:
+        self.what, self.residual, self.keys = what, float(residual), tuple(keys)
+        super().__init__(f"calibration of {', '.join(self.keys)} {what} (last residual norm {self.residual:.4g})")

@@ -23,6 +23,7 @@ from pressfit.kinematics import workspace
 from pressfit.mechanics import condensed
 from pressfit.mechanics.statics import Equilibrium, solve_equilibrium
 from pressfit.output import maps, plots
+from pressfit.output.calibration_files import read_calibration, report_section
 from pressfit.output.files import write_csv, write_json, write_text
 from pressfit.output.html_report import ReportContent, write_html_report
 from pressfit.output.scene3d import SceneCase
@@ -40,16 +41,19 @@ def _md_table(header: list[str], rows: list[list[object]]) -> str:
 
 
 def write_report(machine: Machine, out_dir: Path | str, overwrite: bool = False, quick: bool = False,
-                 progress: bool = True, cycle_study: Path | str | None = None) -> Path:
+                 progress: bool = True, cycle_study: Path | str | None = None,
+                 calibration: Path | str | None = None) -> Path:
     """Compute every section and write ``report.md`` with its figures, CSV and JSON into ``out_dir``, and
     the interactive ``report.html`` (:mod:`pressfit.output.html_report`) beside it; returns report.md's path.
 
     ``quick`` (a preview, and the tests) uses coarser grids and writes no static PNG maps (report.html shows
     the same maps interactively); the default grids are the design ones. ``cycle_study``: the directory of a
-    ``pressfit study cycle`` run whose front the board's section shows.
+    ``pressfit study cycle`` run whose front the board's section shows. ``calibration``: the ``--out`` directory
+    of a ``pressfit calibrate`` run, whose results get their own section.
     """
     out = Path(out_dir)
     study = None if cycle_study is None else read_cycle_study(cycle_study)  # checked before computing
+    fitted = None if calibration is None else read_calibration(calibration)
     steps = tqdm(total=10, desc="report", disable=not progress, unit="section")
     md = [f"# pressfit report: {machine.name}", "",
           f"Machine file: `{machine.source}`. SI units throughout. Interactive version "
@@ -60,6 +64,8 @@ def write_report(machine: Machine, out_dir: Path | str, overwrite: bool = False,
     for section in sections:
         md += section(machine, out, overwrite, quick, parts)
         steps.update()
+    if fitted is not None:
+        md += report_section(fitted, calibration)
     write_json(out / "summary.json", {"workspace": parts["summary"], "interference": parts["interference"]
                                       .kind_minima()}, overwrite)
     path = write_text(out / "report.md", "\n".join(md) + "\n", overwrite)
