@@ -144,3 +144,10 @@ def test_a_bad_modes_file_names_the_file_row_and_column(tmp_path, rows, words):
 def test_rotation_columns_without_sigma_rad_are_refused(tmp_path):
     path = csv_file(tmp_path, ROW + ",1e-6,0,0", header=HEADER + ",rx_rad,ry_rad,rz_rad")
     assert_one_line_exit_2(run("calibrate", MACHINE, path, *FIT), str(path), "'sigma_rad'")
+
+
+def test_report_refuses_a_calibration_directory_without_results_before_computing(tmp_path):
+    empty = tmp_path / "not-a-run"
+    empty.mkdir()
+    res = run("report", "--calibration", empty, "--out", tmp_path / "report", "--quick")
+    assert_one_line_exit_2(res, "results.json", "not the results.json of a pressfit calibrate run")

@@ -109,7 +109,7 @@ def _plot(cal: Calibration, path: Path) -> Path:
         ax.set(xlabel="measured translation (um)", ylabel="predicted translation (um)",
                title="calibrated model vs measurement", aspect="equal")
         if cal.rms_sigma_m is not None:
-            bx.axhspan(-2e6 * cal.rms_sigma_m, 2e6 * cal.rms_sigma_m, color="0.9", label="+-2 sigma (RMS)")
+            bx.axhspan(-2e6 * cal.rms_sigma_m, 2e6 * cal.rms_sigma_m, color="0.9", zorder=0, label="+-2 sigma (RMS)")
         bx.set(xlabel="row", ylabel="residual, predicted - measured (um)", title="residuals")
         ax.legend()
         bx.legend()
