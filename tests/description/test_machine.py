@@ -1,5 +1,7 @@
 """Unit tests of pressfit.machine: the shipped model, derived geometry, and malformed model files."""
 
+from pathlib import Path
+
 import numpy as np
 import pytest
 
@@ -82,3 +84,49 @@ def test_missing_file(tmp_path):
 def test_wrong_scalar_type_is_rejected(tmp_path, value):
     with pytest.raises(ModelFileError, match="base_half_side_m"):
         load_machine(_write(tmp_path, "base_half_side_m = 0.442", f"base_half_side_m = {value}"))
+
+
+def _with_mass(tmp_path, source, name, table):
+    """A copy of ``source`` (a TOML file) with [mass] keys replaced (tomllib + tomli_w)."""
+    import tomllib
+
+    import tomli_w
+
+    data = tomllib.loads(Path(source).read_text())
+    data.setdefault("mass", {}).update(table)
+    path = tmp_path / name
+    path.write_text(tomli_w.dumps(data))
+    return path
+
+
+@pytest.mark.parametrize(("key", "value"), [("cardan_spider_mass_kg", 1e-12), ("density_kg_per_m3", 1e-9),
+                                            ("plate_mass_kg", 1e-12)])
+@pytest.mark.parametrize("command", ["simulate", "control"])
+def test_near_zero_masses_are_refused_by_the_dynamics_naming_the_key(tmp_path, command, key, value):
+    """A near-zero [mass] value the schema accepts made the mass matrix singular (exit 70, LinAlgError, in
+    simulate and control): refused before computing, one line naming the file and the key (exit 2)."""
+    from click.testing import CliRunner
+
+    from pressfit.cli import main
+
+    root = Path(__file__).resolve().parents[2]
+    case = tmp_path / "case.toml"
+    case.write_text((root / "cases" / "paper" / "insertion.toml").read_text()
+                    + f"\n[model_overrides.mass]\n{key} = {value!r}\n")
+    res = CliRunner().invoke(main, [command, str(case)])
+    assert res.exit_code == 2, res.output
+    assert len(res.output.strip().splitlines()) == 1 and f"mass.{key}" in res.output
+
+
+def test_a_massless_gantry_is_refused_by_compare_naming_the_key(tmp_path):
+    from click.testing import CliRunner
+
+    from pressfit.cli import main
+
+    root = Path(__file__).resolve().parents[2]
+    gantry = _with_mass(tmp_path, root / "models" / "gantry_cartesian.toml", "massless.toml",
+                        {"density_kg_per_m3": 1e-9, "tool_mass_kg": 0.0})
+    res = CliRunner().invoke(main, ["compare", "--no-progress", str(root / "models" / "pressfit_4upu.toml"),
+                                    str(gantry)])
+    assert res.exit_code == 2, res.output
+    assert len(res.output.strip().splitlines()) == 1 and "mass.density_kg_per_m3" in res.output
