@@ -55,6 +55,7 @@ def test_grid_and_cone(tmp_path):
     (lambda d: d["loads"].update(press_force_n=math.nan), "loads.press_force_n"),
     (lambda d: d["loads"].update(press_force_n=1e30), "loads.press_force_n"),
     (lambda d: d["poses"]["x"].update(count=0), "poses.x.count"),
+    (lambda d: d["poses"]["x"].update(count=1), "poses.x"),  # one point over a range: was silently min_m
     (lambda d: d["envelope"].update(max_tension_n=-1.0), "envelope.max_tension_n"),
     (lambda d: d["preload"].update(mode="torque"), "preload.mode"),
     (lambda d: d.update(model_overrides={"limits": {"leg_length_min_m": 2.0}}), "limits"),
@@ -125,3 +126,18 @@ def test_a_shipped_case_that_promises_pressfit_check_has_limits_to_check():
             case.cycle is not None and case.cycle.limits.model_dump(exclude_none=True))
         assert limits, f"{path} promises `pressfit check` but has no limits to check"
     assert "board.toml" in promising
+
+
+def test_a_one_pin_grid_axis_over_a_range_is_refused(tmp_path):
+    """[cycle.grid] with count = 1 and min_m < max_m would place its one pin at min_m: refused, naming the key."""
+    text = (ROOT / "cases" / "paper" / "board.toml").read_text()
+    head, grid = text.split("[cycle.grid]", 1)
+    body, rest = grid.split("\n[", 1)
+    x_line = next(line for line in body.splitlines() if line.strip().startswith("x ="))
+    bad = head + "[cycle.grid]" + body.replace(x_line, 'x = { min_m = -0.1, max_m = 0.1, count = 1 }') + "\n[" + rest
+    tmp = tmp_path / "one_pin_grid.toml"
+    tmp.write_text(bad)
+    with pytest.raises(ModelFileError, match=r"cycle\.grid\.x.*count = 1 places one point"):
+        load_case(tmp)
+    res = CliRunner().invoke(main, ["cycle", str(tmp)])
+    assert res.exit_code == 2 and len(res.output.strip().splitlines()) == 1 and "cycle.grid.x" in res.output

@@ -1,5 +1,7 @@
 """Unit tests of pressfit.machine: the shipped model, derived geometry, and malformed model files."""
 
+from pathlib import Path
+
 import numpy as np
 import pytest
 
@@ -98,12 +100,54 @@ _ROOT = DEFAULT_MODEL.parents[1]
 def test_the_wrong_kind_of_file_gets_a_plain_refusal(monkeypatch, args, what):
     """issue 28 item 8: a machine file given as a case, or a case as a machine: one `error:` line saying what the
     file is and where it goes, exit 2; not the schema's first complaint ("key 'model': Input should be ...")."""
-    from click.testing import CliRunner
-
-    from pressfit.cli import main
-
     monkeypatch.chdir(_ROOT)
     res = CliRunner().invoke(main, args)
     lines = [line for line in res.output.strip().splitlines() if line.startswith("error:")]
     assert res.exit_code == 2 and len(lines) == 1 and what in lines[0], res.output
     assert "key '" not in res.output and "Traceback" not in res.output
+
+
+def _with_mass(tmp_path, source, name, table):
+    """A copy of ``source`` (a TOML file) with [mass] keys replaced (tomllib + tomli_w)."""
+    import tomllib
+
+    import tomli_w
+
+    data = tomllib.loads(Path(source).read_text())
+    data.setdefault("mass", {}).update(table)
+    path = tmp_path / name
+    path.write_text(tomli_w.dumps(data))
+    return path
+
+
+@pytest.mark.parametrize(("key", "value"), [("cardan_spider_mass_kg", 1e-12), ("density_kg_per_m3", 1e-9),
+                                            ("plate_mass_kg", 1e-12)])
+@pytest.mark.parametrize("command", ["simulate", "control"])
+def test_near_zero_masses_are_refused_by_the_dynamics_naming_the_key(tmp_path, command, key, value):
+    """A near-zero [mass] value the schema accepts made the mass matrix singular (exit 70, LinAlgError, in
+    simulate and control): refused before computing, one line naming the file and the key (exit 2)."""
+    root = Path(__file__).resolve().parents[2]
+    case = tmp_path / "case.toml"
+    case.write_text((root / "cases" / "paper" / "insertion.toml").read_text()
+                    + f"\n[model_overrides.mass]\n{key} = {value!r}\n")
+    res = CliRunner().invoke(main, [command, str(case)])
+    assert res.exit_code == 2, res.output
+    assert len(res.output.strip().splitlines()) == 1 and f"mass.{key}" in res.output
+
+
+def test_a_massless_gantry_is_refused_by_compare_naming_the_key(tmp_path):
+    from click.testing import CliRunner
+
+    from pressfit.cli import main
+
+    root = Path(__file__).resolve().parents[2]
+    gantry = _with_mass(tmp_path, root / "models" / "gantry_cartesian.toml", "massless.toml",
+                        {"density_kg_per_m3": 1e-9, "tool_mass_kg": 0.0})
+    res = CliRunner().invoke(main, ["compare", "--no-progress", str(root / "models" / "pressfit_4upu.toml"),
+                                    str(gantry)])
+    assert res.exit_code == 2, res.output
+    assert len(res.output.strip().splitlines()) == 1 and "mass.density_kg_per_m3" in res.output
+    from click.testing import CliRunner
+
+    from pressfit.cli import main
+

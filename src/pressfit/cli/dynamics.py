@@ -18,6 +18,8 @@ from pressfit.cli.common import (
     user_errors,
 )
 from pressfit.description.machine import load_machine
+from pressfit.dynamics.response import MAX_SAMPLES as MAX_RESPONSE_SAMPLES
+from pressfit.dynamics.response import SAMPLES_PER_PERIOD
 from pressfit.output.files import to_json
 
 # s: the 60th mode at pose A is 4.4 kHz (pressfit modes --count 60), a period of 230 us that 1 us resolves
@@ -203,9 +205,13 @@ def export_mjcf_cmd(x: float, y: float, z: float, timestep_s: float, out: Path |
 @click.option("--force", "force_n", type=FORCE, nargs=3, required=True,
               help="FX FY FZ: the force step at the tool (N, world axes).")
 @click.option("--duration", "duration_s", type=FiniteFloat(0.0, 60.0, open_low=True), default=0.5,
-              show_default=True, help="Simulated time after the step (s).")
-@click.option("--damping-ratio", type=FiniteFloat(0.0, 1.0, open_low=True), default=0.02, show_default=True,
-              help="Modal damping ratio of every mode (an estimate; 1-5% is typical of bolted steel frames).")
+              show_default=True, help="Simulated time after the step (s), in (0, 60] and at most "
+              f"{MAX_RESPONSE_SAMPLES} samples at {SAMPLES_PER_PERIOD} per period of the fastest contributing mode "
+              "(a few seconds, by pose and force direction: a longer one is refused before the history is computed, "
+              "naming the longest).")
+@click.option("--damping-ratio", type=FiniteFloat(0.0, 1.0), default=0.02, show_default=True,
+              help="Modal damping ratio of every mode, in [0, 1]: 0 undamped, 1 critical (an estimate; 1-5% is "
+              "typical of bolted steel frames).")
 @click.option("--out", "out_dir", type=click.Path(path_type=Path), default=None,
               help="Directory for response.json, response.csv, receptance.csv and response.png.")
 @OVERWRITE_OPTION
@@ -215,7 +221,9 @@ def export_mjcf_cmd(x: float, y: float, z: float, timestep_s: float, out: Path |
 def response_cmd(x: float, y: float, z: float, force_n: tuple[float, float, float], duration_s: float,
                  damping_ratio: float, out_dir: Path | None, overwrite: bool, as_json: bool, model_path: Path) -> None:
     """Tool-point response at the plate pose X Y Z (m), drives holding their lengths: a force step at the tool
-    (displacement history) and the receptance (frequency response) with its peaks at the modes."""
+    (displacement history) and the receptance (frequency response) with its peaks at the modes. Linear, about
+    the equilibrium under the weight: a step with a buckling factor below 10, a peak plate rotation beyond
+    0.01 rad or a tool translation beyond 1% of the shortest leg is refused (pressfit solve answers it)."""
     from pressfit.output.response import run_response
 
     r, paths = run_response(load_machine(model_path), [x, y, z], list(force_n), duration_s, damping_ratio, out_dir,
@@ -231,7 +239,8 @@ def response_cmd(x: float, y: float, z: float, force_n: tuple[float, float, floa
                f"peak: lateral {s['peak_lateral_m'] * 1e6:.3f} um, vertical {s['peak_vertical_m'] * 1e6:+.3f} um")
     click.echo(f"dominant mode {s['dominant_frequency_hz']:.4g} Hz; lowest modes "
                + ", ".join(f"{f:.4g}" for f in s["lowest_modes_hz"]) + " Hz; receptance peaks "
-               + ", ".join(f"{f:.4g}" for f in s["receptance_peak_hz"]) + " Hz")
+               + (", ".join(f"{f:.4g}" for f in s["receptance_peak_hz"]) + " Hz" if s["receptance_peak_hz"]
+                  else "none"))
     echo_written(paths)
 
 

@@ -40,7 +40,8 @@ MAX_GRID_DESIGNS = 100_000  # [design] search = "grid": grid_points ** parameter
 
 
 class Axis(StrictModel):
-    """A range of one coordinate: ``count`` points from ``min_m`` to ``max_m`` (m)."""
+    """A range of one coordinate: ``count`` points from ``min_m`` to ``max_m`` (m); one point (``count`` = 1)
+    needs ``min_m`` = ``max_m`` (a range with one point would silently be its ``min_m``)."""
 
     min_m: Finite
     max_m: Finite
@@ -48,6 +49,9 @@ class Axis(StrictModel):
 
     @model_validator(mode="after")
     def _order(self) -> Axis:
+        if self.count == 1 and self.max_m > self.min_m:
+            raise ValueError(f"count = 1 places one point, but min_m = {self.min_m:g} m < max_m = {self.max_m:g} m: "
+                             "give count >= 2 for a range or min_m = max_m for one point")
         if self.max_m < self.min_m or (self.count > 1 and self.max_m == self.min_m):
             raise ValueError("max_m must be larger than min_m (or count = 1 with min_m = max_m)")
         return self

@@ -24,6 +24,23 @@ DEFAULT_MODEL = default_model()  # the paper's machine, shipped inside the packa
 
 Positive = Annotated[float, Field(gt=0, allow_inf_nan=False)]
 NonNegative = Annotated[float, Field(ge=0, allow_inf_nan=False)]
+# Physical lower bounds of the inertia the time-domain dynamics need (``simulate``, ``control``, a gantry's
+# figures): a body with inertia of its own (the plate, a cardan's spider, a tube through the density) lighter than
+# a gram, or a material lighter than 100 kg/m^3 (below any structural one: wood is ~400), makes the mass matrix
+# numerically singular. The modes and response accept lighter legs (the massless-leg closed forms of the tests)
+MIN_BODY_MASS_KG = 1e-3
+MIN_DENSITY_KG_PER_M3 = 100.0
+
+
+def require_inertia(source: str, values: dict[str, float]) -> None:
+    """Refuse inertial data below the physical bounds: ``values`` maps [mass] keys (``density_kg_per_m3`` or a
+    ``*_mass_kg``) to their values; ModelFileError naming the file, the key and the bound."""
+    for key, value in values.items():
+        low, unit = (MIN_DENSITY_KG_PER_M3, "kg/m^3") if key == "density_kg_per_m3" else (MIN_BODY_MASS_KG, "kg")
+        if not value >= low:
+            raise ModelFileError(source or "<machine>", f"mass.{key}",
+                                 f"at least {low:g} {unit} for the dynamics (the body carries inertia: a lighter one "
+                                 f"makes the mass matrix singular), got {value:g}")
 Finite = Annotated[float, Field(allow_inf_nan=False)]
 Vector3 = Annotated[list[Finite], Field(min_length=3, max_length=3)]
 
@@ -380,6 +397,12 @@ class Mass(StrictModel):
     actuator_housing_mass_kg: NonNegative = 2.5
     actuator_moving_mass_kg: NonNegative = 0.8
     cardan_spider_mass_kg: NonNegative = 0.3
+
+    def require_dynamics_inertia(self, source: str) -> None:
+        """:func:`require_inertia` of the bodies that carry inertia of their own (the plate, the spiders, the
+        tubes through the density) of the machine file ``source``."""
+        require_inertia(source, {"density_kg_per_m3": self.density_kg_per_m3, "plate_mass_kg": self.plate_mass_kg,
+                                 "cardan_spider_mass_kg": self.cardan_spider_mass_kg})
 
 
 class Damping(StrictModel):

@@ -29,6 +29,7 @@ import pinocchio as pin
 from scipy.linalg import eigh, null_space
 
 from pressfit.description.gantry import GANTRY_AXES, BeamSection, Gantry
+from pressfit.description.machine import require_inertia
 from pressfit.dynamics.inertia import _add, joint_placements, total_mass_kg
 from pressfit.dynamics.modes import mass_matrix
 from pressfit.errors import PressfitError, ResidualError
@@ -167,6 +168,7 @@ def gantry_metrics(gantry: Gantry, poses_m: np.ndarray, load_n: float | np.ndarr
                    ) -> GantryMetrics:
     """Metrics of ``gantry`` over tool poses (p, 3) (m) under ``load_n``: a press force (N) on the tool along +y
     (the board's reaction), or tool wrenches (l, 6) (N, N m; e.g. a load cone), every one at every pose."""
+    require_inertia(gantry.source, {"density_kg_per_m3": gantry.mass.density_kg_per_m3})
     poses = np.atleast_2d(np.asarray(poses_m, dtype=float))
     if poses.ndim != 2 or poses.shape[1] != 3 or len(poses) == 0 or not np.all(np.isfinite(poses)):
         raise PressfitError(f"poses_m must be a non-empty (p, 3) array of finite positions, got shape {poses.shape}")

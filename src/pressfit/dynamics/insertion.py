@@ -424,6 +424,7 @@ def simulate_insertion(case: Case, limiter: bool = True, progress: bool = False)
     """Run the case's ``[simulation]`` scenario, with or without the force limiter, on the case's model
     (``[simulation] model``: the rigid-leg model with the compliance in series, or the flexible machine)."""
     machine = case.machine()
+    machine.mass.require_dynamics_inertia(machine.source)
     plan = plan_scenario(case, machine)
     drives = drive_kinds.of(machine)
     rows, phases, sections = run_plan(case, machine, plan, drives, limiter, progress)

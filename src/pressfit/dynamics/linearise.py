@@ -460,6 +460,7 @@ def control_design(case: Case, model: Model | None = None) -> ControlDesign:
         raise PressfitError(f"{case.path}: no [simulation] table: pressfit control needs the insertion scenario")
     model = model or sim.model
     machine = case.machine()
+    machine.mass.require_dynamics_inertia(machine.source)
     c = sim.contact
     pin_pose = np.array([c.pin_position_m[0], c.board_height_m, c.pin_position_m[1]])
     approach = pin_pose + np.array([0.0, sim.approach_height_m, 0.0])
