@@ -213,3 +213,21 @@ def test_simulate_runs_the_shipped_linear_motor_case():
     res = CliRunner().invoke(main, ["simulate", str(CASE), "--no-progress"])
     assert res.exit_code == 0, res.output
     assert "winding" in res.output and "drive sizing" in res.output
+
+
+@pytest.mark.parametrize("compensation", [0.0, 0.5, 1.0])
+def test_the_ripple_compensation_leaves_its_complement(compensation):
+    """Blocked at a length where sin(k l) = cos(k l) = 1/sqrt 2, held at N_cmd until the loop settles: the delivered
+    tension is (N_cmd - c F s) (1 + eps s) / (1 + c eps s) + F s, s = 1/sqrt 2 (N_cmd exactly at c = 1)."""
+    m = load_machine(MODEL, {"actuator": {"linear_motor": {"ripple_compensation": compensation}}})
+    t, drive = m.actuator.linear_motor, drives.of(m)
+    length = np.array([0.5 + (math.pi / 4) / drive.wavenumber_per_m])  # k l = pi/4 (mod 2 pi: 0.5 m = 50 periods)
+    length = np.array([round(length[0] / 1e-6) * 1e-6])  # on an encoder count, so that it measures it exactly
+    s, c = math.sin(drive.wavenumber_per_m * length[0]), math.cos(drive.wavenumber_per_m * length[0])
+    state, command = drive.initial_state(np.zeros(1), length), 300.0
+    for _ in range(200):
+        state, force = drive.step(state, np.full(1, command), length, np.zeros(1), 1e-4)
+    eps, cog = t.force_ripple_fraction, t.cogging_force_n
+    expected = (command - compensation * cog * s) * (1 + eps * c) / (1 + compensation * eps * c) + cog * s
+    assert force[0] == pytest.approx(expected, rel=1e-9)
+    assert abs(s - math.sqrt(0.5)) < 1e-3

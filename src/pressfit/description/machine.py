@@ -404,7 +404,8 @@ class LinearMotorDrive(CurrentLoop):
     is carried along the leg as the prismatic joint's armature (behind the mount in the linearised port).
     Thermal: winding-to-ambient ``thermal_resistance_k_per_w`` (K/W) and ``thermal_time_constant_s`` (s), the
     rise limited to ``max_winding_temperature_rise_k`` (K). Ripple (period ``pole_pitch_m`` / 3, the 6th
-    electrical harmonic of a 3-phase motor): ``force_ripple_fraction`` of K_f i and ``cogging_force_n`` (N).
+    electrical harmonic of a 3-phase motor): ``force_ripple_fraction`` of K_f i and ``cogging_force_n`` (N), of which
+    the drive compensates the fraction ``ripple_compensation`` (0..1, a calibrated anti-cogging table; default 0).
     ``encoder_resolution_m``: the linear encoder's step (m), the leg length it measures is quantised on it."""
 
     force_limit_key: ClassVar[str] = "K_f i_max = [actuator.linear_motor] force_constant_n_per_a x current_limit_a"
@@ -420,6 +421,7 @@ class LinearMotorDrive(CurrentLoop):
     pole_pitch_m: Positive
     force_ripple_fraction: Annotated[float, Field(ge=0, lt=1, allow_inf_nan=False)] = 0.0
     cogging_force_n: NonNegative = 0.0
+    ripple_compensation: Annotated[float, Field(ge=0, le=1, allow_inf_nan=False)] = 0.0
     encoder_resolution_m: Positive
 
     @model_validator(mode="after")

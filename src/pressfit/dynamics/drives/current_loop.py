@@ -142,11 +142,16 @@ class CurrentLoopDrive:
         z = i * t.winding_resistance_ohm / t.current_loop_ki_v_per_a_s if t.current_loop_bandwidth_hz is None else 0 * i
         return CurrentLoopState(i, z)
 
-    def current_reference_a(self, command_n: np.ndarray, rates_m_per_s: np.ndarray) -> np.ndarray:
-        """sat(N_cmd / k_f) with the speed limit applied (module docstring), A."""
+    def commanded_current_a(self, command_n: np.ndarray, lengths_m: np.ndarray | None) -> np.ndarray:
+        """The current the drive commands for a tension N_cmd at the measured lengths, N_cmd / k_f, A (the hook of a
+        motor that compensates its ripple)."""
+        return np.asarray(command_n, dtype=float) / self.force_per_current_n_per_a
+
+    def current_reference_a(self, command_n: np.ndarray, rates_m_per_s: np.ndarray,
+                            lengths_m: np.ndarray | None = None) -> np.ndarray:
+        """sat(N_cmd / k_f) (:meth:`commanded_current_a`) with the speed limit applied (module docstring), A."""
         t = self.table
-        i_ref = np.clip(np.asarray(command_n, dtype=float) / self.force_per_current_n_per_a, -t.current_limit_a,
-                        t.current_limit_a)
+        i_ref = np.clip(self.commanded_current_a(command_n, lengths_m), -t.current_limit_a, t.current_limit_a)
         omega = self.motor_speed(rates_m_per_s)
         i_ref = np.where(omega > self.speed_limit, np.minimum(i_ref, 0.0), i_ref)
         return np.where(omega < -self.speed_limit, np.maximum(i_ref, 0.0), i_ref)
@@ -154,7 +159,7 @@ class CurrentLoopDrive:
     def step(self, state: CurrentLoopState, command_n: np.ndarray, lengths_m: np.ndarray, rates_m_per_s: np.ndarray,
              dt_s: float) -> tuple[CurrentLoopState, np.ndarray]:
         phi, gamma = self.discrete(require_step(dt_s))
-        i_ref = self.current_reference_a(command_n, rates_m_per_s)
+        i_ref = self.current_reference_a(command_n, rates_m_per_s, lengths_m)
         emf = self.emf_constant * self.motor_speed(rates_m_per_s)
         i, z = state.current_a, state.integral_a_s
         i_new = phi[0, 0] * i + phi[0, 1] * z + gamma[0, 0] * i_ref + gamma[0, 1] * emf

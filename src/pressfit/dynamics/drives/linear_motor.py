@@ -7,7 +7,10 @@ Force: N = K_f i (1 + eps cos(k l)) + F_cog sin(k l), K_f = ``force_constant_n_p
 tau_p = ``pole_pitch_m``: a 3-phase motor commutated sinusoidally has its force ripple (eps =
 ``force_ripple_fraction`` of K_f i) and, for the usual slot/pole combinations, its cogging (F_cog =
 ``cogging_force_n``, independent of the current) at the 6th harmonic of the electrical period 2 tau_p, i.e. of
-period tau_p / 3 (our choice of the one dominant harmonic; the back-EMF is taken ripple-free). The delivered
+period tau_p / 3 (our choice of the one dominant harmonic; the back-EMF is taken ripple-free). The drive
+compensates a fraction c = ``ripple_compensation`` of both (a calibrated anti-cogging table: the current
+reference (N_cmd - c F_cog sin(k l_m)) / (K_f (1 + c eps cos(k l_m))) at the encoder's length l_m), leaving
+(1 - c) of them, plus the travel within the step, as a force disturbance. The delivered
 tension is evaluated at the step's end length l + l_dot dt. The current loop (ZOH, exact for any dt), the
 current limit and the speed limit (``speed_limit_m_per_s`` on the leg speed, the motor speed w = -l_dot > 0 while
 the leg shortens, back-EMF K_f w) are :mod:`pressfit.dynamics.drives.current_loop`'s. The linear encoder
@@ -134,6 +137,17 @@ class LinearMotorDrive(CurrentLoopDrive):
         cos, sin = self._harmonics(lengths_m)
         return ((np.asarray(force_n, dtype=float) - t.cogging_force_n * sin)
                 / (t.force_constant_n_per_a * (1.0 + t.force_ripple_fraction * cos)))
+
+    def commanded_current_a(self, command_n: np.ndarray, lengths_m: np.ndarray | None) -> np.ndarray:
+        """The current reference with the drive's calibrated ripple compensation c = ``ripple_compensation``:
+        i = (N_cmd - c F_cog sin(k l_m)) / (K_f (1 + c eps cos(k l_m))) at the encoder's lengths l_m (c = 0: N_cmd /
+        K_f, no compensation; c = 1: the modelled ripple and cogging cancelled at the step's start), A."""
+        t, c = self.table, self.table.ripple_compensation
+        if lengths_m is None or c == 0.0:
+            return np.asarray(command_n, dtype=float) / t.force_constant_n_per_a
+        cos, sin = self._harmonics(self.measure_lengths_m(lengths_m))
+        return ((np.asarray(command_n, dtype=float) - c * t.cogging_force_n * sin)
+                / (t.force_constant_n_per_a * (1.0 + c * t.force_ripple_fraction * cos)))
 
     def sizing(self, tension_n: np.ndarray, rate_m_per_s: np.ndarray, dt_s: float
                ) -> tuple[LinearMotorSizing, list[Rating]]:
