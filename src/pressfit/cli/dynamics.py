@@ -165,6 +165,10 @@ def _echo_sizing(s: dict) -> None:
                    + (f", copper loss {row('copper_loss_w', 1.0, '.2f')} W" if loss else "")
                    + (f" ({_each(drives, 'copper_loss_without_preload_w', '.2f')} W with a4 = 0)"
                       if loss and "copper_loss_without_preload_w" in drives[0] else ""))
+    if "periodic_winding_rise_k" in drives[0]:
+        click.echo(f"linear motors: RMS current {row('rms_current_a', 1.0, '.3f')} A, copper loss "
+                   f"{row('copper_loss_w', 1.0, '.2f')} W, winding rise {row('peak_winding_rise_k', 1.0, '.3f')} K "
+                   f"(cold start), {row('periodic_winding_rise_k', 1.0, '.2f')} K (the motion repeated, periodic)")
     if "peak_flow_m3_per_s" in drives[0]:
         click.echo(f"valves: peak flow {row('peak_flow_m3_per_s', 6e4, '.2f')} l/min, supplied power p_s Q peak "
                    f"{row('peak_supply_power_w')} W, mean {row('mean_supply_power_w')} W")

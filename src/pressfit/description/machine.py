@@ -11,10 +11,19 @@ import stat
 import tomllib
 from functools import cached_property
 from pathlib import Path
-from typing import Annotated, Any, Literal
+from typing import Annotated, Any, ClassVar, Literal
 
 import numpy as np
-from pydantic import BaseModel, ConfigDict, Field, ValidationError, ValidationInfo, field_validator, model_validator
+from pydantic import (
+    BaseModel,
+    ConfigDict,
+    Field,
+    ValidationError,
+    ValidationInfo,
+    create_model,
+    field_validator,
+    model_validator,
+)
 
 from pressfit.description import drive_stiffness
 from pressfit.errors import LegCountError, ModelFileError, WrongFileKindError
@@ -191,15 +200,94 @@ class Stem(StrictModel):
     diameter_m: Positive
 
 
-class ElectricDrive(StrictModel):
+class DriveTable(StrictModel):
+    """A drive kind's schema table, owning the kind's statics (docs/drives.md): ``force_limit_n`` (N, the largest
+    tension magnitude it delivers), ``force_limit_key`` (the machine-file keys that set it, for messages),
+    :meth:`axial_stiffness_n_per_m` (its own axial stiffness in series with the leg), :meth:`reflected_mass_kg`
+    (inertia along the leg carried as the prismatic joint's armature) and :meth:`check` (its constraints
+    against the rest of the machine). ``inline``: its keys sit in ``[actuator]`` itself (the force kind), not
+    in a table ``[actuator.<kind>]``. A new kind is one subclass and one line of :data:`DRIVE_TABLES`."""
+
+    inline: ClassVar[bool] = False
+    force_limit_key: ClassVar[str] = ""
+
+    @property
+    def force_limit_n(self) -> float:
+        raise NotImplementedError
+
+    def axial_stiffness_n_per_m(self, machine: Machine, leg_length_m: np.ndarray | float) -> np.ndarray:
+        raise NotImplementedError
+
+    def reflected_mass_kg(self, machine: Machine) -> float:
+        """Inertia reflected along the leg, kg (0 unless the kind says otherwise)."""
+        return 0.0
+
+    def check(self, machine: Machine) -> None:
+        """Refuse (ValueError naming the key) a table that does not fit the machine; nothing by default."""
+
+
+class ForceSource(DriveTable):
+    """``kind = "force"``: an ideal first-order force source, its keys in ``[actuator]`` itself: axial stiffness
+    (N/m, required), the force bandwidth (Hz; paper section 4.2: 40 Hz, feasible for servo-hydraulics) and its
+    force saturation (N, magnitude; an estimate, see the machine file)."""
+
+    inline: ClassVar[bool] = True
+    force_limit_key: ClassVar[str] = "[actuator] force_limit_n"
+
+    axial_stiffness_n_per_m_: Positive = Field(alias="axial_stiffness_n_per_m")
+    force_bandwidth_hz: Positive = 40.0
+    force_limit_n_: Positive = Field(1000.0, alias="force_limit_n")
+
+    @property
+    def force_limit_n(self) -> float:
+        return self.force_limit_n_
+
+    def axial_stiffness_n_per_m(self, machine: Machine, leg_length_m: np.ndarray | float) -> np.ndarray:
+        """``axial_stiffness_n_per_m`` at every length, N/m."""
+        return np.full_like(np.asarray(leg_length_m, dtype=float), self.axial_stiffness_n_per_m_)
+
+
+class CurrentLoop(DriveTable):
+    """The keys of a drive with a current loop (an electric motor: rotary or linear). The loop is given by its
+    closed-loop bandwidth (``current_loop_bandwidth_hz``: a first-order loop) or by its PI gains on the winding
+    (``current_loop_kp_v_per_a``, ``current_loop_ki_v_per_a_s``, ``winding_inductance_h``,
+    ``winding_resistance_ohm``)."""
+
+    current_limit_a: Positive
+    current_loop_bandwidth_hz: Positive | None = None
+    current_loop_kp_v_per_a: Positive | None = None
+    current_loop_ki_v_per_a_s: Positive | None = None
+    winding_inductance_h: Positive | None = None
+    winding_resistance_ohm: Positive | None = None
+
+    def _require_current_loop(self) -> None:
+        gains = ("current_loop_kp_v_per_a", "current_loop_ki_v_per_a_s", "winding_inductance_h",
+                 "winding_resistance_ohm")
+        given = [getattr(self, k) is not None for k in gains]
+        if self.current_loop_bandwidth_hz is not None and any(given[:3]):
+            raise ValueError("give the current loop either as current_loop_bandwidth_hz or as its gains "
+                             f"({', '.join(gains)}), not both")
+        if self.current_loop_bandwidth_hz is None and not all(given):
+            raise ValueError("give current_loop_bandwidth_hz or all of " + ", ".join(gains))
+
+    @property
+    def force_per_current_n_per_a(self) -> float:
+        raise NotImplementedError
+
+    @property
+    def force_limit_n(self) -> float:
+        """Largest axial force k_f i_max, N."""
+        return self.force_per_current_n_per_a * self.current_limit_a
+
+
+class ElectricDrive(CurrentLoop):
     """``[actuator.electric]``: servo motor + ball screw (docs/drives.md). The screw's root diameter gives its
     section (stiffness E A / L_free, and its inertia when ``screw_length_m`` is given instead of
     ``screw_inertia_kg_m2``); the free length between the fixed bearing and the nut is either constant
     (``screw_free_length_m``) or ``screw_free_length_at_min_leg_m`` at ``limits.leg_length_min_m``, growing one
-    for one with the leg length. The current loop is given by its closed-loop bandwidth
-    (``current_loop_bandwidth_hz``: a first-order loop) or by its PI gains on the winding
-    (``current_loop_kp_v_per_a``, ``current_loop_ki_v_per_a_s``, ``winding_inductance_h``,
-    ``winding_resistance_ohm``)."""
+    for one with the leg length. The current loop: :class:`CurrentLoop`."""
+
+    force_limit_key: ClassVar[str] = "2 pi eta K_t [actuator.electric] current_limit_a / lead"
 
     lead_m: Positive
     screw_diameter_m: Positive
@@ -212,13 +300,7 @@ class ElectricDrive(StrictModel):
     screw_length_m: Positive | None = None
     screw_efficiency: Annotated[float, Field(gt=0, le=1, allow_inf_nan=False)] = 0.9
     torque_constant_nm_per_a: Positive
-    current_limit_a: Positive
     speed_limit_rad_per_s: Positive
-    current_loop_bandwidth_hz: Positive | None = None
-    current_loop_kp_v_per_a: Positive | None = None
-    current_loop_ki_v_per_a_s: Positive | None = None
-    winding_inductance_h: Positive | None = None
-    winding_resistance_ohm: Positive | None = None
     continuous_torque_nm: Positive | None = None  # the motor's rated (continuous, S1) torque: the RMS torque's rating
     rated_power_w: Positive | None = None  # the motor's rated power: the peak mechanical power's rating
 
@@ -226,14 +308,7 @@ class ElectricDrive(StrictModel):
     def _one_of_each(self) -> ElectricDrive:
         _exactly_one(self, "screw_free_length_m", "screw_free_length_at_min_leg_m")
         _exactly_one(self, "screw_inertia_kg_m2", "screw_length_m")
-        gains = ("current_loop_kp_v_per_a", "current_loop_ki_v_per_a_s", "winding_inductance_h",
-                 "winding_resistance_ohm")
-        given = [getattr(self, k) is not None for k in gains]
-        if self.current_loop_bandwidth_hz is not None and any(given[:3]):
-            raise ValueError("give the current loop either as current_loop_bandwidth_hz or as its gains "
-                             f"({', '.join(gains)}), not both")
-        if self.current_loop_bandwidth_hz is None and not all(given):
-            raise ValueError("give current_loop_bandwidth_hz or all of " + ", ".join(gains))
+        self._require_current_loop()
         return self
 
     @property
@@ -246,8 +321,29 @@ class ElectricDrive(StrictModel):
         """Largest axial force, 2 pi eta K_t i_max / lead, N."""
         return self.force_per_current_n_per_a * self.current_limit_a
 
+    def axial_stiffness_n_per_m(self, machine: Machine, leg_length_m: np.ndarray | float) -> np.ndarray:
+        """The ball screw E A / L_free(l) in series with nut and bearing, N/m."""
+        length = np.asarray(leg_length_m, dtype=float)
+        free = (np.full_like(length, self.screw_free_length_m) if self.screw_free_length_m is not None
+                else self.screw_free_length_at_min_leg_m + (length - machine.limits.leg_length_min_m))
+        return drive_stiffness.screw_axial_stiffness_n_per_m(
+            machine.material.youngs_modulus_pa, self.screw_diameter_m, free, self.nut_stiffness_n_per_m,
+            self.bearing_stiffness_n_per_m)
 
-class HydraulicDrive(StrictModel):
+    def screw_inertia(self, machine: Machine) -> float:
+        """The ball screw's inertia about its axis, kg m^2: ``screw_inertia_kg_m2`` or a solid steel bar of the
+        root diameter d and ``screw_length_m`` L, rho pi d^4 L / 32 (rho = ``mass.density_kg_per_m3``)."""
+        if self.screw_inertia_kg_m2 is not None:
+            return self.screw_inertia_kg_m2
+        return machine.mass.density_kg_per_m3 * math.pi * self.screw_diameter_m**4 * self.screw_length_m / 32.0
+
+    def reflected_mass_kg(self, machine: Machine) -> float:
+        """(J_rotor + J_screw) (2 pi / lead)^2, kg (its kinetic energy J omega^2 / 2 with omega = 2 pi l_dot /
+        lead)."""
+        return (self.rotor_inertia_kg_m2 + self.screw_inertia(machine)) * (2.0 * math.pi / self.lead_m) ** 2
+
+
+class HydraulicDrive(DriveTable):
     """``[actuator.hydraulic]``: symmetric double-acting cylinder with a servo valve (docs/drives.md). The
     annulus area is ``piston_area_m2`` or follows from ``bore_diameter_m`` and ``rod_diameter_m`` (a rod on
     both sides). The working leg travel sits centred in the stroke: piston position
@@ -255,7 +351,10 @@ class HydraulicDrive(StrictModel):
     shorter (tension), chamber b's pushes it longer. Valve: Q = K_v x_v sqrt(dp), spool x_v in [-1, 1]
     with a first-order response; pressure loop x_v,cmd = g (dp_cmd - dp) - f_v A l_dot / K_q, dp = p_a - p_b,
     f_v = ``flow_feedforward`` (0..1) the fraction of the leg's flow A l_dot fed forward from the measured leg
-    rate through the null flow gain K_q = K_v sqrt((p_s - p_t) / 2)."""
+    rate through the null flow gain K_q = K_v sqrt((p_s - p_t) / 2). No reflected inertia: the piston and rod
+    translate with the stem (``mass.actuator_moving_mass_kg``)."""
+
+    force_limit_key: ClassVar[str] = "A ([actuator.hydraulic] supply_pressure_pa - tank_pressure_pa)"
 
     piston_area_m2: Positive | None = None
     bore_diameter_m: Positive | None = None
@@ -297,33 +396,107 @@ class HydraulicDrive(StrictModel):
         """Largest axial force A (p_s - p_t), N (one chamber at supply, the other at tank)."""
         return self.area_m2 * (self.supply_pressure_pa - self.tank_pressure_pa)
 
+    def axial_stiffness_n_per_m(self, machine: Machine, leg_length_m: np.ndarray | float) -> np.ndarray:
+        """The oil column beta A^2 (1/V_a + 1/V_b) at the piston position of l (valve closed), N/m."""
+        v_a, v_b = drive_stiffness.chamber_volumes_m3(self.area_m2, self.stroke_m, machine.piston_position_m(
+            np.asarray(leg_length_m, dtype=float)), self.dead_volume_a_m3, self.dead_volume_b_m3)
+        return drive_stiffness.oil_column_stiffness_n_per_m(self.bulk_modulus_pa, self.area_m2, v_a, v_b)
+
+    def check(self, machine: Machine) -> None:
+        """The stroke must hold the leg travel l_max - l_min."""
+        travel = machine.limits.leg_length_max_m - machine.limits.leg_length_min_m
+        if self.stroke_m < travel:
+            raise ValueError(f"actuator.hydraulic.stroke_m must be at least the leg travel leg_length_max_m - "
+                             f"leg_length_min_m = {travel:g} m (got {self.stroke_m!r})")
+
+
+class LinearMotorDrive(CurrentLoop):
+    """``[actuator.linear_motor]``: a direct-drive linear motor on each leg (the drive the paper argues for;
+    docs/drives.md): the forcer on the stem, the magnet track along the cylinder. Force N = K_f i (1 + ripple)
+    + cogging, K_f = ``force_constant_n_per_a`` (N/A, = the back-EMF constant in V s/m); the peak force
+    K_f i_max, the continuous (S1) force ``continuous_force_n`` (the RMS force's rating); ``speed_limit_m_per_s``
+    (m/s) its largest leg speed; the current loop as :class:`CurrentLoop` (``winding_resistance_ohm`` is
+    required: the copper loss R i^2 heats the winding). Statics: no screw, the mount (forcer bracket and track)
+    ``mount_stiffness_n_per_m`` (N/m) is the drive's own axial stiffness; the forcer's ``moving_mass_kg`` (kg)
+    is carried along the leg as the prismatic joint's armature (behind the mount in the linearised port).
+    Thermal: winding-to-ambient ``thermal_resistance_k_per_w`` (K/W) and ``thermal_time_constant_s`` (s), the
+    rise limited to ``max_winding_temperature_rise_k`` (K). Ripple (period ``pole_pitch_m`` / 3, the 6th
+    electrical harmonic of a 3-phase motor): ``force_ripple_fraction`` of K_f i and ``cogging_force_n`` (N), of which
+    the drive compensates the fraction ``ripple_compensation`` (0..1, a calibrated anti-cogging table; default 0).
+    ``encoder_resolution_m``: the linear encoder's step (m), the leg length it measures is quantised on it."""
+
+    force_limit_key: ClassVar[str] = "K_f i_max = [actuator.linear_motor] force_constant_n_per_a x current_limit_a"
+
+    force_constant_n_per_a: Positive
+    continuous_force_n: Positive
+    speed_limit_m_per_s: Positive
+    mount_stiffness_n_per_m: Positive
+    moving_mass_kg: NonNegative
+    thermal_resistance_k_per_w: Positive
+    thermal_time_constant_s: Positive
+    max_winding_temperature_rise_k: Positive
+    pole_pitch_m: Positive
+    force_ripple_fraction: Annotated[float, Field(ge=0, lt=1, allow_inf_nan=False)] = 0.0
+    cogging_force_n: NonNegative = 0.0
+    ripple_compensation: Annotated[float, Field(ge=0, le=1, allow_inf_nan=False)] = 0.0
+    encoder_resolution_m: Positive
+
+    @model_validator(mode="after")
+    def _loop_and_ratings(self) -> LinearMotorDrive:
+        self._require_current_loop()
+        if self.winding_resistance_ohm is None:
+            raise ValueError("winding_resistance_ohm is required (the copper loss R i^2 heats the winding)")
+        if self.continuous_force_n > self.force_limit_n:
+            raise ValueError(f"continuous_force_n must be at most the peak force force_constant_n_per_a x "
+                             f"current_limit_a = {self.force_limit_n:g} N (got {self.continuous_force_n!r})")
+        return self
+
+    @property
+    def force_per_current_n_per_a(self) -> float:
+        """K_f, N/A."""
+        return self.force_constant_n_per_a
+
+    def axial_stiffness_n_per_m(self, machine: Machine, leg_length_m: np.ndarray | float) -> np.ndarray:
+        """The mount's ``mount_stiffness_n_per_m`` at every length (no screw), N/m."""
+        return np.full_like(np.asarray(leg_length_m, dtype=float), self.mount_stiffness_n_per_m)
+
+    def reflected_mass_kg(self, machine: Machine) -> float:
+        """The forcer's ``moving_mass_kg`` along the leg, kg."""
+        return self.moving_mass_kg
+
 
 def _exactly_one(table: BaseModel, a: str, b: str) -> None:
     if (getattr(table, a) is None) == (getattr(table, b) is None):
         raise ValueError(f"give exactly one of {a} and {b}")
 
 
-_FORCE_KEYS = {"axial_stiffness_n_per_m": None, "force_bandwidth_hz": 40.0, "force_limit_n": 1000.0}
+# The drive kinds: ``[actuator] kind`` -> its schema table (the only list of kinds; a table that is not inline is
+# ``[actuator.<kind>]``). Their dynamics: pressfit.dynamics.drives.DRIVES, keyed by these tables.
+DRIVE_TABLES: dict[str, type[DriveTable]] = {
+    "force": ForceSource,
+    "electric": ElectricDrive,
+    "hydraulic": HydraulicDrive,
+    "linear_motor": LinearMotorDrive,
+}
+_INLINE = {name: table for name, table in DRIVE_TABLES.items() if table.inline}
+_TABLES = {name: table for name, table in DRIVE_TABLES.items() if not table.inline}
+_INLINE_KEYS = {field.alias or key: field for table in _INLINE.values() for key, field in table.model_fields.items()}
 
 
-class Actuator(StrictModel):
-    """The linear actuators. ``kind`` (default "force") selects the drive model (docs/drives.md):
+class _ActuatorKeys(StrictModel):
+    """The linear actuators. ``kind`` (default "force") selects the drive (:data:`DRIVE_TABLES`, docs/drives.md):
 
-    * "force": an ideal first-order force source: axial stiffness (N/m, required), the force bandwidth (Hz;
-      paper section 4.2: 40 Hz, feasible for servo-hydraulics) and its force saturation (N, magnitude; an
-      estimate, see the machine file);
+    * "force": an ideal first-order force source, the keys of :class:`ForceSource` in ``[actuator]`` itself;
     * "electric": servo motor + ball screw, the table ``[actuator.electric]`` (:class:`ElectricDrive`);
-    * "hydraulic": servo valve + symmetric cylinder, the table ``[actuator.hydraulic]`` (:class:`HydraulicDrive`).
+    * "hydraulic": servo valve + symmetric cylinder, the table ``[actuator.hydraulic]`` (:class:`HydraulicDrive`);
+    * "linear_motor": direct-drive linear motor, ``[actuator.linear_motor]`` (:class:`LinearMotorDrive`).
 
-    An electric or hydraulic drive's stiffness, bandwidth and force limit follow from its table, so the force
-    kind's three keys are refused with it (one key means one thing)."""
+    A tabled drive's stiffness, bandwidth and force limit follow from its table, so the force kind's three keys
+    are refused with it (one key means one thing)."""
 
-    kind: Literal["force", "electric", "hydraulic"] = "force"
     axial_stiffness_n_per_m: Positive | None = None
     force_bandwidth_hz: Positive | None = None
     force_limit_n: Positive | None = None
-    electric: ElectricDrive | None = None
-    hydraulic: HydraulicDrive | None = None
 
     @model_validator(mode="before")
     @classmethod
@@ -332,32 +505,46 @@ class Actuator(StrictModel):
             return data
         data = {k: v for k, v in data.items() if v is not None}  # a dumped model lists absent keys as None
         kind = data.get("kind", "force")
-        if kind == "force":
-            for key, default in _FORCE_KEYS.items():
-                if default is None and key not in data:
-                    raise ValueError(f"{key} is required for kind = \"force\"")
-                data.setdefault(key, default)
-        elif kind in ("electric", "hydraulic"):
-            given = sorted(set(_FORCE_KEYS) & set(data))
+        if kind not in DRIVE_TABLES:
+            return data  # the kind's Literal names the known kinds, at actuator.kind
+        if kind in _INLINE:
+            for key, field in _INLINE_KEYS.items():
+                if field.is_required() and key not in data:
+                    raise ValueError(f"{key} is required for kind = \"{kind}\"")
+                data.setdefault(key, field.default)
+        elif kind in _TABLES:
+            given = sorted(set(_INLINE_KEYS) & set(data))
             if given:
                 raise ValueError(f"{given[0]} belongs to kind = \"force\"; the {kind} drive's stiffness, bandwidth "
                                  f"and force limit follow from [actuator.{kind}]")
             if kind not in data:
                 raise ValueError(f"kind = \"{kind}\" needs the table [actuator.{kind}]")
-        for table in ("electric", "hydraulic"):
+        for table in _TABLES:
             if table in data and table != kind:
                 raise ValueError(f"[actuator.{table}] is given but kind = \"{kind}\"")
         return data
 
+    @cached_property
+    def table(self) -> DriveTable:
+        """The drive kind's table (:data:`DRIVE_TABLES`): ``[actuator.<kind>]``, or the inline keys' table."""
+        kind = self.kind  # type: ignore[attr-defined]
+        if kind in _INLINE:
+            return _INLINE[kind].model_validate({key: getattr(self, key) for key in _INLINE_KEYS})
+        return getattr(self, kind)
+
     @property
     def drive_force_limit_n(self) -> float:
-        """The largest axial force the drive delivers (magnitude), N: ``force_limit_n`` for the force kind,
-        2 pi eta K_t i_max / lead for the electric, A (p_s - p_t) for the hydraulic drive."""
-        if self.kind == "electric":
-            return self.electric.force_limit_n
-        if self.kind == "hydraulic":
-            return self.hydraulic.force_limit_n
-        return self.force_limit_n
+        """The largest axial force the drive delivers (magnitude), N (:attr:`DriveTable.force_limit_n`): the
+        force kind's ``force_limit_n``, 2 pi eta K_t i_max / lead (electric), A (p_s - p_t) (hydraulic),
+        K_f i_max (linear motor)."""
+        return self.table.force_limit_n
+
+
+Actuator = create_model(
+    "Actuator", __base__=_ActuatorKeys, __module__=__name__, __doc__=_ActuatorKeys.__doc__,
+    kind=(Literal[tuple(DRIVE_TABLES)], "force"),
+    **{name: (table | None, None) for name, table in _TABLES.items()})
+Actuator.__qualname__ = "Actuator"
 
 
 class Joints(StrictModel):
@@ -553,10 +740,7 @@ class Machine(StrictModel):
     def _cylinder_shorter_than_legs(self) -> Machine:
         if self.cylinder.length_m >= self.limits.leg_length_min_m:
             raise ValueError("cylinder.length_m must be shorter than limits.leg_length_min_m")
-        travel = self.limits.leg_length_max_m - self.limits.leg_length_min_m
-        if self.actuator.kind == "hydraulic" and self.actuator.hydraulic.stroke_m < travel:
-            raise ValueError(f"actuator.hydraulic.stroke_m must be at least the leg travel leg_length_max_m - "
-                             f"leg_length_min_m = {travel:g} m (got {self.actuator.hydraulic.stroke_m!r})")
+        self.actuator.table.check(self)
         return self
 
 
@@ -641,29 +825,17 @@ class Machine(StrictModel):
         + stem, m/N."""
         e = self.material.youngs_modulus_pa
         lc = self.cylinder.length_m
-        drive = (1.0 / self.actuator.axial_stiffness_n_per_m if self.actuator.kind == "force"
-                 else 1.0 / self.drive_stiffness_n_per_m(leg_length_m))
+        drive = 1.0 / self.drive_stiffness_n_per_m(leg_length_m)
         return (drive + lc / (e * self.cylinder_section.area_m2)
                 + (np.asarray(leg_length_m) - lc) / (e * self.stem_section.area_m2))
 
     def drive_stiffness_n_per_m(self, leg_length_m: np.ndarray | float) -> np.ndarray:
-        """The drive's own axial stiffness at leg length l (m), N/m (:mod:`pressfit.description.drive_stiffness`):
+        """The drive's own axial stiffness at leg length l (m), N/m: its table's
+        :meth:`DriveTable.axial_stiffness_n_per_m` (:mod:`pressfit.description.drive_stiffness`):
         ``axial_stiffness_n_per_m`` (force kind), the ball screw E A / L_free(l) in series with nut and bearing
-        (electric), the oil column beta A^2 (1/V_a + 1/V_b) at the piston position of l (hydraulic)."""
-        a, length = self.actuator, np.asarray(leg_length_m, dtype=float)
-        if a.kind == "electric":
-            el = a.electric
-            free = (np.full_like(length, el.screw_free_length_m) if el.screw_free_length_m is not None
-                    else el.screw_free_length_at_min_leg_m + (length - self.limits.leg_length_min_m))
-            return drive_stiffness.screw_axial_stiffness_n_per_m(
-                self.material.youngs_modulus_pa, el.screw_diameter_m, free, el.nut_stiffness_n_per_m,
-                el.bearing_stiffness_n_per_m)
-        if a.kind == "hydraulic":
-            hy = a.hydraulic
-            v_a, v_b = drive_stiffness.chamber_volumes_m3(hy.area_m2, hy.stroke_m, self.piston_position_m(length),
-                                                          hy.dead_volume_a_m3, hy.dead_volume_b_m3)
-            return drive_stiffness.oil_column_stiffness_n_per_m(hy.bulk_modulus_pa, hy.area_m2, v_a, v_b)
-        return np.full_like(length, a.axial_stiffness_n_per_m)
+        (electric), the oil column beta A^2 (1/V_a + 1/V_b) at the piston position of l (hydraulic), the mount
+        (linear motor)."""
+        return self.actuator.table.axial_stiffness_n_per_m(self, leg_length_m)
 
     def piston_position_m(self, leg_length_m: np.ndarray | float) -> np.ndarray:
         """Hydraulic piston position x (m from the base-side end of the stroke) at leg length l: the leg travel
@@ -674,22 +846,15 @@ class Machine(StrictModel):
 
     @cached_property
     def screw_inertia_kg_m2(self) -> float:
-        """The ball screw's inertia about its axis, kg m^2: ``screw_inertia_kg_m2`` or a solid steel bar of the
-        root diameter d and ``screw_length_m`` L, rho pi d^4 L / 32 (rho = ``mass.density_kg_per_m3``)."""
-        el = self.actuator.electric
-        if el.screw_inertia_kg_m2 is not None:
-            return el.screw_inertia_kg_m2
-        return self.mass.density_kg_per_m3 * math.pi * el.screw_diameter_m**4 * el.screw_length_m / 32.0
+        """The electric drive's ball screw inertia about its axis, kg m^2 (:meth:`ElectricDrive.screw_inertia`)."""
+        return self.actuator.electric.screw_inertia(self)
 
     @cached_property
     def drive_reflected_mass_kg(self) -> float:
-        """Rotating inertia reflected along the leg, kg: (J_rotor + J_screw) (2 pi / lead)^2 for an electric
-        drive (its kinetic energy J omega^2 / 2 with omega = 2 pi l_dot / lead), 0 otherwise (a hydraulic
+        """Inertia reflected along the leg, kg (:meth:`DriveTable.reflected_mass_kg`): (J_rotor + J_screw)
+        (2 pi / lead)^2 for an electric drive, the forcer's mass for a linear motor, 0 otherwise (a hydraulic
         drive's piston and rod are translating masses: ``mass.actuator_moving_mass_kg``)."""
-        if self.actuator.kind != "electric":
-            return 0.0
-        el = self.actuator.electric
-        return (el.rotor_inertia_kg_m2 + self.screw_inertia_kg_m2) * (2.0 * math.pi / el.lead_m) ** 2
+        return self.actuator.table.reflected_mass_kg(self)
 
     @cached_property
     def cylinder_tube_mass_kg(self) -> float:

@@ -127,11 +127,7 @@ class CyclePlan:
 
 def drive_speed_limit_m_per_s(drives: drive_kinds.Drive) -> tuple[float | None, str]:
     """The leg speed (m/s) the drive kind cannot exceed and the key that sets it (None: the model has none)."""
-    if getattr(drives, "kind", "force") == "electric":
-        table = drives.table  # type: ignore[attr-defined]
-        return table.speed_limit_rad_per_s * table.lead_m / (2.0 * math.pi), \
-            "[actuator.electric] speed_limit_rad_per_s x lead_m / 2 pi"
-    return None, ""
+    return getattr(drives, "speed_limit_m_per_s", None), getattr(drives, "speed_limit_key", "")
 
 
 def _pin_label(pin: ResolvedPin) -> str:

@@ -38,7 +38,7 @@ from tqdm import tqdm
 
 from pressfit import kinematics
 from pressfit.description.cases import Case, Simulation
-from pressfit.description.machine import Machine
+from pressfit.description.machine import ForceSource, Machine
 from pressfit.dynamics import drives as drive_kinds
 from pressfit.dynamics import kernels
 from pressfit.dynamics.contact import NO_TABLE, contact_force_n, contact_parameters
@@ -366,15 +366,11 @@ def check_preload(case: Case, machine: Machine, drives: drive_kinds.Drive, path_
                   "the preload alone")
 
 
-_LIMIT_KEYS = {"force": "[actuator] force_limit_n",
-               "electric": "k_f [actuator.electric] current_limit_a (k_f = 2 pi eta K_t / lead)",
-               "hydraulic": "A ([actuator.hydraulic] supply_pressure_pa - tank_pressure_pa)"}
-
-
 def drive_limit(drives: drive_kinds.Drive) -> str:
     """The drives' force limit and the key that sets it, for messages ("the drives' [actuator] force_limit_n =
     1000 N")."""
-    return f"the drives' {_LIMIT_KEYS[getattr(drives, 'kind', 'force')]} = {drives.force_limit_n:g} N"
+    key = getattr(drives, "force_limit_key", ForceSource.force_limit_key)
+    return f"the drives' {key} = {drives.force_limit_n:g} N"
 
 
 def _require_reachable(case: Case, machine: Machine, pose: np.ndarray, key: str, what: str) -> None:
@@ -596,7 +592,7 @@ def _flexible_steps(case: Case, machine: Machine, plan: ScenarioPlan, drives: dr
     dt, preload = sim.time_step_s, preload_amplitudes_n(case, machine)
     start = np.asarray(sim.start_m, float)
     plays = clearance_from_case(case, machine) if sim.clearance else None
-    implicit = drives.kind != "force"  # a drive whose tension follows its travel, stepped inside the step
+    implicit = drives.follows_travel  # a drive whose tension follows its travel, stepped inside the step
     fm = FlexibleMachine(machine, start,  # its step: check_flexible_step
                          actuator_series_n_per_m=None if plays is None else 0.5 * plays.contact_stiffness_n_per_m,
                          drive_mass_on_legs=plays is None or not implicit)  # behind the plays: on the drive side
@@ -627,10 +623,10 @@ def _flexible_steps(case: Case, machine: Machine, plan: ScenarioPlan, drives: dr
         reference = trajectory.at(t)
         ctrl.force_limit_n = plan.force_limits_n[trajectory.segment(t)]
         try:
-            force = ctrl.command(lengths, rates, reference, contact_force, dt)
+            force = ctrl.command(drives.measure_lengths_m(lengths), rates, reference, contact_force, dt)
             command = -ctrl.pinv @ force + ctrl.null @ preload
             wrench[1] = contact_force
-            if drives.kind == "force":  # its tension does not follow the travel: stepped once, held over the step
+            if not drives.follows_travel:  # its tension does not follow the travel: stepped once, held over the step
                 drive, tension = drives.step(drive, command, lengths, rates, dt)
                 state = fm.step(state, DriveInput.forces(tension), wrench, dt)
             else:

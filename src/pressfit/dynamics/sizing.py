@@ -48,6 +48,9 @@ from typing import Any
 import numpy as np
 
 from pressfit.dynamics import drives as drive_kinds
+from pressfit.dynamics.drives.base import Rating, rms
+from pressfit.dynamics.drives.electric import ElectricSizing
+from pressfit.dynamics.drives.hydraulic import HydraulicSizing
 from pressfit.errors import PressfitError, ResidualError
 
 # relative residual of the energy balance: 3x the largest measured on the shipped insertions at their 1 ms step
@@ -55,53 +58,6 @@ from pressfit.errors import PressfitError, ResidualError
 ENERGY_BALANCE_TOLERANCE = 0.05
 PRELOAD_FIGURES = ("rms_force_n", "copper_loss_w", "positive_energy_j", "regenerative_energy_j",
                    "supply_energy_j")  # given again with a4 = 0 (the preload's cost)
-
-
-@dataclass(frozen=True, kw_only=True)
-class Rating:
-    """A sizing figure beside its rating: ``value`` and ``rating`` in the figure's unit, ``key`` the machine-file
-    key the rating comes from."""
-
-    figure: str
-    value: float
-    rating: float
-    key: str
-
-    @property
-    def ratio(self) -> float:
-        return self.value / self.rating
-
-    @property
-    def exceeded(self) -> bool:
-        return self.ratio > 1.0
-
-    def to_dict(self) -> dict[str, Any]:
-        return {"value": self.value, "rating": self.rating, "ratio": self.ratio, "exceeded": self.exceeded,
-                "key": self.key}
-
-
-@dataclass(frozen=True, kw_only=True)
-class ElectricSizing:
-    """An electric drive's motor figures (module docstring): torque N m, current A, speed rad/s, loss W, energy J
-    (the copper figures None without ``winding_resistance_ohm``)."""
-
-    rms_torque_nm: float
-    peak_torque_nm: float
-    rms_current_a: float
-    peak_current_a: float
-    peak_motor_speed_rad_per_s: float
-    copper_loss_w: float | None
-    copper_energy_j: float | None
-
-
-@dataclass(frozen=True, kw_only=True)
-class HydraulicSizing:
-    """A hydraulic drive's supply figures (module docstring): flow m^3/s, power W, energy J."""
-
-    peak_flow_m3_per_s: float
-    peak_supply_power_w: float
-    mean_supply_power_w: float
-    supply_energy_j: float
 
 
 @dataclass(frozen=True, kw_only=True)
@@ -116,8 +72,7 @@ class DriveSizing:
     peak_regenerative_power_w: float
     positive_energy_j: float
     regenerative_energy_j: float
-    electric: ElectricSizing | None
-    hydraulic: HydraulicSizing | None
+    drive: Any | None  # the drive's own figures (its ``sizing``: ElectricSizing, HydraulicSizing, ...), or None
     ratings: tuple[Rating, ...]
     without_preload: DriveSizing | None = None
     rms_preload_share_n: float | None = None  # RMS of N(a4) - N(a4 = 0) on the same time grid, N
@@ -127,10 +82,19 @@ class DriveSizing:
         out = {k: getattr(self, k) for k in ("peak_force_n", "rms_force_n", "peak_speed_m_per_s", "peak_power_w",
                                              "peak_regenerative_power_w", "positive_energy_j",
                                              "regenerative_energy_j")}
-        for part in (self.electric, self.hydraulic):
-            if part is not None:
-                out.update(vars(part))
+        if self.drive is not None:
+            out.update(vars(self.drive))
         return out
+
+    @property
+    def electric(self) -> ElectricSizing | None:
+        """The electric drive's figures (None for another kind)."""
+        return self.drive if isinstance(self.drive, ElectricSizing) else None
+
+    @property
+    def hydraulic(self) -> HydraulicSizing | None:
+        """The hydraulic drive's figures (None for another kind)."""
+        return self.drive if isinstance(self.drive, HydraulicSizing) else None
 
     def to_dict(self) -> dict[str, Any]:
         """JSON record: the figures, ``ratings`` by figure, and with a preload comparison each of
@@ -159,77 +123,27 @@ def _series(tensions_n: np.ndarray, rates_m_per_s: np.ndarray, dt_s: float) -> t
     return n, v
 
 
-def _rms(x: np.ndarray) -> np.ndarray:
-    return np.sqrt(np.mean(x * x, axis=0))
-
-
 def drive_sizing(tensions_n: np.ndarray, rates_m_per_s: np.ndarray, dt_s: float, drive: drive_kinds.Drive
                  ) -> tuple[DriveSizing, ...]:
     """Per drive (column) the sizing figures and ratings (module docstring) of tensions (samples, legs) N and leg
     rates (samples, legs) m/s sampled every ``dt_s`` (s), for a drive model of :mod:`pressfit.dynamics.drives`."""
     n, v = _series(tensions_n, rates_m_per_s, dt_s)
     power = -n * v
-    peak_force, rms_force = np.abs(n).max(axis=0), _rms(n)
+    peak_force, rms_force = np.abs(n).max(axis=0), rms(n)
     speed = np.abs(v).max(axis=0)
-    kind = getattr(drive, "kind", "force")
     out = []
     for i in range(n.shape[1]):
+        own, more = drive.sizing(n[:, i], v[:, i], dt_s)
         ratings = [Rating(figure="peak_force_n", value=float(peak_force[i]), rating=float(drive.force_limit_n),
-                          key=_FORCE_LIMIT_KEYS[kind])]
-        electric = hydraulic = None
-        if kind == "electric":
-            electric, more = _electric(drive.table, n[:, i], v[:, i], dt_s, float(power[:, i].max()),
-                                       float(speed[i]))
-            ratings += more
-        elif kind == "hydraulic":
-            hydraulic, more = _hydraulic(drive.table, n[:, i], v[:, i], dt_s)
-            ratings += more
+                          key=drive.force_limit_key), *more]
         out.append(DriveSizing(
             leg=i + 1, peak_force_n=float(peak_force[i]), rms_force_n=float(rms_force[i]),
             peak_speed_m_per_s=float(speed[i]), peak_power_w=float(max(power[:, i].max(), 0.0)),
             peak_regenerative_power_w=float(max(-power[:, i].min(), 0.0)),
             positive_energy_j=float(np.maximum(power[:, i], 0.0).sum() * dt_s),
             regenerative_energy_j=float(np.maximum(-power[:, i], 0.0).sum() * dt_s),
-            electric=electric, hydraulic=hydraulic, ratings=tuple(ratings)))
+            drive=own, ratings=tuple(ratings)))
     return tuple(out)
-
-
-_FORCE_LIMIT_KEYS = {"force": "[actuator] force_limit_n",
-                     "electric": "2 pi eta K_t [actuator.electric] current_limit_a / lead",
-                     "hydraulic": "A ([actuator.hydraulic] supply_pressure_pa - tank_pressure_pa)"}
-
-
-def _electric(t: Any, n: np.ndarray, v: np.ndarray, dt_s: float, peak_power_w: float, peak_speed: float
-              ) -> tuple[ElectricSizing, list[Rating]]:
-    current = n / t.force_per_current_n_per_a
-    torque = t.torque_constant_nm_per_a * current
-    rms_i = float(_rms(current))
-    loss = None if t.winding_resistance_ohm is None else t.winding_resistance_ohm * rms_i**2
-    sizing = ElectricSizing(
-        rms_torque_nm=float(_rms(torque)), peak_torque_nm=float(np.abs(torque).max()), rms_current_a=rms_i,
-        peak_current_a=float(np.abs(current).max()),
-        peak_motor_speed_rad_per_s=2.0 * math.pi * peak_speed / t.lead_m,
-        copper_loss_w=loss, copper_energy_j=None if loss is None else loss * n.size * dt_s)
-    ratings = [Rating(figure="peak_speed_m_per_s", value=peak_speed,
-                      rating=t.speed_limit_rad_per_s * t.lead_m / (2.0 * math.pi),
-                      key="[actuator.electric] speed_limit_rad_per_s lead / (2 pi)")]
-    if t.continuous_torque_nm is not None:
-        ratings.append(Rating(figure="rms_torque_nm", value=sizing.rms_torque_nm, rating=t.continuous_torque_nm,
-                              key="[actuator.electric] continuous_torque_nm"))
-    if t.rated_power_w is not None:
-        ratings.append(Rating(figure="peak_power_w", value=max(peak_power_w, 0.0), rating=t.rated_power_w,
-                              key="[actuator.electric] rated_power_w"))
-    return sizing, ratings
-
-
-def _hydraulic(t: Any, n: np.ndarray, v: np.ndarray, dt_s: float) -> tuple[HydraulicSizing, list[Rating]]:
-    flow = t.area_m2 * np.abs(v) + t.leakage_m3_per_s_pa * np.abs(n) / t.area_m2
-    power = t.supply_pressure_pa * flow
-    sizing = HydraulicSizing(peak_flow_m3_per_s=float(flow.max()), peak_supply_power_w=float(power.max()),
-                             mean_supply_power_w=float(power.mean()), supply_energy_j=float(power.sum() * dt_s))
-    rated = t.valve_flow_gain_m3_per_s_sqrt_pa * math.sqrt(0.5 * (t.supply_pressure_pa - t.tank_pressure_pa))
-    return sizing, [Rating(figure="peak_flow_m3_per_s", value=sizing.peak_flow_m3_per_s, rating=rated,
-                           key="[actuator.hydraulic] valve_flow_gain_m3_per_s_sqrt_pa sqrt((p_s - p_t) / 2)")]
 
 
 def with_preload_cost(sizing: tuple[DriveSizing, ...], tensions_n: np.ndarray, without: tuple[DriveSizing, ...],
@@ -239,7 +153,7 @@ def with_preload_cost(sizing: tuple[DriveSizing, ...], tensions_n: np.ndarray, w
     a, b = np.asarray(tensions_n, dtype=float), np.asarray(tensions_without_n, dtype=float)
     if a.shape != b.shape or len(sizing) != len(without) or a.shape[1] != len(sizing):
         raise PressfitError(f"the preload's cost compares two runs on one time grid: got {a.shape} and {b.shape}")
-    share = _rms(a - b)
+    share = rms(a - b)
     return tuple(DriveSizing(**{**vars(s), "without_preload": w, "rms_preload_share_n": float(share[i])})
                  for i, (s, w) in enumerate(zip(sizing, without, strict=True)))
 
@@ -321,13 +235,12 @@ def _columns(result: Any, prefix: str) -> np.ndarray:
 
 def drive_losses_j(sizing: tuple[DriveSizing, ...]) -> float:
     """The drives' losses upstream of the joints, J: copper R i^2 (electric, with the winding resistance), the valve's
-    throttling p_s Q - P (hydraulic: supplied minus net mechanical work), 0 for the force kind."""
+    throttling p_s Q - P (hydraulic: supplied minus net mechanical work), 0 for the force kind: each drive's
+    figures' ``loss_energy_j``."""
     total = 0.0
     for s in sizing:
-        if s.electric is not None and s.electric.copper_energy_j is not None:
-            total += s.electric.copper_energy_j
-        if s.hydraulic is not None:
-            total += s.hydraulic.supply_energy_j - (s.positive_energy_j - s.regenerative_energy_j)
+        if s.drive is not None:
+            total += s.drive.loss_energy_j(s.positive_energy_j - s.regenerative_energy_j)
     return total
 
 

@@ -23,7 +23,18 @@ serves several runs.
   force before that inertia, never minus it (no double count);
 * ``bandwidth_hz``: the -3 dB frequency of its force loop (small signal, blocked leg);
 * ``linear_port(length_m, tension_n)``: the drive linearised about rest at one leg's length and tension
-  (:class:`DrivePort`), for the control design (:mod:`pressfit.dynamics.linearise`).
+  (:class:`DrivePort`), for the control design (:mod:`pressfit.dynamics.linearise`);
+* ``measure_lengths_m(lengths_m)``: the leg lengths its sensor reports (an encoder quantises them);
+* ``sizing(tension_n, rate_m_per_s, dt_s)``: one drive's own figures over a motion (a frozen dataclass, or None)
+  and their :class:`Rating`\ s, for :mod:`pressfit.dynamics.sizing` (which adds the peak force against
+  ``force_limit_n``, named by ``force_limit_key``);
+* flags read instead of the kind's name: ``follows_travel`` (its tension follows the leg's travel within a step,
+  so an implicit step takes it inside its iterations), ``explicit_spring`` (a stiff spring, the oil column, that
+  the rigid model's explicit coupling must resolve: :mod:`pressfit.dynamics.drives.steps`),
+  ``speed_limit_m_per_s`` and ``speed_limit_key`` (the leg speed it cannot exceed, None without one).
+
+The kinds are registered in :data:`pressfit.dynamics.drives.DRIVES` (schema table -> drive), the tables in
+:data:`pressfit.description.machine.DRIVE_TABLES` (name -> table).
 """
 
 from __future__ import annotations
@@ -62,11 +73,43 @@ class DrivePort:
         return np.array([self.c @ np.linalg.solve(w * eye - self.a, self.b_command) for w in s])
 
 
+@dataclass(frozen=True, kw_only=True)
+class Rating:
+    """A sizing figure beside its rating: ``value`` and ``rating`` in the figure's unit, ``key`` the machine-file
+    key the rating comes from."""
+
+    figure: str
+    value: float
+    rating: float
+    key: str
+
+    @property
+    def ratio(self) -> float:
+        return self.value / self.rating
+
+    @property
+    def exceeded(self) -> bool:
+        return self.ratio > 1.0
+
+    def to_dict(self) -> dict[str, Any]:
+        return {"value": self.value, "rating": self.rating, "ratio": self.ratio, "exceeded": self.exceeded,
+                "key": self.key}
+
+
+def rms(x: np.ndarray) -> np.ndarray:
+    """sqrt(mean x^2) over the first axis (samples), in x's unit."""
+    return np.sqrt(np.mean(x * x, axis=0))
+
+
 class Drive(Protocol):
     """An actuator drive (module docstring)."""
 
     kind: str
     measures: tuple[str, ...]
+    force_limit_key: str
+    follows_travel: bool
+    explicit_spring: bool
+    speed_limit_key: str
 
     @property
     def force_limit_n(self) -> float: ...
@@ -89,6 +132,13 @@ class Drive(Protocol):
     def step_stiffness_n_per_m(self, lengths_m: np.ndarray) -> np.ndarray: ...
 
     def linear_port(self, length_m: float, tension_n: float) -> DrivePort: ...
+
+    @property
+    def speed_limit_m_per_s(self) -> float | None: ...
+
+    def measure_lengths_m(self, lengths_m: np.ndarray) -> np.ndarray: ...
+
+    def sizing(self, tension_n: np.ndarray, rate_m_per_s: np.ndarray, dt_s: float) -> tuple[Any, list[Rating]]: ...
 
 
 class DriveOverStep:

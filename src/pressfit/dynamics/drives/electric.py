@@ -5,7 +5,8 @@ Force from current: the screw turns the motor torque T = K_t i into the axial fo
 positive current pulls the leg shorter. The force command is a current reference
 i_ref = sat(N_cmd / k_f), saturated at +-i_max; the drive's force limit is k_f i_max.
 
-Current loop, per leg, with the motor speed omega = -2 pi l_dot / lead (rad/s, > 0 while the leg shortens):
+Current loop (:mod:`pressfit.dynamics.drives.current_loop`, shared with the linear motor), per leg, with the
+motor speed omega = -2 pi l_dot / lead (rad/s, > 0 while the leg shortens) and the back-EMF constant K_e = K_t:
 
 * by its gains (PI on the winding, inductance L, resistance R, back-EMF K_e omega with K_e = K_t in SI):
   L di/dt = k_p (i_ref - i) + k_i z - R i - K_t omega, dz/dt = i_ref - i; the closed loop
@@ -27,138 +28,94 @@ from __future__ import annotations
 
 import math
 from dataclasses import dataclass
+from typing import Any
 
 import numpy as np
-from scipy.linalg import expm
 
 from pressfit.description.machine import ElectricDrive as ElectricTable
 from pressfit.description.machine import Machine
-from pressfit.dynamics.drives.base import DrivePort, minus_3db_hz, require_step
+from pressfit.dynamics.drives.base import Rating, rms
+from pressfit.dynamics.drives.current_loop import CurrentLoopDrive, CurrentLoopState
+
+ElectricState = CurrentLoopState  # motor current i (A) and the PI integrator z (A s)
 
 
-@dataclass(frozen=True)
-class ElectricState:
-    current_a: np.ndarray  # motor current i, A
-    integral_a_s: np.ndarray  # PI integrator z = integral of (i_ref - i), A s (0 for the bandwidth form)
+@dataclass(frozen=True, kw_only=True)
+class ElectricSizing:
+    """An electric drive's motor figures (:meth:`ElectricDrive.sizing`): torque N m, current A, speed rad/s, loss W,
+    energy J (the copper figures None without ``winding_resistance_ohm``)."""
+
+    kind = "electric"
+    rms_torque_nm: float
+    peak_torque_nm: float
+    rms_current_a: float
+    peak_current_a: float
+    peak_motor_speed_rad_per_s: float
+    copper_loss_w: float | None
+    copper_energy_j: float | None
+
+    def loss_energy_j(self, net_work_j: float) -> float:
+        """Its losses upstream of the joint, J: the copper energy (0 without the winding resistance)."""
+        return 0.0 if self.copper_energy_j is None else self.copper_energy_j
 
 
-class ElectricDrive:
+class ElectricDrive(CurrentLoopDrive):
     """Servo motor + ball screw drive (module docstring)."""
 
     kind = "electric"
-    measures = ("leg_length_m", "current_a")
+    speed_limit_key = "[actuator.electric] speed_limit_rad_per_s x lead_m / 2 pi"
 
     def __init__(self, machine: Machine) -> None:
-        self.machine = machine
         self.table: ElectricTable = machine.actuator.electric
-        t = self.table
-        self.force_per_current_n_per_a = t.force_per_current_n_per_a
-        if t.current_loop_bandwidth_hz is not None:
-            w = 2.0 * math.pi * t.current_loop_bandwidth_hz
-            self._a = np.array([[-w, 0.0], [0.0, 0.0]])
-            self._b = np.array([[w, 0.0], [0.0, 0.0]])  # inputs (i_ref, back-EMF V)
-        else:
-            inv_l = 1.0 / t.winding_inductance_h
-            kp, ki, r = t.current_loop_kp_v_per_a, t.current_loop_ki_v_per_a_s, t.winding_resistance_ohm
-            self._a = np.array([[-(kp + r) * inv_l, ki * inv_l], [-1.0, 0.0]])
-            self._b = np.array([[kp * inv_l, -inv_l], [1.0, 0.0]])
-        self._zoh: dict[float, tuple[np.ndarray, np.ndarray]] = {}
-
-    @classmethod
-    def of(cls, machine: Machine) -> ElectricDrive:
-        return cls(machine)
+        super().__init__(machine)
 
     @property
-    def force_limit_n(self) -> float:
-        """k_f i_max = 2 pi eta K_t i_max / lead, N."""
-        return self.table.force_limit_n
+    def emf_constant(self) -> float:
+        """K_e = K_t, V s/rad."""
+        return self.table.torque_constant_nm_per_a
 
     @property
-    def reflected_mass_kg(self) -> float:
-        return self.machine.drive_reflected_mass_kg
-
-    def closed_loop(self, frequency_hz: np.ndarray) -> np.ndarray:
-        """The current (= force) loop i / i_ref at frequencies (Hz), complex (blocked motor)."""
-        s = 2j * math.pi * np.asarray(frequency_hz, dtype=float)
-        t = self.table
-        if t.current_loop_bandwidth_hz is not None:
-            w = 2.0 * math.pi * t.current_loop_bandwidth_hz
-            return w / (s + w)
-        kp, ki = t.current_loop_kp_v_per_a, t.current_loop_ki_v_per_a_s
-        return (kp * s + ki) / (t.winding_inductance_h * s**2 + (t.winding_resistance_ohm + kp) * s + ki)
+    def speed_limit(self) -> float:
+        """The motor's ``speed_limit_rad_per_s``, rad/s."""
+        return self.table.speed_limit_rad_per_s
 
     @property
-    def bandwidth_hz(self) -> float:
-        """The -3 dB frequency of :meth:`closed_loop` (its last crossing of 1/sqrt 2), Hz."""
-        return minus_3db_hz(self.closed_loop)
+    def speed_limit_m_per_s(self) -> float:
+        """The leg speed of the motor's speed limit, speed_limit_rad_per_s lead / 2 pi, m/s."""
+        return self.table.speed_limit_rad_per_s * self.table.lead_m / (2.0 * math.pi)
 
-    def _discrete(self, dt_s: float) -> tuple[np.ndarray, np.ndarray]:
-        if dt_s not in self._zoh:
-            aug = np.zeros((4, 4))
-            aug[:2, :2], aug[:2, 2:] = self._a * dt_s, self._b * dt_s
-            e = expm(aug)
-            self._zoh[dt_s] = (e[:2, :2], e[:2, 2:])
-        return self._zoh[dt_s]
-
-    def initial_state(self, force_n: np.ndarray, lengths_m: np.ndarray) -> ElectricState:
-        """At rest delivering ``force_n`` (clipped at the force limit): i = N / k_f, z = R i / k_i (steady)."""
-        i = np.clip(np.asarray(force_n, dtype=float) / self.force_per_current_n_per_a, -self.table.current_limit_a,
-                    self.table.current_limit_a)
-        t = self.table
-        z = i * t.winding_resistance_ohm / t.current_loop_ki_v_per_a_s if t.current_loop_bandwidth_hz is None else 0 * i
-        return ElectricState(i, z)
-
-    def current_reference_a(self, command_n: np.ndarray, rates_m_per_s: np.ndarray) -> np.ndarray:
-        """sat(N_cmd / k_f) with the speed limit applied (module docstring), A."""
-        t = self.table
-        i_ref = np.clip(np.asarray(command_n, dtype=float) / self.force_per_current_n_per_a, -t.current_limit_a,
-                        t.current_limit_a)
-        omega = self.motor_speed_rad_per_s(rates_m_per_s)
-        i_ref = np.where(omega > t.speed_limit_rad_per_s, np.minimum(i_ref, 0.0), i_ref)
-        return np.where(omega < -t.speed_limit_rad_per_s, np.maximum(i_ref, 0.0), i_ref)
+    def motor_speed(self, rates_m_per_s: np.ndarray) -> np.ndarray:
+        return self.motor_speed_rad_per_s(rates_m_per_s)
 
     def motor_speed_rad_per_s(self, rates_m_per_s: np.ndarray) -> np.ndarray:
         """omega = -2 pi l_dot / lead, rad/s (> 0 while the leg shortens, the direction a positive current drives)."""
         return -2.0 * math.pi * np.asarray(rates_m_per_s, dtype=float) / self.table.lead_m
 
-    def step(self, state: ElectricState, command_n: np.ndarray, lengths_m: np.ndarray, rates_m_per_s: np.ndarray,
-             dt_s: float) -> tuple[ElectricState, np.ndarray]:
-        phi, gamma = self._discrete(require_step(dt_s))
-        i_ref = self.current_reference_a(command_n, rates_m_per_s)
-        emf = self.table.torque_constant_nm_per_a * self.motor_speed_rad_per_s(rates_m_per_s)
-        i, z = state.current_a, state.integral_a_s
-        i_new = phi[0, 0] * i + phi[0, 1] * z + gamma[0, 0] * i_ref + gamma[0, 1] * emf
-        z_new = phi[1, 0] * i + phi[1, 1] * z + gamma[1, 0] * i_ref + gamma[1, 1] * emf
-        limit = self.table.current_limit_a
-        i_new = np.clip(i_new, -limit, limit)
-        return ElectricState(i_new, z_new), self.force_per_current_n_per_a * i_new
+    def emf_per_rate(self) -> float:
+        """-K_t 2 pi / lead, V s/m."""
+        return -self.table.torque_constant_nm_per_a * 2.0 * math.pi / self.table.lead_m
 
-    def saturated(self, command_n: np.ndarray) -> np.ndarray:
-        return np.abs(command_n) > self.force_limit_n
-
-    def axial_stiffness_n_per_m(self, lengths_m: np.ndarray) -> np.ndarray:
-        return self.machine.drive_stiffness_n_per_m(lengths_m)
-
-    def copper_loss_w(self, state: ElectricState) -> np.ndarray:
-        """R i^2 per motor, W (0 without ``winding_resistance_ohm``)."""
-        r = self.table.winding_resistance_ohm or 0.0
-        return r * state.current_a**2
-
-
-    def step_stiffness_n_per_m(self, lengths_m: np.ndarray) -> np.ndarray:
-        """0, N/m: the current follows the travel only through the back-EMF, a rate term the iterations resolve."""
-        return np.zeros_like(np.asarray(lengths_m, dtype=float))
-
-    def linear_port(self, length_m: float, tension_n: float) -> DrivePort:
-        r"""The current loop (module docstring) with i_ref = dN_cmd / k_f and the back-EMF K_t omega,
-        omega = -2 pi v / lead, v the motor side's rate; dN = k_f i. The rotor (``reflected_mass_kg``) sits on
-        the motor side of the screw, nut and bearing in series (``axial_stiffness_n_per_m`` at the length)."""
-        n = 1 if self.table.current_loop_bandwidth_hz is not None else 2
-        a, b = self._a[:n, :n], self._b[:n]
-        emf_per_rate = -self.table.torque_constant_nm_per_a * 2.0 * math.pi / self.table.lead_m
-        c = np.zeros(n)
-        c[0] = self.force_per_current_n_per_a
-        return DrivePort(states=("current_a", "integral_a_s")[:n], a=a.copy(),
-                         b_command=b[:, 0] / self.force_per_current_n_per_a, b_rate=b[:, 1] * emf_per_rate, c=c,
-                         reflected_mass_kg=self.reflected_mass_kg,
-                         series_stiffness_n_per_m=float(self.axial_stiffness_n_per_m(np.array(length_m))))
+    def sizing(self, tension_n: np.ndarray, rate_m_per_s: np.ndarray, dt_s: float) -> tuple[Any, list[Rating]]:
+        """One motor's figures over a motion (:mod:`pressfit.dynamics.sizing`): current i = N / k_f, torque
+        K_t i, motor speed 2 pi |l_dot| / lead, copper loss R RMS(i)^2; rated: the peak leg speed, the RMS torque
+        (``continuous_torque_nm``) and the peak power (``rated_power_w``)."""
+        t, n, v = self.table, tension_n, rate_m_per_s
+        peak_speed, peak_power_w = float(np.abs(v).max()), float((-n * v).max())
+        current = n / t.force_per_current_n_per_a
+        torque = t.torque_constant_nm_per_a * current
+        rms_i = float(rms(current))
+        loss = None if t.winding_resistance_ohm is None else t.winding_resistance_ohm * rms_i**2
+        sizing = ElectricSizing(
+            rms_torque_nm=float(rms(torque)), peak_torque_nm=float(np.abs(torque).max()), rms_current_a=rms_i,
+            peak_current_a=float(np.abs(current).max()),
+            peak_motor_speed_rad_per_s=2.0 * math.pi * peak_speed / t.lead_m,
+            copper_loss_w=loss, copper_energy_j=None if loss is None else loss * n.size * dt_s)
+        ratings = [Rating(figure="peak_speed_m_per_s", value=peak_speed, rating=self.speed_limit_m_per_s,
+                          key="[actuator.electric] speed_limit_rad_per_s lead / (2 pi)")]
+        if t.continuous_torque_nm is not None:
+            ratings.append(Rating(figure="rms_torque_nm", value=sizing.rms_torque_nm, rating=t.continuous_torque_nm,
+                                  key="[actuator.electric] continuous_torque_nm"))
+        if t.rated_power_w is not None:
+            ratings.append(Rating(figure="peak_power_w", value=max(peak_power_w, 0.0), rating=t.rated_power_w,
+                                  key="[actuator.electric] rated_power_w"))
+        return sizing, ratings

@@ -13,9 +13,9 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from pressfit.description.machine import Machine
+from pressfit.description.machine import ForceSource, Machine
 from pressfit.dynamics.actuators import ForceActuators
-from pressfit.dynamics.drives.base import DrivePort
+from pressfit.dynamics.drives.base import DrivePort, Rating
 
 
 @dataclass(frozen=True)
@@ -29,6 +29,11 @@ class ForceDrive:
     kind = "force"
     measures = ("leg_length_m", "force_n")
     reflected_mass_kg = 0.0
+    force_limit_key = ForceSource.force_limit_key
+    follows_travel = False  # an ideal force source: stepped once per step, its tension held over it
+    explicit_spring = False
+    speed_limit_m_per_s = None
+    speed_limit_key = ""
 
     def __init__(self, bandwidth_hz: float, force_limit_n: float, axial_stiffness_n_per_m: float) -> None:
         self._first_order = ForceActuators(bandwidth_hz, force_limit_n)  # validates both numbers
@@ -36,8 +41,8 @@ class ForceDrive:
 
     @classmethod
     def of(cls, machine: Machine) -> ForceDrive:
-        a = machine.actuator
-        return cls(a.force_bandwidth_hz, a.force_limit_n, a.axial_stiffness_n_per_m)
+        t = machine.actuator.table
+        return cls(t.force_bandwidth_hz, t.force_limit_n, t.axial_stiffness_n_per_m_)
 
     @property
     def bandwidth_hz(self) -> float:
@@ -75,3 +80,11 @@ class ForceDrive:
         w = 1.0 / self.time_constant_s
         return DrivePort(states=("force_n",), a=np.array([[-w]]), b_command=np.array([w]), b_rate=np.zeros(1),
                          c=np.ones(1))
+
+    def measure_lengths_m(self, lengths_m: np.ndarray) -> np.ndarray:
+        """The leg lengths, exact (an ideal sensor), m."""
+        return lengths_m
+
+    def sizing(self, tension_n: np.ndarray, rate_m_per_s: np.ndarray, dt_s: float) -> tuple[None, list[Rating]]:
+        """No figures of its own beyond the common ones (:mod:`pressfit.dynamics.sizing`)."""
+        return None, []

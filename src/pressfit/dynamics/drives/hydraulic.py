@@ -50,7 +50,7 @@ import numpy as np
 
 from pressfit.description.machine import HydraulicDrive as HydraulicTable
 from pressfit.description.machine import Machine
-from pressfit.dynamics.drives.base import DrivePort, minus_3db_hz, require_step
+from pressfit.dynamics.drives.base import DrivePort, Rating, minus_3db_hz, require_step
 from pressfit.errors import DriveStepError
 
 SUBSTEP_S = 1e-4  # largest pressure substep, s (accuracy, not stability: module docstring)
@@ -65,12 +65,32 @@ class HydraulicState:
     spool: np.ndarray  # valve opening x_v in [-1, 1]
 
 
+@dataclass(frozen=True, kw_only=True)
+class HydraulicSizing:
+    """A hydraulic drive's supply figures (:meth:`HydraulicDrive.sizing`): flow m^3/s, power W, energy J."""
+
+    kind = "hydraulic"
+    peak_flow_m3_per_s: float
+    peak_supply_power_w: float
+    mean_supply_power_w: float
+    supply_energy_j: float
+
+    def loss_energy_j(self, net_work_j: float) -> float:
+        """The valve's throttling, J: the supplied energy minus the net mechanical work ``net_work_j`` (J)."""
+        return self.supply_energy_j - net_work_j
+
+
 class HydraulicDrive:
     """Servo-hydraulic drive (module docstring)."""
 
     kind = "hydraulic"
     measures = ("leg_length_m", "pressure_a_pa", "pressure_b_pa")
     reflected_mass_kg = 0.0
+    force_limit_key = HydraulicTable.force_limit_key
+    follows_travel = True  # the oil column follows the travel: stepped inside the flexible step
+    explicit_spring = True  # the rigid model's explicit coupling must resolve the oil column (refuse_step)
+    speed_limit_m_per_s = None
+    speed_limit_key = ""
 
     def __init__(self, machine: Machine) -> None:
         self.machine = machine
@@ -196,6 +216,23 @@ class HydraulicDrive:
                 leg = int(bad[0])
                 raise DriveStepError(self.kind, leg + 1, name, float(np.ravel(p)[leg]),
                                      f"[{-0.1 * ps:g}, {10.0 * ps:g}] Pa (no relief valve or cavitation modelled)")
+
+    def measure_lengths_m(self, lengths_m: np.ndarray) -> np.ndarray:
+        """The leg lengths from its position transducer, exact, m."""
+        return lengths_m
+
+    def sizing(self, tension_n: np.ndarray, rate_m_per_s: np.ndarray, dt_s: float
+               ) -> tuple[HydraulicSizing, list[Rating]]:
+        """One valve's supply over a motion (:mod:`pressfit.dynamics.sizing`): Q = A |l_dot| + C_L |N| / A at p_s;
+        rated: the peak flow against the valve's no-load flow K_v sqrt((p_s - p_t) / 2)."""
+        t, n, v = self.table, tension_n, rate_m_per_s
+        flow = t.area_m2 * np.abs(v) + t.leakage_m3_per_s_pa * np.abs(n) / t.area_m2
+        power = t.supply_pressure_pa * flow
+        sizing = HydraulicSizing(peak_flow_m3_per_s=float(flow.max()), peak_supply_power_w=float(power.max()),
+                                 mean_supply_power_w=float(power.mean()), supply_energy_j=float(power.sum() * dt_s))
+        rated = t.valve_flow_gain_m3_per_s_sqrt_pa * math.sqrt(0.5 * (t.supply_pressure_pa - t.tank_pressure_pa))
+        return sizing, [Rating(figure="peak_flow_m3_per_s", value=sizing.peak_flow_m3_per_s, rating=rated,
+                               key="[actuator.hydraulic] valve_flow_gain_m3_per_s_sqrt_pa sqrt((p_s - p_t) / 2)")]
 
     def saturated(self, command_n: np.ndarray) -> np.ndarray:
         return np.abs(command_n) > self.force_limit_n

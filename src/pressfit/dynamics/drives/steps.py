@@ -17,6 +17,7 @@ import numpy as np
 
 from pressfit import kinematics
 from pressfit.description.machine import Machine
+from pressfit.dynamics import drives
 from pressfit.dynamics.drives.hydraulic import refuse_step
 from pressfit.dynamics.multibody import inverse_apparent_mass
 
@@ -33,8 +34,9 @@ def hydraulic_step_refusal(machine: Machine, waypoints_m: np.ndarray, path_m: np
     """None when ``dt_s`` integrates the oil columns over the planned ``path_m`` (n, 3) on ``model``, else the
     reason (:func:`pressfit.dynamics.drives.hydraulic.refuse_step`): per leg the stiffest column over the path
     (k_h is largest at the ends of the stroke) on the lightest of the masses at the ``waypoints_m`` (the mass
-    changes slowly with the pose). Not hydraulic, or the flexible model (module doc): None."""
-    if machine.actuator.kind != "hydraulic" or model == "flexible":
+    changes slowly with the pose). A drive without an ``explicit_spring`` (not hydraulic), or the flexible model
+    (module doc): None."""
+    if not drives.drive_type(machine).explicit_spring or model == "flexible":
         return None
     lengths = np.array([kinematics.inverse_kinematics(machine, p).lengths_m for p in np.atleast_2d(path_m)])
     legs = np.arange(lengths.shape[1])
