@@ -4,7 +4,9 @@ from pathlib import Path
 
 import numpy as np
 import pytest
+from click.testing import CliRunner
 
+from pressfit.cli import main
 from pressfit.description.machine import DEFAULT_MODEL, load_machine
 from pressfit.errors import ModelFileError
 
@@ -136,9 +138,6 @@ def test_near_zero_masses_are_refused_by_the_dynamics_naming_the_key(tmp_path, c
 
 
 def test_a_massless_gantry_is_refused_by_compare_naming_the_key(tmp_path):
-    from click.testing import CliRunner
-
-    from pressfit.cli import main
 
     root = Path(__file__).resolve().parents[2]
     gantry = _with_mass(tmp_path, root / "models" / "gantry_cartesian.toml", "massless.toml",
@@ -147,7 +146,4 @@ def test_a_massless_gantry_is_refused_by_compare_naming_the_key(tmp_path):
                                     str(gantry)])
     assert res.exit_code == 2, res.output
     assert len(res.output.strip().splitlines()) == 1 and "mass.density_kg_per_m3" in res.output
-    from click.testing import CliRunner
-
-    from pressfit.cli import main
 
