@@ -7,6 +7,7 @@ from pathlib import Path
 
 import pytest
 from click.testing import CliRunner
+from readme import assert_printed, readme_fragment
 
 from pressfit.cli import main
 from pressfit.studies import calibration as cal_mod
@@ -151,3 +152,19 @@ def test_report_refuses_a_calibration_directory_without_results_before_computing
     empty.mkdir()
     res = run("report", "--calibration", empty, "--out", tmp_path / "report", "--quick")
     assert_one_line_exit_2(res, "results.json", "not the results.json of a pressfit calibrate run")
+
+
+def test_the_readme_calibration_table_is_this_run_and_holds_the_built_machine(calibrated):
+    """Drift protection: the README's table is what the run prints (each cell at its printed digits). The
+    independent source: the built machine's values (4.2e7 N/m, 4.6 mm: docs/examples/calibration/generate.py,
+    from which the VJM chain made the data) lie inside the README's printed 95% intervals, and its chi-square's
+    degrees of freedom are 3 x 16 rows - 2 keys = 46."""
+    out, _ = calibrated
+    results = json.loads((out / "results.json").read_text())
+    for e, truth in zip(results["estimates"], [4.2e7, 0.0046], strict=True):
+        low, high = (f"{v:.6g}" for v in e["interval_95"])
+        row = readme_fragment(f"| `{e['key']}` | {e['start']:g} | {e['value']:.6g} |")
+        assert row and readme_fragment(f"[{low}, {high}] |")
+        assert float(low) < truth < float(high)
+    readme_fragment("16 rows, 48 residuals, 46 degrees of freedom")
+    assert_printed(results["chi_square"], readme_fragment("chi-square 36.09").split()[-1])
