@@ -68,7 +68,7 @@ def test_the_3upu_at_its_centred_pose_is_the_closed_form():
     """Tsai's 3-UPU with the plate centre on the y axis: by symmetry each leg carries F / (3 sin alpha) of a
     vertical force F (sin alpha = the legs' vertical direction cosine, y / l with the leg vector (p - r, y) in its
     radial plane), and the vertical stiffness is 3 k_a sin^2 alpha (rigid cardans: the leg springs in parallel,
-    each seen through its direction cosine)."""
+    each seen through its direction cosine). The cone's worst drive force: the Pinocchio solve per direction."""
     machine = load_machine(ROOT / "models/tsai_3upu.toml")
     y = 0.6
     f = pose_figures(machine, np.array([[0.0, y, 0.0]]))
@@ -79,7 +79,15 @@ def test_the_3upu_at_its_centred_pose_is_the_closed_form():
     assert f.vertical_stiffness_n_per_m[0] == pytest.approx(3 * k_a * sin_alpha**2, rel=1e-10)
     tension = 700.0 / (3 * sin_alpha)  # under the press load alone; the cone's worst leg carries more
     assert f.drive_force_n[0].min() >= tension * (1 - 1e-12)
-    assert f.drive_force_n[0].max() <= 700.0 / (3 * sin_alpha * math.cos(CONE_HALF_ANGLE_RAD)) * 2
+    # the cone's worst leg, against the Pinocchio solve per direction (second formulation, as the 4-UPU's above)
+    cone = [(0.0, 1.0, 0.0)] + [(math.sin(CONE_HALF_ANGLE_RAD) * math.cos(2 * math.pi * k / CONE_DIRECTIONS),
+                                 math.cos(CONE_HALF_ANGLE_RAD),
+                                 math.sin(CONE_HALF_ANGLE_RAD) * math.sin(2 * math.pi * k / CONE_DIRECTIONS))
+                                for k in range(CONE_DIRECTIONS)]
+    pose = np.array([0.0, y, 0.0])
+    solves = [solve_equilibrium(machine, pose, [*(700.0 * np.array(d)), 0, 0, 0], linear=True) for d in cone]
+    np.testing.assert_allclose(f.drive_force_n[0], np.max([np.abs(e.actuator_forces_n) for e in solves], axis=0),
+                               rtol=1e-8)
 
 
 def test_the_box_is_the_required_workspace_and_refused_when_short():
