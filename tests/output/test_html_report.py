@@ -129,8 +129,29 @@ def test_tables_5_6_cells_equal_tables_json(page, report_dir):
             return "~0 both" if r["compared"] else "listed (frame)"
         return f"{100 * r['relative_error']:+.2f} %"
 
-    _check_table(page, "tables-5-6", records, {"relative_error": rel})
+    def scale(r):  # the case's table's largest |paper| or |linear| entry
+        return max(max(abs(x["paper"]), abs(x["linear"])) for x in records
+                   if x["case"] == r["case"] and x["quantity"][0] == r["quantity"][0])
+
+    def number(key):  # round-off (below 1e-9 of the scale) is 0, as is anything printing -0 (issue 28 item 9)
+        def text(r):
+            x = r[key]
+            return "0" if abs(x) <= 1e-9 * scale(r) or float(f"{x:.4g}") == 0 else f"{x:.4g}"
+        return text
+
+    _check_table(page, "tables-5-6", records, {"relative_error": rel, **{k: number(k) for k in
+                                                                         ("paper", "linear", "nonlinear")}})
     assert "(pressfit linear - paper) / |paper|" in page.inner_text("#tables + p")
+    # as the paper prints them: per case and table, a row per CAD leg, each component's paper value then ours
+    for case in ("paper-A", "paper-B", "paper-C"):
+        for table, first in (("Table-5", "F_x"), ("Table-6", "M_x")):
+            cells = page.locator(f"[id='{table}-{case}'] tbody tr").all_inner_texts()
+            heads = page.locator(f"[id='{table}-{case}'] th").all_inner_texts()
+            assert len(cells) == 4 and heads[1:3] == [f"{first} paper", f"{first} pressfit"]
+            r = next(x for x in records if x["case"] == case and x["quantity"] == first and x["cad_leg"] == 1)
+            assert cells[0].split("\t")[1:3] == [number("paper")(r), number("linear")(r)]
+    text = page.inner_text("#tables ~ table")
+    assert "e-15" not in text and "e-16" not in text
 
 
 def test_envelope_and_interference_cells_equal_their_json(page, report_dir):

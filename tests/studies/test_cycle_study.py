@@ -187,3 +187,35 @@ def test_an_incomplete_insertion_is_never_within(tmp_path):
 
     case = load_case(board(tmp_path, pins=PINS, study=GRID))
     assert not within_limits(case, pin_result(case, 0.0, 0.0, completed=False))
+
+
+def test_the_front_figure_shows_the_samples_the_front_and_the_fastest(tmp_path):
+    """front.png's figure (front_figure): per panel, the samples outside the limits (hollow), within (filled),
+    the front (crosses) and the fastest within (circled) at exactly their (cycle time, alignment in um /
+    overshoot in N); the axes span every sample."""
+    from pressfit.output.cycle_study import front_figure
+    from pressfit.output.plots import plt
+    from pressfit.studies.cycle_study import CycleStudyResult
+
+    t = np.array([3.0, 2.0, 4.0, 2.5])
+    align = np.array([10e-6, 40e-6, 5e-6, 20e-6])
+    over = np.array([0.5, 7.0, 0.1, 0.8])
+    ok = np.array([True, False, True, True])
+    columns = {k: np.ones(4) for k in FACTORS} | {
+        "cycle_time_s": t, "worst_alignment_error_m": align, "worst_overshoot_n": over,
+        "pins_passed": np.full(4, 2), "within_limits": ok, "error": np.array([""] * 4, dtype=object),
+        "on_front": np.array([True, True, True, True])}
+    result = CycleStudyResult(case=load_case(study_case(tmp_path)), columns=columns, front=np.array([1, 3, 0, 2]),
+                              fastest=3, model="rigid")
+    fig = front_figure(result)
+    try:
+        for ax, y in zip(fig.axes, (align * 1e6, over), strict=True):
+            outside, within, front, fastest = (line.get_xydata() for line in ax.lines)
+            np.testing.assert_array_equal(outside, np.column_stack([t[~ok], y[~ok]]))
+            np.testing.assert_array_equal(within, np.column_stack([t[ok], y[ok]]))
+            np.testing.assert_array_equal(front, np.column_stack([t[[1, 3, 0, 2]], y[[1, 3, 0, 2]]]))
+            np.testing.assert_array_equal(fastest, [[2.5, y[3]]])
+            lo, hi = ax.get_xlim()
+            assert lo < t.min() and hi > t.max() and ax.get_ylim()[0] < y.min() and ax.get_ylim()[1] > y.max()
+    finally:
+        plt.close(fig)

@@ -122,6 +122,27 @@ def test_written_designs_load_as_machines(small_study):
     assert (out / "one" / "pareto.png").stat().st_size > 0
 
 
+def test_the_pareto_figure_shows_the_trials_and_the_front(small_study):
+    """pareto.png's figure: the feasible trials at their (objective 1, objective 2) and the front's line through
+    the Pareto trials, as the trial table holds them; the axes named by the objectives and spanning the front."""
+    from pressfit.output.design_files import pareto_figure
+    from pressfit.output.plots import plt
+
+    _, one, _ = small_study
+    r = one.result
+    c, (x, y) = r.columns, r.plan.design.objectives[:2]
+    fig = pareto_figure(r)
+    try:
+        ax = fig.axes[0]
+        assert (ax.get_xlabel(), ax.get_ylabel()) == (x, y)
+        np.testing.assert_array_equal(ax.collections[1].get_offsets(), np.column_stack([c[x], c[y]])[c["feasible"]])
+        np.testing.assert_array_equal(ax.lines[0].get_xydata(), np.column_stack([c[x][r.pareto], c[y][r.pareto]]))
+        lo, hi = ax.get_xlim()
+        assert lo <= c[x][r.pareto].min() and hi >= c[x][r.pareto].max()
+    finally:
+        plt.close(fig)
+
+
 def test_a_reversed_range_is_a_named_error(tmp_path):
     p = one_parameter_case(tmp_path).read_text().replace("stem_diameter_m = [0.015, 0.035]",
                                                         "stem_diameter_m = [0.035, 0.015]")

@@ -34,17 +34,24 @@ def summary(result: design.DesignResult) -> dict[str, object]:
             "pareto": [{"trial": int(i)} | row(i) for i in result.pareto], "best": result.best()}
 
 
-def _plot(result: design.DesignResult, path: Path) -> Path:
+def pareto_figure(result: design.DesignResult) -> plt.Figure:
+    """pareto.png: the trials in the plane of the first two objectives (or the first parameter and the one
+    objective), infeasible in light grey, feasible in grey, the Pareto front in red."""
     c, obj = result.columns, result.plan.design.objectives
     x, y = (obj[0], obj[1]) if len(obj) > 1 else (next(iter(result.plan.parameters())), obj[0])
     fig, ax = plt.subplots(figsize=(7, 5), layout="constrained")
+    ok = c["status"] == "ok"
+    ax.scatter(c[x][ok & ~c["feasible"]], c[y][ok & ~c["feasible"]], s=10, c="0.75", label="infeasible")
+    ax.scatter(c[x][c["feasible"]], c[y][c["feasible"]], s=12, c="0.4", label="feasible")
+    ax.plot(c[x][result.pareto], c[y][result.pareto], "o-", c="r", ms=5, label="Pareto front")
+    ax.set(xlabel=x, ylabel=y, title=f"{result.plan.name}: {len(c['trial'])} designs")
+    ax.legend()
+    return fig
+
+
+def _plot(result: design.DesignResult, path: Path) -> Path:
+    fig = pareto_figure(result)
     try:
-        ok = c["status"] == "ok"
-        ax.scatter(c[x][ok & ~c["feasible"]], c[y][ok & ~c["feasible"]], s=10, c="0.75", label="infeasible")
-        ax.scatter(c[x][c["feasible"]], c[y][c["feasible"]], s=12, c="0.4", label="feasible")
-        ax.plot(c[x][result.pareto], c[y][result.pareto], "o-", c="r", ms=5, label="Pareto front")
-        ax.set(xlabel=x, ylabel=y, title=f"{result.plan.name}: {len(c['trial'])} designs")
-        ax.legend()
         return io.save_figure(fig, path)
     finally:
         plt.close(fig)

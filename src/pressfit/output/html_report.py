@@ -16,6 +16,7 @@ from __future__ import annotations
 
 import html
 import json
+import math
 from collections.abc import Callable, Sequence
 from dataclasses import dataclass
 from pathlib import Path
@@ -35,6 +36,7 @@ from pressfit.mechanics.condensed import StiffnessMaps
 from pressfit.output.files import write_text
 from pressfit.output.maps import kinematic_fields
 from pressfit.output.scene3d import SceneCase, scene_figure
+from pressfit.studies import paper_tables as tables
 from pressfit.studies.compare import Comparison
 from pressfit.studies.cycle_study import FACTOR_LABELS
 from pressfit.studies.preload_study import PreloadStudy, format_answers
@@ -178,7 +180,22 @@ def _tables_section(page: _Page, c: ReportContent) -> None:
     cols = [("case", "case"), ("quantity", "component"), ("cad_leg", "CAD leg"), ("kinematic_leg", "kin. leg"),
             ("paper", "paper"), ("linear", "pressfit linear"), ("relative_error", "rel. error"),
             ("nonlinear", "pressfit nonlinear")]
-    page.add(_table("tables-5-6", cols, c.tables, {"relative_error": relative_error_text}))
+    entries = [tables.TableEntry(**{**r, "relative_error": math.nan if r["relative_error"] is None else
+                                    r["relative_error"]}) for r in c.tables]
+    for table, title in tables.TABLES:  # as the paper prints them: per case, components by leg
+        for case in dict.fromkeys(e.case for e in entries):
+            header, rows = tables.case_table(entries, case, table)
+            page.add(f'<h3>{html.escape(f"{table}: {title}, {case}")}</h3><table id="{table.replace(" ", "-")}-'
+                     f'{html.escape(case)}"><thead><tr>' + "".join(f"<th>{html.escape(h)}</th>" for h in header)
+                     + "</tr></thead><tbody>" + "\n".join("<tr>" + "".join(f"<td>{html.escape(x)}</td>" for x in r)
+                                                         + "</tr>" for r in rows) + "</tbody></table>")
+    scale = {(e.case, e.table): max(max(abs(x.paper), abs(x.linear)) for x in entries
+                                    if (x.case, x.table) == (e.case, e.table)) for e in entries}
+    shown = {k: (lambda r, k=k: tables.shown_value(r[k], scale[r["case"], "Table 5" if r["quantity"][0] == "F"
+                                                                 else "Table 6"]))
+             for k in ("paper", "linear", "nonlinear")}
+    page.add("<h3>Every entry (sortable)</h3>")
+    page.add(_table("tables-5-6", cols, c.tables, {"relative_error": relative_error_text, **shown}))
     page.add(_links("tables.json", "tables.csv", "tables.md"))
 
 

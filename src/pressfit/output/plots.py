@@ -67,22 +67,28 @@ def write_xz_maps(out_dir: Path | str, stem: str, x_m: np.ndarray, z_m: np.ndarr
     return paths
 
 
-def write_leg_bars(path: Path | str, fields: Fields, title: str, overwrite: bool = False) -> Path:
-    """One bar chart panel per field, one bar per leg (values of shape (n_legs,))."""
+def leg_bars_figure(fields: Fields, title: str) -> plt.Figure:
+    """One bar chart panel per field, one bar per leg (values of shape (n_legs,)), each bar annotated."""
     rows, cols = _grid(len(fields))
     fig, axes = plt.subplots(rows, cols, figsize=(4.0 * cols, 3.2 * rows), squeeze=False)
+    for ax, (name, (values, label)) in zip(axes.flat, fields.items(), strict=False):
+        v = np.asarray(values, dtype=float)
+        legs = np.arange(1, v.size + 1)
+        ax.bar(legs, v, color="tab:blue")
+        for i, val in zip(legs, v, strict=True):
+            ax.annotate(f"{val:.4g}", (i, val), ha="center", va="bottom", fontsize=7)
+        ax.set(title=name, xlabel="leg", ylabel=label, xticks=legs)
+    for ax in list(axes.flat)[len(fields):]:
+        ax.set_visible(False)
+    fig.suptitle(title)
+    fig.tight_layout()
+    return fig
+
+
+def write_leg_bars(path: Path | str, fields: Fields, title: str, overwrite: bool = False) -> Path:
+    """:func:`leg_bars_figure` written to ``path``."""
+    fig = leg_bars_figure(fields, title)
     try:
-        for ax, (name, (values, label)) in zip(axes.flat, fields.items(), strict=False):
-            v = np.asarray(values, dtype=float)
-            legs = np.arange(1, v.size + 1)
-            ax.bar(legs, v, color="tab:blue")
-            for i, val in zip(legs, v, strict=True):
-                ax.annotate(f"{val:.4g}", (i, val), ha="center", va="bottom", fontsize=7)
-            ax.set(title=name, xlabel="leg", ylabel=label, xticks=legs)
-        for ax in list(axes.flat)[len(fields):]:
-            ax.set_visible(False)
-        fig.suptitle(title)
-        fig.tight_layout()
         return io.save_figure(fig, path, overwrite)
     finally:
         plt.close(fig)

@@ -129,24 +129,55 @@ def paper_tables(directory: Path = PAPER_CASES, solutions: list[CaseSolution] | 
     return [e for s in (solve_paper_cases(directory) if solutions is None else solutions) for e in compare_solution(s)]
 
 
+ROUND_OFF = 1e-9  # an entry below this fraction of its table's scale (the case's largest |value|) is printed 0
+TABLES = (("Table 5", "forces (N)"), ("Table 6", "moments (N m)"))
+
+
+def shown_value(x: float, scale: float) -> str:
+    """An entry as printed: 4 significant digits; round-off (|x| at most ``ROUND_OFF`` x ``scale``, the table's
+    largest |value|) and anything that would print as -0 are "0"."""
+    if abs(x) <= ROUND_OFF * scale:
+        return "0"
+    text = f"{x:.4g}"
+    return "0" if float(text) == 0.0 else text
+
+
+def case_table(entries: list[TableEntry], case: str, table: str) -> tuple[list[str], list[list[str]]]:
+    """One case's part of Table 5 or 6 as the paper prints it: a row per CAD leg (its kinematic leg beside it),
+    per component the paper's value beside pressfit's linear one, and the relative error of the compared
+    components (:attr:`TableEntry.verdict`); every value printed with :func:`shown_value` at the case's scale."""
+    mine = [e for e in entries if e.case == case and e.table == table]
+    scale = max((max(abs(e.paper), abs(e.linear)) for e in mine), default=0.0)
+    quantities = [q for q in QUANTITIES if any(e.quantity == q for e in mine)]
+    header = ["CAD leg (kin.)"]
+    for q in quantities:
+        header += [f"{q} paper", f"{q} pressfit"] + ([f"{q} rel. error"] if q in COMPARED else [])
+    rows = []
+    for cad in sorted({e.cad_leg for e in mine}):
+        by = {e.quantity: e for e in mine if e.cad_leg == cad}
+        row = [f"{cad} ({by[quantities[0]].kinematic_leg})"]
+        for q in quantities:
+            e = by[q]
+            row += [shown_value(e.paper, scale), shown_value(e.linear, scale)] + ([e.verdict] if e.compared else [])
+        rows.append(row)
+    return header, rows
+
+
 def to_markdown(entries: list[TableEntry]) -> str:
-    """Tables 5 and 6 side by side with pressfit, with relative errors."""
+    """Tables 5 and 6 as the paper prints them (:func:`case_table`: per case, components by leg), the paper
+    beside pressfit's linear solution with the relative errors; the nonlinear solution is in tables.csv."""
+    cases = list(dict.fromkeys(e.case for e in entries))
     lines = []
-    for table, title in (("Table 5", "forces (N)"), ("Table 6", "moments (N m)")):
-        lines += [
-            f"### {table}: {title}, paper vs pressfit (actuator section, paper's axes and signs)",
-            "",
-            "rel. error = (pressfit linear - paper) / |paper|, signed in the paper's axes; "
-            "'~0 both' when both are below 1e-3.",
-            "",
-            "| case | component | CAD leg | kin. leg | paper | pressfit linear | rel. error | pressfit nonlinear |",
-            "|---|---|---|---|---|---|---|---|",
-        ]
-        for e in entries:
-            if e.table == table:
-                lines.append(f"| {e.case} | {e.quantity} | {e.cad_leg} | {e.kinematic_leg} | {e.paper:.4g} | "
-                             f"{e.linear:.4g} | {e.verdict} | {e.nonlinear:.4g} |")
-        lines.append("")
+    for table, title in TABLES:
+        lines += [f"### {table}: {title}, paper vs pressfit (actuator section, paper's axes and signs)", "",
+                  "rel. error = (pressfit linear - paper) / |paper|, signed in the paper's axes; '~0 both' when "
+                  "both are below 1e-3; round-off (below 1e-9 of the case's largest entry) printed 0; the "
+                  "nonlinear solution is in tables.csv and tables.json.", ""]
+        for case in cases:
+            header, rows = case_table(entries, case, table)
+            lines += [f"**{case}**", "", "| " + " | ".join(header) + " |", "|" + "---|" * len(header)]
+            lines += ["| " + " | ".join(r) + " |" for r in rows]
+            lines.append("")
     return "\n".join(lines)
 
 
