@@ -305,3 +305,10 @@ def test_the_architecture_document_names_every_module():
                if p.name != "__main__.py" and (p.name != "__init__.py" or p.parent.name in packages_with_code)}
     assert present - named == set(), f"modules missing from docs/architecture.md: {sorted(present - named)}"
     assert named - present == set(), f"docs/architecture.md names modules that do not exist: {sorted(named - present)}"
+
+
+def test_test_modules_have_unique_names():
+    """pytest's default import mode imports a test module by its basename: two ``test_x.py`` in different folders
+    make the second fail to collect ("import file mismatch") on a clean clone, so every basename is unique."""
+    names = [p.name for p in (SRC.parents[1] / "tests").rglob("test_*.py")]
+    assert sorted({n for n in names if names.count(n) > 1}) == []

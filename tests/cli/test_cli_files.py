@@ -94,7 +94,7 @@ def test_report_loses_to_a_run_that_filled_the_directory_meanwhile(tmp_path, mon
     if existing:
         out.mkdir()
 
-    def fake_report(machine, tmp, quick=False, progress=True, cycle_study=None):
+    def fake_report(machine, tmp, **options):
         write_text(tmp / "tables.md", "mine")
         path = write_text(tmp / "report.md", "mine")
         other_run(out)

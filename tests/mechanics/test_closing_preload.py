@@ -139,3 +139,24 @@ def test_the_studies_critical_preload_is_none_where_it_cannot_exist(tmp_path):
         play = Clearance.uniform(machine).with_gap(PLAY)
         got = critical_preload(machine, [0.0, 0.55, 0.0], [0.0, 1.0, 0.0], 700.0, play)
         assert math.isnan(got.preload) and got.evaluations == 1
+
+
+def test_a_cardan_open_on_the_way_and_closed_at_the_end_is_open():
+    """2 um of play at the low corner and half the critical preload: the critical leg's force a v_i + N_i(f) crosses
+    zero at about 350 N, its cardans open there (the plate must move 2 g along the leg before they close on their
+    other side) and close again in compression before 420 N: at 700 N every cardan is closed (load_deflection, the
+    one-pose solve, says both). A decision from the last step alone would call the path closed; the batched sweep
+    must not."""
+    from pressfit.mechanics.closing_preload import _model, _sweep
+
+    machine = load_machine()
+    play = Clearance.uniform(machine).with_gap(2e-6)
+    result = closing_preload(machine, LOW_CORNER, [[0.0, 1.0, 0.0]], 700.0, play)
+    half = 0.5 * float(result.critical_preload_n[0])
+    closed_each_step, ld = _all_closed(machine, LOW_CORNER, half, play)
+    open_steps = np.flatnonzero(~ld.closed().all(axis=(1, 2)))
+    assert not closed_each_step and ld.closed()[-1].all() and 0 < open_steps.min() and open_steps.max() < 50
+    chain = _model(machine, LOW_CORNER[None], play, True)
+    ok, _, _, residual = _sweep(chain, 1.0 / chain.k, half * result.preload_direction, STEPS,
+                                np.array([[0.0, 1.0, 0.0]]))
+    assert residual < 1e-8 and not ok[0]
