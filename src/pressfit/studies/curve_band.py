@@ -156,9 +156,9 @@ def windows_from_band(band: CurveBand, *, lower_quantile: float | None = None, u
     m = max(force_margin_n, force_margin_fraction * peak)
     elements: list[Any] = [MaxForce(name="max_force", force_n=float(np.nanmax(hi)) + m)]
     rise = np.flatnonzero(np.isfinite(hi) & (hi > m))
-    if rise.size and x[rise[0]] - x_margin_m > x[0]:
+    if rise.size and rise[0] > 0 and x[rise[0] - 1] - x_margin_m > x[0]:  # the last grid point before any rise
         elements.append(Threshold(name="no_early_force", force_n=m, x_min_m=float(x[0]),
-                                  x_max_m=float(x[rise[0]] - x_margin_m), mode="must_not_cross"))
+                                  x_max_m=float(x[rise[0] - 1] - x_margin_m), mode="must_not_cross"))
     k_low = int(np.flatnonzero(zone)[np.argmax(lo[zone])])  # where the lowest curves are at their peak
     a, b = _run_around(zone & (lo >= peak_level * float(lo[k_low])), k_low)
     if a == b:
