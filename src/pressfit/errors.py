@@ -261,3 +261,9 @@ class CalibrationError(PressfitError):
     def __init__(self, what: str, *, residual: float, keys: Iterable[str]) -> None:
         self.what, self.residual, self.keys = what, float(residual), tuple(keys)
         super().__init__(f"calibration of {', '.join(self.keys)} {what} (last residual norm {self.residual:.4g})")
+
+
+class CurveFileError(MeasurementFileError):
+    """A measured force-displacement curve file (:mod:`pressfit.description.measured_curves`) is unusable:
+    ``path``, ``row`` (the 1-based line number in the file; None for the whole file), ``column`` (the column's
+    name as the file spells it, or None) and ``reason``, as :class:`MeasurementFileError`."""

@@ -285,6 +285,19 @@ class Distribution(StrictModel):
             raise ValueError("truncnormal needs std > 0 and [low, high] within 8 std of the mean")
         return self
 
+    def draw(self, rng: np.random.Generator, shape: tuple[int, ...]) -> np.ndarray:
+        """Values of this distribution of the given shape from ``rng`` (the one sampler of a Distribution:
+        the Monte Carlo studies draw through it)."""
+        from scipy import special
+
+        if self.distribution == "normal":
+            return self.mean + self.std * rng.standard_normal(shape)  # type: ignore[operator]
+        if self.distribution == "uniform":
+            return rng.uniform(self.low, self.high, shape)  # type: ignore[arg-type]
+        lo, hi = special.ndtr((self.low - self.mean) / self.std), special.ndtr((self.high - self.mean) / self.std)  # type: ignore
+        return np.clip(self.mean + self.std * special.ndtri(lo + (hi - lo) * rng.uniform(size=shape)),  # type: ignore
+                       self.low, self.high)
+
 
 class MonteCarloInputs(StrictModel):
     """The random inputs of a Monte Carlo study; each is drawn independently for every leg (and joint, and

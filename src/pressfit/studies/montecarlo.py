@@ -54,7 +54,7 @@ from dataclasses import dataclass, field
 from typing import Any
 
 import numpy as np
-from scipy import special, stats
+from scipy import stats
 from scipy.linalg import eigh, null_space
 
 from pressfit import kinematics
@@ -242,12 +242,7 @@ def chunk_seeds(plan: MonteCarloPlan) -> list[np.random.SeedSequence]:
 
 
 def _draw(d: Distribution, rng: np.random.Generator, shape: tuple[int, int]) -> np.ndarray:
-    if d.distribution == "normal":
-        return d.mean + d.std * rng.standard_normal(shape)  # type: ignore[operator]
-    if d.distribution == "uniform":
-        return rng.uniform(d.low, d.high, shape)  # type: ignore[arg-type]
-    lo, hi = special.ndtr((d.low - d.mean) / d.std), special.ndtr((d.high - d.mean) / d.std)  # type: ignore
-    return np.clip(d.mean + d.std * special.ndtri(lo + (hi - lo) * rng.uniform(size=shape)), d.low, d.high)  # type: ignore
+    return d.draw(rng, shape)
 
 
 def draw_inputs(plan: MonteCarloPlan, k: int, seed: np.random.SeedSequence) -> dict[str, np.ndarray]:

@@ -1,0 +1,134 @@
+"""Files of the press-fit curve monitor: ``windows.json``, the verdicts as text, JSON and JUnit XML, and the
+figure of the curves over the band and the evaluation objects (all written atomically, :mod:`.files`)."""
+
+from __future__ import annotations
+
+import json
+import math
+from collections.abc import Sequence
+from pathlib import Path
+from typing import Any
+
+import numpy as np
+
+from pressfit.description.measured_curves import MeasuredCurve
+from pressfit.description.monitor_windows import Envelope, MaxForce, Threshold, Window, Windows
+from pressfit.output import files as io
+from pressfit.studies.curve_check import CurveVerdict
+
+
+def windows_document(windows: Windows) -> dict[str, Any]:
+    """The JSON-ready ``windows.json`` content (NaN of the band as null)."""
+    return json.loads(io.to_json(windows.model_dump(mode="python")))
+
+
+def write_windows(path: Path | str, windows: Windows, overwrite: bool = False) -> Path:
+    return io.write_json(path, windows_document(windows), overwrite)
+
+
+def _where(x_m: float | None, y_n: float | None) -> str:
+    return "" if x_m is None else f" at x = {x_m:.6g} m, y = {y_n:.6g} N"
+
+
+def verdict_line(v: CurveVerdict) -> str:
+    """``OK  path (name)`` or ``NOK path (name): element 'press_in' (window): <reason> at x = .. m, y = .. N``
+    (and how many more elements failed)."""
+    head = f"{v.path} ({v.name})"
+    if v.passed:
+        return f"OK  {head}"
+    first, more = v.failures[0], len(v.failures) - 1
+    return (f"NOK {head}: element '{first.element}' ({first.kind}): {first.reason}{_where(first.x_m, first.y_n)}"
+            + (f" (+{more} more element{'s' if more > 1 else ''} failed: "
+               + ", ".join(r.element for r in v.failures[1:]) + ")" if more else ""))
+
+
+def verdicts_json(verdicts: Sequence[CurveVerdict], windows_path: str) -> dict[str, Any]:
+    return {"windows": windows_path, "curves": len(verdicts), "nok": sum(not v.passed for v in verdicts),
+            "results": [{"path": v.path, "name": v.name, "ok": v.passed,
+                         "compliance_m_per_n": v.compliance_m_per_n,
+                         "elements": [{"element": r.element, "kind": r.kind, "ok": r.passed, "reason": r.reason,
+                                       "x_m": r.x_m, "y_n": r.y_n} for r in v.results]} for v in verdicts]}
+
+
+def junit_xml(verdicts: Sequence[CurveVerdict], windows_path: str) -> str:
+    """JUnit XML: one test suite, one test case per curve (a failure for a NOK curve, its message the first failed
+    element, its text every failed element)."""
+    import xml.etree.ElementTree as ET
+
+    root = ET.Element("testsuites", name="pressfit curves check")
+    suite = ET.SubElement(root, "testsuite", name=windows_path, tests=str(len(verdicts)),
+                          failures=str(sum(not v.passed for v in verdicts)), errors="0")
+    for v in verdicts:
+        tc = ET.SubElement(suite, "testcase", classname=windows_path, name=f"{v.path} ({v.name})", file=v.path)
+        if not v.passed:
+            text = "\n".join(f"{r.element} ({r.kind}): {r.reason}{_where(r.x_m, r.y_n)}" for r in v.failures)
+            ET.SubElement(tc, "failure", message=verdict_line(v)).text = text
+    return ET.tostring(root, encoding="unicode", xml_declaration=True)
+
+
+def curves_figure(curves: Sequence[tuple[str, np.ndarray, np.ndarray, bool]], windows: Windows) -> Any:
+    """The curves ((label, displacement m, force N, ok)) over the band and the evaluation objects, in mm and N."""
+    from pressfit.output import plots  # noqa: F401, I001  (the Agg backend, before pyplot)
+    import matplotlib.pyplot as plt
+    from matplotlib.patches import Rectangle
+
+    fig, ax = plt.subplots(figsize=(8, 5), layout="constrained")
+    mm = 1e3
+    if windows.band is not None:
+        g, f = np.array(windows.band.grid_m) * mm, np.array(windows.band.force_n, dtype=float)
+        ax.fill_between(g, f[0], f[-1], color="0.85", label=f"band q{windows.band.quantiles[0]:g}-"
+                        f"q{windows.band.quantiles[-1]:g} ({windows.band.samples} curves)")
+        ax.plot(g, f[len(f) // 2], color="0.5", lw=0.8, ls="--", label=f"q{windows.band.quantiles[len(f) // 2]:g}")
+    for el in windows.elements:
+        if isinstance(el, Envelope):
+            x = np.array(el.displacement_m) * mm
+            ax.plot(x, el.lower_force_n, color="tab:blue", lw=0.8)
+            ax.plot(x, el.upper_force_n, color="tab:blue", lw=0.8, label=f"envelope '{el.name}'")
+        elif isinstance(el, Window):
+            ax.add_patch(Rectangle((el.x_min_m * mm, el.y_min_n), (el.x_max_m - el.x_min_m) * mm,
+                                   el.y_max_n - el.y_min_n, fill=False, ec="tab:green", lw=1.5,
+                                   label=f"window '{el.name}' ({el.entry} -> {el.exit})"))
+        elif isinstance(el, Threshold):
+            ax.plot([el.x_min_m * mm, el.x_max_m * mm], [el.force_n] * 2, lw=1.5,
+                    color="tab:purple" if el.mode == "must_cross" else "tab:orange",
+                    label=f"threshold '{el.name}' ({el.mode.replace('_', ' ')})")
+        elif isinstance(el, MaxForce):
+            ax.axhline(el.force_n, color="tab:red", lw=0.8, ls=":", label=f"max_force '{el.name}'")
+    for label, x, f, ok in curves:
+        ax.plot(np.asarray(x) * mm, f, lw=1.2, color="k" if ok else "tab:red",
+                label=f"{label}: {'OK' if ok else 'NOK'}")
+    ax.set(xlabel="displacement [mm]", ylabel="force [N]", title=windows.name or "press-fit curves")
+    if not math.isclose(ax.get_ylim()[0], 0.0):
+        ax.set_ylim(bottom=min(0.0, ax.get_ylim()[0]))
+    ax.legend(fontsize=7, loc="upper left")
+    ax.grid(alpha=0.3)
+    return fig
+
+
+def write_check_outputs(verdicts: Sequence[CurveVerdict], curves: Sequence[MeasuredCurve], windows: Windows,
+                        windows_path: str, *, json_path: Path | None = None, junit_path: Path | None = None,
+                        png_path: Path | None = None, overwrite: bool = False) -> list[Path]:
+    """Write the outputs asked for (each atomically, refusing to replace a file without ``overwrite``); the
+    figure shows each curve's forward stroke as judged (compensated when it was)."""
+    out: list[Path] = []
+    if json_path is not None:
+        out.append(io.write_json(json_path, verdicts_json(verdicts, windows_path), overwrite))
+    if junit_path is not None:
+        out.append(io.write_text(junit_path, junit_xml(verdicts, windows_path) + "\n", overwrite))
+    if png_path is not None:
+        from pressfit.studies.curve_check import compensated_displacement
+
+        drawn = []
+        for c, v in zip(curves, verdicts, strict=True):
+            x, f = c.forward()
+            if v.compliance_m_per_n is not None:
+                x = compensated_displacement(x, f, v.compliance_m_per_n)
+            drawn.append((c.name, x, f, v.passed))
+        import matplotlib.pyplot as plt
+
+        fig = curves_figure(drawn, windows)
+        try:
+            out.append(io.save_figure(fig, png_path, overwrite))
+        finally:
+            plt.close(fig)
+    return out
