@@ -261,3 +261,12 @@ class CalibrationError(PressfitError):
     def __init__(self, what: str, *, residual: float, keys: Iterable[str]) -> None:
         self.what, self.residual, self.keys = what, float(residual), tuple(keys)
         super().__init__(f"calibration of {', '.join(self.keys)} {what} (last residual norm {self.residual:.4g})")
+
+
+class PressCurveError(PressfitError):
+    """The predicted press curve cannot be drawn for a case: ``path`` (the case file, or ""), ``key`` (the key
+    that decides it) and ``reason``."""
+
+    def __init__(self, path: object, key: str, reason: str) -> None:
+        self.path, self.key, self.reason = str(path), key, reason
+        super().__init__(f"{self.path or '<contact>'}: key '{key}': {reason}")
