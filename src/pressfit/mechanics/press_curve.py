@@ -147,9 +147,9 @@ class PressCurve:
 
     def summary(self) -> dict:
         """The scalar fields and the per-pin lists (JSON-ready)."""
-        keys = ("peak_force_n", "final_force_n", "plateau_force_n", "seated", "seating_depth_m", "sensed_minus_true_depth_at_peak_m",
-                "machine_compliance_along_press_m_per_n", "tool_tilt_max_rad", "max_pin_depth_spread_m",
-                "all_pins_seated", "series_residual_n")
+        keys = ("peak_force_n", "final_force_n", "plateau_force_n", "seated", "seating_depth_m",
+                "sensed_minus_true_depth_at_peak_m", "machine_compliance_along_press_m_per_n", "tool_tilt_max_rad",
+                "max_pin_depth_spread_m", "all_pins_seated", "series_residual_n")
         out = {k: getattr(self, k) for k in keys}
         out["pose_m"] = list(self.pose_m)
         out["max_depth_m"] = float(self.depth_m[-1])

@@ -45,5 +45,6 @@ def from_keys(law: str, keys: Mapping[str, Any]) -> ElasticLaw:
     if law == "elastic":
         return ElasticLaw(stiffness_n_per_m=float(keys["stiffness_n_per_m"]))
     return ElasticLaw(stiffness_n_per_m=float(keys["stiffness_n_per_m"]), fit=str(keys["fit"]),
-                      fit_stiffness_n_per_m=float(keys["fit_stiffness_n_per_m"]), fit_force_n=float(keys["fit_force_n"]),
+                      fit_stiffness_n_per_m=float(keys["fit_stiffness_n_per_m"]),
+                      fit_force_n=float(keys["fit_force_n"]),
                       fit_depth_m=float(keys["fit_depth_m"]))

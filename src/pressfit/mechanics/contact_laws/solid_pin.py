@@ -100,6 +100,7 @@ def from_keys(law: str, keys: Mapping[str, Any]) -> SolidPinLaw:
     notes = (f"the Lame pressure {p:.4g} Pa exceeds board_yield_strength_pa = {cap:.4g} Pa: capped at the yield "
              "strength (the hole wall yields)",) if capped else ()
     return SolidPinLaw(diameter_m=d, interference_m=delta, elastic_pressure_pa=p,
-                       pressure_pa=float(cap) if capped else p, friction_coefficient=float(keys["friction_coefficient"]),
+                       pressure_pa=float(cap) if capped else p,
+                       friction_coefficient=float(keys["friction_coefficient"]),
                        engaged_length_m=float(keys["engaged_length_m"]),
                        chamfer_length_m=float(keys.get("chamfer_length_m") or 0.0), capped=capped, notes=notes)
