@@ -45,7 +45,7 @@ def contact_parameters(contact: Contact, machine: Machine | None = None) -> np.n
     the tool axis with the elastic or press-fit law and no shoulder: the kernels' own codes (the paper's numbers).
     Any other law, a shoulder or a pin field: the component's total force against the tool's depth tabulated
     (:func:`pressfit.mechanics.press_curve.force_table`: ``TABLE_SAMPLES`` rows, linear interpolation, its error
-    ``ForceTable.error_n``; 0.19 N of 1.9 kN on the shipped off-centre field, at the shoulder's kink), with the
+    ``ForceTable.error_n``; 0.06 N on the shipped compliant pin, at the peak's and the shoulder's kinks), with the
     field's tilt by the machine's compliance at the pin pose when ``machine`` is given (the insertion's), and the
     damping b d_dot added on top: the one path of every law in the rigid and the flexible models."""
     pins = contact.resolved_pins()

@@ -117,7 +117,7 @@ class PressCurve:
     stroke), ``seating_depth_m`` (the true tool depth where the last pin seats; None if never or no shoulder),
     ``sensed_minus_true_depth_at_peak_m``, ``machine_compliance_along_press_m_per_n`` (C_yy at the pose),
     ``tool_tilt_max_rad`` (the largest |theta|), ``max_pin_depth_spread_m`` (the largest spread of the pins'
-    depths), ``all_pins_seated``, per pin ``pin_peak_force_n``, ``pin_final_depth_m``, ``pin_seated`` and
+    depths), ``all_pins_seated``, per pin ``pin_peak_force_n`` (before its shoulder touches), ``pin_final_depth_m``, ``pin_seated`` and
     ``pin_offsets_m``; ``series_residual_n`` (the series equation's worst residual, N: callers enforce it against
     ``RESIDUAL_LIMIT_N``), ``pose_m`` (the pin pose, m) and ``notes`` (what the laws say of themselves)."""
 
@@ -230,7 +230,8 @@ def predict_curve(machine: Machine, case_or_contact: Case | Contact, *, pose_m: 
         tool_tilt_max_rad=float(np.max(np.linalg.norm(tilt, axis=1))),
         max_pin_depth_spread_m=float(np.max(np.ptp(sol.pin_depths_m, axis=1))),
         all_pins_seated=bool(shoulder and all(pin_seated)),
-        pin_peak_force_n=tuple(float(x) for x in sol.pin_forces_n.max(axis=0)),
+        pin_peak_force_n=tuple(float(np.max(np.where(sol.pin_depths_m[:, i] < (s if s is not None else np.inf),
+                                                      sol.pin_forces_n[:, i], 0.0))) for i, s in enumerate(seats)),
         pin_final_depth_m=tuple(float(x) for x in sol.pin_depths_m[-1]), pin_seated=pin_seated,
         pin_offsets_m=tuple((float(a), float(b)) for a, b in pins.offsets_m), series_residual_n=sol.residual_n,
         pose_m=(float(pose[0]), float(pose[1]), float(pose[2])), notes=notes)
@@ -239,8 +240,10 @@ def predict_curve(machine: Machine, case_or_contact: Case | Contact, *, pose_m: 
 @dataclass(frozen=True, kw_only=True)
 class ForceTable:
     """The component's total force against the tool's true depth, for the insertion kernels' TABLE law: depths
-    (m, uniform from 0), forces (N), the slope past the last depth (N/m), and the tabulation error: the largest
-    |linear interpolation - the solve| at the midpoints of the grid (N)."""
+    (m, uniform from 0), forces (N), the slope past the last depth (N/m), and the tabulation error bound (N):
+    twice the largest |linear interpolation - the solve| at the midpoints of the grid (on a smooth law the midpoint
+    error is the cell's largest; at a kink of slope jump s at a fraction a of a cell of width h the error is
+    a (1 - a) h s, at most twice the midpoint's min(a, 1 - a) h s / 2)."""
 
     depth_m: np.ndarray
     force_n: np.ndarray
@@ -269,6 +272,6 @@ def force_table(machine: Machine | None, contact: Contact, *, pose_m: Sequence[f
     both = solve_field(pins, compliance, np.concatenate([depth, mid, [end, end + 1e-6]]))
     total = both.pin_forces_n.sum(axis=1)
     rows, between = total[:samples], total[samples:2 * samples - 1]
-    error = float(np.max(np.abs(0.5 * (rows[1:] + rows[:-1]) - between), initial=0.0))
+    error = 2.0 * float(np.max(np.abs(0.5 * (rows[1:] + rows[:-1]) - between), initial=0.0))
     slope = float((total[-1] - total[-2]) / 1e-6)
     return ForceTable(depth_m=depth, force_n=rows, slope_n_per_m=slope, error_n=error)
