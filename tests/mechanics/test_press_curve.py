@@ -77,10 +77,11 @@ def test_the_tilt_of_linear_pins_is_the_stiffness_form_solved_by_hand(machine):
     x = np.linalg.solve(big_k + g @ k @ g.T, g @ k @ np.ones(3) * sensed)
     forces = k @ (sensed - g.T @ x)
     true_depth = sensed - x[1]
-    at = lambda column: np.interp(true_depth, curve.depth_m, column)  # noqa: E731
-    assert [at(curve.pin_forces_n[:, i]) for i in range(3)] == pytest.approx(forces, rel=1e-9)
-    assert [at(curve.tilt_rad[:, i]) for i in range(3)] == pytest.approx(x[3:], rel=1e-9)
-    assert at(curve.sensed_depth_m) == pytest.approx(sensed, rel=1e-12)
+    got_forces = [np.interp(true_depth, curve.depth_m, curve.pin_forces_n[:, i]) for i in range(3)]
+    got_tilt = [np.interp(true_depth, curve.depth_m, curve.tilt_rad[:, i]) for i in range(3)]
+    assert got_forces == pytest.approx(forces, rel=1e-9)
+    assert got_tilt == pytest.approx(x[3:], rel=1e-9)
+    assert np.interp(true_depth, curve.depth_m, curve.sensed_depth_m) == pytest.approx(sensed, rel=1e-12)
 
 
 def test_sensed_minus_true_depth_is_the_pinocchio_compliance_times_the_force(machine):

@@ -38,8 +38,9 @@ def curve_cmd(case_path: Path, out_dir: Path | None, samples: int | None, overwr
                f"{s['tool_tilt_max_rad'] * 1e3:.4f} mrad, pin depths spread up to "
                f"{s['max_pin_depth_spread_m'] * 1e6:.2f} um; series residual {s['series_residual_n']:.1e} N")
     for k, p in enumerate(s["pins"]):
-        click.echo(f"  pin {k + 1} at ({p['offset_m'][0]:+g}, {p['offset_m'][1]:+g}) m: peak {p['peak_force_n']:.2f} N, "
-                   f"final depth {p['final_depth_m'] * 1e3:.4f} mm, {'seated' if p['seated'] else 'not seated'}")
+        click.echo(f"  pin {k + 1} at ({p['offset_m'][0]:+g}, {p['offset_m'][1]:+g}) m: "
+                   f"peak {p['peak_force_n']:.2f} N, final depth {p['final_depth_m'] * 1e3:.4f} mm, "
+                   + ("seated" if p["seated"] else "not seated"))
     for note in s["notes"]:
         click.echo(f"note: {note}")
     echo_written(paths)

@@ -117,9 +117,10 @@ class PressCurve:
     stroke), ``seating_depth_m`` (the true tool depth where the last pin seats; None if never or no shoulder),
     ``sensed_minus_true_depth_at_peak_m``, ``machine_compliance_along_press_m_per_n`` (C_yy at the pose),
     ``tool_tilt_max_rad`` (the largest |theta|), ``max_pin_depth_spread_m`` (the largest spread of the pins'
-    depths), ``all_pins_seated``, per pin ``pin_peak_force_n`` (before its shoulder touches), ``pin_final_depth_m``, ``pin_seated`` and
-    ``pin_offsets_m``; ``series_residual_n`` (the series equation's worst residual, N: callers enforce it against
-    ``RESIDUAL_LIMIT_N``), ``pose_m`` (the pin pose, m) and ``notes`` (what the laws say of themselves)."""
+    depths), ``all_pins_seated``, per pin ``pin_peak_force_n`` (before its shoulder touches),
+    ``pin_final_depth_m``, ``pin_seated`` and ``pin_offsets_m``; ``series_residual_n`` (the series equation's
+    worst residual, N: callers enforce it against ``RESIDUAL_LIMIT_N``), ``pose_m`` (the pin pose, m) and
+    ``notes`` (what the laws say of themselves)."""
 
     depth_m: np.ndarray
     force_n: np.ndarray
