@@ -115,9 +115,10 @@ def compliant_pin_simulation():
 
 
 def test_curve_agrees_with_a_slow_simulation(compliant_pin_simulation):
-    """`pressfit curve` against `pressfit simulate` of the same case, on the descent before the shoulder: the
-    force at the same sensed depth (the encoders' view, the sag at first contact removed) to 1% of the peak
-    (achieved 0.3%), and the sensed minus true depth at the same force to 1% of the deflection at the peak."""
+    """`pressfit curve` against `pressfit simulate` of the same case, on the descent before the shoulder (4069
+    rows): the force at the same sensed depth (the encoders' view, the sag at first contact removed) within the
+    issue's 1% of the peak, held here to 0.1% (achieved 0.025%), and the sensed minus true depth at the same force
+    to 0.5% of the deflection at the peak (achieved 0.17%)."""
     case, run = compliant_pin_simulation
     curve = predict_curve(case.machine(), case)
     board = case.simulation.contact.board_height_m
@@ -129,7 +130,7 @@ def test_curve_agrees_with_a_slow_simulation(compliant_pin_simulation):
     rows = rows[rows < np.argmax(depth)]  # the first stroke
     assert rows.size > 100
     predicted = np.interp(sensed[rows] - sag, curve.sensed_depth_m, curve.force_n)
-    assert np.max(np.abs(predicted - force[rows])) < 0.01 * curve.peak_force_n
+    assert np.max(np.abs(predicted - force[rows])) < 1e-3 * curve.peak_force_n
     gap = sensed[rows] - sag - depth[rows]
     c = curve.machine_compliance_along_press_m_per_n
-    assert np.max(np.abs(gap - c * force[rows])) < 0.01 * curve.sensed_minus_true_depth_at_peak_m
+    assert np.max(np.abs(gap - c * force[rows])) < 5e-3 * curve.sensed_minus_true_depth_at_peak_m
