@@ -263,6 +263,15 @@ class CalibrationError(PressfitError):
         super().__init__(f"calibration of {', '.join(self.keys)} {what} (last residual norm {self.residual:.4g})")
 
 
+class PressCurveError(PressfitError):
+    """The predicted press curve cannot be drawn for a case: ``path`` (the case file, or ""), ``key`` (the key
+    that decides it) and ``reason``."""
+
+    def __init__(self, path: object, key: str, reason: str) -> None:
+        self.path, self.key, self.reason = str(path), key, reason
+        super().__init__(f"{self.path or '<contact>'}: key '{key}': {reason}")
+
+
 class CurveFileError(MeasurementFileError):
     """A measured force-displacement curve file (:mod:`pressfit.description.measured_curves`) is unusable:
     ``path``, ``row`` (the 1-based line number in the file; None for the whole file), ``column`` (the column's

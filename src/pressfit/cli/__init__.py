@@ -14,7 +14,7 @@ from typing import Any
 
 import click
 
-from pressfit.cli import calibrate, check, compare, curves, dynamics, listing, paper, pose, study, workspace
+from pressfit.cli import calibrate, check, compare, curve, curves, dynamics, listing, paper, pose, study, workspace
 from pressfit.cli.common import close_progress_bars
 
 INTERNAL_ERROR_EXIT = 70  # EX_SOFTWARE of sysexits.h: never 1, which CI reads as "a limit is exceeded"
@@ -70,5 +70,5 @@ for command in (pose.kinematics_cmd, listing.list_cmd, pose.solve_cmd, paper.tab
                 workspace.workspace_cmd, pose.stiffness_cmd, pose.interference_cmd, paper.report_cmd,
                 study.study_group, dynamics.modes_cmd, dynamics.simulate_cmd,
                 dynamics.export_mjcf_cmd, dynamics.response_cmd, dynamics.control_cmd, dynamics.cycle_cmd,
-                compare.compare_cmd, calibrate.calibrate_cmd, curves.curves_group):
+                compare.compare_cmd, calibrate.calibrate_cmd, curve.curve_cmd, curves.curves_group):
     main.add_command(command)

@@ -420,28 +420,217 @@ class Design(StrictModel):
         return self
 
 
-class ContactLaw(StrictModel):
-    """The pin-board contact law of the insertion simulation (:mod:`pressfit.dynamics.contact`):
-    ``law = "elastic"``: F = k d + b d_dot for an interference d > 0 (paper section 4.2: force proportional
+# keys of each contact law in [simulation.contact] (and [cycle.contact], and per pin in [[simulation.contact.pins]]):
+# (required, optional); the keys every law takes are CONTACT_COMMON_KEYS. docs/joint.md gives the equations.
+CONTACT_LAW_KEYS: dict[str, tuple[tuple[str, ...], tuple[str, ...]]] = {
+    "elastic": ((), ("stiffness_n_per_m",)),
+    "press_fit": ((), ("stiffness_n_per_m", "fit", "fit_stiffness_n_per_m", "fit_force_n", "fit_depth_m")),
+    "solid_pin": (("pin_diameter_m", "hole_diameter_m", "pin_youngs_modulus_pa", "pin_poisson_ratio",
+                   "board_youngs_modulus_pa", "board_poisson_ratio", "friction_coefficient", "engaged_length_m"),
+                  ("board_outer_diameter_m", "chamfer_length_m", "board_yield_strength_pa")),
+    "compliant_pin": (("hole_diameter_m", "zone_width_m", "radial_stiffness_n_per_m", "radial_yield_force_n",
+                       "post_yield_stiffness_n_per_m", "zone_length_m", "lead_in_length_m",
+                       "friction_coefficient"), ()),
+    "tabulated": (("table_path",), ()),
+}
+CONTACT_COMMON_KEYS = ("seat_depth_m", "seat_stiffness_n_per_m")  # the shoulder (seating), with any law
+MAX_CONTACT_PINS = 200  # a component of more pins in one press stroke is a typo
+PoissonRatio = Annotated[float, Field(ge=0.0, lt=0.5, allow_inf_nan=False)]
+Friction = Annotated[float, Field(ge=0.0, le=2.0, allow_inf_nan=False)]
+
+
+class LawKeys(StrictModel):
+    """The keys of the pin laws (``CONTACT_LAW_KEYS``) and of the seating, all optional here; which are
+    required, allowed or refused depends on ``law`` (:func:`check_law_keys`). SI units: m, Pa, N/m, N;
+    ``table_path``: a CSV file (header ``depth_m,force_n``), relative to the case file."""
+
+    pin_diameter_m: Positive | None = None
+    hole_diameter_m: Positive | None = None
+    pin_youngs_modulus_pa: Positive | None = None
+    pin_poisson_ratio: PoissonRatio | None = None
+    board_youngs_modulus_pa: Positive | None = None
+    board_poisson_ratio: PoissonRatio | None = None
+    board_outer_diameter_m: Positive | None = None
+    friction_coefficient: Friction | None = None
+    engaged_length_m: Positive | None = None
+    chamfer_length_m: NonNegative | None = None
+    board_yield_strength_pa: Positive | None = None
+    zone_width_m: Positive | None = None
+    radial_stiffness_n_per_m: Positive | None = None
+    radial_yield_force_n: Positive | None = None
+    post_yield_stiffness_n_per_m: NonNegative | None = None
+    zone_length_m: Positive | None = None
+    lead_in_length_m: Positive | None = None
+    table_path: str | None = None
+    seat_depth_m: Positive | None = None
+    seat_stiffness_n_per_m: Positive | None = None
+
+
+LEGACY_LAW_KEYS = ("stiffness_n_per_m", "fit", "fit_stiffness_n_per_m", "fit_force_n", "fit_depth_m")
+LAW_KEY_NAMES = LEGACY_LAW_KEYS + tuple(LawKeys.model_fields)
+
+
+def check_law_keys(law: str, given: dict[str, Any], where: str, *, complete: bool) -> None:
+    """Refuse a key of another law than ``law`` in ``given`` (the keys set, with their values), naming the key
+    and ``where``; with ``complete``, also a missing required key, and the pair rules (seating keys together, an
+    interference that is positive: pin/zone wider than the hole, hole inside the board's outer diameter)."""
+    required, optional = CONTACT_LAW_KEYS[law]
+    allowed = set(required) | set(optional) | set(CONTACT_COMMON_KEYS)
+    for key, value in given.items():
+        if value is not None and key not in allowed:
+            owners = [name for name, (r, o) in CONTACT_LAW_KEYS.items() if key in r or key in o]
+            raise ValueError(f"{where}{key} is not a key of law = \"{law}\" (it belongs to law = "
+                             + " or ".join(f'"{o}"' for o in owners) + ")")
+    if not complete:
+        return
+    for key in required:
+        if given.get(key) is None:
+            raise ValueError(f"{where}{key} is required with law = \"{law}\"")
+    if (given.get("seat_depth_m") is None) != (given.get("seat_stiffness_n_per_m") is None):
+        raise ValueError(f"{where}seat_depth_m and seat_stiffness_n_per_m go together (the shoulder's depth and "
+                         "stiffness): give both or neither")
+    hole = given.get("hole_diameter_m")
+    for key in ("pin_diameter_m", "zone_width_m"):
+        if key in required and not given[key] > hole:
+            raise ValueError(f"{where}{key} = {given[key]:g} m must be larger than hole_diameter_m = {hole:g} m "
+                             "(an interference fit needs an interference)")
+    outer = given.get("board_outer_diameter_m")
+    if law == "solid_pin" and outer is not None and not outer > hole:
+        raise ValueError(f"{where}board_outer_diameter_m = {outer:g} m must be larger than hole_diameter_m = "
+                         f"{hole:g} m")
+    if law == "compliant_pin":
+        taper = 0.5 * (given["zone_width_m"] - hole) / given["lead_in_length_m"]
+        if given["friction_coefficient"] * taper >= 1.0:
+            raise ValueError(f"{where}friction_coefficient x the lead-in's taper {taper:.3g} >= 1: the zone "
+                             "self-locks in the lead-in; lengthen lead_in_length_m")
+
+
+class ContactPin(LawKeys):
+    """One pin of the component in ``[[simulation.contact.pins]]``: its ``offset_m`` = [dx, dz] (m) from the tool
+    axis in the board plane, and overrides of the contact law's keys (``CONTACT_LAW_KEYS`` of the contact's law;
+    the others are refused)."""
+
+    stiffness_n_per_m: Positive | None = None
+    fit_stiffness_n_per_m: NonNegative | None = None
+    fit_force_n: NonNegative | None = None
+    fit_depth_m: Positive | None = None
+    offset_m: Annotated[list[Finite], Field(min_length=2, max_length=2)] = [0.0, 0.0]
+
+
+class ResolvedContactPin(StrictModel):
+    """A pin with its law's keys resolved (its own, else the contact's): ``offset_m`` = [dx, dz] (m), ``law``,
+    ``keys`` (the law's keys set, SI) and ``source`` (where it is defined)."""
+
+    offset_m: tuple[float, float]
+    law: str
+    keys: dict[str, Any]
+    source: str
+
+
+class ContactLaw(LawKeys):
+    """The pin-board contact law of the insertion (:mod:`pressfit.dynamics.contact`; the laws:
+    :mod:`pressfit.mechanics.contact_laws`, equations in docs/joint.md), for an interference (depth) d > 0 of the
+    tool tip below the board face: ``law = "elastic"``: F = k d + b d_dot (paper section 4.2: force proportional
     to the interference); ``"press_fit"`` adds f_fit(d): ``fit = "linear"`` (``fit_stiffness_n_per_m`` d) or
-    ``"saturating"`` (``fit_force_n`` tanh(d / ``fit_depth_m``)). Defaults: an estimate of a compliant
-    pin-board stack, 30 N at 0.6 mm, no damping."""
+    ``"saturating"`` (``fit_force_n`` tanh(d / ``fit_depth_m``)); ``"solid_pin"`` (a cylindrical interference fit,
+    Lame), ``"compliant_pin"`` (an eye-of-needle zone), ``"tabulated"`` (a CSV of force against depth), each with
+    its keys (``CONTACT_LAW_KEYS``; a key of another law is refused), and on any law the shoulder
+    (``seat_depth_m``, ``seat_stiffness_n_per_m``). ``damping_n_s_per_m``: b d_dot on every law. Defaults: an
+    estimate of a compliant pin-board stack, 30 N at 0.6 mm, no damping."""
 
     stiffness_n_per_m: Positive = 5.0e4
     damping_n_s_per_m: NonNegative = 0.0
-    law: Literal["elastic", "press_fit"] = "elastic"
+    law: Literal["elastic", "press_fit", "solid_pin", "compliant_pin", "tabulated"] = "elastic"
     fit: Literal["linear", "saturating"] = "linear"
     fit_stiffness_n_per_m: NonNegative = 0.0
     fit_force_n: NonNegative = 0.0
     fit_depth_m: Positive = 1e-3
 
+    def law_keys(self) -> dict[str, Any]:
+        """The law's keys as given (the legacy keys of ``elastic`` / ``press_fit`` with their defaults)."""
+        required, optional = CONTACT_LAW_KEYS[self.law]
+        legacy = {k: getattr(self, k) for k in LEGACY_LAW_KEYS if k in required + optional}
+        return {**legacy, **{k: getattr(self, k) for k in LawKeys.model_fields if getattr(self, k) is not None}}
+
+    @model_validator(mode="after")
+    def _law_keys(self) -> ContactLaw:
+        given = {k: getattr(self, k) for k in LawKeys.model_fields}
+        given |= {k: getattr(self, k) for k in LEGACY_LAW_KEYS if k in self.model_fields_set}
+        check_law_keys(self.law, given, "", complete=True)
+        if self.table_path is not None:
+            read_force_table(self.table_path)  # refused here, naming the file, when it is not a table
+        return self
+
+
+def read_force_table(path: str | Path) -> tuple[np.ndarray, np.ndarray]:
+    """The tabulated law's CSV (a header with ``depth_m`` and ``force_n`` columns, comma-separated): depths
+    (strictly increasing, >= 0, m) and forces (>= 0, N), at least 2 rows; ValueError naming the file, the row and
+    the column otherwise."""
+    path = Path(path)
+    try:
+        lines = [line for line in path.read_text().splitlines() if line.strip()]
+    except OSError as exc:
+        raise ValueError(f"table_path: cannot read {path}: {exc.strerror}") from None
+    if not lines:
+        raise ValueError(f"table_path: {path} is empty")
+    header = [h.strip() for h in lines[0].split(",")]
+    if "depth_m" not in header or "force_n" not in header:
+        raise ValueError(f"table_path: {path}: the header needs the columns depth_m and force_n, got {header}")
+    i, j = header.index("depth_m"), header.index("force_n")
+    depth, force = [], []
+    for row, line in enumerate(lines[1:], start=2):
+        cells = line.split(",")
+        for name, k, out in (("depth_m", i, depth), ("force_n", j, force)):
+            try:
+                value = float(cells[k])
+            except (IndexError, ValueError):
+                raise ValueError(f"table_path: {path} row {row} column {name}: not a number") from None
+            if not math.isfinite(value) or value < 0.0:
+                raise ValueError(f"table_path: {path} row {row} column {name}: {value!r} is not a finite number >= 0")
+            out.append(value)
+    d, f = np.array(depth), np.array(force)
+    if d.size < 2:
+        raise ValueError(f"table_path: {path}: give at least 2 rows, got {d.size}")
+    bad = np.flatnonzero(np.diff(d) <= 0.0)
+    if bad.size:
+        raise ValueError(f"table_path: {path} row {bad[0] + 3} column depth_m: the depths must increase strictly")
+    return d, f
+
 
 class Contact(ContactLaw):
     """Tool-board contact of ``[simulation]``: the law (:class:`ContactLaw`) on the board's top face, the plane
-    y = ``board_height_m``, with the pin to insert on it at (x, z) = ``pin_position_m``."""
+    y = ``board_height_m``, with the pin to insert on it at (x, z) = ``pin_position_m`` (the tool axis). ``pins``:
+    a component of several pins pressed at once (``[[simulation.contact.pins]]``, each at its ``offset_m`` from
+    the tool axis, with overrides of the law's keys); without it one pin on the axis."""
 
     board_height_m: Positive
     pin_position_m: Annotated[list[Finite], Field(min_length=2, max_length=2)]
+    pins: Annotated[list[ContactPin], Field(max_length=MAX_CONTACT_PINS)] = []
+
+    @model_validator(mode="after")
+    def _pin_keys(self) -> Contact:
+        base = self.law_keys()
+        for k, pin in enumerate(self.pins):
+            own = {key: getattr(pin, key) for key in LAW_KEY_NAMES if key in type(pin).model_fields}
+            check_law_keys(self.law, own, f"pins[{k}].", complete=False)
+            merged = {**base, **{key: v for key, v in own.items() if v is not None}}
+            check_law_keys(self.law, merged, f"pins[{k}].", complete=True)
+            if pin.table_path is not None:
+                read_force_table(pin.table_path)
+        return self
+
+    def resolved_pins(self) -> list[ResolvedContactPin]:
+        """Every pin of the component with its law's keys resolved (one on the axis without ``pins``)."""
+        base = self.law_keys()
+        if not self.pins:
+            return [ResolvedContactPin(offset_m=(0.0, 0.0), law=self.law, keys=base, source="[simulation.contact]")]
+        out = []
+        for k, pin in enumerate(self.pins):
+            own = {key: getattr(pin, key) for key in LAW_KEY_NAMES
+                   if key in type(pin).model_fields and getattr(pin, key) is not None}
+            out.append(ResolvedContactPin(offset_m=(float(pin.offset_m[0]), float(pin.offset_m[1])), law=self.law,
+                                          keys={**base, **own}, source=f"[simulation.contact] pins[{k}]"))
+        return out
 
 
 class Controller(StrictModel):
@@ -724,6 +913,29 @@ class Case(StrictModel):
     simulation: Simulation | None = None
     cycle: Cycle | None = None
     path: str = ""
+
+    @model_validator(mode="before")
+    @classmethod
+    def _table_paths(cls, data: Any) -> Any:
+        """A tabulated law's ``table_path`` is relative to the case file: made absolute before validation."""
+        if not isinstance(data, dict) or not data.get("path"):
+            return data
+        base = Path(data["path"]).parent
+
+        def resolve(table: Any) -> Any:
+            if isinstance(table, dict) and isinstance(table.get("table_path"), str):
+                return {**table, "table_path": str(base / table["table_path"])}
+            return table
+
+        out = dict(data)
+        for name in ("simulation", "cycle"):
+            section = out.get(name)
+            if isinstance(section, dict) and isinstance(section.get("contact"), dict):
+                contact = resolve(section["contact"])
+                if isinstance(contact.get("pins"), list):
+                    contact = {**contact, "pins": [resolve(p) for p in contact["pins"]]}
+                out[name] = {**section, "contact": contact}
+        return out
 
     def machine(self) -> Machine:
         """The case's machine, with its overrides applied (errors name the case file)."""

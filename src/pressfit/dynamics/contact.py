@@ -3,7 +3,9 @@ r"""Tool-board contact with the machine's compliance in series (quasi-static), f
 Contact law (case ``[simulation.contact]``): for an interference d > 0 (m) of the tool tip below the board
 face, F(d) = k d + f_fit(d) + b d_dot (N, pushing the tool up, +y), F = 0 out of contact and never negative
 (no adhesion). ``elastic``: f_fit = 0 (paper section 4.2: a force proportional to the interference);
-``press_fit``: f_fit(d) = k_fit d (linear) or F_fit tanh(d / d_fit) (saturating).
+``press_fit``: f_fit(d) = k_fit d (linear) or F_fit tanh(d / d_fit) (saturating); every other law
+(:mod:`pressfit.mechanics.contact_laws`: solid and compliant pins, tables, the shoulder, a field of pins) as a
+table of the component's force against the depth (:func:`contact_parameters`), plus b d_dot.
 
 The tool sees the machine's compliance: the rigid-leg multibody model (:mod:`pressfit.dynamics.multibody`)
 gives the rigid tool position r, the structure adds the deflection u(F) under the contact force and the moving
@@ -29,26 +31,44 @@ from dataclasses import dataclass
 import numpy as np
 
 from pressfit.description.cases import Contact
+from pressfit.description.machine import Machine
 from pressfit.dynamics import kernels
+from pressfit.mechanics.contact_laws import build_law
+from pressfit.mechanics.contact_laws.elastic import ElasticLaw
+from pressfit.mechanics.press_curve import force_table
 
-_LAWS = {("elastic", "linear"): kernels.ELASTIC, ("elastic", "saturating"): kernels.ELASTIC,
-         ("press_fit", "linear"): kernels.FIT_LINEAR, ("press_fit", "saturating"): kernels.FIT_TANH}
+_FITS = {"none": kernels.ELASTIC, "linear": kernels.FIT_LINEAR, "saturating": kernels.FIT_TANH}
 
 
-def contact_parameters(contact: Contact) -> np.ndarray:
-    """The contact as the compiled kernels take it (:func:`pressfit.dynamics.kernels.solve_contact`)."""
+def contact_parameters(contact: Contact, machine: Machine | None = None) -> np.ndarray:
+    """The contact as the compiled kernels take it (:func:`pressfit.dynamics.kernels.solve_contact`). One pin on
+    the tool axis with the elastic or press-fit law and no shoulder: the kernels' own codes (the paper's numbers).
+    Any other law, a shoulder or a pin field: the component's total force against the tool's depth tabulated
+    (:func:`pressfit.mechanics.press_curve.force_table`: ``TABLE_SAMPLES`` rows, linear interpolation, its error
+    ``ForceTable.error_n``; 0.06 N on the shipped compliant pin, at the peak's and the shoulder's kinks), with the
+    field's tilt by the machine's compliance at the pin pose when ``machine`` is given (the insertion's), and the
+    damping b d_dot added on top: the one path of every law in the rigid and the flexible models."""
+    pins = contact.resolved_pins()
+    law = build_law(pins[0].law, pins[0].keys)
     values = np.zeros(7)
-    values[[kernels.BOARD, kernels.STIFFNESS, kernels.DAMPING, kernels.LAW]] = (
-        contact.board_height_m, contact.stiffness_n_per_m, contact.damping_n_s_per_m, _LAWS[contact.law, contact.fit])
-    if contact.law == "press_fit":
-        values[[kernels.FIT_STIFFNESS, kernels.FIT_FORCE, kernels.FIT_DEPTH]] = (
-            contact.fit_stiffness_n_per_m, contact.fit_force_n, contact.fit_depth_m)
-    return values
+    values[[kernels.BOARD, kernels.DAMPING]] = contact.board_height_m, contact.damping_n_s_per_m
+    if len(pins) == 1 and pins[0].offset_m == (0.0, 0.0) and isinstance(law, ElasticLaw):
+        values[[kernels.STIFFNESS, kernels.LAW]] = law.stiffness_n_per_m, _FITS[law.fit]
+        if law.fit != "none":
+            values[[kernels.FIT_STIFFNESS, kernels.FIT_FORCE, kernels.FIT_DEPTH]] = (
+                law.fit_stiffness_n_per_m, law.fit_force_n, law.fit_depth_m)
+        return values
+    table = force_table(machine, contact)
+    values[kernels.LAW] = kernels.TABLE
+    head = np.array([table.force_n.max(), table.slope_n_per_m, table.depth_m.size], dtype=float)
+    return np.concatenate([values, head, table.depth_m, table.force_n])
 
 
-def contact_force_n(contact: Contact, depth_m: float, depth_rate_m_per_s: float = 0.0) -> float:
-    """The contact law F(d, d_dot) (N, >= 0) at interference ``depth_m`` (m) and its rate (m/s)."""
-    return float(kernels.contact_law(contact_parameters(contact), float(depth_m), float(depth_rate_m_per_s)))
+def contact_force_n(contact: Contact | np.ndarray, depth_m: float, depth_rate_m_per_s: float = 0.0) -> float:
+    """The contact law F(d, d_dot) (N, >= 0) at interference ``depth_m`` (m) and its rate (m/s); ``contact``: the
+    case's contact or its :func:`contact_parameters` (computed once: a tabulated law's table costs a solve)."""
+    params = contact if isinstance(contact, np.ndarray) else contact_parameters(contact)
+    return float(kernels.contact_law(params, float(depth_m), float(depth_rate_m_per_s)))
 
 
 @dataclass(frozen=True, kw_only=True)
@@ -69,17 +89,20 @@ def solve_contact(contact: Contact, rigid_tip_m: np.ndarray, deflection: Callabl
     any deflection function; the insertion loop's linear or tabulated compliance takes the compiled
     :func:`pressfit.dynamics.kernels.solve_contact`, the same bisection (tested against this one)."""
     rigid_depth = contact.board_height_m - float(rigid_tip_m[1])
+    params = contact_parameters(contact)
 
     def residual(force: float) -> tuple[float, float, np.ndarray]:
         u = deflection(force)
         d = rigid_depth - float(u[1])
-        return force - contact_force_n(contact, d, (d - previous_depth_m) / dt_s), d, u
+        return force - contact_force_n(params, d, (d - previous_depth_m) / dt_s), d, u
 
     r0, d0, u0 = residual(0.0)
     if r0 >= 0.0:
         return ContactState(force_n=0.0, depth_m=d0, deflection_m=u0)
     # the deflection grows with the force (compliance >= 0), so the depth at zero force bounds the force
-    lo, hi = 0.0, contact_force_n(contact, d0, max(d0 - previous_depth_m, 0.0) / dt_s)
+    lo, hi = 0.0, contact_force_n(params, d0, max(d0 - previous_depth_m, 0.0) / dt_s)
+    if params[kernels.LAW] == kernels.TABLE:  # a law that falls after its peak (kernels.solve_contact)
+        hi = max(hi, params[kernels.TABLE_MAX] + params[kernels.DAMPING] * max(d0 - previous_depth_m, 0.0) / dt_s)
     for _ in range(kernels.BISECTIONS):
         mid = 0.5 * (lo + hi)
         if residual(mid)[0] < 0.0:

@@ -195,7 +195,7 @@ def cycle_simulation(cycle: Cycle, first: ResolvedPin, model: str) -> Simulation
     return Simulation(start_m=cycle.start_m, end_m=cycle.end_m, settle_s=cycle.settle_s,
                       time_step_s=cycle.time_step_s, baumgarte_rad_per_s=cycle.baumgarte_rad_per_s, model=model,
                       contact=Contact(board_height_m=cycle.board_height_m, pin_position_m=[first.x_m, first.z_m],
-                                      **cycle.contact.model_dump()),
+                                      **cycle.contact.model_dump(exclude_unset=True)),
                       controller=cycle.controller)
 
 

@@ -156,7 +156,10 @@ def _deflection(machine: Machine, case: Case, sim: Simulation, pin_pose: np.ndar
     shared: the estimate and the rigid pose differ by the closure drift, so one update serves both."""
     if not sim.clearance:
         return lambda pose: (*columns(pose), NO_TABLE)
-    limit = max(4.0 * sim.controller.force_limit_n, sim.contact.stiffness_n_per_m * sim.interference_m)
+    params = contact_parameters(sim.contact)
+    law_force = (contact_force_n(params, sim.interference_m) if params[kernels.LAW] == kernels.TABLE
+                 else sim.contact.stiffness_n_per_m * sim.interference_m)
+    limit = max(4.0 * sim.controller.force_limit_n, law_force)
     curve = load_deflection(machine, pin_pose, [0.0, 1.0, 0.0], np.linspace(0.0, limit, _CURVE_POINTS),
                             clearance_from_case(case, machine), ActuatorPreload.from_case(case.preload).a4,
                             unload=False)
@@ -519,7 +522,7 @@ def _run_rigid(case: Case, machine: Machine, plan: ScenarioPlan, drives: drive_k
     ref_position, ref_velocity = trajectory.sample(times)
     limits = plan.force_limits_n[trajectory.segments(times)]  # the running segment's insertion limit
     phases = trajectory.segments(times - 1e-12)
-    params = contact_parameters(sim.contact)
+    params = contact_parameters(sim.contact, machine)
     iterations = ctrl.gains.estimator_iterations
     columns = series_columns(len(machine.legs))
     post = np.array([columns.index(c) for c in ("plate_x_m", "tool_x_m", "contact_force_n", "depth_m",
@@ -590,6 +593,7 @@ def _flexible_steps(case: Case, machine: Machine, plan: ScenarioPlan, drives: dr
     Starts from the static equilibrium under gravity with the drives holding the start pose's lengths."""
     sim, trajectory, steps, rigid = plan.simulation, plan.trajectory, plan.steps, plan.rigid
     dt, preload = sim.time_step_s, preload_amplitudes_n(case, machine)
+    params = contact_parameters(sim.contact, machine)  # once: a tabulated law's table costs a solve
     start = np.asarray(sim.start_m, float)
     plays = clearance_from_case(case, machine) if sim.clearance else None
     implicit = drives.follows_travel  # a drive whose tension follows its travel, stepped inside the step
@@ -649,7 +653,7 @@ def _flexible_steps(case: Case, machine: Machine, plan: ScenarioPlan, drives: dr
             _check_pose(case, machine, k, steps, t, tool, plan.table)
             previous, depth = depth, board - tool[1]
             _check_depth(case, plan, depth, t)
-            contact_force = contact_force_n(sim.contact, depth, (depth - previous) / dt)
+            contact_force = contact_force_n(params, depth, (depth - previous) / dt)
             lengths, rates = fm.leg_lengths_m(state), fm.leg_rates_m_per_s(state)
             if play is not None and implicit:  # the drives measure their own side of the plays
                 lengths, rates = side.length_m, side.rate_m_per_s

@@ -59,8 +59,9 @@ def _compiled(function):
         config.CACHE_DIR, config.CACHE_LOCATOR_CLASSES = saved
 
 
-# contact laws (contact_law's ``law``): elastic, press fit with a linear or a saturating (tanh) fit force
-ELASTIC, FIT_LINEAR, FIT_TANH = 0, 1, 2
+# contact laws (contact_law's ``law``): elastic, press fit with a linear or a saturating (tanh) fit force, and any
+# other law tabulated on a depth grid (TABLE: :func:`pressfit.dynamics.contact.contact_parameters`)
+ELASTIC, FIT_LINEAR, FIT_TANH, TABLE = 0, 1, 2, 3
 # the controller's parameter vector (control's ``params``)
 KP, KD, KI, FORCE_LIMIT, BACKOFF, LIMITER, GRAVITY, GRAVITY_TOL, DEFLECTION, DEFLECTION_TOL = range(10)
 SINGULAR_SIGMA = 1e-6  # A is singular below this smallest singular value (entries O(1))
@@ -68,6 +69,9 @@ SINGULAR_DET = 1e-12  # legs 1-3 do not span space below this |det(e_1, e_2, e_3
 BISECTIONS = 60  # bisection steps of the contact solve (to 1e-9 of the bracket, module docstring of contact)
 # the contact's parameter vector (solve_contact's ``contact``)
 BOARD, STIFFNESS, DAMPING, LAW, FIT_STIFFNESS, FIT_FORCE, FIT_DEPTH = range(7)
+# a TABLE law appends: the table's largest force (N), the slope past its last depth (N/m), its row count n, then
+# n depths (m, increasing) and n forces (N)
+TABLE_MAX, TABLE_SLOPE, TABLE_COUNT, TABLE_START = 7, 8, 9, 10
 # rigid_post_step's ``layout``: the first column of each quantity it writes into the row
 ROW_PLATE, ROW_TOOL, ROW_FORCE, ROW_DEPTH, ROW_AXIAL, ROW_KINEMATIC, ROW_LENGTHS, ROW_RATES = range(8)
 # rigid_pre_step's ``layout``
@@ -256,6 +260,14 @@ def contact_law(contact, depth, rate):
     :func:`solve_contact`)."""
     if depth <= 0.0:
         return 0.0
+    if contact[LAW] == TABLE:  # np.interp between the rows; the given slope past the last one
+        n = int(contact[TABLE_COUNT])
+        depths, forces = contact[TABLE_START:TABLE_START + n], contact[TABLE_START + n:TABLE_START + 2 * n]
+        if depth > depths[n - 1]:
+            force = forces[n - 1] + contact[TABLE_SLOPE] * (depth - depths[n - 1])
+        else:
+            force = np.interp(depth, depths, forces)
+        return max(force + contact[DAMPING] * rate, 0.0)
     force = contact[STIFFNESS] * depth + contact[DAMPING] * rate
     if contact[LAW] == FIT_LINEAR:
         force += contact[FIT_STIFFNESS] * depth
@@ -279,13 +291,17 @@ def solve_contact(contact, rigid_depth, previous_depth, dt, column, sag, loads, 
     """The contact force F (N) with the structure's deflection u(F) in series (:mod:`pressfit.dynamics.contact`):
     u = ``column`` F + ``sag``, or, when ``loads`` is not empty, ``sag`` + the table ``loads`` (n,), N -> ``disp``
     (n, 3), m, interpolated (m/N, m). ``contact`` = (board height m, k N/m, b N s/m, law, fit stiffness N/m, fit
-    force N, fit depth m). Writes u (3,), m, into ``u``; returns (F, interference m). The bracket's upper end is
-    the law at the depth at zero force d(0), which includes the sag (the deflection grows with the force)."""
+    force N, fit depth m; a TABLE law appends its table from TABLE_MAX on). Writes u (3,), m, into ``u``; returns
+    (F, interference m). The bracket's upper end is the law at the depth at zero force d(0), which includes the sag
+    (the deflection grows with the force), or for a TABLE law the larger of it and the table's largest force (a
+    law that falls after its peak is not monotone: the bracket still holds a root, which the bisection finds)."""
     _deflect(0.0, column, sag, loads, disp, u)
     d0 = rigid_depth - u[1]
     if 0.0 - contact_law(contact, d0, (d0 - previous_depth) / dt) >= 0.0:
         return 0.0, d0
     lo, hi = 0.0, contact_law(contact, d0, max(d0 - previous_depth, 0.0) / dt)
+    if contact[LAW] == TABLE:  # a law that falls after a peak: the force at d(0) need not bound it
+        hi = max(hi, contact[TABLE_MAX] + contact[DAMPING] * max(d0 - previous_depth, 0.0) / dt)
     for _ in range(BISECTIONS):
         mid = 0.5 * (lo + hi)
         _deflect(mid, column, sag, loads, disp, u)

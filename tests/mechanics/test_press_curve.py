@@ -1,0 +1,136 @@
+"""The predicted press curve (mechanics/press_curve.py): symmetry of a pin field, the tilt against a stiffness-form
+solve written here, the sensed-minus-true depth against the Pinocchio model's compliance, and the curve against a
+slow simulation of the same case."""
+
+from __future__ import annotations
+
+import numpy as np
+import pytest
+
+from pressfit.description.cases import Contact, load_case
+from pressfit.description.machine import DEFAULT_MODEL, load_machine
+from pressfit.errors import PressCurveError
+from pressfit.mechanics.compliance import vjm_plate_compliance
+from pressfit.mechanics.condensed import plate_stiffness
+from pressfit.mechanics.press_curve import RESIDUAL_LIMIT_N, predict_curve
+from pressfit.shipped import cases_dir
+
+COMPLIANT = dict(law="compliant_pin", hole_diameter_m=1.0e-3, zone_width_m=1.15e-3, radial_stiffness_n_per_m=1.6e6,
+                 radial_yield_force_n=80.0, post_yield_stiffness_n_per_m=3.7e5, zone_length_m=1.0e-3,
+                 lead_in_length_m=0.6e-3, friction_coefficient=0.15, seat_depth_m=1.4e-3, seat_stiffness_n_per_m=2e6)
+
+
+@pytest.fixture(scope="module")
+def machine():
+    return load_machine(DEFAULT_MODEL)
+
+
+def _pins(offsets, **over):
+    return [{"offset_m": list(o), **over} for o in offsets]
+
+
+def test_a_centred_symmetric_field_at_the_centred_pose_does_not_tilt(machine):
+    """Four equal pins at (+-a, +-b) on the axis of the centred pose (x = z = 0, where a vertical force passes
+    through the legs' concurrency point): no tilt (achieved 0 to 1e-19 rad), equal pins, no spread."""
+    contact = Contact(board_height_m=0.6, pin_position_m=[0.0, 0.0], **COMPLIANT,
+                      pins=_pins([(0.01, 0.005), (-0.01, 0.005), (0.01, -0.005), (-0.01, -0.005)]))
+    curve = predict_curve(machine, contact)
+    assert curve.tool_tilt_max_rad < 1e-15
+    assert curve.max_pin_depth_spread_m < 1e-15
+    assert np.ptp(curve.pin_forces_n, axis=1).max() < 1e-9
+    assert curve.all_pins_seated and curve.series_residual_n <= RESIDUAL_LIMIT_N
+
+
+def test_a_mirrored_field_gives_mirrored_forces_and_tilt(machine):
+    """An asymmetric field at the centred pose and its mirror image x -> -x (the 4-UPU is mirror-symmetric in x):
+    the same total force, each pin's force at its mirror pin, the tilt's x component the same and its y, z
+    components reversed (a rotation is an axial vector: mirrored in x, theta -> (theta_x, -theta_y, -theta_z));
+    achieved 1e-9 relative."""
+    offsets = [(0.012, 0.004), (-0.004, 0.009), (0.002, -0.011)]
+    one = predict_curve(machine, Contact(board_height_m=0.6, pin_position_m=[0.0, 0.0], **COMPLIANT,
+                                         pins=_pins(offsets)))
+    two = predict_curve(machine, Contact(board_height_m=0.6, pin_position_m=[0.0, 0.0], **COMPLIANT,
+                                         pins=_pins([(-x, z) for x, z in offsets])))
+    assert one.tool_tilt_max_rad > 3e-5  # the field does tilt the tool (66 urad)
+    assert two.force_n == pytest.approx(one.force_n, rel=1e-9, abs=1e-9)
+    assert two.pin_forces_n == pytest.approx(one.pin_forces_n, rel=1e-9, abs=1e-9)
+    assert two.tilt_rad == pytest.approx(one.tilt_rad * np.array([1.0, -1.0, -1.0]), rel=1e-6, abs=1e-12)
+
+
+def test_the_tilt_of_linear_pins_is_the_stiffness_form_solved_by_hand(machine):
+    """Three linear (elastic) pins of different stiffness off-centre at an off-centre pose. A second formulation:
+    the tool held by the machine's 6x6 stiffness K (plate_stiffness, the inverse of the compliance) about the
+    encoders' position, pressed down to the sensed depth s; pin i at the depth s - u_y - (theta x r_i)_y =
+    s - g_i . x (g_i = (0, 1, 0, -dz_i, 0, dx_i)), pushing back with k_i of it: K x = sum_i k_i g_i (s - g_i . x),
+    so x = (K + G k G^T)^-1 G k s. The curve at the true depth s - u_y gives the same pin forces and tilt
+    (achieved 1e-12 relative)."""
+    offsets, stiffness = [(0.02, 0.01), (-0.015, 0.0), (0.005, -0.02)], [3e5, 1e5, 2e5]
+    pins = [{"offset_m": list(o), "stiffness_n_per_m": k} for o, k in zip(offsets, stiffness, strict=True)]
+    contact = Contact(board_height_m=0.6, pin_position_m=[0.1, -0.05], stiffness_n_per_m=1e5, pins=pins)
+    curve = predict_curve(machine, contact, max_depth_m=1e-3, samples=11)
+    g = np.zeros((6, 3))
+    g[1] = 1.0
+    g[3], g[5] = [-o[1] for o in offsets], [o[0] for o in offsets]
+    k = np.diag(stiffness)
+    big_k = plate_stiffness(machine, np.array([0.1, 0.6, -0.05]))
+    sensed = 1e-3 + 0.0
+    x = np.linalg.solve(big_k + g @ k @ g.T, g @ k @ np.ones(3) * sensed)
+    forces = k @ (sensed - g.T @ x)
+    true_depth = sensed - x[1]
+    got_forces = [np.interp(true_depth, curve.depth_m, curve.pin_forces_n[:, i]) for i in range(3)]
+    got_tilt = [np.interp(true_depth, curve.depth_m, curve.tilt_rad[:, i]) for i in range(3)]
+    assert got_forces == pytest.approx(forces, rel=1e-9)
+    assert got_tilt == pytest.approx(x[3:], rel=1e-9)
+    assert np.interp(true_depth, curve.depth_m, curve.sensed_depth_m) == pytest.approx(sensed, rel=1e-12)
+
+
+def test_sensed_minus_true_depth_is_the_pinocchio_compliance_times_the_force(machine):
+    """One pin on the axis at pose A (0.1, 0.6, -0.05): the sensed minus the true depth at the peak is the plate's
+    compliance along the press from the Pinocchio VJM model (`pressfit stiffness`'s cross-check, a second
+    formulation of the condensed one the curve uses) times the peak force (achieved 2e-9 relative)."""
+    contact = Contact(board_height_m=0.6, pin_position_m=[0.1, -0.05], **COMPLIANT)
+    curve = predict_curve(machine, contact)
+    c_yy = vjm_plate_compliance(machine, np.array([0.1, 0.6, -0.05]))[1, 1]
+    assert curve.machine_compliance_along_press_m_per_n == pytest.approx(c_yy, rel=1e-6)
+    assert curve.sensed_minus_true_depth_at_peak_m == pytest.approx(c_yy * curve.peak_force_n, rel=1e-6)
+    assert curve.peak_force_n == pytest.approx(2 * 117 * 0.275 / (1 - 0.15 * 0.125), rel=1e-3)  # the law's peak
+
+
+def test_a_curve_without_a_depth_range_or_simulation_is_refused(machine):
+    """An elastic spring without a shoulder has no stroke of its own: refused naming max_depth_m; a case without
+    [simulation]: refused naming it."""
+    with pytest.raises(PressCurveError, match="max_depth_m"):
+        predict_curve(machine, Contact(board_height_m=0.6, pin_position_m=[0.0, 0.0]))
+    with pytest.raises(PressCurveError, match=r"\[simulation\]"):
+        predict_curve(machine, load_case(cases_dir() / "paper" / "A.toml"))
+
+
+@pytest.fixture(scope="module")
+def compliant_pin_simulation():
+    """The shipped compliant-pin case simulated (rigid model, 8 s descent) with its limiter: about 20 s."""
+    from pressfit.dynamics.insertion import simulate_insertion
+
+    case = load_case(cases_dir() / "paper" / "insertion_compliant_pin.toml")
+    return case, simulate_insertion(case, True, False)
+
+
+def test_curve_agrees_with_a_slow_simulation(compliant_pin_simulation):
+    """`pressfit curve` against `pressfit simulate` of the same case, on the descent before the shoulder (4069
+    rows): the force at the same sensed depth (the encoders' view, the sag at first contact removed) within the
+    issue's 1% of the peak, held here to 0.1% (achieved 0.025%), and the sensed minus true depth at the same force
+    to 0.5% of the deflection at the peak (achieved 0.17%)."""
+    case, run = compliant_pin_simulation
+    curve = predict_curve(case.machine(), case)
+    board = case.simulation.contact.board_height_m
+    force, depth = run.column("contact_force_n"), run.column("depth_m")
+    sensed = board - run.column("plate_y_m")
+    first = int(np.flatnonzero(force > 0)[0])
+    sag = sensed[first - 1] - depth[first - 1]
+    rows = np.flatnonzero((force > 5.0) & (depth < 1.35e-3))
+    rows = rows[rows < np.argmax(depth)]  # the first stroke
+    assert rows.size > 100
+    predicted = np.interp(sensed[rows] - sag, curve.sensed_depth_m, curve.force_n)
+    assert np.max(np.abs(predicted - force[rows])) < 1e-3 * curve.peak_force_n
+    gap = sensed[rows] - sag - depth[rows]
+    c = curve.machine_compliance_along_press_m_per_n
+    assert np.max(np.abs(gap - c * force[rows])) < 5e-3 * curve.sensed_minus_true_depth_at_peak_m
