@@ -24,7 +24,7 @@ import pytest
 
 SRC = Path(__file__).resolve().parents[1] / "src" / "pressfit"
 LAYERS = ["errors", "spatial", "shipped", "description", "kinematics", "mechanics", "geometry", "dynamics",
-          "studies", "output", "cli"]
+          "studies", "output", "workflows", "cli"]
 BASE = {"errors": 0, "spatial": 0, "shipped": 0}  # the lowest layer: all three may import each other
 PHYSICS = {"kinematics", "mechanics", "geometry", "dynamics"}
 

@@ -14,6 +14,8 @@ from click.testing import CliRunner
 import pressfit.output.modal
 import pressfit.output.report
 import pressfit.output.simulation
+import pressfit.workflows.insertion_simulation
+import pressfit.workflows.natural_modes
 from pressfit.cli import main
 from pressfit.description.machine import DEFAULT_MODEL, load_machine, read_toml
 from pressfit.errors import ModelFileError, OutputExistsError, PressfitError
@@ -46,8 +48,8 @@ def test_a_non_empty_directory_is_refused_before_computing(tmp_path, monkeypatch
     def never(*a, **k):
         raise AssertionError("computed before checking the output directory")
 
-    monkeypatch.setattr(pressfit.output.simulation, "simulate_insertion", never)
-    monkeypatch.setattr(pressfit.output.modal, "natural_modes", never)
+    monkeypatch.setattr(pressfit.workflows.insertion_simulation, "simulate_insertion", never)
+    monkeypatch.setattr(pressfit.workflows.natural_modes, "natural_modes", never)
     out = tmp_path / "out"
     out.mkdir()
     (out / "mine.txt").write_text("keep")
