@@ -22,9 +22,10 @@ os.environ.setdefault("OMP_NUM_THREADS", "1")
 os.environ.setdefault("OPENBLAS_NUM_THREADS", "1")
 
 from pressfit.description.cases import load_case
-from pressfit.output.montecarlo_files import CHUNK_DIR, run_montecarlo
+from pressfit.output.montecarlo_files import CHUNK_DIR
 from pressfit.shipped import cases_dir
 from pressfit.studies import montecarlo
+from pressfit.workflows.tolerance_study import run_montecarlo
 
 CASE = cases_dir() / "studies" / "montecarlo_tolerances.toml"
 

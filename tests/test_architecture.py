@@ -1,7 +1,11 @@
 """The layout's rules (docs/architecture.md), checked on the source's import graph with ``ast``:
 
 * layers, low to high: errors, spatial, shipped < description < kinematics < mechanics < geometry < dynamics
-  < studies < output < cli; a module never imports a higher layer (a lower one, or its own, is fine);
+  < studies < output < workflows < cli; a module never imports a higher layer (a lower one, or its own, is fine);
+* output/ only formats and writes: at run time it imports no module of the physics or the studies (kinematics,
+  mechanics, geometry, dynamics, studies); types for annotations come in under ``if TYPE_CHECKING:``, and the few
+  names it reads at run time are listed in ``OUTPUT_RUNTIME_NAMES`` with their reason (the workflows/ layer
+  loads the inputs, runs the physics and hands the results to output/);
 * the physics subpackages (kinematics, mechanics, geometry, dynamics) import neither matplotlib nor
   pressfit.output, and never open files for writing;
 * no module-level mutable state in the library: no module-level dict/list/set that a function mutates
@@ -24,7 +28,7 @@ import pytest
 
 SRC = Path(__file__).resolve().parents[1] / "src" / "pressfit"
 LAYERS = ["errors", "spatial", "shipped", "description", "kinematics", "mechanics", "geometry", "dynamics",
-          "studies", "output", "cli"]
+          "studies", "output", "workflows", "cli"]
 BASE = {"errors": 0, "spatial": 0, "shipped": 0}  # the lowest layer: all three may import each other
 PHYSICS = {"kinematics", "mechanics", "geometry", "dynamics"}
 
@@ -70,6 +74,72 @@ def test_no_import_of_a_higher_layer(layer, path):
         parts = name.split(".")
         if parts[0] == "pressfit" and len(parts) > 1 and parts[1] in LAYERS:
             assert _rank(parts[1]) <= _rank(layer), f"{path.name} ({layer}) imports {name}"
+
+
+SOLVER_LAYERS = ("kinematics", "mechanics", "geometry", "dynamics", "studies")
+# names output/ imports at run time from a solver layer, each with its reason; every other import of a solver layer
+# is under ``if TYPE_CHECKING:`` (an annotation). Data: the schema of a result (column names, labels, units), defined
+# once beside the code that fills it. Presentation helpers: pure functions of a finished result (no solve) that still
+# live beside their study because the CLI prints them too; they move into output/ with their callers.
+OUTPUT_RUNTIME_NAMES = {
+    "pressfit.dynamics.insertion.section_columns": "data: the header of sections.csv (the flexible run's sections)",
+    "pressfit.studies.insertion_study.COLUMNS": "data: the columns of the insertion study's table",
+    "pressfit.studies.cycle_study.FACTOR_LABELS": "data: the throughput study's factors as labels",
+    "pressfit.studies.design.METRICS": "data: the design study's metric columns",
+    "pressfit.studies.montecarlo.OUTPUTS": "data: the Monte Carlo study's output columns",
+    "pressfit.studies.montecarlo.QUANTILES": "data: the quantiles the Monte Carlo summary holds",
+    "pressfit.studies.limit_check.LIMITS": "data: each envelope limit's label and unit",
+    "pressfit.studies.workspace_envelope.LEG_QUANTITIES": "data: the load envelope's per-leg quantities and units",
+    "pressfit.studies.workspace_envelope.PLATE_QUANTITIES": "data: the load envelope's plate quantities and units",
+    "pressfit.studies.workspace_envelope.envelope_rows": "presentation: the envelope's table rows",
+    "pressfit.studies.preload_study.format_answers": "presentation: the preload study's answers as text",
+    "pressfit.studies.paper_tables.TableEntry": "data: one printed entry of Tables 5-6 (rebuilt from tables.json)",
+    "pressfit.studies.paper_tables.TABLES": "data: the titles of Tables 5 and 6",
+    "pressfit.studies.paper_tables.case_table": "presentation: one case's part of Table 5 or 6 as printed",
+    "pressfit.studies.paper_tables.shown_value": "presentation: an entry as the paper prints it",
+    "pressfit.geometry.interference.machine_shapes": "drawing: the bodies' shapes and placements (no distance query)",
+    "pressfit.kinematics.closed_form.frames_along": "drawing: a drawn leg's frame from its direction (closed form)",
+}
+
+
+def _runtime_imports(path: Path) -> list[tuple[int, str, list[str]]]:
+    """(line, module, imported names) of every import of ``path`` outside an ``if TYPE_CHECKING:`` block
+    (``import a.b`` gives the names ``[]``)."""
+    tree = ast.parse(path.read_text())
+    hidden = {id(n) for node in ast.walk(tree) if isinstance(node, ast.If) and ast.unparse(node.test) in
+              ("TYPE_CHECKING", "typing.TYPE_CHECKING") for stmt in node.body for n in ast.walk(stmt)}
+    out = []
+    for node in ast.walk(tree):
+        if id(node) in hidden:
+            continue
+        if isinstance(node, ast.Import):
+            out += [(node.lineno, a.name, []) for a in node.names]
+        elif isinstance(node, ast.ImportFrom):
+            out.append((node.lineno, node.module or "", [a.name for a in node.names]))
+    return out
+
+
+@pytest.mark.parametrize(("layer", "path"), [m for m in MODULES if m[0] == "output"],
+                         ids=[str(p.relative_to(SRC)) for layer, p in MODULES if layer == "output"])
+def test_output_imports_no_solver(layer, path):
+    """output/ formats and writes: no import of the physics or the studies at run time, but for the names of
+    ``OUTPUT_RUNTIME_NAMES`` (the workflows run the solvers and hand output/ their results)."""
+    for line, module, names in _runtime_imports(path):
+        parts = module.split(".")
+        if parts[0] != "pressfit" or len(parts) < 2 or parts[1] not in SOLVER_LAYERS:
+            continue
+        bad = [f"{module}.{n}" for n in names if f"{module}.{n}" not in OUTPUT_RUNTIME_NAMES] or \
+            ([] if names else [module])
+        assert not bad, f"{path}:{line} imports {', '.join(bad)} at run time: output/ writes only (run the " \
+                        "physics in a workflow, or import the type under `if TYPE_CHECKING:`)"
+
+
+def test_the_output_allow_list_is_still_needed():
+    """Every name of OUTPUT_RUNTIME_NAMES is still imported at run time by a module of output/ (a name no longer
+    read there leaves the list)."""
+    used = {f"{module}.{n}" for layer, path in MODULES if layer == "output"
+            for _, module, names in _runtime_imports(path) for n in names}
+    assert set(OUTPUT_RUNTIME_NAMES) - used == set(), "allowed but no longer imported: remove from the list"
 
 
 @pytest.mark.parametrize(("layer", "path"), [m for m in MODULES if m[0] in PHYSICS],
@@ -193,6 +263,20 @@ def test_the_rules_catch_a_violation(tmp_path):
         test_the_cli_holds_no_physics("cli", bad)
     with pytest.raises(AssertionError, match=r"\(kinematics\) imports pressfit.output"):
         test_no_import_of_a_higher_layer("kinematics", bad)
+    writer = tmp_path / "writer.py"  # an output module that solves: refused; the same import for a type is fine
+    writer.write_text("from typing import TYPE_CHECKING\nfrom pressfit.mechanics.statics import solve_equilibrium\n"
+                      "if TYPE_CHECKING:\n    from pressfit.mechanics.statics import Equilibrium\n")
+    with pytest.raises(AssertionError, match="imports pressfit.mechanics.statics.solve_equilibrium at run time"):
+        test_output_imports_no_solver("output", writer)
+    writer.write_text("import pressfit.studies.compare\n")
+    with pytest.raises(AssertionError, match="imports pressfit.studies.compare at run time"):
+        test_output_imports_no_solver("output", writer)
+    writer.write_text("from typing import TYPE_CHECKING\nfrom pressfit.studies.limit_check import LIMITS\n"
+                      "if TYPE_CHECKING:\n    from pressfit.mechanics.statics import Equilibrium\n")
+    test_output_imports_no_solver("output", writer)  # an allowed name, a type for annotations
+    writer.write_text("from pressfit.workflows.report import write_report\n")
+    with pytest.raises(AssertionError, match=r"\(output\) imports pressfit.workflows.report"):
+        test_no_import_of_a_higher_layer("output", writer)
     positional = tmp_path / "positional.py"
     positional.write_text("from dataclasses import dataclass, field\n@dataclass(frozen=True)\nclass Result:\n"
                           "    force_n: float\n    moment_nm: float\n    residual: float\n"

@@ -12,8 +12,10 @@ import tomli_w
 from click.testing import CliRunner
 
 import pressfit.output.modal
-import pressfit.output.report
 import pressfit.output.simulation
+import pressfit.workflows.insertion_simulation
+import pressfit.workflows.natural_modes
+import pressfit.workflows.report
 from pressfit.cli import main
 from pressfit.description.machine import DEFAULT_MODEL, load_machine, read_toml
 from pressfit.errors import ModelFileError, OutputExistsError, PressfitError
@@ -46,8 +48,8 @@ def test_a_non_empty_directory_is_refused_before_computing(tmp_path, monkeypatch
     def never(*a, **k):
         raise AssertionError("computed before checking the output directory")
 
-    monkeypatch.setattr(pressfit.output.simulation, "simulate_insertion", never)
-    monkeypatch.setattr(pressfit.output.modal, "natural_modes", never)
+    monkeypatch.setattr(pressfit.workflows.insertion_simulation, "simulate_insertion", never)
+    monkeypatch.setattr(pressfit.workflows.natural_modes, "natural_modes", never)
     out = tmp_path / "out"
     out.mkdir()
     (out / "mine.txt").write_text("keep")
@@ -100,7 +102,7 @@ def test_report_loses_to_a_run_that_filled_the_directory_meanwhile(tmp_path, mon
         other_run(out)
         return path
 
-    monkeypatch.setattr(pressfit.output.report, "write_report", fake_report)
+    monkeypatch.setattr(pressfit.workflows.report, "write_report", fake_report)
     one_error_line(run("report", "--out", out, "--quick"), str(out), "another run")
     assert tree(tmp_path) == ["rep", "rep/report.md"] and (out / "report.md").read_text() == "the other run"
 
@@ -278,7 +280,7 @@ def test_report_refuses_a_study_summary_it_cannot_show_before_computing(tmp_path
     study = tmp_path / "study"
     study.mkdir()
     (study / "summary.json").write_text(summary)
-    monkeypatch.setattr(pressfit.output.report, "_tables_section", lambda *a: pytest.fail("computed"))
+    monkeypatch.setattr(pressfit.workflows.report, "_tables_section", lambda *a: pytest.fail("computed"))
     one_error_line(run("report", "--out", tmp_path / "rep", "--quick", "--cycle-study", study), "summary.json",
                    fragment)
     assert not (tmp_path / "rep").exists()

@@ -8,9 +8,8 @@ from click.testing import CliRunner
 
 from pressfit import kinematics
 from pressfit.cli import main
-from pressfit.errors import OutputExistsError, WorkspaceError
+from pressfit.errors import WorkspaceError
 from pressfit.kinematics import workspace
-from pressfit.output import maps
 
 
 def test_square_points(machine):
@@ -44,16 +43,6 @@ def test_plane_map(machine):
     header, rows = workspace.map_rows(pm)
     assert rows.shape == (17 * 17, len(header))
     assert rows[i * 17 + j, :3].tolist() == [pm.x_m[j], 0.6, pm.z_m[i]]
-
-
-def test_write_outputs_and_no_silent_overwrite(machine, tmp_path):
-    (tmp_path / "summary.json").write_text("keep")
-    with pytest.raises(OutputExistsError):  # checked before anything is computed or written
-        maps.write_kinematic_maps(machine, tmp_path, [0.6])
-    assert (tmp_path / "summary.json").read_text() == "keep" and not (tmp_path / "maps_y0.600.csv").exists()
-    summary, paths, _ = maps.write_kinematic_maps(machine, tmp_path, [0.6], overwrite=True)
-    assert sorted(p.name for p in paths) == ["maps_y0.600.csv", "maps_y0.600.png", "summary.json"]
-    assert json.loads((tmp_path / "summary.json").read_text()) == json.loads(json.dumps(summary))
 
 
 def test_cli_workspace(tmp_path):

@@ -44,8 +44,8 @@ def test_gains_and_preload_in_the_grid_reach_the_run_and_the_fastest_case(tmp_pa
     preload: the grid holds every combination (2 x 2 = 4, the other factors at 1 and no ``a4_n``: the case's), a
     variant carries exactly the scaled gains and the preload, and fastest.toml written for a sample with kp x 2 and
     a4 = 0 loads with those values (not the case's 2e4 N/m and 100 N)."""
-    from pressfit.output.cycle_study import fastest_case_toml
     from pressfit.studies.cycle_study import CycleStudyResult
+    from pressfit.workflows.throughput_study import fastest_case_toml
 
     case = load_case(study_case(tmp_path, kp_scale=[1.0, 2.0], a4_n=[0.0, 100.0]))
     samples = grid(case)

@@ -12,9 +12,9 @@ from pressfit import kinematics
 from pressfit.description.cases import DesignConstraints, load_case
 from pressfit.description.machine import load_machine
 from pressfit.errors import ModelFileError
-from pressfit.output import design_files
 from pressfit.shipped import cases_dir
 from pressfit.studies import design
+from pressfit.workflows import design_study
 
 Y_M = 0.65
 D_STAR_M = 0.02523  # the stem diameter whose vertical stiffness is the constraint's limit (not a grid value)
@@ -91,8 +91,8 @@ def small_study(tmp_path_factory):
     case = case.model_copy(update={"design": case.design.model_copy(update={  # only the height range constrains
         "population": 4, "grid_xz": 5, "constraints": DesignConstraints()})})
     out = tmp_path_factory.mktemp("design")
-    one = design_files.run_design_study(case, out / "one", trials=8, workers=1, progress=False)
-    two = design_files.run_design_study(case, out / "two", trials=8, workers=2, progress=False)
+    one = design_study.run_design_study(case, out / "one", trials=8, workers=1, progress=False)
+    two = design_study.run_design_study(case, out / "two", trials=8, workers=2, progress=False)
     return out, one, two
 
 
@@ -185,10 +185,10 @@ def test_overwrite_never_replaces_the_case_file_with_a_design(tmp_path):
     from pressfit.errors import OutputConflictError
 
     out = tmp_path / "out"
-    first = design_files.run_design_study(load_case(one_parameter_case(tmp_path)), out, workers=1, progress=False)
+    first = design_study.run_design_study(load_case(one_parameter_case(tmp_path)), out, workers=1, progress=False)
     target = next(p for p in first.written if p.parent.name == "designs")
     target.write_text(one_parameter_case(tmp_path).read_text())
     before = target.read_text()
     with pytest.raises(OutputConflictError, match="input file"):
-        design_files.run_design_study(load_case(target), out, workers=1, overwrite=True, progress=False)
+        design_study.run_design_study(load_case(target), out, workers=1, overwrite=True, progress=False)
     assert target.read_text() == before

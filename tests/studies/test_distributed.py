@@ -15,6 +15,7 @@ from pressfit.description.cases import load_case
 from pressfit.errors import ClusterError
 from pressfit.output import montecarlo_files as mcf
 from pressfit.studies import distributed, montecarlo
+from pressfit.workflows.tolerance_study import run_montecarlo
 from tests.studies.test_montecarlo import synthetic_case
 
 TILT = """[montecarlo.inputs.load_tilt_rad]
@@ -51,8 +52,8 @@ def _same(a: dict[str, np.ndarray], b: dict[str, np.ndarray]) -> None:
 
 def test_one_and_two_workers_and_a_resumed_run_agree(case, cluster, tmp_path, monkeypatch):
     two_workers = {"scheduler": cluster.scheduler_address}
-    one = mcf.run_montecarlo(case, tmp_path / "one", chunk_size=4, workers=1, progress=False)
-    two = mcf.run_montecarlo(case, tmp_path / "two", chunk_size=4, **two_workers, progress=False)
+    one = run_montecarlo(case, tmp_path / "one", chunk_size=4, workers=1, progress=False)
+    two = run_montecarlo(case, tmp_path / "two", chunk_size=4, **two_workers, progress=False)
     assert one.chunks_run == two.chunks_run == 6
     _same(_columns(tmp_path / "one"), _columns(tmp_path / "two"))
     np.testing.assert_array_equal(_columns(tmp_path / "one")["sample"], np.arange(24))
@@ -67,15 +68,15 @@ def test_one_and_two_workers_and_a_resumed_run_agree(case, cluster, tmp_path, mo
 
     monkeypatch.setattr(mcf.io, "write_parquet", interrupt_after_two)
     with pytest.raises(KeyboardInterrupt):
-        mcf.run_montecarlo(case, tmp_path / "resumed", chunk_size=4, **two_workers, progress=False)
+        run_montecarlo(case, tmp_path / "resumed", chunk_size=4, **two_workers, progress=False)
     monkeypatch.setattr(mcf.io, "write_parquet", real)
     done, damaged = mcf.finished_chunks(tmp_path / "resumed", montecarlo.plan_from_case(case, chunk_size=4))
     assert done == {int(p.stem.split("-")[1]) for p in written} and not damaged
-    resumed = mcf.run_montecarlo(case, tmp_path / "resumed", chunk_size=4, **two_workers, progress=False)
+    resumed = run_montecarlo(case, tmp_path / "resumed", chunk_size=4, **two_workers, progress=False)
     assert resumed.chunks_run == 4
     _same(_columns(tmp_path / "one"), _columns(tmp_path / "resumed"))
     with pytest.raises(mcf.OutputExistsError, match="different Monte Carlo study"):
-        mcf.run_montecarlo(case, tmp_path / "resumed", chunk_size=4, seed=99, workers=1, progress=False)
+        run_montecarlo(case, tmp_path / "resumed", chunk_size=4, seed=99, workers=1, progress=False)
 
 
 def test_a_killed_worker_leaves_every_sample_exactly_once(case, cluster):
@@ -119,7 +120,7 @@ def test_scheduler_and_worker_as_separate_processes(case, tmp_path):
         assert address.startswith("tcp://127.0.0.1:")
         procs.append(subprocess.Popen([sys.executable, "-m", "distributed.cli.dask_worker", address, "--nthreads",
                                        "1", "--no-dashboard"], env=env, stderr=subprocess.DEVNULL))
-        run = mcf.run_montecarlo(case, tmp_path / "remote", samples=8, chunk_size=4, scheduler=address,
+        run = run_montecarlo(case, tmp_path / "remote", samples=8, chunk_size=4, scheduler=address,
                                  progress=False)
         assert run.chunks_run == 2
         plan = montecarlo.plan_from_case(case, samples=8, chunk_size=4)

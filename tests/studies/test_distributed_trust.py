@@ -17,6 +17,7 @@ from pressfit.description.cases import load_case
 from pressfit.errors import ClusterError, OutputExistsError
 from pressfit.output import montecarlo_files as mcf
 from pressfit.studies import distributed, montecarlo
+from pressfit.workflows.tolerance_study import run_montecarlo
 from tests.studies.test_distributed import TILT
 from tests.studies.test_montecarlo import synthetic_case
 
@@ -41,12 +42,12 @@ def cluster():
 def clean(case, cluster, tmp_path_factory):
     """A finished 6-sample study in 2 chunks of 3, and its columns."""
     out = tmp_path_factory.mktemp("clean") / "mc"
-    mcf.run_montecarlo(case, out, chunk_size=3, scheduler=cluster.scheduler_address, progress=False)
+    run_montecarlo(case, out, chunk_size=3, scheduler=cluster.scheduler_address, progress=False)
     return out, mcf.read_samples(out)
 
 
 def _run(case, cluster, out, **kw):
-    return mcf.run_montecarlo(case, out, chunk_size=3, scheduler=cluster.scheduler_address, progress=False, **kw)
+    return run_montecarlo(case, out, chunk_size=3, scheduler=cluster.scheduler_address, progress=False, **kw)
 
 
 def _same(a, b):
@@ -64,7 +65,7 @@ def _copy(clean, tmp_path):
 @pytest.fixture(scope="module")
 def other_seed(case, cluster, tmp_path_factory):
     out = tmp_path_factory.mktemp("other") / "mc"
-    mcf.run_montecarlo(case, out, chunk_size=3, seed=99, scheduler=cluster.scheduler_address, progress=False)
+    run_montecarlo(case, out, chunk_size=3, seed=99, scheduler=cluster.scheduler_address, progress=False)
     return out
 
 
@@ -127,7 +128,7 @@ def test_a_first_run_that_wrote_only_study_json_can_be_restarted(case, cluster, 
 
     monkeypatch.setattr(distributed, "run_chunks", unreachable)
     with pytest.raises(ClusterError):
-        mcf.run_montecarlo(case, out, chunk_size=3, progress=False)
+        run_montecarlo(case, out, chunk_size=3, progress=False)
     assert [p.name for p in out.iterdir()] == ["study.json"]
     monkeypatch.undo()
     run = _run(case, cluster, out, seed=99)
@@ -264,7 +265,7 @@ def test_a_tls_scheduler_with_certificates_from_the_dask_configuration(case, tmp
         config = {"distributed.comm.tls.ca-file": str(cert), "distributed.comm.tls.client.cert": str(cert),
                   "distributed.comm.tls.client.key": str(key)}
         with dask.config.set(config):
-            run = mcf.run_montecarlo(case, tmp_path / "tls", chunk_size=3, scheduler=address, progress=False)
+            run = run_montecarlo(case, tmp_path / "tls", chunk_size=3, scheduler=address, progress=False)
         assert run.chunks_run == 2
         plan = montecarlo.plan_from_case(case, chunk_size=3)
         here = [montecarlo.evaluate_chunk(plan, k, montecarlo.chunk_seed(plan, k)) for k in range(2)]
@@ -287,7 +288,7 @@ def test_one_or_two_samples_work_and_say_the_sensitivity_is_undefined(case, clus
     """1 or 2 samples (old code: a traceback in the sensitivity plot after partial writes): the study is
     summarised, the notes say the rank correlation is undefined, and no sensitivity plot is written; from 3
     samples on it is computed and plotted."""
-    run = mcf.run_montecarlo(case, tmp_path / "mc", samples=samples, chunk_size=3,
+    run = run_montecarlo(case, tmp_path / "mc", samples=samples, chunk_size=3,
                              scheduler=cluster.scheduler_address, progress=False)
     assert run.summary.samples == samples
     undefined = any(n.startswith("sensitivity: undefined") for n in run.summary.notes)

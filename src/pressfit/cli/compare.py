@@ -50,7 +50,7 @@ def compare_cmd(machine_files: tuple[Path, ...], as_json: bool, out_dir: Path | 
     natural frequency, moving mass, lost motion with 20 um of cardan play without and with each pose's critical
     preload and the drive forces with it; and the paper's claims (against the gantry, against the 3-UPU) decided pose
     by pose over the box (confirmed, holds on X% of the box, refuted; SI units)."""
-    from pressfit.output.compare import run_compare
+    from pressfit.workflows.machine_comparison import run_compare
 
     if len(set(machine_files)) != len(machine_files):
         raise PressfitError("the same machine file is given twice")

@@ -41,7 +41,7 @@ MIN_MJCF_TIMESTEP_S = 1e-6
 def modes_cmd(x: float, y: float, z: float, count: int, out_dir: Path | None, overwrite: bool, as_json: bool,
               model_path: Path) -> None:
     """Natural frequencies and mode shapes at the plate pose X Y Z (m), under the plate's and tool's weight."""
-    from pressfit.output.modal import run_modes
+    from pressfit.workflows.natural_modes import run_modes
 
     machine = load_machine(model_path)
     modes, paths = run_modes(machine, [x, y, z], count, out_dir, overwrite)
@@ -70,7 +70,7 @@ def modes_cmd(x: float, y: float, z: float, count: int, out_dir: Path | None, ov
 def simulate_cmd(case_path: Path, out_dir: Path | None, no_limiter: bool, overwrite: bool, as_json: bool,
                  progress: bool) -> None:
     """Simulate the insertion scenario of a case file's [simulation] table (Figures 13-14), SI units."""
-    from pressfit.output.simulation import run_simulation
+    from pressfit.workflows.insertion_simulation import run_simulation
 
     summary, paths = run_simulation(case_path, out_dir, not no_limiter, overwrite, progress)
     s = summary
@@ -196,7 +196,7 @@ def export_mjcf_cmd(x: float, y: float, z: float, timestep_s: float, out: Path |
                     model_path: Path) -> None:
     """The rigid-leg machine closed at the plate pose X Y Z (m) as a MuJoCo model (MJCF, SI units): bodies,
     masses, gravity, the loop closures (one per leg) as welds, a keyframe 'reference' at the pose."""
-    from pressfit.output.mjcf import export_mjcf
+    from pressfit.workflows.mjcf_export import export_mjcf
 
     text, path = export_mjcf(load_machine(model_path), [x, y, z], timestep_s, out, overwrite)
     click.echo(f"wrote {path}" if path is not None else text)
@@ -228,7 +228,7 @@ def response_cmd(x: float, y: float, z: float, force_n: tuple[float, float, floa
     (displacement history) and the receptance (frequency response) with its peaks at the modes. Linear, about
     the equilibrium under the weight: a step with a buckling factor below 10, a peak plate rotation beyond
     0.01 rad or a tool translation beyond 1% of the shortest leg is refused (pressfit solve answers it)."""
-    from pressfit.output.response import run_response
+    from pressfit.workflows.step_response import run_response
 
     r, paths = run_response(load_machine(model_path), [x, y, z], list(force_n), duration_s, damping_ratio, out_dir,
                             overwrite)
@@ -261,7 +261,7 @@ def response_cmd(x: float, y: float, z: float, force_n: tuple[float, float, floa
 def control_cmd(case_path: Path, plant_model: str | None, out_dir: Path | None, overwrite: bool, as_json: bool) -> None:
     """The case's insertion loop (machine, drives, controller) linearised at the pin and the waypoints: margins,
     closed-loop poles, -3 dB bandwidth, structural modes and the drives' share of each."""
-    from pressfit.output.control import run_control
+    from pressfit.workflows.control_design import run_control
 
     design, paths = run_control(case_path, plant_model, out_dir, overwrite)  # type: ignore[arg-type]
     if as_json:
@@ -299,7 +299,7 @@ def cycle_cmd(case_path: Path, plant_model: str | None, out_dir: Path | None, ov
     """Simulate a whole board, the case file's [cycle] table: per pin the insertion figures and pass/fail, the
     cycle time, pins per minute and what limits each segment, the drive sizing over the cycle with the preload's
     cost (a second run with a4 = 0) and the run's energy balance (SI units). Exit 1 when a pin fails its limits."""
-    from pressfit.output.cycle import run_cycle
+    from pressfit.workflows.board_cycle import run_cycle
 
     s, paths = run_cycle(case_path, plant_model, out_dir, overwrite, progress)
     for warning in dict.fromkeys(s["warnings"]):

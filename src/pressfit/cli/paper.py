@@ -59,7 +59,7 @@ def report_cmd(out_dir: Path, overwrite: bool, quick: bool, cycle_study: Path | 
                model_path: Path) -> None:
     """Reproduce Tables 5 and 6 and write the full report (maps, envelope, stiffness, ...) as report.md and .html."""
     from pressfit.output.files import check_directory, write_directory
-    from pressfit.output.report import write_report
+    from pressfit.workflows.report import write_report
 
     check_directory(out_dir, overwrite)
     machine = load_machine(model_path)

@@ -103,7 +103,7 @@ def study_montecarlo_cmd(case_file: Path, samples: int | None, seed: int | None,
     """Monte Carlo tolerances: exceedance probability of each envelope limit (Wilson 95% interval) and a
     sensitivity ranking, on a Dask cluster (SI units)."""
     from pressfit.description.cases import load_case
-    from pressfit.output.montecarlo_files import run_montecarlo
+    from pressfit.workflows.tolerance_study import run_montecarlo
 
     run = run_montecarlo(load_case(case_file), out_dir, samples=samples, seed=seed, chunk_size=chunk_size,
                          workers=workers, scheduler=scheduler, overwrite=overwrite, progress=progress,
@@ -140,7 +140,7 @@ def study_insertion_cmd(case_file: Path, preloads: list[float] | None, clearance
                         overwrite: bool, as_json: bool, progress: bool) -> None:
     """The insertion scenario over preload and joint clearance: the tool error the play hides from the
     length-based estimate, and the overshoot (SI)."""
-    from pressfit.output.simulation import run_insertion_study
+    from pressfit.workflows.insertion_simulation import run_insertion_study
 
     study, written = run_insertion_study(case_file, preloads, clearances, out_dir, overwrite, progress)
     if as_json:
@@ -172,7 +172,8 @@ def study_design_cmd(case_file: Path, trials: int | None, workers: int | None, s
     """Design search: the Pareto front of the case's objectives under its constraints over the workspace,
     and the best designs as machine files, on a Dask cluster (SI units)."""
     from pressfit.description.cases import load_case
-    from pressfit.output.design_files import run_design_study, summary
+    from pressfit.output.design_files import summary
+    from pressfit.workflows.design_study import run_design_study
 
     run = run_design_study(load_case(case_file), out_dir, trials=trials, workers=workers, scheduler=scheduler,
                            overwrite=overwrite, progress=progress, dashboard=dashboard)
@@ -203,8 +204,8 @@ def study_cycle_cmd(case_file: Path, plant_model: str | None, workers: int | Non
     worst alignment error and the worst overshoot, and the fastest setting within the pins' limits (the force limit,
     the overshoot and alignment limits where given; the limits judged are printed), written as a case file (SI
     units)."""
-    from pressfit.output.cycle_study import run_cycle_study
     from pressfit.studies.cycle_study import FACTOR_LABELS, FACTORS
+    from pressfit.workflows.throughput_study import run_cycle_study
 
     if dashboard and scheduler is not None:
         raise PressfitError("--dashboard starts the local cluster's dashboard: not with --scheduler")

@@ -26,7 +26,7 @@ def workspace_cmd(heights: tuple[float, ...], out_dir: Path, overwrite: bool, as
                   model_path: Path) -> None:
     """Reachable heights of the required square (0, 45, 90 deg), maps of n, F and dl/dh, statistics."""
     from pressfit.kinematics import workspace
-    from pressfit.output import maps as map_files
+    from pressfit.workflows.kinematic_maps import write_kinematic_maps
 
     check_directory(out_dir, overwrite)
     machine = load_machine(model_path)
@@ -38,8 +38,8 @@ def workspace_cmd(heights: tuple[float, ...], out_dir: Path, overwrite: bool, as
     box: dict[str, dict] = {}
 
     def write(tmp: Path) -> list[Path]:
-        box["summary"], paths, _ = map_files.write_kinematic_maps(machine, tmp, heights or workspace.DEFAULT_HEIGHTS_M,
-                                                                  progress=progress)
+        box["summary"], paths, _ = write_kinematic_maps(machine, tmp, heights or workspace.DEFAULT_HEIGHTS_M,
+                                                        progress=progress)
         return paths
 
     write_directory(out_dir, overwrite, write)

@@ -9,7 +9,7 @@ from __future__ import annotations
 
 import json
 from pathlib import Path
-from typing import Any
+from typing import TYPE_CHECKING, Any
 
 import matplotlib
 
@@ -21,8 +21,10 @@ import tomli_w
 from pressfit.description.machine import read_toml
 from pressfit.errors import PressfitError
 from pressfit.output import files as io
-from pressfit.studies.calibration import Calibration
-from pressfit.studies.measurement_plan import MeasurementPlan
+
+if TYPE_CHECKING:
+    from pressfit.studies.calibration import Calibration
+    from pressfit.studies.measurement_plan import MeasurementPlan
 
 RESULTS = "results.json"
 RESIDUALS = "residuals.csv"

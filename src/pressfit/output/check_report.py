@@ -2,7 +2,10 @@
 
 from __future__ import annotations
 
-from pressfit.studies.limit_check import CaseResult, CheckRun, FileError
+from typing import TYPE_CHECKING
+
+if TYPE_CHECKING:
+    from pressfit.studies.limit_check import CaseResult, CheckRun, FileError
 
 
 def _vec(v: list[float], digits: int) -> str:

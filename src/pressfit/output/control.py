@@ -4,13 +4,15 @@ the summary (JSON)."""
 from __future__ import annotations
 
 from pathlib import Path
+from typing import TYPE_CHECKING
 
 import numpy as np
 
-from pressfit.description.cases import load_case
-from pressfit.dynamics.linearise import ControlDesign, Model, control_design
 from pressfit.output import files as io
 from pressfit.output.plots import plt
+
+if TYPE_CHECKING:
+    from pressfit.dynamics.linearise import ControlDesign
 
 
 def bode_figure(design: ControlDesign) -> plt.Figure:
@@ -50,14 +52,3 @@ def write_control(design: ControlDesign, out: Path) -> list[Path]:
     finally:
         plt.close(fig)
     return paths
-
-
-def run_control(case_path: Path | str, model: Model | None, out_dir: Path | None,
-                overwrite: bool = False) -> tuple[ControlDesign, list[Path]]:
-    """:func:`pressfit.dynamics.linearise.control_design` of a case file and, with ``out_dir``, its files
-    (checked before computing, written atomically)."""
-    if out_dir is not None:
-        io.check_directory(out_dir, overwrite)
-    design = control_design(load_case(case_path), model)
-    paths = io.write_directory(out_dir, overwrite, lambda tmp: write_control(design, tmp)) if out_dir else []
-    return design, paths

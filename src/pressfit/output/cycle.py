@@ -7,14 +7,15 @@ drive's speed-force operating points over the cycle inside its limits)."""
 from __future__ import annotations
 
 from pathlib import Path
-from typing import Any
+from typing import TYPE_CHECKING, Any
 
 import numpy as np
 
-from pressfit.description.cases import load_case
-from pressfit.dynamics.cycle import CycleResult, simulate_cycle
 from pressfit.output import files as io
 from pressfit.output.plots import plt
+
+if TYPE_CHECKING:
+    from pressfit.dynamics.cycle import CycleResult
 
 
 def path_figure(result: CycleResult) -> plt.Figure:
@@ -127,18 +128,3 @@ def write_cycle(result: CycleResult, out_dir: Path | str, overwrite: bool = Fals
         finally:
             plt.close(fig)
     return paths
-
-
-def run_cycle(case_path: Path | str, model: str | None, out_dir: Path | None, overwrite: bool = False,
-              progress: bool = False) -> tuple[dict[str, Any], list[Path]]:
-    """Simulate the case file's board (:func:`pressfit.dynamics.cycle.simulate_cycle`); the summary, and the
-    files in ``out_dir`` if given (checked before the simulation, written through a temporary directory)."""
-    if out_dir is not None:
-        io.check_directory(out_dir, overwrite)  # before computing
-    case = load_case(case_path)
-    result = simulate_cycle(case, model, progress)
-    source = case.machine().source
-    paths = [] if out_dir is None else io.write_directory(
-        out_dir, overwrite, lambda tmp: write_cycle(result, tmp),
-        inputs=[Path(case_path), *([source] if source else [])])
-    return result.summary, paths

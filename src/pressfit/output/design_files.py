@@ -3,8 +3,8 @@
 
 from __future__ import annotations
 
-from dataclasses import dataclass
 from pathlib import Path
+from typing import TYPE_CHECKING
 
 import matplotlib
 
@@ -13,22 +13,19 @@ import matplotlib.pyplot as plt
 import numpy as np
 import tomli_w
 
-from pressfit.description.cases import Case
 from pressfit.output import files as io
-from pressfit.studies import design
+from pressfit.studies.design import METRICS
 
-
-@dataclass(frozen=True)
-class DesignRun:
-    result: design.DesignResult
-    written: list[Path]
+if TYPE_CHECKING:
+    from pressfit.description.machine import Machine
+    from pressfit.studies import design
 
 
 def summary(result: design.DesignResult) -> dict[str, object]:
     """JSON-ready: counts, the front (parameters and metrics per trial) and the best designs written."""
     c = result.columns
     row = lambda i: {k: (c[k][i].item() if np.isfinite(c[k][i]) else None)
-                     for k in (*result.plan.parameters(), *design.METRICS)}
+                     for k in (*result.plan.parameters(), *METRICS)}
     return {"trials": len(c["trial"]), "failed": int((c["status"] != "ok").sum()), "feasible": int(c["feasible"].sum()),
             "objectives": list(result.plan.design.objectives), "search": result.plan.design.search,
             "pareto": [{"trial": int(i)} | row(i) for i in result.pareto], "best": result.best()}
@@ -57,30 +54,16 @@ def _plot(result: design.DesignResult, path: Path) -> Path:
         plt.close(fig)
 
 
-def write_design(result: design.DesignResult, out: Path) -> list[Path]:
-    """Every file of a design study into directory ``out`` (fresh: see :func:`run_design_study`)."""
+def write_design(result: design.DesignResult, out: Path, best: dict[int, Machine]) -> list[Path]:
+    """Every file of a design study into directory ``out`` (fresh: see
+    :func:`pressfit.workflows.design_study.run_design_study`); ``best``: the machine of each best trial
+    (:meth:`DesignResult.best`), written as ``designs/design-NNNNNN.toml``."""
     c = result.columns
     paths = [io.write_parquet(out / "trials.parquet", c),
              io.write_parquet(out / "pareto.parquet", {k: v[result.pareto] for k, v in c.items()}),
              io.write_json(out / "summary.json", summary(result)), _plot(result, out / "pareto.png")]
-    params = list(result.plan.parameters())
-    for i in result.best():
-        m = design.design_machine(result.plan, {k: float(c[k][i]) for k in params})
+    for i, m in best.items():
         data = m.model_dump(exclude={"source"}, exclude_none=True)
         data["description"] = f"design study {result.plan.name}, trial {i}: {m.source}"
         paths.append(io.write_text(out / "designs" / f"design-{i:06d}.toml", tomli_w.dumps(data)))
     return paths
-
-
-def run_design_study(case: Case, out_dir: Path | str, *, trials: int | None = None, workers: int | None = None,
-                     scheduler: str | None = None, overwrite: bool = False, progress: bool = True,
-                     dashboard: bool = False) -> DesignRun:
-    """Run the case's design study on Dask and write its directory atomically (nothing existing is
-    replaced without ``overwrite``)."""
-    plan = design.plan_from_case(case, trials)
-    io.check_directory(out_dir, overwrite)
-    result = design.run_design(plan, workers=workers, scheduler=scheduler, progress=progress, dashboard=dashboard)
-    source = case.machine().source
-    inputs = [p for p in (case.path, source) if p and Path(str(p)).is_file()]  # a designs/*.toml never replaces them
-    return DesignRun(result, io.write_directory(out_dir, overwrite, lambda tmp: write_design(result, tmp),
-                                                inputs=inputs))

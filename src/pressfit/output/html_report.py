@@ -20,6 +20,7 @@ import math
 from collections.abc import Callable, Sequence
 from dataclasses import dataclass
 from pathlib import Path
+from typing import TYPE_CHECKING
 
 import numpy as np
 import plotly.graph_objects as go
@@ -27,20 +28,24 @@ from plotly.colors import qualitative
 from plotly.offline import get_plotlyjs
 from plotly.subplots import make_subplots
 
-from pressfit.description.machine import Machine
-from pressfit.dynamics.cycle import CycleResult
-from pressfit.dynamics.insertion import InsertionResult
-from pressfit.geometry.interference import SweepResult
-from pressfit.kinematics.workspace import PlaneMap, square_corners
-from pressfit.mechanics.condensed import StiffnessMaps
 from pressfit.output.files import write_text
 from pressfit.output.maps import kinematic_fields
 from pressfit.output.scene3d import SceneCase, scene_figure
-from pressfit.studies import paper_tables as tables
-from pressfit.studies.compare import Comparison
 from pressfit.studies.cycle_study import FACTOR_LABELS
-from pressfit.studies.preload_study import PreloadStudy, format_answers
-from pressfit.studies.workspace_envelope import LEG_QUANTITIES, PLATE_QUANTITIES, LoadEnvelope
+from pressfit.studies.paper_tables import TABLES, TableEntry, case_table, shown_value
+from pressfit.studies.preload_study import format_answers
+from pressfit.studies.workspace_envelope import LEG_QUANTITIES, PLATE_QUANTITIES
+
+if TYPE_CHECKING:
+    from pressfit.description.machine import Machine
+    from pressfit.dynamics.cycle import CycleResult
+    from pressfit.dynamics.insertion import InsertionResult
+    from pressfit.geometry.interference import SweepResult
+    from pressfit.kinematics.workspace import PlaneMap
+    from pressfit.mechanics.condensed import StiffnessMaps
+    from pressfit.studies.compare import Comparison
+    from pressfit.studies.preload_study import PreloadStudy
+    from pressfit.studies.workspace_envelope import LoadEnvelope
 
 Record = dict[str, object]
 REL_ERROR_FORMULA = "relative error = (pressfit linear - paper) / |paper|, in the paper's axes and signs"
@@ -70,6 +75,7 @@ class ReportContent:
     scene: list[SceneCase]  # the worst envelope pose first, then the paper's cases
     tables: list[Record]  # tables.json: TableEntry.as_dict() of Tables 5-6
     plane_maps: list[PlaneMap]
+    required_square_m: np.ndarray  # (4, 2) corners (x, z) of the required square (kinematics.workspace.square_corners)
     envelope: LoadEnvelope
     envelope_table: list[Record]  # envelope/load_envelope.json
     stiffness: list[StiffnessMaps]
@@ -180,18 +186,18 @@ def _tables_section(page: _Page, c: ReportContent) -> None:
     cols = [("case", "case"), ("quantity", "component"), ("cad_leg", "CAD leg"), ("kinematic_leg", "kin. leg"),
             ("paper", "paper"), ("linear", "pressfit linear"), ("relative_error", "rel. error"),
             ("nonlinear", "pressfit nonlinear")]
-    entries = [tables.TableEntry(**{**r, "relative_error": math.nan if r["relative_error"] is None else
+    entries = [TableEntry(**{**r, "relative_error": math.nan if r["relative_error"] is None else
                                     r["relative_error"]}) for r in c.tables]
-    for table, title in tables.TABLES:  # as the paper prints them: per case, components by leg
+    for table, title in TABLES:  # as the paper prints them: per case, components by leg
         for case in dict.fromkeys(e.case for e in entries):
-            header, rows = tables.case_table(entries, case, table)
+            header, rows = case_table(entries, case, table)
             page.add(f'<h3>{html.escape(f"{table}: {title}, {case}")}</h3><table id="{table.replace(" ", "-")}-'
                      f'{html.escape(case)}"><thead><tr>' + "".join(f"<th>{html.escape(h)}</th>" for h in header)
                      + "</tr></thead><tbody>" + "\n".join("<tr>" + "".join(f"<td>{html.escape(x)}</td>" for x in r)
                                                          + "</tr>" for r in rows) + "</tbody></table>")
     scale = {(e.case, e.table): max(max(abs(x.paper), abs(x.linear)) for x in entries
                                     if (x.case, x.table) == (e.case, e.table)) for e in entries}
-    shown = {k: (lambda r, k=k: tables.shown_value(r[k], scale[r["case"], "Table 5" if r["quantity"][0] == "F"
+    shown = {k: (lambda r, k=k: shown_value(r[k], scale[r["case"], "Table 5" if r["quantity"][0] == "F"
                                                                  else "Table 6"]))
              for k in ("paper", "linear", "nonlinear")}
     page.add("<h3>Every entry (sortable)</h3>")
@@ -206,7 +212,7 @@ def _kinematics_section(page: _Page, c: ReportContent) -> None:
                  "Choose the map in the dropdown; blank where the pose is outside the joint limits.")
     for pm in c.plane_maps:
         page.figure(_map_figure(f"kinematic maps at y_h = {pm.y_m:g} m", pm.x_m, pm.z_m, kinematic_fields(pm),
-                                square_corners(c.machine)))
+                                c.required_square_m))
     page.add(_links(*[f"kinematics/maps_y{pm.y_m:.3f}.csv" for pm in c.plane_maps], "kinematics/summary.json"))
 
 

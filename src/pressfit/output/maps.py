@@ -3,36 +3,27 @@ interference sweeps and the preload study (CSV, JSON and PNG, written atomically
 
 from __future__ import annotations
 
-from collections.abc import Iterable
 from pathlib import Path
+from typing import TYPE_CHECKING
 
 import numpy as np
-from tqdm import tqdm
 
-from pressfit.description.machine import Machine
 from pressfit.errors import OutputError, OutputExistsError
-from pressfit.geometry.interference import SweepResult
-from pressfit.kinematics.workspace import (
-    _AXES,
-    DEFAULT_HEIGHTS_M,
-    PlaneMap,
-    map_rows,
-    plane_map,
-    square_corners,
-    summary,
-)
-from pressfit.mechanics.condensed import StiffnessMaps
 from pressfit.output import files as io
 from pressfit.output import plots
 from pressfit.output.files import save_figure, write_csv
 from pressfit.output.plots import plt, write_leg_bars, write_xz_maps
-from pressfit.studies.preload_study import PreloadStudy
-from pressfit.studies.workspace_envelope import (
-    LEG_QUANTITIES,
-    PLATE_QUANTITIES,
-    LoadEnvelope,
-    envelope_rows,
-)
+from pressfit.studies.workspace_envelope import LEG_QUANTITIES, PLATE_QUANTITIES, envelope_rows
+
+if TYPE_CHECKING:
+    from pressfit.description.machine import Machine
+    from pressfit.geometry.interference import SweepResult
+    from pressfit.kinematics.workspace import PlaneMap
+    from pressfit.mechanics.condensed import StiffnessMaps
+    from pressfit.studies.preload_study import PreloadStudy
+    from pressfit.studies.workspace_envelope import LoadEnvelope
+
+_AXES = "xyz"  # the world axes, as the kinematic maps' field names spell them
 
 
 def write_load_envelope(env: LoadEnvelope, out_dir: Path | str, overwrite: bool = False,
@@ -70,13 +61,9 @@ def kinematic_fields(pm: PlaneMap) -> plots.Fields:
     return fields
 
 
-def write_kinematic_maps(machine: Machine, out_dir: Path | str, heights_m: Iterable[float] = DEFAULT_HEIGHTS_M,
-                  overwrite: bool = False, progress: bool = False, figures: bool = True
-                  ) -> tuple[dict[str, object], list[Path], list[PlaneMap]]:
-    """Write per height ``maps_y<y>.csv`` (every field, every leg) and ``maps_y<y>.png`` (panels, the
-    required square dashed magenta, also at 45 deg on the F panels), then ``summary.json``; returns the
-    summary, the paths and the maps.
-    Refuses to overwrite unless asked (checked for every file before anything is written)."""
+def check_kinematic_maps(out_dir: Path | str, heights_m: list[float], overwrite: bool) -> None:
+    """Refuse, before anything is computed, heights that would write the same ``maps_y<y>.*`` (OutputError) and
+    existing output files without ``overwrite`` (OutputExistsError, checked for every file)."""
     out = Path(out_dir)
     heights = [float(y) for y in heights_m]
     names = [out / f"maps_y{y:.3f}.{ext}" for y in heights for ext in ("csv", "png")] + [out / "summary.json"]
@@ -89,27 +76,25 @@ def write_kinematic_maps(machine: Machine, out_dir: Path | str, heights_m: Itera
     if clash and not overwrite:
         raise OutputExistsError(f"{clash[0]} exists ({len(clash)} output files do); pass --overwrite "
                                 "to replace them", path=clash[0])
-    squares = [np.vstack([c, c[:1]]) for c in (square_corners(machine, 0.0), square_corners(machine, 45.0))]
-    written, plane_maps = [], []
-    with tqdm(total=len(heights) + 1, desc="workspace", unit="step", disable=not progress) as bar:
-        for y in heights:
-            pm = plane_map(machine, y)
-            plane_maps.append(pm)
-            written.append(io.write_csv(out / f"maps_y{y:.3f}.csv", *map_rows(pm), overwrite=overwrite))
-            fields = kinematic_fields(pm)
-            if not figures:
-                bar.update()
-                continue
-            fig = plane_map_figure(machine, pm, fields, squares)
-            try:
-                written.append(io.save_figure(fig, out / f"maps_y{y:.3f}.png", overwrite))
-            finally:
-                plots.plt.close(fig)
-            bar.update()
-        result = summary(machine, heights)
-        written.append(io.write_json(out / "summary.json", result, overwrite))
-        bar.update()
-    return result, written, plane_maps
+
+
+def write_plane_map(machine: Machine, pm: PlaneMap, rows: tuple[list[str], np.ndarray], squares: list[np.ndarray],
+                    out_dir: Path | str, overwrite: bool = False, figures: bool = True) -> list[Path]:
+    """One height's ``maps_y<y>.csv`` (``rows``: header and rows, every field, every leg:
+    :func:`pressfit.kinematics.workspace.map_rows`) and ``maps_y<y>.png`` (panels, ``squares``: the required square
+    closed, at 0 and 45 degrees, m); ``figures=False``: no PNG."""
+    out = Path(out_dir)
+    y = pm.y_m
+    written = [io.write_csv(out / f"maps_y{y:.3f}.csv", *rows, overwrite=overwrite)]
+    fields = kinematic_fields(pm)
+    if not figures:
+        return written
+    fig = plane_map_figure(machine, pm, fields, squares)
+    try:
+        written.append(io.save_figure(fig, out / f"maps_y{y:.3f}.png", overwrite))
+    finally:
+        plots.plt.close(fig)
+    return written
 
 
 def plane_map_figure(machine: Machine, pm: PlaneMap, fields: dict[str, np.ndarray], squares: list[np.ndarray]

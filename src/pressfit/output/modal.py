@@ -3,13 +3,15 @@
 from __future__ import annotations
 
 from pathlib import Path
+from typing import TYPE_CHECKING
 
 import numpy as np
 
-from pressfit.description.machine import Machine
-from pressfit.dynamics.modes import Modes, natural_modes
 from pressfit.output import files as io
 from pressfit.output.plots import plt
+
+if TYPE_CHECKING:
+    from pressfit.dynamics.modes import Modes
 
 PLOTTED_MODES = 6
 SHAPE_AMPLITUDE_M = 0.08  # largest drawn displacement of a mode shape (the shapes are scaled to it)
@@ -54,13 +56,3 @@ def write_modes(modes: Modes, out_dir: Path | str, overwrite: bool = False) -> l
         plt.close(fig)
     return paths
 
-
-def run_modes(machine: Machine, pose_m: np.ndarray, count: int, out_dir: Path | None,
-              overwrite: bool = False) -> tuple[Modes, list[Path]]:
-    """:func:`pressfit.dynamics.modes.natural_modes` at a pose, and its files in ``out_dir`` if given (checked
-    before computing, written through a temporary directory: :func:`pressfit.output.files.write_directory`)."""
-    if out_dir is not None:
-        io.check_directory(out_dir, overwrite)
-    modes = natural_modes(machine, pose_m, count)
-    return modes, ([] if out_dir is None else io.write_directory(
-        out_dir, overwrite, lambda tmp: write_modes(modes, tmp), inputs=[machine.source] if machine.source else []))

@@ -16,9 +16,8 @@ import json
 import math
 import re
 import shutil
-from collections.abc import Callable, Sequence
-from dataclasses import dataclass, field
 from pathlib import Path
+from typing import TYPE_CHECKING
 
 import matplotlib
 
@@ -26,43 +25,18 @@ matplotlib.use("Agg")
 import matplotlib.pyplot as plt
 import numpy as np
 
-from pressfit.description.cases import Case
-from pressfit.errors import OutputExistsError, StudyFailedError
+from pressfit.errors import OutputExistsError
 from pressfit.output import files as io
-from pressfit.studies import distributed, montecarlo
 from pressfit.studies.limit_check import LIMITS
+from pressfit.studies.montecarlo import OUTPUTS, QUANTILES
+
+if TYPE_CHECKING:
+    from pressfit.studies import montecarlo
 
 CHUNK_DIR = "samples"
 DERIVED = ("summary.json", "quantiles.csv", "histograms.png", "sensitivity.png")  # replaced on every run
 _CHUNK_NAME = re.compile(r"chunk-(\d{6})\.parquet")
 _STUDY_KEY, _CHUNK_KEY = "pressfit.study_sha256", "pressfit.chunk"
-
-
-@dataclass(frozen=True, kw_only=True)
-class MonteCarloRun:
-    """A finished study: its summary, the chunks run now (the rest were resumed), the files written, and the
-    damaged chunk files found and run again."""
-
-    summary: montecarlo.MonteCarloSummary
-    chunks_run: int
-    chunks_total: int
-    written: list[Path]
-    rerun: list[Path] = field(default_factory=list)
-
-
-class _Lazy(Sequence):  # type: ignore[type-arg]
-    """The values f(0) .. f(n - 1), made when asked (a study of 1e7 chunks keeps no list of them)."""
-
-    def __init__(self, n: int, f: Callable[[int], object]) -> None:
-        self.n, self.f = n, f
-
-    def __len__(self) -> int:
-        return self.n
-
-    def __getitem__(self, k):  # type: ignore[no-untyped-def]
-        if not 0 <= k < self.n:
-            raise IndexError(k)
-        return self.f(k)
 
 
 def study_hash(plan: montecarlo.MonteCarloPlan) -> str:
@@ -140,7 +114,7 @@ def read_samples(out_dir: Path | str, plan: montecarlo.MonteCarloPlan | None = N
     return cols
 
 
-def _prepare(out_dir: Path, fingerprint: dict[str, object], overwrite: bool) -> None:
+def prepare(out_dir: Path, fingerprint: dict[str, object], overwrite: bool) -> None:
     """Check (or start) the study directory. A directory holding nothing of a study but its ``study.json``
     (a first run that failed before its first chunk: scheduler unreachable, SIGTERM) is restarted."""
     manifest, samples = out_dir / "study.json", out_dir / CHUNK_DIR
@@ -160,39 +134,15 @@ def _prepare(out_dir: Path, fingerprint: dict[str, object], overwrite: bool) -> 
     io.write_json(manifest, fingerprint, overwrite=True)  # fresh, or a start that wrote nothing else
 
 
-def run_montecarlo(case: Case, out_dir: Path | str, *, samples: int | None = None, seed: int | None = None,
-                   chunk_size: int | None = None, workers: int | None = None, scheduler: str | None = None,
-                   overwrite: bool = False, progress: bool = True, dashboard: bool = False) -> MonteCarloRun:
-    """Run (or resume) the case's Monte Carlo study on Dask and write the samples, summary and plots.
-    Raises StudyFailedError (after keeping the chunks) when every sample failed."""
-    plan = montecarlo.plan_from_case(case, samples, seed, chunk_size)
-    out = Path(out_dir)
-    _prepare(out, plan.fingerprint(), overwrite)
-    done, damaged = finished_chunks(out, plan)
-    run = distributed.run_chunks(montecarlo.evaluate_chunk,
-                                 _Lazy(plan.n_chunks, lambda k: (k, montecarlo.chunk_seed(plan, k))),
-                                 _Lazy(plan.n_chunks, lambda k: plan.chunk_range(k)[1] - plan.chunk_range(k)[0]),
-                                 lambda k, cols: write_chunk(out, plan, k, cols), shared=plan, done=done,
-                                 workers=workers, scheduler=scheduler, progress=progress, name="montecarlo",
-                                 dashboard=dashboard, total=plan.samples)
-    columns = read_samples(out, plan)
-    envelope = {k: v for k, v in case.envelope.model_dump().items() if v is not None}
-    summary = montecarlo.summarize(plan, columns, envelope)
-    if summary.failed and sum(summary.failed.values()) == summary.samples:
-        raise StudyFailedError(f"{case.path}: Monte Carlo study in {out}", summary.failed)
-    written = write_summary(summary, columns, envelope, out)
-    return MonteCarloRun(summary=summary, chunks_run=run, chunks_total=plan.n_chunks, written=written, rerun=damaged)
-
-
 def write_summary(summary: montecarlo.MonteCarloSummary, columns: dict[str, np.ndarray], envelope: dict[str, float],
                   out: Path) -> list[Path]:
     """summary.json, quantiles.csv, histograms of the envelope outputs and the sensitivity ranking (PNG);
     these are derived from all the samples and are replaced on every (resumed) run."""
     paths = [io.write_json(out / "summary.json", summary.to_dict(), overwrite=True)]
-    rows = [[k, *(q.get(f"q{p:g}", math.nan) for p in montecarlo.QUANTILES)] for k, q in summary.quantiles.items()]
-    paths.append(io.write_csv(out / "quantiles.csv", ["output", *(f"q{p:g}" for p in montecarlo.QUANTILES)], rows,
+    rows = [[k, *(q.get(f"q{p:g}", math.nan) for p in QUANTILES)] for k, q in summary.quantiles.items()]
+    paths.append(io.write_csv(out / "quantiles.csv", ["output", *(f"q{p:g}" for p in QUANTILES)], rows,
                               overwrite=True))
-    keys = [k for k in montecarlo.OUTPUTS if np.isfinite(columns[k]).any()]
+    keys = [k for k in OUTPUTS if np.isfinite(columns[k]).any()]
     if keys:  # none when every sample failed (the caller refuses that study before)
         paths.append(_histograms(summary, columns, envelope, keys, out))
     if summary.sensitivity:  # undefined below 3 solved samples (summary.notes says so): no plot

@@ -20,16 +20,20 @@ One colour scale serves every case, so cases compare by colour.
 from __future__ import annotations
 
 from dataclasses import dataclass
+from typing import TYPE_CHECKING
 
 import numpy as np
 import pinocchio as pin
 import plotly.graph_objects as go
 from plotly.colors import get_colorscale
 
-from pressfit.description.machine import Machine
-from pressfit.geometry.interference import Shape, machine_shapes
+from pressfit.geometry.interference import machine_shapes
 from pressfit.kinematics.closed_form import frames_along
-from pressfit.mechanics.statics import Equilibrium
+
+if TYPE_CHECKING:
+    from pressfit.description.machine import Machine
+    from pressfit.geometry.interference import Shape
+    from pressfit.mechanics.statics import Equilibrium
 
 MAGNIFICATIONS = (0.0, 1.0, 10.0, 30.0, 100.0, 300.0, 1000.0, 3000.0)
 VISIBLE_DEFLECTION_M = 0.05  # the default magnification is the largest that keeps every cardan within this

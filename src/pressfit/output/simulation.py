@@ -4,16 +4,19 @@
 from __future__ import annotations
 
 from pathlib import Path
-from typing import Any
+from typing import TYPE_CHECKING, Any
 
 import numpy as np
 
-from pressfit.description.cases import load_case
-from pressfit.dynamics.insertion import InsertionResult, leg_columns, section_columns, simulate_insertion
-from pressfit.dynamics.sizing import RunSizing, size_insertion
+from pressfit.dynamics.insertion import section_columns
 from pressfit.output import files as io
 from pressfit.output.plots import plt
-from pressfit.studies.insertion_study import COLUMNS, InsertionStudy, insertion_study
+from pressfit.studies.insertion_study import COLUMNS
+
+if TYPE_CHECKING:
+    from pressfit.dynamics.insertion import InsertionResult
+    from pressfit.dynamics.sizing import RunSizing
+    from pressfit.studies.insertion_study import InsertionStudy
 
 
 def simulation_figure(result: InsertionResult, comparison: InsertionResult | None = None) -> plt.Figure:
@@ -33,7 +36,7 @@ def simulation_figure(result: InsertionResult, comparison: InsertionResult | Non
                      label="with limiter" if run.limiter else "without limiter")
     axes[1].axhline(result.summary["force_limit_n"], color="k", ls=":", label="insertion limit")
     axes[1].set(ylabel="force [N]", title="contact force")
-    for i in range(1, len(leg_columns(result.columns, "cmd_n")) + 1):
+    for i in range(1, sum(c.startswith("cmd_n") for c in result.columns) + 1):
         line, = axes[2].plot(t, result.column(f"act_n{i}"), lw=1.5, label=f"leg {i}")
         axes[2].plot(t, result.column(f"cmd_n{i}"), "--", lw=0.8, color=line.get_color())
         axes[3].plot(t, result.column(f"axial_n{i}"), lw=1.5, color=line.get_color(), label=f"leg {i}")
@@ -63,7 +66,7 @@ def write_simulation(result: InsertionResult, out_dir: Path | str, overwrite: bo
     ``simulation.png``; with the flexible model ``sections.csv`` (the leg section resultants per step, N and N m,
     :func:`pressfit.dynamics.insertion.section_columns`)."""
     out = Path(out_dir)
-    summary = _summary(result, comparison, sizing)
+    summary = simulation_summary(result, comparison, sizing)
     paths = [io.write_csv(out / "simulation.csv", result.columns, result.series, overwrite),
              io.write_json(out / "simulation.json", summary, overwrite)]
     if result.sections is not None:
@@ -77,33 +80,16 @@ def write_simulation(result: InsertionResult, out_dir: Path | str, overwrite: bo
     return paths
 
 
-def _summary(result: InsertionResult, comparison: InsertionResult | None, sizing: RunSizing | None = None
-             ) -> dict[str, Any]:
+def simulation_summary(result: InsertionResult, comparison: InsertionResult | None, sizing: RunSizing | None = None
+                       ) -> dict[str, Any]:
+    """``simulation.json``: the run's summary, the comparison run's figures under ``"comparison"`` and the drive
+    sizing's records."""
     extra = sizing.to_dict() if sizing is not None else {}
     if comparison is None:
         return {**result.summary, **extra}
     keys = ("limiter", "peak_contact_force_n", "overshoot_n", "steady_insertion_force_n", "steady_insertion_depth_m",
             "positioning_error_m", "settling_time_s", "insertion_completed", "release_time_s", "warnings")
     return {**result.summary, "comparison": {k: comparison.summary[k] for k in keys}, **extra}
-
-
-def run_simulation(case_path: Path | str, out_dir: Path | None, limiter: bool = True, overwrite: bool = False,
-                   progress: bool = False) -> tuple[dict[str, Any], list[Path]]:
-    """Simulate the case file's insertion (:func:`pressfit.dynamics.insertion.simulate_insertion`); with the
-    limiter on, the same scenario also runs without it (the comparison of the contact-force plot and of the
-    summary's ``"comparison"``) and, for the drive sizing's preload cost, with ``[preload] a4_n`` = 0
-    (:func:`pressfit.dynamics.sizing.size_insertion`). The summary, and the files in ``out_dir`` if given (checked
-    before the simulation, written through a temporary directory: :func:`pressfit.output.files.write_directory`)."""
-    if out_dir is not None:
-        io.check_directory(out_dir, overwrite)  # before computing
-    case = load_case(case_path)
-    result = simulate_insertion(case, limiter, progress)
-    comparison = simulate_insertion(case, False, progress) if limiter else None
-    sizing = size_insertion(case, result, limiter, progress)
-    paths = [] if out_dir is None else io.write_directory(
-        out_dir, overwrite, lambda tmp: write_simulation(result, tmp, comparison=comparison, sizing=sizing),
-        inputs=[Path(case_path), *([case.machine().source] if case.machine().source else [])])
-    return _summary(result, comparison, sizing), paths
 
 
 def insertion_study_figure(study: InsertionStudy) -> plt.Figure:
@@ -136,17 +122,3 @@ def write_insertion_study(study: InsertionStudy, out_dir: Path) -> list[Path]:
     finally:
         plt.close(fig)
     return paths
-
-
-def run_insertion_study(case_path: Path | str, preloads_n: list[float] | None, clearances_m: list[float] | None,
-                        out_dir: Path, overwrite: bool = False, progress: bool = False) -> tuple[InsertionStudy,
-                                                                                                  list[Path]]:
-    """The insertion study of a case file (:func:`pressfit.studies.insertion_study.insertion_study`; defaults:
-    preloads 0 N and the case's a4, clearances 10 and 50 um) and its files in ``out_dir``."""
-    io.check_directory(out_dir, overwrite)
-    case = load_case(case_path)
-    study = insertion_study(case, preloads_n or sorted({0.0, case.preload.a4_n}), clearances_m or [1e-5, 5e-5],
-                            progress)
-    source = case.machine().source
-    return study, io.write_directory(out_dir, overwrite, lambda tmp: write_insertion_study(study, tmp),
-                                     inputs=[p for p in (case_path, source) if p and Path(str(p)).is_file()])

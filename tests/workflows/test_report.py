@@ -5,7 +5,7 @@ from __future__ import annotations
 
 import numpy as np
 
-from pressfit.output import report
+from pressfit.workflows import report
 
 
 def test_the_preload_section_on_a_3_leg_machine_shows_the_clearance_alone(tmp_path, tsai):

@@ -1,4 +1,5 @@
-"""``pressfit report``: one Markdown report of everything pressfit computes for a machine.
+"""``pressfit report``: one Markdown report of everything pressfit computes for a machine (each section computes
+its results and hands them to output/'s writers: maps, simulation, cycle, compare, html_report).
 
 Sections: the paper's Tables 5-6 beside pressfit, the kinematic maps and workspace claims, the
 workspace load envelope (design loads), stiffness maps, the clearance-vs-preload study, the leg
@@ -32,6 +33,7 @@ from pressfit.shipped import cases_dir
 from pressfit.studies import cad_fit, preload_study, workspace_envelope
 from pressfit.studies import paper_tables as tables
 from pressfit.studies.cycle_study import FACTORS, FRONT_FIGURES
+from pressfit.workflows.kinematic_maps import write_kinematic_maps
 
 
 def _md_table(header: list[str], rows: list[list[object]]) -> str:
@@ -74,6 +76,7 @@ def write_report(machine: Machine, out_dir: Path | str, overwrite: bool = False,
     sweep = parts["interference"]
     write_html_report(out, ReportContent(
         machine=machine, scene=scene, tables=[e.as_dict() for e in parts["entries"]], plane_maps=parts["plane_maps"],
+        required_square_m=workspace.square_corners(machine),
         envelope=parts["envelope"], envelope_table=parts["envelope_table"], stiffness=parts["stiffness"],
         preload=parts["studies"], interference=sweep,
         interference_table=[{"kind": k, **v} for k, v in sweep.kind_minima().items()], insertion=parts["insertion"],
@@ -102,8 +105,8 @@ def _tables_section(machine: Machine, out: Path, overwrite: bool, quick: bool, p
 
 def _kinematics_section(machine: Machine, out: Path, overwrite: bool, quick: bool, parts: Parts) -> list[str]:
     heights = [0.6] if quick else list(workspace.DEFAULT_HEIGHTS_M)
-    summ, _, parts["plane_maps"] = maps.write_kinematic_maps(machine, out / "kinematics", heights, overwrite=overwrite,
-                                                                 figures=not quick)
+    summ, _, parts["plane_maps"] = write_kinematic_maps(machine, out / "kinematics", heights, overwrite=overwrite,
+                                                            figures=not quick)
     parts["summary"] = summ
     rng = summ["height_range"][0]
     return ["## 2. Kinematics and workspace (paper section 4.1)", "",

@@ -1,4 +1,5 @@
-"""The MJCF export of the rigid-leg machine (``pressfit export-mjcf``): the model string, to a file if asked."""
+"""``pressfit export-mjcf``: the rigid-leg machine closed at a pose as MuJoCo's MJCF
+(:mod:`pressfit.dynamics.mjcf`), printed or written atomically (:mod:`pressfit.output.files`)."""
 
 from __future__ import annotations
 
