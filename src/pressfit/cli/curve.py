@@ -22,7 +22,7 @@ from pressfit.output.files import to_json
 def curve_cmd(case_path: Path, out_dir: Path | None, samples: int | None, overwrite: bool, as_json: bool) -> None:
     """The press curve a monitor would record for the case's [simulation.contact] (its pins' laws in series with
     the machine's 6x6 compliance at the pin pose, the tool's tilt included; no time stepping), SI units."""
-    from pressfit.output.curve import run_curve
+    from pressfit.workflows.press_curve import run_curve
 
     s, paths = run_curve(case_path, out_dir, overwrite, samples)
     if as_json:

@@ -51,7 +51,7 @@ def check_cmd(paths: tuple[Path, ...], windows_path: Path, case_path: Path | Non
     from pressfit.description.monitor_windows import load_windows
     from pressfit.output import curve_files
     from pressfit.output.files import check_distinct, check_target
-    from pressfit.studies.curve_check import judge_curves, press_compliance_m_per_n
+    from pressfit.studies.curve_check import judge_curves, judged_strokes, press_compliance_m_per_n
 
     if compensate and case_path is None:
         raise click.UsageError("--compensate needs --case CASE (the pin pose whose press compliance is removed)")
@@ -74,7 +74,7 @@ def check_cmd(paths: tuple[Path, ...], windows_path: Path, case_path: Path | Non
         click.echo(curve_files.verdict_line(v))
     nok = sum(not v.passed for v in verdicts)
     click.echo(f"{len(verdicts) - nok} OK, {nok} NOK of {len(verdicts)} curves")
-    for p in curve_files.write_check_outputs(verdicts, curves, windows, str(windows_path), json_path=json_path,
+    for p in curve_files.write_check_outputs(verdicts, judged_strokes(curves, verdicts), windows, str(windows_path), json_path=json_path,
                                              junit_path=junit_path, png_path=png_path, overwrite=overwrite):
         click.echo(f"wrote {p}")
     sys.exit(1 if nok else 0)

@@ -7,14 +7,15 @@ import json
 import math
 from collections.abc import Sequence
 from pathlib import Path
-from typing import Any
+from typing import TYPE_CHECKING, Any
 
 import numpy as np
 
-from pressfit.description.measured_curves import MeasuredCurve
 from pressfit.description.monitor_windows import Envelope, MaxForce, Threshold, Window, Windows
 from pressfit.output import files as io
-from pressfit.studies.curve_check import CurveVerdict
+
+if TYPE_CHECKING:
+    from pressfit.studies.curve_check import CurveVerdict
 
 
 def windows_document(windows: Windows) -> dict[str, Any]:
@@ -105,28 +106,22 @@ def curves_figure(curves: Sequence[tuple[str, np.ndarray, np.ndarray, bool]], wi
     return fig
 
 
-def write_check_outputs(verdicts: Sequence[CurveVerdict], curves: Sequence[MeasuredCurve], windows: Windows,
-                        windows_path: str, *, json_path: Path | None = None, junit_path: Path | None = None,
-                        png_path: Path | None = None, overwrite: bool = False) -> list[Path]:
+def write_check_outputs(verdicts: Sequence[CurveVerdict],
+                        strokes: Sequence[tuple[str, np.ndarray, np.ndarray, bool]], windows: Windows, windows_path: str, *, json_path: Path | None = None,
+                        junit_path: Path | None = None, png_path: Path | None = None,
+                        overwrite: bool = False) -> list[Path]:
     """Write the outputs asked for (each atomically, refusing to replace a file without ``overwrite``); the
-    figure shows each curve's forward stroke as judged (compensated when it was)."""
+    figure shows each curve's forward stroke as judged (``strokes``: name, displacement m, force N, passed;
+    :func:`pressfit.studies.curve_check.judged_strokes`)."""
     out: list[Path] = []
     if json_path is not None:
         out.append(io.write_json(json_path, verdicts_json(verdicts, windows_path), overwrite))
     if junit_path is not None:
         out.append(io.write_text(junit_path, junit_xml(verdicts, windows_path) + "\n", overwrite))
     if png_path is not None:
-        from pressfit.studies.curve_check import compensated_displacement
-
-        drawn = []
-        for c, v in zip(curves, verdicts, strict=True):
-            x, f = c.forward()
-            if v.compliance_m_per_n is not None:
-                x = compensated_displacement(x, f, v.compliance_m_per_n)
-            drawn.append((c.name, x, f, v.passed))
         import matplotlib.pyplot as plt
 
-        fig = curves_figure(drawn, windows)
+        fig = curves_figure(strokes, windows)
         try:
             out.append(io.save_figure(fig, png_path, overwrite))
         finally:

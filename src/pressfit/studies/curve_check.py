@@ -295,3 +295,16 @@ def judge_curves(curves: Sequence[MeasuredCurve], windows: Windows,
         out.append(CurveVerdict(path=c.path, name=c.name, results=check_curve(x, y, windows),
                                 compliance_m_per_n=compliance_m_per_n))
     return out
+
+
+def judged_strokes(curves: Sequence[MeasuredCurve], verdicts: Sequence[CurveVerdict]
+                   ) -> list[tuple[str, np.ndarray, np.ndarray, bool]]:
+    """Each curve's forward stroke as it was judged: (name, displacement m -- compensated where its verdict was --,
+    force N, passed), for the figure of ``pressfit curves check``."""
+    drawn = []
+    for c, v in zip(curves, verdicts, strict=True):
+        x, f = c.forward()
+        if v.compliance_m_per_n is not None:
+            x = compensated_displacement(x, f, v.compliance_m_per_n)
+        drawn.append((c.name, x, f, v.passed))
+    return drawn
