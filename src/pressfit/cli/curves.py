@@ -74,7 +74,8 @@ def check_cmd(paths: tuple[Path, ...], windows_path: Path, case_path: Path | Non
         click.echo(curve_files.verdict_line(v))
     nok = sum(not v.passed for v in verdicts)
     click.echo(f"{len(verdicts) - nok} OK, {nok} NOK of {len(verdicts)} curves")
-    for p in curve_files.write_check_outputs(verdicts, judged_strokes(curves, verdicts), windows, str(windows_path), json_path=json_path,
+    strokes = judged_strokes(curves, verdicts)
+    for p in curve_files.write_check_outputs(verdicts, strokes, windows, str(windows_path), json_path=json_path,
                                              junit_path=junit_path, png_path=png_path, overwrite=overwrite):
         click.echo(f"wrote {p}")
     sys.exit(1 if nok else 0)

@@ -107,9 +107,9 @@ def curves_figure(curves: Sequence[tuple[str, np.ndarray, np.ndarray, bool]], wi
 
 
 def write_check_outputs(verdicts: Sequence[CurveVerdict],
-                        strokes: Sequence[tuple[str, np.ndarray, np.ndarray, bool]], windows: Windows, windows_path: str, *, json_path: Path | None = None,
-                        junit_path: Path | None = None, png_path: Path | None = None,
-                        overwrite: bool = False) -> list[Path]:
+                        strokes: Sequence[tuple[str, np.ndarray, np.ndarray, bool]], windows: Windows,
+                        windows_path: str, *, json_path: Path | None = None, junit_path: Path | None = None,
+                        png_path: Path | None = None, overwrite: bool = False) -> list[Path]:
     """Write the outputs asked for (each atomically, refusing to replace a file without ``overwrite``); the
     figure shows each curve's forward stroke as judged (``strokes``: name, displacement m, force N, passed;
     :func:`pressfit.studies.curve_check.judged_strokes`)."""
