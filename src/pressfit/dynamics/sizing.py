@@ -23,20 +23,40 @@ hydraulic one the peak flow against the valve's no-load flow K_v sqrt((p_s - p_t
 
 Energy balance of a run (:func:`energy_balance`), between its first and last rows:
 
-    W_drives = dK + dV_g + dV_el + W_pin + D + residual,
+    W_drives = dK + dV_g + dV_el + W_pin + D + dV_play + P_play - E_replacement + residual,
 
-W_drives = sum_i sum_k -N_i,k (l_i,k - l_i,k-1), the exact work of the tensions held over each step; W_pin =
-sum_k F_k-1 (y_k-1 - y_k), the work of the tool on the pin (the contact force F, +y on the tool, held over the
-step after it was computed; on the rigid model through the series compliance, whose quasi-static spring is the
-pin's side); K (armature included) and V_g from Pinocchio; V_el the flexible model's springs and D its Rayleigh
-damping's work per step (:class:`pressfit.dynamics.machine.flexible.FlexibleState`). The drives' own losses
-(copper, valve throttling) are upstream of the joints, so they are reported beside the balance, not in it. The
-relative residual is |residual| / the drives' gross work sum_k |sum_i -N_i,k (l_i,k - l_i,k-1)| (the energy the
-drives move in and out of the machine, motoring and regenerating; the preload's circulating power, which sums to
-zero over the legs at every instant on a rigid machine, v_p . l_dot = 0, does not inflate it). What is left is the
+W_drives = sum_i sum_k -N_i,k (l_i,k - l_i,k-1), the exact work of the tensions held over each step over the
+drives' lengths (the sensors'); W_pin = sum_k F_k-1 (y_k-1 - y_k), the work of the tool on the pin (the contact
+force F, +y on the tool, held over the step after it was computed; on the rigid model through the series
+compliance, whose quasi-static spring is the pin's side); K (armature and a drive side behind the plays included)
+and V_g from Pinocchio; V_el the flexible model's springs and D its Rayleigh damping's work per step
+(:class:`pressfit.dynamics.machine.flexible.FlexibleState`); V_play and P_play the cardan plays' stored energy and
+dissipation (flexible model with clearance: :class:`pressfit.dynamics.insertion.PlayLedger`, what the drives do
+on their side of the plays minus what reaches the legs); E_replacement the stems' re-placement, a jump of the
+flexible machine's energy no force works on (:meth:`FlexibleMachine.replacement_energy_j`, step-independent). The
+drives' own losses (copper, valve throttling) are upstream of the joints, so they are reported beside the balance,
+not in it. The relative residual is |residual| / the drives' gross work sum_k |sum_i -N_i,k (l_i,k - l_i,k-1)|
+(the energy the drives move in and out of the machine; the preload's circulating power, which sums to zero over
+the legs at every instant on a rigid machine, v_p . l_dot = 0, does not inflate it). What is left is the
 integrators' own energy error, first order in dt on both models (docs/sizing.md): semi-implicit Euler's
 sum 1/2 dv^T M dv per step (its velocity update is explicit) on the rigid model, generalised-alpha's with its
-rectangle-rule damping work and numerical damping (rho_inf) on the flexible one; ``ENERGY_BALANCE_TOLERANCE``.
+rectangle-rule damping work and numerical damping (rho_inf) on the flexible one.
+
+Tolerance per model and drive kind (``ENERGY_BALANCE_TOLERANCES``, about 3x the largest relative residual measured
+on the shipped insertions at 1 ms, with the limiter; ratio = residual(1 ms) / residual(0.5 ms),
+``ENERGY_RESIDUAL_STEP_RATIO``):
+
+    model     drive         largest measured (case)              ratio  tolerance
+    rigid     force         0.275% (insertion_fast)              2.00   0.8%
+    rigid     electric      0.242% (insertion_electric)          2.00   0.75%
+    rigid     hydraulic     0.178% (insertion_hydraulic)         2.00   0.55%
+    rigid     linear_motor  0.208% (insertion_linear_motor)      2.00   0.65%
+    flexible  force         0.291% (insertion_fast; 0.181% insertion with clearance)  2.03   0.9%
+    flexible  electric      0.247% (insertion_electric)          2.00   0.75%
+    flexible  hydraulic     about 0.18% (insertion_hydraulic)    ~2     0.55%
+    flexible  linear_motor  about 0.21% (insertion_linear_motor) ~2     0.65%
+
+(the last two from their runs before the re-placement term, 0.372 J and 0.375 J, less its 0.43 J).
 """
 
 from __future__ import annotations
@@ -56,15 +76,16 @@ from pressfit.errors import PressfitError, ResidualError
 # the relative residual of the energy balance by (model, drive kind): about 3x the largest measured on the shipped
 # insertions at 1 ms (module docstring's table, docs/sizing.md)
 ENERGY_BALANCE_TOLERANCES = {
-    ("rigid", "force"): 0.01, ("rigid", "electric"): 0.01, ("rigid", "hydraulic"): 0.05,
-    ("rigid", "linear_motor"): 0.01,
-    ("flexible", "force"): 0.01, ("flexible", "electric"): 0.01, ("flexible", "hydraulic"): 0.05,
-    ("flexible", "linear_motor"): 0.01,
+    ("rigid", "force"): 0.008, ("rigid", "electric"): 0.0075, ("rigid", "hydraulic"): 0.0055,
+    ("rigid", "linear_motor"): 0.0065,
+    ("flexible", "force"): 0.009, ("flexible", "electric"): 0.0075, ("flexible", "hydraulic"): 0.0055,
+    ("flexible", "linear_motor"): 0.0065,
 }
 # residual(1 ms) / residual(0.5 ms) measured on the shipped insertions (the same table): first order is 2
 ENERGY_RESIDUAL_STEP_RATIO = {
-    ("rigid", "force"): 2.0, ("rigid", "electric"): 2.0, ("rigid", "hydraulic"): 2.0, ("rigid", "linear_motor"): 2.0,
-    ("flexible", "force"): 2.0, ("flexible", "electric"): 2.0, ("flexible", "hydraulic"): 2.0,
+    ("rigid", "force"): 2.00, ("rigid", "electric"): 2.00, ("rigid", "hydraulic"): 2.00,
+    ("rigid", "linear_motor"): 2.00,
+    ("flexible", "force"): 2.00, ("flexible", "electric"): 2.00, ("flexible", "hydraulic"): 2.0,
     ("flexible", "linear_motor"): 2.0,
 }
 FIRST_ORDER_RATIO = 1.6  # a residual that shrinks by at least this when the step halves: a smaller step reduces it
