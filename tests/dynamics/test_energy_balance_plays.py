@@ -172,8 +172,9 @@ def test_the_tolerances_are_about_three_times_what_is_achieved():
         assert sizing.converges_with_the_step(*key), key
 
 
-# the largest relative residual measured per (model, kind) on the shipped insertions at 1 ms (docs/sizing.md)
-MEASURED = {("rigid", "force"): 0.00275, ("rigid", "electric"): 0.00242, ("rigid", "hydraulic"): 0.00178,
+# the largest relative residual measured per (model, kind) on the shipped insertions at 1 ms (docs/sizing.md); rigid
+# force: the suite's 0.3 s-move scenario (tests/dynamics/test_insertion.py), 1.00%
+MEASURED = {("rigid", "force"): 0.01004, ("rigid", "electric"): 0.00242, ("rigid", "hydraulic"): 0.00178,
             ("rigid", "linear_motor"): 0.00208, ("flexible", "force"): 0.00291, ("flexible", "electric"): 0.00247}
 
 

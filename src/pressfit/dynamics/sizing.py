@@ -47,7 +47,7 @@ on the shipped insertions at 1 ms, with the limiter; ratio = residual(1 ms) / re
 ``ENERGY_RESIDUAL_STEP_RATIO``):
 
     model     drive         largest measured (case)              ratio  tolerance
-    rigid     force         0.275% (insertion_fast)              2.00   0.8%
+    rigid     force         0.275% (insertion_fast; 1.00% the suite's 0.3 s moves)  2.00   3%
     rigid     electric      0.242% (insertion_electric)          2.00   0.75%
     rigid     hydraulic     0.178% (insertion_hydraulic)         2.00   0.55%
     rigid     linear_motor  0.208% (insertion_linear_motor)      2.00   0.65%
@@ -56,7 +56,9 @@ on the shipped insertions at 1 ms, with the limiter; ratio = residual(1 ms) / re
     flexible  hydraulic     about 0.18% (insertion_hydraulic)    ~2     0.55%
     flexible  linear_motor  about 0.21% (insertion_linear_motor) ~2     0.65%
 
-(the last two from their runs before the re-placement term, 0.372 J and 0.375 J, less its 0.43 J).
+(the last two from their runs before the re-placement term, 0.372 J and 0.375 J, less its 0.43 J). The rigid
+force drives' tolerance is 3x the 1.00% of tests/dynamics/test_insertion.py's fast scenario (0.3 s moves, 1 ms):
+semi-implicit Euler's error grows with the accelerations, so 3x the shipped 0.275% would refuse it.
 """
 
 from __future__ import annotations
@@ -76,7 +78,7 @@ from pressfit.errors import PressfitError, ResidualError
 # the relative residual of the energy balance by (model, drive kind): about 3x the largest measured on the shipped
 # insertions at 1 ms (module docstring's table, docs/sizing.md)
 ENERGY_BALANCE_TOLERANCES = {
-    ("rigid", "force"): 0.008, ("rigid", "electric"): 0.0075, ("rigid", "hydraulic"): 0.0055,
+    ("rigid", "force"): 0.03, ("rigid", "electric"): 0.0075, ("rigid", "hydraulic"): 0.0055,
     ("rigid", "linear_motor"): 0.0065,
     ("flexible", "force"): 0.009, ("flexible", "electric"): 0.0075, ("flexible", "hydraulic"): 0.0055,
     ("flexible", "linear_motor"): 0.0065,
