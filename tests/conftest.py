@@ -50,7 +50,8 @@ def five(machine):
 #: expensive fixtures (module- or session-scoped simulations, studies, clusters, installs): their tests are slow
 EXPENSIVE = {"quick_report", "pairs", "both_models", "runs", "slow_and_fast", "measured", "short_runs", "sized",
              "free_run", "simulated", "rigid_runs", "study", "small_study", "every_pair", "loose_result", "cluster",
-             "installed", "paper_fit", "report_dir", "calibrated", "compliant_pin_simulation"}
+             "installed", "paper_fit", "report_dir", "calibrated", "compliant_pin_simulation",
+             "shipped_play_runs"}
 
 
 @pytest.fixture(scope="session")

@@ -85,6 +85,13 @@ def test_preload_share_is_a4_vp_along_the_path(sized):
     assert share == pytest.approx(expected, rel=0.01)
 
 
+def _plays_and_stems(cols):
+    """The plays' stored energy change and dissipation less the stems' re-placement energy, J (0 on the rigid
+    model, which the board runs on unless its case says otherwise)."""
+    return (cols["play_energy_j"][-1] - cols["play_energy_j"][0] + cols["play_dissipation_j"][1:].sum()
+            - cols["stem_replacement_j"][1:].sum())
+
+
 def test_energy_balance_closes(sized):
     """The drives' work recomputed from the CSV's lengths and tensions, sum_k -N_k . (l_k - l_k-1), equals the
     JSON's, the terms sum to it with the residual, and the relative residual is within the stated tolerance."""
@@ -97,10 +104,10 @@ def test_energy_balance_closes(sized):
     dv = cols["potential_energy_j"][-1] - cols["potential_energy_j"][0]
     dk = cols["kinetic_energy_j"][-1] - cols["kinetic_energy_j"][0]
     pin = np.sum(cols["contact_force_n"][:-1] * -np.diff(cols["plate_y_m"]))
-    residual = step.sum() - dk - dv - pin - cols["damping_work_j"][1:].sum()
+    residual = step.sum() - dk - dv - pin - cols["damping_work_j"][1:].sum() - _plays_and_stems(cols)
     assert e["residual_j"] == pytest.approx(residual, rel=1e-9, abs=1e-12)
     assert s["energy_balance_residual"] == pytest.approx(abs(residual) / np.abs(step).sum(), rel=1e-9)
-    assert s["energy_balance_residual"] <= sizing.ENERGY_BALANCE_TOLERANCE
+    assert s["energy_balance_residual"] <= sizing.energy_balance_tolerance(e["model"], e["drive_kind"])
 
 
 def test_balance_over_its_tolerance_is_refused(sized, monkeypatch):
@@ -112,12 +119,14 @@ def test_balance_over_its_tolerance_is_refused(sized, monkeypatch):
     dv = cols["potential_energy_j"][-1] - cols["potential_energy_j"][0]
     dk = cols["kinetic_energy_j"][-1] - cols["kinetic_energy_j"][0]
     pin = np.sum(cols["contact_force_n"][:-1] * -np.diff(cols["plate_y_m"]))
-    relative = abs(step.sum() - dk - dv - pin - cols["damping_work_j"][1:].sum()) / np.abs(step).sum()
-    monkeypatch.setattr(sizing, "ENERGY_BALANCE_TOLERANCE", relative * 0.999)
+    relative = abs(step.sum() - dk - dv - pin - cols["damping_work_j"][1:].sum() - _plays_and_stems(cols)
+                   ) / np.abs(step).sum()
+    key = (s["energy_balance"]["model"], s["energy_balance"]["drive_kind"])
+    monkeypatch.setitem(sizing.ENERGY_BALANCE_TOLERANCES, key, relative * 0.999)
     res = run("cycle", case, "--no-progress", "--json")
     lines = res.output.strip().splitlines()
     assert res.exit_code == 2 and len(lines) == 1 and "energy balance" in lines[0], res.output
     assert "Traceback" not in res.output
-    monkeypatch.setattr(sizing, "ENERGY_BALANCE_TOLERANCE", relative * 1.001)
+    monkeypatch.setitem(sizing.ENERGY_BALANCE_TOLERANCES, key, relative * 1.001)
     res = run("cycle", case, "--no-progress", "--json")
     assert res.exit_code == 0, res.output

@@ -211,15 +211,15 @@ def test_the_preload_does_no_net_work_but_moves_energy_between_drives(rigid_runs
     controller's error; asserted to 1e-3), while each drive's motoring and regenerated energy moves by joules
     (measured 0.6-4.5 J per drive; asserted: the largest change above 1 J)."""
     case, with_a4, without = rigid_runs
-    out = sizing.run_sizing(with_a4, drives.of(case.machine()), 1e-3, without).drives
+    out = sizing.run_sizing(with_a4, drives.of(case.machine()), 1e-3, without, model="rigid").drives
     net = sum(d.positive_energy_j - d.regenerative_energy_j for d in out)
     net_0 = sum(d.without_preload.positive_energy_j - d.without_preload.regenerative_energy_j for d in out)
     assert net == pytest.approx(net_0, rel=1e-3)
     assert max(abs(d.positive_energy_j - d.without_preload.positive_energy_j) for d in out) > 1.0
 
 
-def _balance(result):
-    return sizing.run_sizing(result, drives.of(FORCE), 1e-3).energy
+def _balance(result, model="rigid"):
+    return sizing.run_sizing(result, drives.of(FORCE), 1e-3, model=model).energy
 
 
 def test_energy_balance_closes_on_the_rigid_model(rigid_runs, tmp_path):
@@ -234,7 +234,7 @@ def test_energy_balance_closes_on_the_rigid_model(rigid_runs, tmp_path):
     assert balance.relative_residual < 0.01
     assert balance.drive_work_j > 0.0 and balance.potential_change_j > 0.0  # the end pose is 3 cm higher
     half = load_case(write_case(tmp_path, "half.toml", simulation={"time_step_s": 5e-4}))
-    finer = sizing.run_sizing(simulate_insertion(half), drives.of(FORCE), 5e-4).energy
+    finer = sizing.run_sizing(simulate_insertion(half), drives.of(FORCE), 5e-4, model="rigid").energy
     assert 1.6 < balance.residual_j / finer.residual_j < 2.4
 
 
@@ -248,7 +248,7 @@ def test_energy_balance_closes_on_the_flexible_model(tmp_path):
     case = load_case(write_case(tmp_path, "flex.toml", simulation={
         "model": "flexible", "move_time_s": 0.25, "descent_time_s": 0.25, "dwell_s": 0.3, "settle_s": 0.25}))
     run = simulate_insertion(case)
-    balance = _balance(run)
+    balance = _balance(run, "flexible")
     assert balance.damping_j > 0.0
     assert balance.relative_residual < 0.03
     assert balance.elastic_change_j != 0.0

@@ -175,7 +175,10 @@ def _echo_sizing(s: dict) -> None:
     e = s["energy_balance"]
     click.echo(f"energy balance: drive work {e['drive_work_j']:.4g} J = kinetic {e['kinetic_change_j']:.4g} + "
                f"potential {e['potential_change_j']:.4g} + elastic {e['elastic_change_j']:.4g} + pin "
-               f"{e['pin_work_j']:.4g} + damping {e['damping_j']:.4g} + residual {e['residual_j']:.3g} J "
+               f"{e['pin_work_j']:.4g} + damping {e['damping_j']:.4g}"
+               + (f" + plays' stored {e['play_energy_change_j']:.3g} + plays' dissipation {e['play_dissipation_j']:.4g}"
+                  if e.get("play_energy_change_j") or e.get("play_dissipation_j") else "")
+               + f" + residual {e['residual_j']:.3g} J "
                f"({100 * e['relative_residual']:.2g}% of the drives' gross work {e['gross_drive_work_j']:.4g} J, "
                f"tolerance {100 * e['tolerance']:g}%); drive losses {e['drive_losses_j']:.4g} J")
 

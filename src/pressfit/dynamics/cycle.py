@@ -335,7 +335,7 @@ def simulate_cycle(case: Case, model: str | None = None, progress: bool = False,
                                     f"{', '.join(f'{a:g}' for a in amplitudes)} N) could not be simulated: {exc}"
                                     ) from None
         sized = run_sizing(_Rows(series=series, columns=columns), drives, plan.scenario.simulation.time_step_s,
-                           baseline if preload_cost else None)
+                           baseline if preload_cost else None, model=plan.scenario.simulation.model)
         sized.energy.require_closed(f"of the board of {case.path}", "cycle")
         summary.update(sized.to_dict())
     return CycleResult(series=series, columns=cycle_columns(len(machine.legs)), plan=plan, summary=summary,

@@ -66,8 +66,12 @@ from pressfit.mechanics.clearance import clearance_from_case, load_deflection
 from pressfit.mechanics.preload import ActuatorPreload, self_stress_forces_n
 
 # the machine's energies after the step and the Rayleigh damping's work over it (flexible model; 0 on the rigid one,
-# which has no elastic energy either), J: the energy balance of :mod:`pressfit.dynamics.sizing`
-ENERGY_COLUMNS = ("kinetic_energy_j", "potential_energy_j", "elastic_energy_j", "damping_work_j")
+# which has no elastic energy either), the cardan plays' stored energy after the step and their dissipation over it
+# (flexible model with clearance, :class:`PlayLedger`; 0 otherwise), the energy change of the step's stem
+# re-placement (flexible model, :meth:`FlexibleMachine.replacement_energy_j`; 0 on the rigid one), J: the energy
+# balance of :mod:`pressfit.dynamics.sizing`
+ENERGY_COLUMNS = ("kinetic_energy_j", "potential_energy_j", "elastic_energy_j", "damping_work_j", "play_energy_j",
+                  "play_dissipation_j", "stem_replacement_j")
 
 
 def internal_columns(legs: int) -> tuple[str, ...]:
@@ -562,7 +566,7 @@ def _run_rigid(case: Case, machine: Machine, plan: ScenarioPlan, drives: drive_k
             if drift > MAX_CLOSURE_DRIFT_M:
                 raise _drift_error(case, drift, t, plan.table)
             _check_pose(case, machine, k, steps, t, q[0:3], plan.table)
-            row[energy] = (*rigid.energy_j(q, v), 0.0, 0.0)
+            row[energy] = (*rigid.energy_j(q, v), 0.0, 0.0, 0.0, 0.0, 0.0)
         except UnreachablePoseError as exc:  # the estimate (feed-forward, compliance) left the workspace
             raise _diverged(case, t, f"the pose estimate left the reachable set: {exc}", plan.table) from None
         except DriveStepError as exc:
@@ -615,6 +619,8 @@ def _flexible_steps(case: Case, machine: Machine, plan: ScenarioPlan, drives: dr
     extension = np.zeros(len(machine.legs))
     side = DriveSide(length_m=lengths.copy(), rate_m_per_s=rates.copy(), acceleration_m_per_s2=np.zeros_like(rates))
     tool = fm.tool_point_m(state)
+    ledger = None if play is None else PlayLedger(fm.leg_lengths_m(state), lengths, _side_kinetic_j(fm, side),
+                                                  float(play.stored_energy_j(tool, extension).sum()))
     drive = drives.initial_state(tension, lengths)
     board, contact_force = sim.contact.board_height_m, 0.0
     depth = board - tool[1]
@@ -630,6 +636,7 @@ def _flexible_steps(case: Case, machine: Machine, plan: ScenarioPlan, drives: dr
             force = ctrl.command(drives.measure_lengths_m(lengths), rates, reference, contact_force, dt)
             command = -ctrl.pinv @ force + ctrl.null @ preload
             wrench[1] = contact_force
+            replaced = fm.replacement_energy_j(state)  # the step re-places the stems first
             if not drives.follows_travel:  # its tension does not follow the travel: stepped once, held over the step
                 drive, tension = drives.step(drive, command, lengths, rates, dt)
                 state = fm.step(state, DriveInput.forces(tension), wrench, dt)
@@ -654,18 +661,24 @@ def _flexible_steps(case: Case, machine: Machine, plan: ScenarioPlan, drives: dr
             previous, depth = depth, board - tool[1]
             _check_depth(case, plan, depth, t)
             contact_force = contact_force_n(params, depth, (depth - previous) / dt)
-            lengths, rates = fm.leg_lengths_m(state), fm.leg_rates_m_per_s(state)
+            legs_m = lengths = fm.leg_lengths_m(state)
+            rates = fm.leg_rates_m_per_s(state)
+            plays_j = (0.0, 0.0)
             if play is not None and implicit:  # the drives measure their own side of the plays
                 lengths, rates = side.length_m, side.rate_m_per_s
+                plays_j = ledger.step(tension, through.force_n, legs_m, lengths, _side_kinetic_j(fm, side),
+                                      float(through.stored_energy_j().sum()))
             elif play is not None:  # a massless force drive: the legs' lengths less the plays' extension
                 before, extension = extension, play.extension_m(tool, tension)
                 lengths, rates = lengths - extension, rates - (extension - before) / dt
+                plays_j = ledger.step(tension, tension, legs_m, lengths, _side_kinetic_j(fm, side),
+                                      float(play.stored_energy_j(tool, extension).sum()))
             kernels.internal_forces(ctrl.null, tension, internal)
             series.add(k, (t, *reference[0] + [0.0, ctrl.lift_m, 0.0], *ctrl.estimate_m, *tool, *tool,
                            contact_force, depth, *command, *tension, ctrl.lift_m, drift, *no_axial,
                            *internal), lengths, rates,
-                       _energies(fm.energy(state), state.damping_work_j,
-                                 0.5 * fm.drive_mass_kg * float(side.rate_m_per_s @ side.rate_m_per_s)))
+                       (*_energies(fm.energy(state), state.damping_work_j, _side_kinetic_j(fm, side)), *plays_j,
+                        replaced))
         except UnreachablePoseError as exc:
             raise _diverged(case, t, f"the pose estimate left the reachable set: {exc}", plan.table) from None
         except ConvergenceError as exc:
@@ -677,6 +690,55 @@ def _flexible_steps(case: Case, machine: Machine, plan: ScenarioPlan, drives: dr
     rows = series.rows()
     rows[:, leg_columns(series_columns(len(machine.legs)), "axial_n")] = sections[:, :, 2, 0]  # plate
     return rows, phases, sections
+
+
+def _side_kinetic_j(fm: FlexibleMachine, side: DriveSide) -> float:
+    """The kinetic energy of the drives' reflected masses behind the plays, 1/2 m_d |l_d'|^2, J (constant without
+    the plays: ``side`` keeps its start there)."""
+    return 0.5 * fm.drive_mass_kg * float(side.rate_m_per_s @ side.rate_m_per_s)
+
+
+class PlayLedger:
+    r"""The cardan plays' energy account over a flexible run's steps (the ``play_energy_j`` and
+    ``play_dissipation_j`` columns, J): what the drives do on their side of the plays minus what reaches the legs.
+
+    Over step k the drives' tensions D_k (the ``act_n`` columns, held over the step) do -D_k . dl_d on their side,
+    l_d the drives' lengths (the ``length_m`` columns: what the sensors read); the plays' forces f_k (the tension
+    the legs carry at the step's end, where the flexible step evaluates them) do -f_k . dq_a on the legs, q_a the
+    legs' lengths between the cardan centres. Between the two sit the plays, of stored energy V
+    (:meth:`pressfit.dynamics.play.LegPlay.stored_energy_j`), and the drives' reflected masses m_d (an electric
+    drive behind the plays), of kinetic energy K_side = 1/2 m_d |l_d'|^2 (in the ``kinetic_energy_j`` column).
+    The plays' dissipation over the step is what is left of the drives' work after the legs, the masses and the
+    plays have taken theirs:
+
+        P_k = -D_k . dl_d + f_k . dq_a - dK_side - dV
+            = [f_k . dx - dV]  +  [(f_k - D_k) . dl_d - dK_side]     (x = q_a - l_d + x_0, the plays' extension)
+
+    The first bracket is the plays' own: with the force held at its end value, sum_k f(x_k) (x_k - x_k-1) - dV
+    = sum_k int_{x_k-1}^{x_k} (f(x_k) - f(x)) dx >= 0 for the monotone law, O(k dx^2) per step inside a contact
+    (first order in the step), and on a crossing of the dead zone (a tension changing sign) about |f_k| 2 G: the
+    massless drive side (an ideal force drive) crosses the gap 2 G at once under the drive's force and meets the
+    contact with the work it did on the way -- the inelastic impact of a vanishing mass, a loss of the model
+    whatever the step. The second bracket is the drive side's: the work of its net force on its mass minus its
+    kinetic energy, generalised-alpha's energy error at rho_inf = ``DRIVE_SIDE_RHO_INF`` (0: the unresolved
+    contact mode annihilated in a step, an inelastic impact, :mod:`pressfit.dynamics.play`); zero without a mass.
+    The machine's own balance (:func:`pressfit.dynamics.sizing.energy_balance`) starts from -f_k . dq_a."""
+
+    def __init__(self, legs_m: np.ndarray, drives_m: np.ndarray, side_j: float, stored_j: float) -> None:
+        self.legs, self.drives = np.array(legs_m, float), np.array(drives_m, float)
+        self.side_j, self.stored_j = float(side_j), float(stored_j)
+
+    def step(self, drive_n: np.ndarray, play_n: np.ndarray, legs_m: np.ndarray, drives_m: np.ndarray,
+             side_j: float, stored_j: float) -> tuple[float, float]:
+        """The step to the legs' lengths q_a (n,), m, and the drives' l_d (n,), m, under the drives' tensions D
+        (n,), N, and the plays' forces f (n,), N, to the drive side's kinetic energy and the plays' stored energy
+        (J): (the stored energy, the step's dissipation P_k), J."""
+        legs, drives = np.asarray(legs_m, float), np.asarray(drives_m, float)
+        dissipation = (float(-np.asarray(drive_n, float) @ (drives - self.drives))
+                       + float(np.asarray(play_n, float) @ (legs - self.legs))
+                       - (side_j - self.side_j) - (stored_j - self.stored_j))
+        self.legs, self.drives, self.side_j, self.stored_j = legs.copy(), drives.copy(), float(side_j), float(stored_j)
+        return float(stored_j), dissipation
 
 
 def _energies(energy: Energy, damping_work_j: float, drive_side_j: float = 0.0) -> tuple[float, float, float, float]:

@@ -107,6 +107,16 @@ class LegPlay:
         return invert_law(np.asarray(tensions_n, float), self.gaps_m(pose_m), self.stiffness_n_per_m,
                           self.width_m) - self.zero_m
 
+    def stored_energy_j(self, pose_m: np.ndarray, extension_m: np.ndarray) -> np.ndarray:
+        """The plays' elastic contact energy V(x) per leg (n,), J, at extensions X - x_0 (n,), m (as
+        :meth:`extension_m` and :attr:`PlayedDrive.extension_m` give them) with the gaps at the pose (m): the
+        closed form of the dead zone's law f (:func:`pressfit.mechanics.clearance_law.dead_zones`), its
+        antiderivative: k/2 (|x| - G)^2 outside the gap of half-width G and 0 inside in the sharp limit (k = k_c / 2,
+        x the extension from the middle of the gap); the smoothed law differs from it within the width w of the
+        edges and by a constant of order k w^2 ln(G / w) (1e-9 J at the default 1 nm)."""
+        x = np.asarray(extension_m, float) + self.zero_m
+        return dead_zones(x, self.gaps_m(pose_m), self.stiffness_n_per_m, self.width_m)[0]
+
     def sensed_lengths_m(self, pose_m: np.ndarray, lengths_m: np.ndarray, tensions_n: np.ndarray) -> np.ndarray:
         """A massless drive's lengths l_d = q_a - (X(N) - x_0) (n,), m, for leg lengths q_a (n,), m."""
         return np.asarray(lengths_m, float) - self.extension_m(pose_m, tensions_n)
@@ -159,6 +169,18 @@ class PlayedDrive:
     @property
     def extension_m(self) -> np.ndarray:
         return self.x - self.play.zero_m
+
+    @property
+    def force_n(self) -> np.ndarray:
+        """The last solve's force of the plays on the legs f(x) (n,), N (the drive's tension at the start)."""
+        if self._last is None:
+            return dead_zones(self.x, self.gaps, self.play.stiffness_n_per_m, self.play.width_m)[1]
+        return self._last[1]
+
+    def stored_energy_j(self) -> np.ndarray:
+        """The plays' elastic energy at the last solve (n,), J, with the gaps of this step
+        (:meth:`LegPlay.stored_energy_j`)."""
+        return dead_zones(self.x, self.gaps, self.play.stiffness_n_per_m, self.play.width_m)[0]
 
     def _accelerations(self, length_m: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
         """The drive side's pseudo- and true acceleration at the step's end length (n,), m/s^2 (module doc)."""
