@@ -26,7 +26,8 @@ from pressfit.output.files import check_directory, to_json, write_directory
 
 @click.group("study")
 def study_group() -> None:
-    """Parameter studies: ``pressfit study preload``, ``montecarlo``, ``design``, ``insertion``, ``cycle``, ``curve``."""
+    """Parameter studies: ``pressfit study preload``, ``montecarlo``, ``design``, ``insertion``, ``cycle``,
+    ``curve``."""
 
 
 @study_group.command("preload", context_settings={"ignore_unknown_options": True})  # negative numbers
