@@ -18,7 +18,7 @@ from pressfit.cli.common import (
     echo_written,
     user_errors,
 )
-from pressfit.description.cases import MAX_CHUNK_SIZE, MAX_FORCE_N, MAX_SAMPLES
+from pressfit.description.cases import MAX_CHUNK_SIZE, MAX_CURVE_SAMPLES, MAX_FORCE_N, MAX_SAMPLES
 from pressfit.description.machine import load_machine
 from pressfit.errors import PressfitError
 from pressfit.output.files import check_directory, to_json, write_directory
@@ -26,7 +26,8 @@ from pressfit.output.files import check_directory, to_json, write_directory
 
 @click.group("study")
 def study_group() -> None:
-    """Parameter studies: ``pressfit study preload``, ``montecarlo``, ``design``, ``insertion``, ``cycle``."""
+    """Parameter studies: ``pressfit study preload``, ``montecarlo``, ``design``, ``insertion``, ``cycle``,
+    ``curve``."""
 
 
 @study_group.command("preload", context_settings={"ignore_unknown_options": True})  # negative numbers
@@ -231,3 +232,39 @@ def study_cycle_cmd(case_file: Path, plant_model: str | None, workers: int | Non
     click.echo("fastest within the limits: " + ("none" if f is None else
                f"sample {f['sample']}, cycle time {f['cycle_time_s']:.3f} s (written as fastest.toml)"))
     echo_written(written)
+
+
+@study_group.command("curve")
+@click.argument("case_file", type=click.Path(path_type=Path))
+@click.option("--samples", type=click.IntRange(1, MAX_CURVE_SAMPLES),
+              help=f"Predicted curves (default: the case's [curve]; at most {MAX_CURVE_SAMPLES:.0e}).")
+@click.option("--seed", type=click.IntRange(0), help="Seed (default: the case's [curve]).")
+@cluster_options
+@click.option("--serial", is_flag=True, help="Run in this process, without a Dask cluster.")
+@click.option("--out", "out_dir", type=click.Path(path_type=Path), default=Path("out/study_curve"), show_default=True,
+              help="Directory for windows.json (with the band), band.csv and band.png.")
+@OVERWRITE_OPTION
+@click.option("--json", "as_json", is_flag=True, help="Print the summary as JSON.")
+@click.option("--progress/--no-progress", default=True, help="Show a progress bar over samples.")
+@user_errors
+def study_curve_cmd(case_file: Path, samples: int | None, seed: int | None, workers: int | None,
+                    scheduler: str | None, dashboard: bool, serial: bool, out_dir: Path, overwrite: bool,
+                    as_json: bool, progress: bool) -> None:
+    """The predicted press curve's tolerance band over the case's [curve.tolerances] (Monte Carlo on a Dask
+    cluster) and the monitor's windows derived from it (windows.json; displacement: the sensed depth, SI)."""
+    from pressfit.workflows.curve_study import run_curve_study
+
+    if dashboard:
+        raise PressfitError("--dashboard is not offered by study curve")
+    if serial and (workers is not None or scheduler is not None):
+        raise PressfitError("give --serial or --workers/--scheduler, not both")
+    run = run_curve_study(case_file, out_dir, samples=samples, seed=seed, workers=workers, scheduler=scheduler,
+                          serial=serial, overwrite=overwrite, progress=progress and not as_json)
+    s = run.summary()
+    if as_json:
+        click.echo(to_json(s))
+        return
+    click.echo(f"{s['samples']} predicted curves (seed {s['seed']}); largest force of a curve "
+               f"{s['largest_force_n_min']:.4g} .. {s['largest_force_n_max']:.4g} N; displacement: the sensed depth")
+    click.echo("windows: " + ", ".join(s["elements"]))
+    echo_written(run.written)

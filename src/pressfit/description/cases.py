@@ -724,6 +724,32 @@ class Simulation(StrictModel):
         return self
 
 
+CURVE_POSE_KEYS = ("pin_x_m", "pin_z_m")  # [curve.tolerances]: the pin's position on the board (the pose)
+MAX_CURVE_SAMPLES = 10**6  # [curve] samples and ``pressfit study curve --samples``: 1e6 curves take hours serially
+MAX_CURVE_POINTS = 10001
+
+
+def curve_tolerance_keys(law: str) -> tuple[str, ...]:
+    """The keys ``[curve.tolerances]`` may vary for a contact ``law``: its numeric keys (``CONTACT_LAW_KEYS``), the
+    shoulder's (``CONTACT_COMMON_KEYS``) and the pin's position on the board (``CURVE_POSE_KEYS``)."""
+    required, optional = CONTACT_LAW_KEYS[law]
+    numeric = tuple(k for k in required + optional if k not in ("table_path", "fit"))
+    return numeric + CONTACT_COMMON_KEYS + CURVE_POSE_KEYS
+
+
+class CurveStudy(StrictModel):
+    """``pressfit study curve`` (:mod:`pressfit.studies.curve_study`): ``samples`` predicted press curves, seeded by
+    ``seed``, each of ``points`` depth samples; ``tolerances``: key -> Distribution of the DEVIATION added to the
+    case's value (so ``mean`` defaults to 0; SI, the key's unit), the keys from :func:`curve_tolerance_keys` of
+    the ``[simulation.contact]`` law (a law key moves every pin's value by the same draw: one component's lot;
+    ``pin_x_m`` / ``pin_z_m`` move the pin position, so the pose and the machine's compliance there)."""
+
+    samples: Annotated[int, Field(ge=1, le=MAX_CURVE_SAMPLES)] = 1000
+    seed: Annotated[int, Field(ge=0)] = 0
+    points: Annotated[int, Field(ge=2, le=MAX_CURVE_POINTS)] = 401
+    tolerances: dict[str, Distribution] = {}
+
+
 MAX_PINS = 1000  # [cycle]: a board of more pins is refused (the run is also capped at MAX_STEPS time steps)
 PIN_KEYS = ("force_limit_n", "approach_height_m", "interference_m", "dwell_s", "max_overshoot_n",
             "max_alignment_error_m")  # per pin, defaulting to [cycle]'s (force_limit_n: [cycle.controller]'s)
@@ -912,6 +938,7 @@ class Case(StrictModel):
     design: Design | None = None
     simulation: Simulation | None = None
     cycle: Cycle | None = None
+    curve: CurveStudy | None = None
     path: str = ""
 
     @model_validator(mode="before")
@@ -967,11 +994,32 @@ def load_case(path: Path | str) -> Case:
     data = read_toml(path)
     refuse_wrong_kind(path, data, "case")
     try:
-        return Case.model_validate({**data, "path": str(path)})
+        case = Case.model_validate({**data, "path": str(path)})
     except ValidationError as exc:
         raise validation_error(path, exc) from None
     except (TypeError, ValueError) as exc:  # e.g. numbers too large for numpy
         raise ModelFileError(path, "<values>", str(exc)) from None
+    check_curve_tolerances(case)
+    return case
+
+
+def check_curve_tolerances(case: Case) -> None:
+    """``[curve]`` needs ``[simulation.contact]`` and its tolerances' keys must be the law's
+    (:func:`curve_tolerance_keys`): ModelFileError naming the case file and the key otherwise."""
+    if case.curve is None:
+        return
+    if case.simulation is None:
+        raise ModelFileError(case.path, "curve", "[curve] needs a [simulation.contact] table (the joint it varies)")
+    contact = case.simulation.contact
+    allowed = curve_tolerance_keys(contact.law)
+    have = {k for p in contact.resolved_pins() for k, v in p.keys.items() if v is not None}
+    for key in case.curve.tolerances:
+        if key not in allowed:
+            raise ModelFileError(case.path, f"curve.tolerances.{key}", f"unknown tolerance for law "
+                                 f"\"{contact.law}\"; give one of {', '.join(allowed)}")
+        if key not in CURVE_POSE_KEYS and key not in have:
+            raise ModelFileError(case.path, f"curve.tolerances.{key}", "the contact has no value of this key to "
+                                 "vary (give it in [simulation.contact])")
 
 
 def discover(paths: list[Path | str]) -> list[Path]:

@@ -127,3 +127,29 @@ def write_check_outputs(verdicts: Sequence[CurveVerdict],
         finally:
             plt.close(fig)
     return out
+
+
+def write_band_csv(path: Path | str, band: Any, overwrite: bool = False) -> Path:
+    """``band.csv``: per grid displacement ``displacement_m`` (m) the curves reaching it (``count``) and one force
+    column per quantile ``force_q<q>_n`` (N; empty where no curve reaches). ``band``: a
+    :class:`pressfit.studies.curve_band.CurveBand`."""
+    header = ["displacement_m", "count", *[f"force_q{q:g}_n" for q in band.quantiles]]
+    rows = ([float(x), int(c), *[("" if not math.isfinite(v) else float(v)) for v in band.force_n[:, j]]]
+            for j, (x, c) in enumerate(zip(band.grid_m, band.count, strict=True)))
+    return io.write_csv(path, header, rows, overwrite)
+
+
+def write_curve_study(directory: Path, windows: Windows, band: Any,
+                      nominal: tuple[np.ndarray, np.ndarray] | None = None) -> list[Path]:
+    """``pressfit study curve``'s files in ``directory``: windows.json (the evaluation objects and the band),
+    band.csv (:func:`write_band_csv`) and band.png (the band, the windows and the ``nominal`` curve, sensed
+    displacement m and force N, if given)."""
+    import matplotlib.pyplot as plt
+
+    out = [write_windows(directory / "windows.json", windows), write_band_csv(directory / "band.csv", band)]
+    fig = curves_figure([] if nominal is None else [("nominal", nominal[0], nominal[1], True)], windows)
+    try:
+        out.append(io.save_figure(fig, directory / "band.png"))
+    finally:
+        plt.close(fig)
+    return out
