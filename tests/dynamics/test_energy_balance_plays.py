@@ -173,9 +173,10 @@ def test_the_tolerances_are_about_three_times_what_is_achieved():
 
 
 # the largest relative residual measured per (model, kind) on the shipped insertions at 1 ms (docs/sizing.md); rigid
-# force: the suite's 0.3 s-move scenario (tests/dynamics/test_insertion.py), 1.00%
+# force: the suite's 0.3 s-move scenario (tests/dynamics/test_insertion.py), 1.00%; flexible force: the suite's
+# two-pin flexible board (tests/dynamics/test_cycle.py::test_cli_runs_the_flexible_model_and_...), 0.9395%
 MEASURED = {("rigid", "force"): 0.01004, ("rigid", "electric"): 0.00242, ("rigid", "hydraulic"): 0.00178,
-            ("rigid", "linear_motor"): 0.00208, ("flexible", "force"): 0.00291, ("flexible", "electric"): 0.00247}
+            ("rigid", "linear_motor"): 0.00208, ("flexible", "force"): 0.009395, ("flexible", "electric"): 0.00247}
 
 
 def test_the_flexible_residual_converges_with_the_step(shipped_play_runs):

@@ -51,7 +51,8 @@ on the shipped insertions at 1 ms, with the limiter; ratio = residual(1 ms) / re
     rigid     electric      0.242% (insertion_electric)          2.00   0.75%
     rigid     hydraulic     0.178% (insertion_hydraulic)         2.00   0.55%
     rigid     linear_motor  0.208% (insertion_linear_motor)      2.00   0.65%
-    flexible  force         0.291% (insertion_fast; 0.181% insertion with clearance)  2.03   0.9%
+    flexible  force         0.291% (insertion_fast; 0.181% insertion with clearance;     2.03   3%
+                            0.94% the suite's two-pin flexible board, test_cycle.py)
     flexible  electric      0.247% (insertion_electric)          2.00   0.75%
     flexible  hydraulic     about 0.18% (insertion_hydraulic)    ~2     0.55%
     flexible  linear_motor  about 0.21% (insertion_linear_motor) ~2     0.65%
@@ -80,7 +81,7 @@ from pressfit.errors import PressfitError, ResidualError
 ENERGY_BALANCE_TOLERANCES = {
     ("rigid", "force"): 0.03, ("rigid", "electric"): 0.0075, ("rigid", "hydraulic"): 0.0055,
     ("rigid", "linear_motor"): 0.0065,
-    ("flexible", "force"): 0.009, ("flexible", "electric"): 0.0075, ("flexible", "hydraulic"): 0.0055,
+    ("flexible", "force"): 0.03, ("flexible", "electric"): 0.0075, ("flexible", "hydraulic"): 0.0055,
     ("flexible", "linear_motor"): 0.0065,
 }
 # residual(1 ms) / residual(0.5 ms) measured on the shipped insertions (the same table): first order is 2
