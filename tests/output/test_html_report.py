@@ -307,7 +307,8 @@ def test_joint_cells_and_figure_equal_the_joint_files(page, report_dir):
     np.testing.assert_allclose(by_name["nominal, sensed depth"]["y"], force, rtol=1e-12)
     head, band = _csv(report_dir / "joint" / "band.csv")
     band_trace = next(t for n, t in by_name.items() if n and n.startswith("band q"))
-    np.testing.assert_allclose(np.array(band_trace["y"], dtype=float), band[:, -1], rtol=1e-12)  # the upper quantile, filled down to the lower
+    upper = np.array(band_trace["y"], dtype=float)  # the upper quantile, filled down to the lower
+    np.testing.assert_allclose(upper, band[:, -1], rtol=1e-12)
     head, board = _csv(report_dir / "joint" / "board_curves.csv")
     pins = [t for n, t in by_name.items() if n and n.startswith("pin ")]
     assert len(pins) == len(js["board_pins"]) == 20
