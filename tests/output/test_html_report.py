@@ -279,7 +279,7 @@ def test_report_quick_writes_every_section(report_dir):
 
 _FIGURE_AFTER = """id => { let e = document.getElementById(id);
   while (e && !(e.classList && e.classList.contains('plot'))) e = e.nextElementSibling;
-  return [e.data.map(t => ({name: t.name, x: Array.from(t.x || []), y: Array.from(t.y || [])})),
+  return [e._fullData.map(t => ({name: t.name, x: Array.from(t.x || []), y: Array.from(t.y || [])})),
           [e._fullLayout.xaxis.title.text, e._fullLayout.xaxis2.title.text, e._fullLayout.yaxis.title.text]]; }"""
 
 
