@@ -275,3 +275,47 @@ def test_report_quick_writes_every_section(report_dir):
         assert f"## {n}." in text
     for link in [line.split("](")[1][:-1] for line in text.splitlines() if line.startswith("![")]:
         assert (tmp_path / link).exists(), link
+
+
+_FIGURE_AFTER = """id => { let e = document.getElementById(id);
+  while (e && !(e.classList && e.classList.contains('plot'))) e = e.nextElementSibling;
+  return [e._fullData.map(t => ({name: t.name, x: Array.from(t.x || []), y: Array.from(t.y || [])})),
+          [e._fullLayout.xaxis.title.text, e._fullLayout.xaxis2.title.text, e._fullLayout.yaxis.title.text]]; }"""
+
+
+def _csv(path):
+    rows = path.read_text().splitlines()
+    return rows[0].split(","), np.array([[float(v) if v else np.nan for v in r.split(",")] for r in rows[1:]])
+
+
+def test_joint_cells_and_figure_equal_the_joint_files(page, report_dir):
+    """Section 11 (issue 30 item 7): the joint tables show joint/joint.json's records; the figure's nominal curves
+    are joint/curve.csv's force against its true and sensed depth (mm), its band joint/band.csv's outer quantiles,
+    and one trace per board pin its force against its sensed minus true depth (um) from joint/board_curves.csv; the
+    axes say so; report.md states the band's sample count (--quick: 100) and shows the figure."""
+    from pressfit.output.curve_files import BOARD_PIN_COLUMNS, JOINT_CURVE_KEYS
+
+    js = json.loads((report_dir / "joint" / "joint.json").read_text())
+    _check_table(page, "joint-curve", [{"quantity": k, "value": js["curve"][k]} for k in JOINT_CURVE_KEYS])
+    _check_table(page, "joint-board", [{k: p[k] for k in BOARD_PIN_COLUMNS} for p in js["board_pins"]])
+    traces, (x1, x2, y1) = page.evaluate(_FIGURE_AFTER, "joint")
+    by_name = {t["name"]: t for t in traces}
+    head, curve = _csv(report_dir / "joint" / "curve.csv")
+    depth, sensed, force = (curve[:, head.index(k)] for k in ("depth_m", "sensed_depth_m", "force_n"))
+    np.testing.assert_allclose(by_name["nominal, true depth"]["x"], depth * 1e3, rtol=1e-12)
+    np.testing.assert_allclose(by_name["nominal, sensed depth"]["x"], sensed * 1e3, rtol=1e-12)
+    np.testing.assert_allclose(by_name["nominal, sensed depth"]["y"], force, rtol=1e-12)
+    head, band = _csv(report_dir / "joint" / "band.csv")
+    band_trace = next(t for n, t in by_name.items() if n and n.startswith("band q"))
+    upper = np.array(band_trace["y"], dtype=float)  # the upper quantile, filled down to the lower
+    np.testing.assert_allclose(upper, band[:, -1], rtol=1e-12)
+    head, board = _csv(report_dir / "joint" / "board_curves.csv")
+    pins = [t for n, t in by_name.items() if n and n.startswith("pin ")]
+    assert len(pins) == len(js["board_pins"]) == 20
+    for t, p in zip(pins, js["board_pins"], strict=True):
+        rows = board[board[:, 0] == p["index"]]
+        np.testing.assert_allclose(t["x"], (rows[:, 2] - rows[:, 1]) * 1e6, rtol=1e-9, atol=1e-12)
+        np.testing.assert_allclose(t["y"], rows[:, 3], rtol=1e-12)
+    assert "depth [mm]" in x1 and "sensed minus true depth [um]" in x2 and y1 == "force [N]"
+    md = (report_dir / "report.md").read_text()
+    assert "## 10. The joint and its press curve" in md and "100 samples" in md and "(joint/joint.png)" in md

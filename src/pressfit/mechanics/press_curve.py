@@ -13,17 +13,20 @@ board face, m), pin i is at the depth
           \qquad \theta = C_{r\cdot} G F,
 
 so the pins' forces solve the series equation F = f(d 1 - A F), A = G_r^T C_{r\cdot} G (n x n, m/N), by Newton
-from the untilted forces f(d 1) at each sampled depth (batched; the worst residual max |F - f(d_i)|, N, is
-returned, and callers enforce it). The drives' encoders (motor side: everything between them and the tool
-deflects) read the sensed depth d + u_y, u_y = (C G F)_y: the sensed minus the true depth is the machine's
-deflection along the press at that pose. The weight's sag is a constant offset between the two that a monitor
-zeroes at first contact; it is left out here. One pin on the axis of a centred pose gives d_1 = d exactly.
+at each sampled depth (batched over the depths; the pins' laws stacked over the pins,
+:func:`pressfit.mechanics.contact_laws.stack_laws`; the Jacobian I + diag(f'(d_i)) A from the laws' slopes in
+closed form; the worst residual max |F - f(d_i)|, N, is returned, and callers enforce it). The drives' encoders
+(motor side: everything between them and the tool deflects) read the sensed depth d + u_y, u_y = (C G F)_y: the
+sensed minus the true depth is the machine's deflection along the press at that pose. The weight's sag is a
+constant offset between the two that a monitor zeroes at first contact; it is left out here. One pin on the axis
+of a centred pose gives d_1 = d exactly.
 """
 
 from __future__ import annotations
 
 from collections.abc import Sequence
 from dataclasses import dataclass, field
+from functools import cached_property
 
 import numpy as np
 
@@ -31,13 +34,12 @@ from pressfit.description.cases import Case, Contact
 from pressfit.description.machine import Machine
 from pressfit.errors import PressCurveError
 from pressfit.mechanics.condensed import condensed_plate_compliance
-from pressfit.mechanics.contact_laws import ContactLawModel, build_law
+from pressfit.mechanics.contact_laws import ContactLawModel, build_law, stack_laws
 
 DEFAULT_SAMPLES = 2001  # depth samples of a predicted curve
 NEWTON_ITERATIONS = 50
 NEWTON_TOLERANCE_N = 1e-9  # N: Newton stops when every pin's residual is below this
 RESIDUAL_LIMIT_N = 1e-6  # N: a curve whose series residual exceeds this is refused by its callers
-DERIVATIVE_STEP_M = 1e-9  # m: the central difference of a law's slope
 
 
 @dataclass(frozen=True, kw_only=True)
@@ -63,13 +65,22 @@ class PinField:
         g[3], g[5] = -self.offsets_m[:, 1], self.offsets_m[:, 0]
         return g
 
+    @cached_property
+    def _stacked(self) -> tuple[tuple[np.ndarray, ContactLawModel], ...]:
+        return stack_laws(self.laws)
+
+    def forces_and_slopes(self, depths_m: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+        """f_i(d_i) (N) and f_i'(d_i) (N/m) for depths (..., n) (m), one evaluation per kind of law."""
+        if len(self._stacked) == 1:
+            return self._stacked[0][1].force_and_slope(depths_m)
+        forces, slopes = np.empty_like(depths_m), np.empty_like(depths_m)
+        for idx, law in self._stacked:
+            forces[..., idx], slopes[..., idx] = law.force_and_slope(depths_m[..., idx])
+        return forces, slopes
+
     def forces_n(self, depths_m: np.ndarray) -> np.ndarray:
         """f_i(d_i) for depths (..., n), N."""
-        return np.stack([law.force_n(depths_m[..., i]) for i, law in enumerate(self.laws)], axis=-1)
-
-    def slopes_n_per_m(self, depths_m: np.ndarray) -> np.ndarray:
-        h = DERIVATIVE_STEP_M
-        return (self.forces_n(depths_m + h) - self.forces_n(depths_m - h)) / (2.0 * h)
+        return self.forces_and_slopes(depths_m)[0]
 
 
 @dataclass(frozen=True, kw_only=True)
@@ -85,24 +96,31 @@ class FieldSolution:
 
 
 def solve_field(pins: PinField, compliance: np.ndarray, depth_m: np.ndarray) -> FieldSolution:
-    """F = f(d 1 - A F) at every tool depth (module docstring), batched Newton from the untilted forces."""
+    """F = f(d 1 - A F) at every tool depth (module docstring): Newton from F = 0 (whose first step is the untilted
+    forces f(d 1) through the linearised tilt, (I + diag(f'(d 1)) A)^-1 f(d 1)), each depth iterated until its pins'
+    residual is at most ``NEWTON_TOLERANCE_N`` (N) and then left alone."""
     d = np.asarray(depth_m, dtype=float)
     g = pins.wrench_map
     a = g[3:].T @ compliance[3:] @ g  # (n, n), m/N
     n = g.shape[1]
-    forces = pins.forces_n(np.repeat(d[:, None], n, axis=1))
     eye = np.eye(n)
+    forces = np.zeros((d.size, n))
+    depths = np.repeat(d[:, None], n, axis=1)
+    law_forces, slopes = pins.forces_and_slopes(depths)
+    residual = forces - law_forces
+    rows = np.arange(d.size)  # the depths still iterating
     for _ in range(NEWTON_ITERATIONS):
-        depths = d[:, None] - forces @ a.T
-        residual = forces - pins.forces_n(depths)
-        if np.max(np.abs(residual), initial=0.0) <= NEWTON_TOLERANCE_N:
+        rows = rows[np.max(np.abs(residual[rows]), axis=1, initial=0.0) > NEWTON_TOLERANCE_N]
+        if not rows.size:
             break
-        jac = eye[None] + pins.slopes_n_per_m(depths)[:, :, None] * a[None]
-        forces = forces - np.linalg.solve(jac, residual[..., None])[..., 0]
-    depths = d[:, None] - forces @ a.T
-    residual = float(np.max(np.abs(forces - pins.forces_n(depths)), initial=0.0))
+        jac = eye[None] + slopes[rows, :, None] * a[None]
+        forces[rows] -= np.linalg.solve(jac, residual[rows, :, None])[..., 0]
+        depths[rows] = d[rows, None] - forces[rows] @ a.T
+        law_forces, slopes[rows] = pins.forces_and_slopes(depths[rows])
+        residual[rows] = forces[rows] - law_forces
     return FieldSolution(depth_m=d, pin_forces_n=forces, pin_depths_m=depths,
-                         displacement=forces @ (compliance @ g).T, residual_n=residual)
+                         displacement=forces @ (compliance @ g).T,
+                         residual_n=float(np.max(np.abs(residual), initial=0.0)))
 
 
 @dataclass(frozen=True, kw_only=True)

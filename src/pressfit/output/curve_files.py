@@ -13,9 +13,11 @@ import numpy as np
 
 from pressfit.description.monitor_windows import Envelope, MaxForce, Threshold, Window, Windows
 from pressfit.output import files as io
+from pressfit.output.curve import curve_columns
 
 if TYPE_CHECKING:
     from pressfit.studies.curve_check import CurveVerdict
+    from pressfit.studies.joint_curves import JointCurves
 
 
 def windows_document(windows: Windows) -> dict[str, Any]:
@@ -67,13 +69,17 @@ def junit_xml(verdicts: Sequence[CurveVerdict], windows_path: str) -> str:
     return ET.tostring(root, encoding="unicode", xml_declaration=True)
 
 
-def curves_figure(curves: Sequence[tuple[str, np.ndarray, np.ndarray, bool]], windows: Windows) -> Any:
-    """The curves ((label, displacement m, force N, ok)) over the band and the evaluation objects, in mm and N."""
+def curves_figure(curves: Sequence[tuple[str, np.ndarray, np.ndarray, bool]], windows: Windows,
+                  ax: Any = None) -> Any:
+    """The curves ((label, displacement m, force N, ok)) over the band and the evaluation objects, in mm and N (on
+    the matplotlib axes ``ax`` if given, else a new figure); returns the figure."""
     from pressfit.output import plots  # noqa: F401, I001  (the Agg backend, before pyplot)
     import matplotlib.pyplot as plt
     from matplotlib.patches import Rectangle
 
-    fig, ax = plt.subplots(figsize=(8, 5), layout="constrained")
+    if ax is None:
+        fig, ax = plt.subplots(figsize=(8, 5), layout="constrained")
+    fig = ax.figure
     mm = 1e3
     if windows.band is not None:
         g, f = np.array(windows.band.grid_m) * mm, np.array(windows.band.force_n, dtype=float)
@@ -150,6 +156,76 @@ def write_curve_study(directory: Path, windows: Windows, band: Any,
     fig = curves_figure([] if nominal is None else [("nominal", nominal[0], nominal[1], True)], windows)
     try:
         out.append(io.save_figure(fig, directory / "band.png"))
+    finally:
+        plt.close(fig)
+    return out
+
+
+BOARD_PIN_COLUMNS = ("index", "x_m", "z_m", "machine_compliance_along_press_m_per_n", "peak_force_n",
+                     "sensed_minus_true_depth_at_peak_m", "max_depth_m", "force_limit_n")  # board_pins.csv
+JOINT_CURVE_KEYS = ("peak_force_n", "plateau_force_n", "final_force_n", "seating_depth_m",
+                    "sensed_minus_true_depth_at_peak_m", "machine_compliance_along_press_m_per_n", "tool_tilt_max_rad",
+                    "max_pin_depth_spread_m", "all_pins_seated")  # the pin case's figures the report shows
+
+
+def joint_figure(joint: JointCurves) -> Any:
+    """The report's joint figure: left, the pin case's nominal curve against the true and the sensed depth over its
+    band and windows (sensed), mm and N; right, each board pin's force (N) against its sensed minus true depth (um:
+    the skew of its sensed curve, whose true curve is every pin's), coloured by the machine's compliance along the
+    press at its pose."""
+    from pressfit.output import plots  # noqa: F401, I001  (the Agg backend, before pyplot)
+    import matplotlib.pyplot as plt
+    from matplotlib import cm, colors
+
+    fig, (left, right) = plt.subplots(1, 2, figsize=(13, 5), layout="constrained")
+    c, mm = joint.curve, 1e3
+    curves_figure([], joint.windows, ax=left)
+    left.plot(c.depth_m * mm, c.force_n, color="tab:blue", ls="--", lw=1.2, label="nominal, true depth")
+    left.plot(c.sensed_depth_m * mm, c.force_n, color="k", lw=1.2, label="nominal, sensed depth (encoders)")
+    left.legend(fontsize=7, loc="upper left")
+    left.set(xlabel="depth [mm] (band and windows: sensed)", title=f"{joint.case_name}: predicted curve, band of "
+             f"{joint.study.band.samples} samples, windows")
+    compliance = np.array([p.curve.machine_compliance_along_press_m_per_n for p in joint.board])
+    norm = colors.Normalize(float(compliance.min()), float(compliance.max()) * (1 + 1e-12))
+    named = {int(np.argmin(compliance)): "stiffest", int(np.argmax(compliance)): "most compliant"}
+    for i, (p, k) in enumerate(zip(joint.board, compliance, strict=True)):
+        right.plot((p.curve.sensed_depth_m - p.curve.depth_m) * 1e6, p.curve.force_n, color=cm.viridis(norm(k)),
+                   lw=1.2, label=f"pin {p.index} ({p.x_m:g}, {p.z_m:g}) m: {named[i]}" if i in named else None)
+    fig.colorbar(cm.ScalarMappable(norm=norm, cmap="viridis"), ax=right,
+                 label="compliance along the press at the pin [m/N]")
+    right.set(xlabel="sensed minus true depth [um] (the press's deflection)", ylabel="force [N]",
+              title=f"{joint.board_name}: {len(joint.board)} pins, each at its pose (one true curve)")
+    right.legend(fontsize=7, loc="upper left")
+    right.grid(alpha=0.3)
+    return fig
+
+
+def write_joint_files(joint: JointCurves, directory: Path, overwrite: bool = False) -> list[Path]:
+    """The report's joint files in ``directory``: curve.csv (the pin case's nominal curve, :func:`curve_columns`),
+    windows.json and band.csv (:func:`write_band_csv`), board_pins.csv (``BOARD_PIN_COLUMNS``), board_curves.csv
+    (per pin and depth: true depth m, sensed depth m, force N), joint.json (the summaries) and joint.png
+    (:func:`joint_figure`)."""
+    import matplotlib.pyplot as plt
+
+    c = joint.curve
+    rows = ([d, x, f, *pf, *pd] for d, x, f, pf, pd in zip(c.depth_m, c.sensed_depth_m, c.force_n, c.pin_forces_n,
+                                                             c.pin_depths_m, strict=True))
+    pins = [p.summary() for p in joint.board]
+    board_rows = ([p.index, d, x, f] for p in joint.board
+                  for d, x, f in zip(p.curve.depth_m, p.curve.sensed_depth_m, p.curve.force_n, strict=True))
+    out = [io.write_csv(directory / "curve.csv", curve_columns(c.pin_forces_n.shape[1]), rows, overwrite),
+           write_windows(directory / "windows.json", joint.windows, overwrite),
+           write_band_csv(directory / "band.csv", joint.study.band, overwrite),
+           io.write_csv(directory / "board_pins.csv", BOARD_PIN_COLUMNS,
+                        ([p[k] for k in BOARD_PIN_COLUMNS] for p in pins), overwrite),
+           io.write_csv(directory / "board_curves.csv", ["index", "depth_m", "sensed_depth_m", "force_n"], board_rows,
+                        overwrite),
+           io.write_json(directory / "joint.json", {"case": joint.case_name, "curve": c.summary(),
+                                                    "band_samples": joint.study.band.samples,
+                                                    "board": joint.board_name, "board_pins": pins}, overwrite)]
+    fig = joint_figure(joint)
+    try:
+        out.append(io.save_figure(fig, directory / "joint.png", overwrite))
     finally:
         plt.close(fig)
     return out

@@ -28,6 +28,8 @@ from plotly.colors import qualitative
 from plotly.offline import get_plotlyjs
 from plotly.subplots import make_subplots
 
+from pressfit.description.monitor_windows import Envelope, MaxForce, Threshold, Window
+from pressfit.output.curve_files import BOARD_PIN_COLUMNS, JOINT_CURVE_KEYS
 from pressfit.output.files import write_text
 from pressfit.output.maps import kinematic_fields
 from pressfit.output.scene3d import SceneCase, scene_figure
@@ -44,6 +46,7 @@ if TYPE_CHECKING:
     from pressfit.kinematics.workspace import PlaneMap
     from pressfit.mechanics.condensed import StiffnessMaps
     from pressfit.studies.compare import Comparison
+    from pressfit.studies.joint_curves import JointCurves
     from pressfit.studies.preload_study import PreloadStudy
     from pressfit.studies.workspace_envelope import LoadEnvelope
 
@@ -86,6 +89,7 @@ class ReportContent:
     cycle: CycleResult | None = None  # the shipped board (cycle/cycle.json)
     cycle_front: Record | None = None  # a throughput study's summary.json (cycle/study_summary.json), if given
     comparison: Comparison | None = None  # the machines compared (compare/compare.json)
+    joint: JointCurves | None = None  # the joint and its press curve (joint/joint.json)
 
 
 def cell_text(value: object) -> str:
@@ -422,6 +426,73 @@ def _compare_section(page: _Page, c: ReportContent) -> None:
     page.add(_links("compare/compare.json", "compare/compare.csv"))
 
 
+JOINT_PIN_HEADERS = {"index": "pin", "x_m": "x [m]", "z_m": "z [m]",
+                     "machine_compliance_along_press_m_per_n": "compliance along the press [m/N]",
+                     "peak_force_n": "peak force [N]", "sensed_minus_true_depth_at_peak_m": "sensed - true at peak [m]",
+                     "max_depth_m": "true depth at the stop [m]", "force_limit_n": "force limit [N]"}
+
+
+def _joint_section(page: _Page, c: ReportContent) -> None:
+    if c.joint is None:
+        return
+    j, mm = c.joint, 1e3
+    page.section("joint", "11. The joint and its press curve",
+                 f"Left: {html.escape(j.case_name)} (cases/paper/insertion_compliant_pin.toml), the press curve "
+                 "predicted quasi-statically (the pins' law in series with the machine's compliance at the pin pose) "
+                 "against the true depth and against the sensed depth the drives' encoders record, over its tolerance "
+                 f"band (a serial Monte Carlo of {j.study.band.samples} samples; <code>pressfit study curve</code> "
+                 "runs the design band) and the monitor's windows derived from it (sensed depth). Right: every pin of "
+                 f"{html.escape(j.board_name)} pressed with the board's contact law at its own pose up to its force "
+                 "limit: they share one true curve; each pin's force against its sensed minus true depth (the "
+                 "press's deflection, the skew of its sensed curve), set by the machine's compliance along the press "
+                 "at its pose (table).")
+    fig = make_subplots(rows=1, cols=2, subplot_titles=("predicted curve, band and windows",
+                                                        "the board's pins: the press's deflection"))
+    band = j.study.band
+    lo, hi = band.force_n[0], band.force_n[-1]
+    fig.add_scatter(x=band.grid_m * mm, y=lo, mode="lines", line={"width": 0}, showlegend=False, row=1, col=1,
+                    hoverinfo="skip")
+    fig.add_scatter(x=band.grid_m * mm, y=hi, mode="lines", line={"width": 0}, fill="tonexty",
+                    fillcolor="rgba(128,128,128,0.3)", row=1, col=1,
+                    name=f"band q{band.quantiles[0]:g}-q{band.quantiles[-1]:g} ({band.samples} samples)")
+    for el in j.windows.elements:
+        if isinstance(el, Window):
+            fig.add_scatter(x=np.array([el.x_min_m, el.x_max_m, el.x_max_m, el.x_min_m, el.x_min_m]) * mm,
+                            y=[el.y_min_n, el.y_min_n, el.y_max_n, el.y_max_n, el.y_min_n], mode="lines",
+                            line={"color": "green"}, name=f"window '{el.name}'", row=1, col=1)
+        elif isinstance(el, Threshold):
+            fig.add_scatter(x=np.array([el.x_min_m, el.x_max_m]) * mm, y=[el.force_n] * 2, mode="lines",
+                            line={"color": "purple" if el.mode == "must_cross" else "orange"},
+                            name=f"threshold '{el.name}' ({el.mode.replace('_', ' ')})", row=1, col=1)
+        elif isinstance(el, Envelope):
+            for force, show in ((el.lower_force_n, True), (el.upper_force_n, False)):
+                fig.add_scatter(x=np.array(el.displacement_m) * mm, y=force, mode="lines", showlegend=show,
+                                line={"color": "royalblue", "width": 1}, legendgroup="envelope",
+                                name=f"envelope '{el.name}'", row=1, col=1)
+        elif isinstance(el, MaxForce):
+            fig.add_hline(y=el.force_n, line={"dash": "dot", "color": "red"}, row=1, col=1)
+    fig.add_scatter(x=j.curve.depth_m * mm, y=j.curve.force_n, mode="lines", line={"dash": "dash"},
+                    name="nominal, true depth", row=1, col=1)
+    fig.add_scatter(x=j.curve.sensed_depth_m * mm, y=j.curve.force_n, mode="lines", line={"color": "black"},
+                    name="nominal, sensed depth", row=1, col=1)
+    for p in j.board:
+        fig.add_scatter(x=(p.curve.sensed_depth_m - p.curve.depth_m) * 1e6, y=p.curve.force_n, mode="lines",
+                        name=f"pin {p.index} ({p.x_m:.2f}, {p.z_m:.2f}) m", row=1, col=2)
+    fig.update_layout(height=520)
+    fig.update_xaxes(title_text="depth [mm] (band and windows: sensed)", row=1, col=1)
+    fig.update_xaxes(title_text="sensed minus true depth [um] (the press's deflection)", row=1, col=2)
+    for col in (1, 2):
+        fig.update_yaxes(title_text="force [N]", row=1, col=col)
+    page.figure(fig)
+    summary = j.curve.summary()
+    page.add(_table("joint-curve", [("quantity", "quantity (SI)"), ("value", "value")],
+                    [{"quantity": k, "value": summary[k]} for k in JOINT_CURVE_KEYS]))
+    page.add(_table("joint-board", [(k, JOINT_PIN_HEADERS[k]) for k in BOARD_PIN_COLUMNS],
+                    [{k: p.summary()[k] for k in BOARD_PIN_COLUMNS} for p in j.board]))
+    page.add(_links("joint/joint.json", "joint/windows.json", "joint/curve.csv", "joint/band.csv",
+                    "joint/board_pins.csv", "joint/board_curves.csv"))
+
+
 def write_html_report(out_dir: Path | str, content: ReportContent, overwrite: bool = False) -> Path:
     """Write ``report.html`` and ``plotly.min.js`` (the offline plotly bundle) into out_dir; returns the page."""
     out = Path(out_dir)
@@ -430,7 +501,8 @@ def write_html_report(out_dir: Path | str, content: ReportContent, overwrite: bo
     page.add(f"<h1>pressfit report: {html.escape(m.name)}</h1><p>Machine file: <code>{html.escape(m.source)}</code>. "
              "SI units throughout. The same numbers as <a href=\"report.md\">report.md</a>, interactive.</p>")
     for section in (_scene_section, _tables_section, _kinematics_section, _envelope_section, _stiffness_section,
-                    _preload_section, _interference_section, _insertion_section, _cycle_section, _compare_section):
+                    _preload_section, _interference_section, _insertion_section, _cycle_section, _compare_section,
+                    _joint_section):
         section(page, content)
     write_text(out / "plotly.min.js", get_plotlyjs(), overwrite)
     doc = (f"<!DOCTYPE html>\n<html lang=\"en\"><head><meta charset=\"utf-8\"><title>pressfit report: "

@@ -4,7 +4,8 @@ its results and hands them to output/'s writers: maps, simulation, cycle, compar
 Sections: the paper's Tables 5-6 beside pressfit, the kinematic maps and workspace claims, the
 workspace load envelope (design loads), stiffness maps, the clearance-vs-preload study, the leg
 interference summary, the paper's insertion and the shipped board's work cycle (with a throughput study's front
-when given). Every number comes from the same library functions the CLI and tests call.
+when given), the machines compared, and the joint and its press curve. Every number comes from the same library
+functions the CLI and tests call.
 """
 
 from __future__ import annotations
@@ -25,12 +26,13 @@ from pressfit.mechanics import condensed
 from pressfit.mechanics.statics import Equilibrium, solve_equilibrium
 from pressfit.output import maps, plots
 from pressfit.output.calibration_files import read_calibration, report_section
+from pressfit.output.curve_files import BOARD_PIN_COLUMNS, JOINT_CURVE_KEYS, write_joint_files
 from pressfit.output.files import write_csv, write_json, write_text
 from pressfit.output.html_report import ReportContent, write_html_report
 from pressfit.output.scene3d import SceneCase
 from pressfit.output.simulation import write_simulation
 from pressfit.shipped import cases_dir
-from pressfit.studies import cad_fit, preload_study, workspace_envelope
+from pressfit.studies import cad_fit, joint_curves, preload_study, workspace_envelope
 from pressfit.studies import paper_tables as tables
 from pressfit.studies.cycle_study import FACTORS, FRONT_FIGURES
 from pressfit.workflows.kinematic_maps import write_kinematic_maps
@@ -56,12 +58,12 @@ def write_report(machine: Machine, out_dir: Path | str, overwrite: bool = False,
     out = Path(out_dir)
     study = None if cycle_study is None else read_cycle_study(cycle_study)  # checked before computing
     fitted = None if calibration is None else read_calibration(calibration)
-    steps = tqdm(total=10, desc="report", disable=not progress, unit="section")
+    steps = tqdm(total=11, desc="report", disable=not progress, unit="section")
     md = [f"# pressfit report: {machine.name}", "",
           f"Machine file: `{machine.source}`. SI units throughout. Interactive version "
           "(3D view of the loaded machine, sortable tables, zoomable plots): [report.html](report.html).", ""]
     sections = (_tables_section, _kinematics_section, _envelope_section, _stiffness_section, _preload_section,
-                _interference_section, _insertion_section, _cycle_section, _compare_section)
+                _interference_section, _insertion_section, _cycle_section, _compare_section, _joint_section)
     parts: dict[str, object] = {"cycle_study": study}
     for section in sections:
         md += section(machine, out, overwrite, quick, parts)
@@ -80,7 +82,8 @@ def write_report(machine: Machine, out_dir: Path | str, overwrite: bool = False,
         envelope=parts["envelope"], envelope_table=parts["envelope_table"], stiffness=parts["stiffness"],
         preload=parts["studies"], interference=sweep,
         interference_table=[{"kind": k, **v} for k, v in sweep.kind_minima().items()], insertion=parts["insertion"],
-        cycle=parts["cycle"], cycle_front=parts["cycle_front"], comparison=parts["comparison"]), overwrite)
+        cycle=parts["cycle"], cycle_front=parts["cycle_front"], comparison=parts["comparison"],
+        joint=parts["joint"]), overwrite)
     steps.update()
     steps.close()
     return path
@@ -271,6 +274,39 @@ def _compare_section(machine: Machine, out: Path, overwrite: bool, quick: bool, 
                     [[k, *[f[k] for f in figures]] for k in CSV_COLUMNS[4:]]), "",
           *[f"- **{c.verdict}** ({c.baseline}): {c.claim}. {c.evidence}." for c in result.claims], "",
           "![compare](compare/compare.png)", ""]
+    return md
+
+
+QUICK_BAND_SAMPLES = 100  # --quick: the joint section's band from 100 samples
+
+
+def _joint_section(machine: Machine, out: Path, overwrite: bool, quick: bool, parts: Parts) -> list[str]:
+    """The joint and its press curve (issue 30): the shipped compliant-pin case's predicted curve, its band from a
+    small serial Monte Carlo and the windows derived from it, and the shipped board's per-pin curves
+    (:func:`pressfit.studies.joint_curves.joint_curves`; each case on its own machine)."""
+    pin_case = load_case(cases_dir() / "paper" / "insertion_compliant_pin.toml")
+    board = load_case(cases_dir() / "paper" / "board.toml")
+    samples = QUICK_BAND_SAMPLES if quick else joint_curves.REPORT_BAND_SAMPLES
+    parts["joint"] = joint = joint_curves.joint_curves(pin_case, board, samples=samples)
+    write_joint_files(joint, out / "joint", overwrite)
+    c, pins = joint.curve, [p.summary() for p in joint.board]
+    spread = [p["sensed_minus_true_depth_at_peak_m"] for p in pins]
+    md = ["## 10. The joint and its press curve (issue 30)", "",
+          f"`{pin_case.path}` (`pressfit curve`): the press curve predicted quasi-statically, the pins' law in series "
+          "with the machine's 6x6 compliance at the pin pose; the monitor records the SENSED depth (the drives' "
+          "encoders), which includes the press's own deflection. Its tolerance band is a small Monte Carlo of "
+          f"{joint.study.band.samples} samples over `[curve.tolerances]`, serial (`pressfit study curve` runs the "
+          "design band: 1000 samples and more, on Dask); the windows are derived from the band by the rules of "
+          "docs/monitor.md. Their files: `joint/`.", "",
+          _md_table(["quantity (SI)", "value"], [[k, "-" if c.summary()[k] is None else c.summary()[k]]
+                                                 for k in JOINT_CURVE_KEYS]), "",
+          _md_table(["window element", "kind"], [[e.name, type(e).__name__] for e in joint.windows.elements]), "",
+          f"`{board.path}`: every pin of the board pressed quasi-statically with the board's `[cycle.contact]` "
+          "law at its own pose, up to its force limit: the true curves coincide, the sensed ones are skewed by the "
+          f"compliance along the press at each pose (sensed minus true depth at the peak {min(spread) * 1e6:.3g} to "
+          f"{max(spread) * 1e6:.3g} um over the board).", "",
+          _md_table(list(BOARD_PIN_COLUMNS), [[p[k] for k in BOARD_PIN_COLUMNS] for p in pins]), "",
+          "![joint](joint/joint.png)", ""]
     return md
 
 

@@ -48,9 +48,16 @@ class CompliantPinLaw:
 
     def radial_force_n(self, compression_m: np.ndarray) -> np.ndarray:
         """N(x), N, on the loading branch (module docstring)."""
+        return self._radial(compression_m)[0]
+
+    def _radial(self, compression_m: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+        """N(x) (N) and dN/dx (N/m: k, then k_p past the yield; k at x <= 0, the loading side)."""
         x = np.maximum(np.asarray(compression_m, dtype=float), 0.0)
         k, fy = self.radial_stiffness_n_per_m, self.radial_yield_force_n
-        return np.where(k * x <= fy, k * x, fy + self.post_yield_stiffness_n_per_m * (x - fy / k))
+        kx = k * x
+        elastic = kx <= fy
+        return (np.where(elastic, kx, fy + self.post_yield_stiffness_n_per_m * (x - fy / k)),
+                np.where(elastic, k, self.post_yield_stiffness_n_per_m))
 
     @property
     def taper(self) -> float:
@@ -59,8 +66,9 @@ class CompliantPinLaw:
 
     @property
     def held_normal_force_n(self) -> float:
-        """N(delta), N: the force across the zone once fully in the hole."""
-        return float(self.radial_force_n(self.squeeze_m))
+        """N(delta), N: the force across the zone once fully in the hole (an array for stacked laws)."""
+        held = self.radial_force_n(self.squeeze_m)
+        return float(held) if held.ndim == 0 else held
 
     @property
     def plastic_set_m(self) -> float:
@@ -87,18 +95,31 @@ class CompliantPinLaw:
         return 0.0, 2.0 * self.lead_in_length_m + self.zone_length_m
 
     def force_n(self, depth_m: np.ndarray) -> np.ndarray:
+        return self.force_and_slope(depth_m)[0]
+
+    def force_and_slope(self, depth_m: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+        """F(z) (N, module docstring) and dF/dz (N/m) in closed form: with g(w) = (mu + w) / (1 - mu w),
+        F = 2 N g(w) and dF/dz = 2 (N' g + N g'(w) w'), g'(w) = (1 + mu^2) / (1 - mu w)^2; at a kink (the lead-in's
+        end, the yield, the fade's end, the exit's start) the slope of one of its sides. The fields may be arrays
+        (n,) (a stacked field of pins, :func:`pressfit.mechanics.contact_laws.stack_laws`) against depths (..., n)."""
         z = np.asarray(depth_m, dtype=float)
         mu, t, ll = self.friction_coefficient, self.taper, self.lead_in_length_m
         fade = FADE_FRACTION * ll
-        wedge = np.where(z <= ll, t, t * np.clip(1.0 - (z - ll) / fade, 0.0, 1.0))
-        held = self.held_normal_force_n
+        s, k = self.squeeze_m, self.radial_stiffness_n_per_m
+        past = (z - ll) / fade  # the fade's progress: <= 0 over the lead-in (the full wedge t)
+        wedge = t * np.clip(1.0 - past, 0.0, 1.0)
         exit_start = ll + self.zone_length_m
-        x_in = self.squeeze_m * np.clip(z / ll, 0.0, 1.0)
-        normal = np.where(z <= exit_start, self.radial_force_n(x_in),
-                          np.maximum(0.0, held - self.radial_stiffness_n_per_m * self.squeeze_m
-                                     * np.clip((z - exit_start) / ll, 0.0, 1.0)))
-        f = 2.0 * normal * (mu + wedge) / (1.0 - mu * wedge)
-        return np.where(z > 0.0, f, 0.0)
+        radial, d_radial = self._radial(s * np.clip(z / ll, 0.0, 1.0))
+        unloaded = self.radial_force_n(s) - k * s * np.clip((z - exit_start) / ll, 0.0, 1.0)
+        inside = z <= exit_start
+        normal = np.where(inside, radial, np.maximum(0.0, unloaded))
+        exiting = ~inside & (z < exit_start + ll) & (unloaded > 0.0)
+        d_normal = np.where(z < ll, d_radial * (s / ll), exiting * (-k * s / ll))
+        d_wedge = ((past > 0.0) & (past < 1.0)) * (-t / fade)
+        denominator = 1.0 - mu * wedge
+        f = 2.0 * normal * (mu + wedge) / denominator  # 0 at z <= 0 (no squeeze)
+        slope = 2.0 * (d_normal * (mu + wedge) / denominator + normal * (1.0 + mu * mu) / denominator**2 * d_wedge)
+        return f, slope * (z > 0.0)
 
 
 def from_keys(law: str, keys: Mapping[str, Any]) -> CompliantPinLaw:

@@ -31,13 +31,19 @@ class ElasticLaw:
     notes: tuple[str, ...] = ()
 
     def force_n(self, depth_m: np.ndarray) -> np.ndarray:
+        return self.force_and_slope(depth_m)[0]
+
+    def force_and_slope(self, depth_m: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+        """F(d) (N) and dF/dd (N/m): k (+ k_fit, or + F_fit / d_fit cosh^-2(d / d_fit)) where F > 0, else 0."""
         d = np.asarray(depth_m, dtype=float)
-        f = self.stiffness_n_per_m * d
+        f, slope = self.stiffness_n_per_m * d, self.stiffness_n_per_m + 0.0 * d
         if self.fit == "linear":
-            f = f + self.fit_stiffness_n_per_m * d
+            f, slope = f + self.fit_stiffness_n_per_m * d, slope + self.fit_stiffness_n_per_m
         elif self.fit == "saturating":
             f = f + self.fit_force_n * np.tanh(d / self.fit_depth_m)
-        return np.where(d > 0.0, np.maximum(f, 0.0), 0.0)
+            slope = slope + self.fit_force_n / self.fit_depth_m / np.cosh(d / self.fit_depth_m) ** 2
+        on = (d > 0.0) & (f > 0.0)
+        return np.where(d > 0.0, np.maximum(f, 0.0), 0.0), np.where(on, slope, 0.0)
 
 
 def from_keys(law: str, keys: Mapping[str, Any]) -> ElasticLaw:

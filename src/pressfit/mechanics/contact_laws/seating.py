@@ -38,5 +38,11 @@ class Seated:
         return getattr(self.law, name)
 
     def force_n(self, depth_m: np.ndarray) -> np.ndarray:
+        return self.force_and_slope(depth_m)[0]
+
+    def force_and_slope(self, depth_m: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+        """The force (N) and its slope (N/m): the law's plus k_s past the shoulder (k_s at d > d_s)."""
         d = np.asarray(depth_m, dtype=float)
-        return self.law.force_n(d) + self.seat_stiffness_n_per_m * np.maximum(d - self.seat_depth_m, 0.0)
+        f, slope = self.law.force_and_slope(d)
+        return (f + self.seat_stiffness_n_per_m * np.maximum(d - self.seat_depth_m, 0.0),
+                slope + np.where(d > self.seat_depth_m, self.seat_stiffness_n_per_m, 0.0))

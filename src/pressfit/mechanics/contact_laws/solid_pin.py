@@ -70,21 +70,34 @@ class SolidPinLaw:
 
     def engaged_length(self, depth_m: np.ndarray) -> np.ndarray:
         """L_eng(z) (m), the chamfer's share weighted by its interference (module docstring)."""
+        return self._engaged(depth_m)[0]
+
+    def _engaged(self, depth_m: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+        """L_eng(z) (m) and dL_eng/dz (-) = G'(z) - G'(z - L_b), G'(s) = min(s / L_c, 1) for s > 0, else 0."""
         z = np.asarray(depth_m, dtype=float)
         c = self.chamfer_length_m
+        c_or_1 = np.where(c > 0.0, c, 1.0)  # no chamfer: only s <= c = 0, i.e. s = 0, takes the quadratic branch
 
-        def g(s: np.ndarray) -> np.ndarray:
+        def g(s: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
             s = np.maximum(s, 0.0)
-            if c == 0.0:
-                return s
-            return np.where(s <= c, s * s / (2.0 * c), s - 0.5 * c)
+            chamfer = s <= c
+            return (np.where(chamfer, s * s / (2.0 * c_or_1), s - 0.5 * c),
+                    np.where(chamfer, s / c_or_1, np.where(s > 0.0, 1.0, 0.0)))
 
-        return g(z) - g(z - self.engaged_length_m)
+        (g0, s0), (g1, s1) = g(z), g(z - self.engaged_length_m)
+        return g0 - g1, s0 - s1
 
     def force_n(self, depth_m: np.ndarray) -> np.ndarray:
+        return self.force_and_slope(depth_m)[0]
+
+    def force_and_slope(self, depth_m: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+        """F(z) (N, module docstring) and dF/dz = mu p pi d dL_eng/dz (N/m); the fields may be arrays (n,) against
+        depths (..., n) (a stacked field of pins)."""
         z = np.asarray(depth_m, dtype=float)
-        f = self.friction_coefficient * self.pressure_pa * math.pi * self.diameter_m * self.engaged_length(z)
-        return np.where(z > 0.0, f, 0.0)
+        unit = self.friction_coefficient * self.pressure_pa * math.pi * self.diameter_m
+        length, d_length = self._engaged(z)
+        positive = z > 0.0
+        return np.where(positive, unit * length, 0.0), np.where(positive, unit * d_length, 0.0)
 
 
 def from_keys(law: str, keys: Mapping[str, Any]) -> SolidPinLaw:

@@ -31,9 +31,18 @@ class TabulatedLaw:
         return float(self.depth_m[0]), float(self.depth_m[-1])
 
     def force_n(self, depth_m: np.ndarray) -> np.ndarray:
+        return self.force_and_slope(depth_m)[0]
+
+    def force_and_slope(self, depth_m: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+        """The interpolated force (N) and its slope (N/m): the row interval's, 0 before the first row and past
+        the last (at a row, the interval above it)."""
         z = np.asarray(depth_m, dtype=float)
         f = np.interp(z, self.depth_m, self.table_force_n, left=0.0)
-        return np.where(z > 0.0, f, 0.0)
+        k = np.searchsorted(self.depth_m, z, side="right")  # the row interval [k - 1, k] holding z
+        inside = (k > 0) & (k < self.depth_m.size) & (z > 0.0)
+        k = np.clip(k, 1, self.depth_m.size - 1)
+        slope = np.diff(self.table_force_n)[k - 1] / np.diff(self.depth_m)[k - 1]
+        return np.where(z > 0.0, f, 0.0), np.where(inside, slope, 0.0)
 
 
 def from_keys(law: str, keys: Mapping[str, Any]) -> TabulatedLaw:
