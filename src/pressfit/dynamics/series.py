@@ -76,10 +76,11 @@ REACH_CHECK_STEPS = 10  # the plate's joint limits are checked every this many s
 
 @dataclass(frozen=True, kw_only=True)
 class ScenarioPlan:
-    """A validated scenario (:func:`plan_scenario`, or a board's :func:`pressfit.dynamics.cycle.plan_cycle`): its
-    reference, the number of steps, the planned path samples (n, 3), m, the warnings to show before the run, the
-    run's settings (``simulation``: time step, model, contact law, controller gains, start pose) and the insertion
-    force limit of each segment of the reference (N; the controller's limiter uses the running segment's)."""
+    """A validated scenario (:func:`pressfit.dynamics.insertion.plan_scenario`, or a board's
+    :func:`pressfit.dynamics.cycle.plan_cycle`): its reference, the number of steps, the planned path samples
+    (n, 3), m, the warnings to show before the run, the run's settings (``simulation``: time step, model, contact
+    law, controller gains, start pose) and the insertion force limit of each segment of the reference (N; the
+    controller's limiter uses the running segment's)."""
 
     trajectory: Trajectory
     steps: int
@@ -94,7 +95,8 @@ class ScenarioPlan:
 
 def preload_amplitudes_n(case: Case, machine: Machine) -> np.ndarray:
     """The case's preload amplitudes a (n - 3,), N, along the machine's preload basis (a4 on the 4-UPU; zeros when
-    the case has no preload; :func:`check_preload` refuses a preload the machine cannot take)."""
+    the case has no preload; :func:`pressfit.dynamics.scenario.check_preload` refuses a preload the machine cannot
+    take)."""
     amplitudes = np.asarray(case.preload.amplitudes, dtype=float)
     return amplitudes if amplitudes.any() else np.zeros(machine.redundancy)
 
@@ -102,7 +104,7 @@ def preload_amplitudes_n(case: Case, machine: Machine) -> np.ndarray:
 class Series:
     """The series' rows, grown in chunks; :meth:`add` appends a row with the kinematic pose (forward kinematics of
     the actuator lengths, Gauss-Newton from the last row's, :func:`pressfit.dynamics.control.estimate_pose`; the
-    rigid loop fills :meth:`row` in place, its kinematic pose from its controller's estimate)."""
+    rigid model's step fills :meth:`row` in place, its kinematic pose from its controller's estimate)."""
 
     def __init__(self, machine: Machine, steps: int, start_m: np.ndarray) -> None:
         self.machine, self.steps, self.kinematic = machine, steps, np.asarray(start_m, float).copy()
@@ -111,9 +113,7 @@ class Series:
 
     def add(self, k: int, row: tuple, lengths: np.ndarray, rates: np.ndarray, energy: tuple) -> None:
         self.kinematic = estimate_pose(self.machine, lengths, self.kinematic, KINEMATIC_ITERATIONS)[0]
-        if k // CHUNK_ROWS == len(self.chunks):
-            self.chunks.append(np.empty((min(self.steps - k, CHUNK_ROWS), self.width)))
-        self.chunks[-1][k % CHUNK_ROWS] = (*row, *self.kinematic, *lengths, *rates, *energy)
+        self.row(k)[:] = (*row, *self.kinematic, *lengths, *rates, *energy)
 
     def row(self, k: int) -> np.ndarray:
         """Row k (the rows are filled in order) to fill in place; the kinematic pose is the caller's."""
