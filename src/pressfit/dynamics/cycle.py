@@ -281,7 +281,7 @@ def plan_cycle(case: Case, machine: Machine | None = None, model: str | None = N
         seg = segments[index[first]]
         pin = pins[seg.pin - 1]
         require_reachable_pose(case, machine, path[first], f"{pin.source} (x_m, z_m)" if seg.phase != "move" else
-                           "[cycle] end_m", f"{_pin_label(pin)}: the planned path ({seg.phase} segment)")
+                               "[cycle] end_m", f"{_pin_label(pin)}: the planned path ({seg.phase} segment)")
     check_preload(case, machine, drives, path, "[preload] a4_n")
     sim = cycle_simulation(cycle, pins[0], model or cycle.model)
     check_steps(case, sim, rigid, np.array([cycle.start_m, *points[1::4], cycle.end_m]), "cycle")  # start,

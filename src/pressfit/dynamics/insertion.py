@@ -116,18 +116,18 @@ def plan_scenario(case: Case, machine: Machine | None = None, preload_key: str =
         value = getattr(sim, key)
         if (value > 0 or key != "settle_s") and value < MIN_SEGMENT_STEPS * dt * (1 - 1e-9):
             raise refuse(case, f"[simulation] {key}", f"at least {MIN_SEGMENT_STEPS} time steps "
-                          f"({MIN_SEGMENT_STEPS * dt:g} s at time_step_s = {dt:g} s){' or 0' * (key == 'settle_s')}, "
-                          f"got {value:g} s")
+                         f"({MIN_SEGMENT_STEPS * dt:g} s at time_step_s = {dt:g} s){' or 0' * (key == 'settle_s')}, "
+                         f"got {value:g} s")
     trajectory = Trajectory.insertion(sim)
     steps = int(np.ceil(trajectory.duration_s / dt))
     if steps > MAX_STEPS:
         raise refuse(case, "[simulation] time_step_s", f"a run of at most {MAX_STEPS} steps: time_step_s = {dt:g} s "
-                      f"over the {trajectory.duration_s:g} s of move_time_s, descent_time_s, dwell_s and settle_s "
-                      f"makes {steps} steps (use a larger time step or shorter segments)")
+                     f"over the {trajectory.duration_s:g} s of move_time_s, descent_time_s, dwell_s and settle_s "
+                     f"makes {steps} steps (use a larger time step or shorter segments)")
     for key, pose in (("start_m", sim.start_m), ("end_m", sim.end_m)):
         if not pose[1] > board:
             raise refuse(case, f"[simulation] {key}", f"a pose above the board face (the contact is the plane y = "
-                          f"[simulation.contact] board_height_m = {board:g} m), got y = {pose[1]:g} m")
+                         f"[simulation.contact] board_height_m = {board:g} m), got y = {pose[1]:g} m")
     names = {1: ("[simulation] approach_height_m", "the approach waypoint above the pin"),
              2: ("[simulation] interference_m", "the bottom of the descent")}
     for k, pose in enumerate(trajectory.waypoints_m[:3]):
@@ -139,7 +139,7 @@ def plan_scenario(case: Case, machine: Machine | None = None, preload_key: str =
     if not ok.all():
         first = int(np.flatnonzero(~ok)[0])
         require_reachable_pose(case, machine, path[first], _SEGMENT_KEYS[segment[first]],
-                           f"the planned path ({trajectory.phases[segment[first]]} segment)")
+                               f"the planned path ({trajectory.phases[segment[first]]} segment)")
     free = np.isin(segment, [0, 4, 5])  # approach, move, settle: out of contact by design
     if np.any(path[free, 1] <= board):
         raise refuse(case, "[simulation] start_m", "a planned approach and move above the board face")

@@ -144,8 +144,8 @@ def check_model_step(case: Case, machine: Machine, sim: Simulation, waypoints_m:
     if sim.time_step_s > bound:
         where = ", ".join(f"{c:.4g}" for c in poses[worst])
         raise refuse(case, key, f"at most {MAX_STEP_FRACTION:g} of the flexible machine's first period on the "
-                      f"planned path: {bound:.4g} s ({frequencies[worst]:.4g} Hz at ({where}) m, "
-                      f"{frequencies.min():.4g} Hz at the softest pose), got {sim.time_step_s:g} s")
+                     f"planned path: {bound:.4g} s ({frequencies[worst]:.4g} Hz at ({where}) m, "
+                     f"{frequencies.min():.4g} Hz at the softest pose), got {sim.time_step_s:g} s")
 
 
 
@@ -167,10 +167,10 @@ def check_preload(case: Case, machine: Machine, drives: drive_kinds.Drive, path_
     if machine.redundancy == 1:
         a4, vp = float(amplitudes[0]), float(np.abs(kinematics.preload_vector(machine, path_m)).max())
         raise refuse(case, key, f"|a4| max|v_p| at most {drive_limit(drives)}: a4 = {a4:g} N with "
-                      f"max|v_p| = {vp:.4g} over the planned path commands {peak:.4g} N from the preload alone")
+                     f"max|v_p| = {vp:.4g} over the planned path commands {peak:.4g} N from the preload alone")
     raise refuse(case, key, f"max |V a| at most {drive_limit(drives)}: the amplitudes "
-                  f"({', '.join(f'{a:g}' for a in amplitudes)}) N command {peak:.4g} N over the planned path from "
-                  "the preload alone")
+                 f"({', '.join(f'{a:g}' for a in amplitudes)}) N command {peak:.4g} N over the planned path from "
+                 "the preload alone")
 
 
 def drive_limit(drives: drive_kinds.Drive) -> str:
@@ -188,7 +188,7 @@ def require_reachable_pose(case: Case, machine: Machine, pose: np.ndarray, key: 
     except UnreachablePoseError as exc:
         reasons = "; ".join(format_violation(*v) for v in exc.violations)
         raise refuse(case, key, f"{what} within the joint limits: pose ({', '.join(f'{c:.6g}' for c in pose)}) m "
-                      f"breaks {reasons}") from None
+                     f"breaks {reasons}") from None
 
 
 
@@ -204,8 +204,8 @@ def check_steps(case: Case, sim: Simulation, rigid: RigidLegModel, poses_m: np.n
     if step_stability(1.0, omega**2, 2.0 * omega, dt) > STABILITY_FRACTION:
         bound = math.sqrt(4 + 4 * STABILITY_FRACTION) - 2  # (omega dt)^2 + 4 omega dt = 4 STABILITY_FRACTION
         raise refuse(case, f"[{table}] baumgarte_rad_per_s", f"omega_b dt at most {bound:.3g} (the explicit "
-                      f"corrector is stable below 2 sqrt(2) - 2 = 0.83), got {omega:g} rad/s x time_step_s "
-                      f"{dt:g} s = {omega * dt:.3g}")
+                     f"corrector is stable below 2 sqrt(2) - 2 = 0.83), got {omega:g} rad/s x time_step_s "
+                     f"{dt:g} s = {omega * dt:.3g}")
     mass = min(apparent_mass_kg(rigid, p) for p in poses_m)
     fit = (c.fit_stiffness_n_per_m if c.fit == "linear" else c.fit_force_n / c.fit_depth_m) if c.law == "press_fit" \
         else 0.0
@@ -213,10 +213,10 @@ def check_steps(case: Case, sim: Simulation, rigid: RigidLegModel, poses_m: np.n
     index = step_stability(mass, stiffness, damping, dt)
     if index > STABILITY_FRACTION:
         raise refuse(case, f"[{table}] time_step_s", f"a step the position loop is stable with: (k dt^2 / m + "
-                      f"2 c dt / m) / 4 = {index:.3g} > {STABILITY_FRACTION:g} (semi-implicit Euler is stable below 1) "
-                      f"with k = kp_n_per_m + the contact stiffness = {stiffness:.4g} N/m, c = kd_n_s_per_m + the "
-                      f"contact damping = {damping:.4g} N s/m, m = {mass:.4g} kg the plate's lightest apparent mass, "
-                      f"dt = {dt:g} s: reduce time_step_s or the [{table}.controller] gains")
+                     f"2 c dt / m) / 4 = {index:.3g} > {STABILITY_FRACTION:g} (semi-implicit Euler is stable below 1) "
+                     f"with k = kp_n_per_m + the contact stiffness = {stiffness:.4g} N/m, c = kd_n_s_per_m + the "
+                     f"contact damping = {damping:.4g} N s/m, m = {mass:.4g} kg the plate's lightest apparent mass, "
+                     f"dt = {dt:g} s: reduce time_step_s or the [{table}.controller] gains")
 
 
 def run_plan(case: Case, machine: Machine, plan: ScenarioPlan, drives: drive_kinds.Drive, limiter: bool,
