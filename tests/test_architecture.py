@@ -82,7 +82,7 @@ SOLVER_LAYERS = ("kinematics", "mechanics", "geometry", "dynamics", "studies")
 # once beside the code that fills it. Presentation helpers: pure functions of a finished result (no solve) that still
 # live beside their study because the CLI prints them too; they move into output/ with their callers.
 OUTPUT_RUNTIME_NAMES = {
-    "pressfit.dynamics.insertion.section_columns": "data: the header of sections.csv (the flexible run's sections)",
+    "pressfit.dynamics.series.section_columns": "data: the header of sections.csv (the flexible run's sections)",
     "pressfit.studies.insertion_study.COLUMNS": "data: the columns of the insertion study's table",
     "pressfit.studies.cycle_study.FACTOR_LABELS": "data: the throughput study's factors as labels",
     "pressfit.studies.design.METRICS": "data: the design study's metric columns",
@@ -396,3 +396,31 @@ def test_test_modules_have_unique_names():
     make the second fail to collect ("import file mismatch") on a clean clone, so every basename is unique."""
     names = [p.name for p in (SRC.parents[1] / "tests").rglob("test_*.py")]
     assert sorted({n for n in names if names.count(n) > 1}) == []
+
+
+
+MAX_FUNCTION_LINES = 80
+
+
+def long_functions(paths: list[Path], root: Path = SRC) -> list[str]:
+    """Every function (and method) of ``paths`` longer than ``MAX_FUNCTION_LINES`` lines, its decorators and
+    docstring included, as ``path:line name (n lines)`` (path relative to ``root``)."""
+    out = []
+    for path in paths:
+        for node in ast.walk(ast.parse(path.read_text())):
+            if isinstance(node, ast.FunctionDef | ast.AsyncFunctionDef):
+                lines = node.end_lineno - min([node.lineno, *(d.lineno for d in node.decorator_list)]) + 1
+                if lines > MAX_FUNCTION_LINES:
+                    out.append(f"{path.relative_to(root)}:{node.lineno} {node.name} ({lines} lines)")
+    return out
+
+
+def test_no_function_is_longer_than_80_lines():
+    """A function over ``MAX_FUNCTION_LINES`` lines is several steps that want names of their own."""
+    assert long_functions(sorted(SRC.rglob("*.py"))) == []
+
+
+def test_the_length_check_catches_a_long_function(tmp_path):
+    body = "    x = 1\n" * (MAX_FUNCTION_LINES - 1)
+    (tmp_path / "m.py").write_text(f"def fits():\n{body}\n\ndef over():\n{body}    x = 2\n")
+    assert long_functions([tmp_path / "m.py"], tmp_path) == ["m.py:83 over (81 lines)"]

@@ -16,7 +16,7 @@ from click.testing import CliRunner
 from pressfit import kinematics
 from pressfit.cli import main
 from pressfit.description.cases import load_case
-from pressfit.dynamics import cycle, insertion
+from pressfit.dynamics import cycle, series
 from pressfit.dynamics import drives as drive_kinds
 from pressfit.dynamics.actuators import distribution
 from pressfit.dynamics.control import gravity_feedforward_n
@@ -338,7 +338,7 @@ def test_a_run_time_error_names_the_cycles_keys(tmp_path, monkeypatch):
     """An error raised inside the step loop of a board names [cycle]'s keys (the board has no [simulation] table):
     with the closure-drift tolerance set to zero the first step's drift stops the run; the one error line names
     [cycle] baumgarte_rad_per_s and [cycle.controller], never [simulation]."""
-    monkeypatch.setattr(insertion, "MAX_CLOSURE_DRIFT_M", 0.0)
+    monkeypatch.setattr(series, "MAX_CLOSURE_DRIFT_M", 0.0)
     line = refused(board(tmp_path), "drifted open", "[cycle] baumgarte_rad_per_s", "[cycle.controller] gains")
     assert "[simulation" not in line
 

@@ -1,5 +1,5 @@
 """The energy balance with the cardan plays (issue 28, "Defects found", item 2; ``pressfit.dynamics.sizing``,
-``pressfit.dynamics.insertion.PlayLedger``, ``LegPlay.stored_energy_j``): the shipped insertion with
+``pressfit.dynamics.machine.flexible_scenario.PlayLedger``, ``LegPlay.stored_energy_j``): the shipped insertion with
 ``clearance = true`` and ``model = "flexible"`` was refused at 14% (its plays' dissipation and the stems'
 re-placement left out of the balance). Closed forms are derived in each test; the runs are the full shipped case
 (a shortened one does not show the plays' crossings)."""
@@ -16,7 +16,8 @@ import tomli_w
 from pressfit.description.cases import load_case
 from pressfit.description.machine import load_machine
 from pressfit.dynamics import drives, sizing
-from pressfit.dynamics.insertion import PlayLedger, simulate_insertion
+from pressfit.dynamics.insertion import simulate_insertion
+from pressfit.dynamics.machine.flexible_scenario import PlayLedger
 from pressfit.dynamics.play import LegPlay
 from pressfit.errors import ResidualError
 from pressfit.mechanics.clearance import clearance_from_case

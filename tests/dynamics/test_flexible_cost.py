@@ -127,13 +127,33 @@ def test_the_flexible_run_keeps_blas_on_one_thread(monkeypatch):
     import scipy.linalg  # noqa: F401 (loads scipy's OpenBLAS beside numpy's)
     from threadpoolctl import threadpool_info, threadpool_limits
 
-    from pressfit.dynamics import insertion
+    from pressfit.description.cases import load_case
+    from pressfit.dynamics.insertion import plan_scenario
+    from pressfit.dynamics.machine.flexible_scenario import FlexibleScenario
+    from pressfit.dynamics.machine.registry import MODELS
+    from pressfit.dynamics.scenario import run_plan
+    from pressfit.shipped import cases_dir
 
     def blas_threads():
         return [i["num_threads"] for i in threadpool_info() if i["user_api"] == "blas"]
 
-    monkeypatch.setattr(insertion, "_flexible_steps", lambda *args: blas_threads())
+    seen = []
+
+    class Probe:  # the flexible model's scenario class as the step loop sees it, recording the BLAS threads
+        one_blas_thread = FlexibleScenario.one_blas_thread
+
+        def __init__(self, *args):
+            seen.append(set(blas_threads()))
+
+        def rows(self):
+            return np.zeros((0, 1)), None
+
+    case = load_case(cases_dir() / "paper" / "insertion.toml")
+    plan = dataclasses.replace(plan_scenario(case), steps=0,
+                               simulation=case.simulation.model_copy(update={"model": "flexible"}))
+    monkeypatch.setitem(MODELS, "flexible", Probe)
     with threadpool_limits(limits=2, user_api="blas"):
         assert blas_threads() and set(blas_threads()) == {2}
-        assert set(insertion._run_flexible(None, None, None, None, True, False)) == {1}
+        run_plan(case, None, plan, None, True, False)
+        assert seen == [{1}]
         assert set(blas_threads()) == {2}

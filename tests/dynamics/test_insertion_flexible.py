@@ -9,7 +9,8 @@ import pytest
 
 from pressfit import kinematics
 from pressfit.description.cases import load_case
-from pressfit.dynamics.insertion import VIBRATION_WINDOW_S, section_columns, series_columns, simulate_insertion
+from pressfit.dynamics.insertion import VIBRATION_WINDOW_S, series_columns, simulate_insertion
+from pressfit.dynamics.series import section_columns
 from pressfit.errors import ModelFileError
 from pressfit.output.simulation import write_simulation
 from tests.dynamics.test_simulation_trust import write_case

@@ -14,7 +14,7 @@ from click.testing import CliRunner
 from pressfit import kinematics
 from pressfit.cli import main
 from pressfit.description.cases import load_case
-from pressfit.dynamics import insertion
+from pressfit.dynamics import scenario, series
 from pressfit.dynamics.actuators import ForceActuators, distribution
 from pressfit.dynamics.contact import contact_force_n
 from pressfit.dynamics.insertion import (
@@ -25,9 +25,9 @@ from pressfit.dynamics.insertion import (
     plan_scenario,
     series_columns,
     simulate_insertion,
-    step_stability,
     summarise,
 )
+from pressfit.dynamics.scenario import step_stability
 from pressfit.errors import ModelFileError, PressfitError
 from pressfit.studies.limit_check import simulation_lines
 
@@ -149,12 +149,12 @@ def test_planned_path_is_sampled_densely_along_every_segment():
     waypoints, no two consecutive samples of a segment farther apart than PATH_SAMPLE_M, and each segment's
     samples start and end at its waypoints."""
     plan = plan_scenario(load_case(SHIPPED))
-    path, segment = insertion._path(plan.trajectory)
+    path, segment = scenario.planned_path(plan.trajectory)
     np.testing.assert_array_equal(path, plan.path_m)
     for k in range(len(plan.trajectory.durations_s)):
         pts, (a, b) = path[segment == k], plan.trajectory.waypoints_m[k:k + 2]
         np.testing.assert_allclose(pts[[0, -1]], [a, b], atol=1e-15)
-        assert np.all(np.linalg.norm(np.diff(pts, axis=0), axis=1) <= insertion.PATH_SAMPLE_M * (1 + 1e-12))
+        assert np.all(np.linalg.norm(np.diff(pts, axis=0), axis=1) <= scenario.PATH_SAMPLE_M * (1 + 1e-12))
         off = np.cross(pts - a, b - a)
         np.testing.assert_allclose(off, 0.0, atol=1e-15)
 
@@ -194,7 +194,7 @@ def test_series_grows_in_chunks_with_the_same_rows(tmp_path, monkeypatch):
                                             "settle_s": 0.0, "baumgarte_rad_per_s": 400.0})
     case = load_case(path)
     whole = simulate_insertion(case).series
-    monkeypatch.setattr(insertion, "_CHUNK_ROWS", 7)
+    monkeypatch.setattr(series, "CHUNK_ROWS", 7)
     np.testing.assert_array_equal(simulate_insertion(case).series, whole)
     assert whole.shape[0] >= 1400  # 1.4 s at 1 ms: 200 chunks of 7 rows
 
@@ -237,9 +237,9 @@ def test_closure_drift_over_the_tolerance_stops_the_run(tmp_path, monkeypatch):
     one line naming the drift, the time and baumgarte_rad_per_s (exit 2); 1% over D it completes."""
     path = write_case(tmp_path)
     drift = simulate_insertion(load_case(path)).summary["max_closure_drift_m"]
-    monkeypatch.setattr(insertion, "MAX_CLOSURE_DRIFT_M", 1.01 * drift)
+    monkeypatch.setattr(series, "MAX_CLOSURE_DRIFT_M", 1.01 * drift)
     assert simulate_insertion(load_case(path)).summary["max_closure_drift_m"] == drift
-    monkeypatch.setattr(insertion, "MAX_CLOSURE_DRIFT_M", 0.99 * drift)
+    monkeypatch.setattr(series, "MAX_CLOSURE_DRIFT_M", 0.99 * drift)
     refused(path, "loop closures drifted open by", "at t =", "[simulation] baumgarte_rad_per_s")
 
 

@@ -190,15 +190,9 @@ def _number(path: Path, line: int, column: str, cell: str, decimal_comma: bool) 
     return v
 
 
-def read_curve(path: Path | str, *, units: dict[str, str] | None = None, columns: dict[str, str] | None = None,
-               reversal_tolerance_m: float = REVERSAL_TOLERANCE_M) -> MeasuredCurve:
-    """Read and check one measured curve (module doc). ``units``: role -> unit for columns whose header names
-    none (``{"force": "kN"}``; a unit in the header wins); ``columns``: role -> the column's name to read where
-    the header's names are ambiguous or unusual. Raises CurveFileError (file, row, column)."""
-    path = Path(path)
-    units, columns = units or {}, columns or {}
-    numbered = [(i, line) for i, line in enumerate(_read_text(path).splitlines(), 1) if line.strip()]
-    head_at = None
+def _header_row(path: Path, numbered: list[tuple[int, str]], columns: dict[str, str]) -> int:
+    """The index in ``numbered`` (line number, text) of the header row: the first row not a comment that names a
+    displacement and a force column (or the ``columns`` asked for) and is not all numbers; CurveFileError if none."""
     for k, (_, line) in enumerate(numbered):
         if line.lstrip().startswith("#"):
             continue
@@ -209,12 +203,20 @@ def read_curve(path: Path | str, *, units: dict[str, str] | None = None, columns
                      for r in ("displacement", "force"))
         if (roles["displacement"] or columns.get("displacement")) and (roles["force"] or columns.get("force")) \
                 and wanted and not all(_is_number(c) for c in cells if c):
-            head_at = k
-            break
-    if head_at is None:
-        first = numbered[0][0] if numbered else None
-        raise CurveFileError(path, first, None, "no header row naming a displacement and a force column "
-                             "(e.g. 'Displacement [mm];Force [kN]')")
+            return k
+    raise CurveFileError(path, numbered[0][0] if numbered else None, None, "no header row naming a displacement "
+                         "and a force column (e.g. 'Displacement [mm];Force [kN]')")
+
+
+def read_curve(path: Path | str, *, units: dict[str, str] | None = None, columns: dict[str, str] | None = None,
+               reversal_tolerance_m: float = REVERSAL_TOLERANCE_M) -> MeasuredCurve:
+    """Read and check one measured curve (module doc). ``units``: role -> unit for columns whose header names
+    none (``{"force": "kN"}``; a unit in the header wins); ``columns``: role -> the column's name to read where
+    the header's names are ambiguous or unusual. Raises CurveFileError (file, row, column)."""
+    path = Path(path)
+    units, columns = units or {}, columns or {}
+    numbered = [(i, line) for i, line in enumerate(_read_text(path).splitlines(), 1) if line.strip()]
+    head_at = _header_row(path, numbered, columns)
     before = [(i, line) for i, line in numbered[:head_at] if not line.lstrip().startswith("#")]
     head_line, head_text = numbered[head_at]
     delim = _delimiter(head_text)

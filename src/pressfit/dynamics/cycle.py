@@ -1,7 +1,8 @@
 r"""A whole board in one run (``pressfit cycle``): the case's ``[cycle]`` (:class:`pressfit.description.cases.Cycle`)
 as one reference of straight S-curve moves (:mod:`pressfit.kinematics.profiles`) through the approach heights,
-simulated by the insertion's own step loops (:func:`pressfit.dynamics.insertion.run_plan`, rigid or flexible
-model) with each segment's insertion force limit the pin's, and per pin and per cycle figures.
+simulated by the scenario engine (:func:`pressfit.dynamics.scenario.run_plan`, on any model of
+:mod:`pressfit.dynamics.machine.registry`) with each segment's insertion force limit the pin's, and per pin and
+per cycle figures.
 
 The reference: from ``start_m`` to the first pin's approach point (x, h_b + approach, z) ("approach"), per pin
 "descent" to (x, h_b - interference, z), "dwell", "retract" to the approach point, then "traverse" to the next
@@ -15,7 +16,7 @@ straight move):
   ``speed_limit_rad_per_s`` x lead / 2 pi; the force and hydraulic models have none of their own);
 * drive force: the rigid-model inverse dynamics at rest, N = -A^+ (G(h) + M(h) a u) + a4 v_p (G the gravity
   feed-forward, M = the plate's apparent mass matrix, the inverse of
-  :func:`pressfit.dynamics.insertion.plate_mobility`, reflected drive inertia included), must stay within the
+  :func:`pressfit.dynamics.scenario.plate_mobility`, reflected drive inertia included), must stay within the
   drives' force limit for |a| up to the acceleration limit; the velocity-product terms (about m v^2 / l, a few
   N at 0.5 m/s) and the force loop's lag are left out of this bound (the simulation has them; its saturation
   time is reported).
@@ -47,32 +48,33 @@ from pressfit.dynamics import drives as drive_kinds
 from pressfit.dynamics.actuators import distribution
 from pressfit.dynamics.contact import contact_force_n
 from pressfit.dynamics.control import Trajectory, gravity_feedforward_n
-from pressfit.dynamics.insertion import (
-    COMPLETION_FRACTION,
-    MAX_DEPTH_FACTOR,
+from pressfit.dynamics.multibody import rigid_leg_model
+from pressfit.dynamics.scenario import (
     MAX_STEPS,
     MIN_SEGMENT_STEPS,
     PATH_SAMPLE_M,
     WARN_STEPS,
-    ScenarioPlan,
-    _check_steps,
-    _path,
-    _require_reachable,
-    check_flexible_step,
+    check_model_step,
     check_oil_column,
     check_preload,
+    check_steps,
     drive_limit,
-    leg_columns,
+    pin_figures,
+    planned_path,
     plate_mobility,
-    preload_amplitudes_n,
     require_force_preload,
+    require_reachable_pose,
     run_plan,
     run_time_warning,
-    series_columns,
-    settling_time_s,
     without_preload,
 )
-from pressfit.dynamics.multibody import rigid_leg_model
+from pressfit.dynamics.series import (
+    MAX_DEPTH_FACTOR,
+    ScenarioPlan,
+    leg_columns,
+    preload_amplitudes_n,
+    series_columns,
+)
 from pressfit.dynamics.sizing import RunSizing, run_sizing
 from pressfit.errors import ModelFileError, PressfitError
 from pressfit.kinematics.profiles import Quintic, SCurve, quintic_move, s_curve
@@ -199,6 +201,28 @@ def cycle_simulation(cycle: Cycle, first: ResolvedPin, model: str) -> Simulation
                       controller=cycle.controller)
 
 
+def _check_poses(case: Case, machine: Machine, pins: tuple[ResolvedPin, ...]) -> None:
+    """Start and end above the board face and reachable; every pin's dwell at least ``MIN_SEGMENT_STEPS`` steps,
+    its approach point and the bottom of its insertion reachable (ModelFileError naming the pin and the key)."""
+    cycle = case.cycle
+    dt, board = cycle.time_step_s, cycle.board_height_m
+    for key, pose in (("start_m", cycle.start_m), ("end_m", cycle.end_m)):
+        if not pose[1] > board:
+            raise ModelFileError(case.path, f"[cycle] {key}", f"a pose above the board face (the plane y = "
+                                 f"[cycle] board_height_m = {board:g} m), got y = {pose[1]:g} m")
+        require_reachable_pose(case, machine, np.asarray(pose, float), f"[cycle] {key}", f"the {key[:-2]} pose")
+    for pin in pins:
+        if pin.dwell_s < MIN_SEGMENT_STEPS * dt * (1 - 1e-9):
+            raise ModelFileError(case.path, f"{pin.source} dwell_s", f"{_pin_label(pin)}: a dwell of at least "
+                                 f"{MIN_SEGMENT_STEPS} time steps ({MIN_SEGMENT_STEPS * dt:g} s at time_step_s = "
+                                 f"{dt:g} s), got {pin.dwell_s:g} s")
+        for height, what in ((pin.approach_height_m, f"its approach point {pin.approach_height_m:g} m above the "
+                              "board face"), (-pin.interference_m, f"the bottom of its insertion "
+                                              f"{pin.interference_m:g} m below the board face")):
+            require_reachable_pose(case, machine, np.array([pin.x_m, board + height, pin.z_m]),
+                                   f"{pin.source} (x_m, z_m)", f"{_pin_label(pin)}: {what}")
+
+
 def plan_cycle(case: Case, machine: Machine | None = None, model: str | None = None) -> CyclePlan:
     """Validate the case's ``[cycle]`` (module docstring; ModelFileError naming the pin, the key and the file)
     and plan it. ``model`` overrides ``[cycle] model``."""
@@ -210,21 +234,7 @@ def plan_cycle(case: Case, machine: Machine | None = None, model: str | None = N
     drives = drive_kinds.of(machine)
     pins = tuple(cycle.resolved_pins())
     dt, board = cycle.time_step_s, cycle.board_height_m
-    for key, pose in (("start_m", cycle.start_m), ("end_m", cycle.end_m)):
-        if not pose[1] > board:
-            raise ModelFileError(case.path, f"[cycle] {key}", f"a pose above the board face (the plane y = "
-                                 f"[cycle] board_height_m = {board:g} m), got y = {pose[1]:g} m")
-        _require_reachable(case, machine, np.asarray(pose, float), f"[cycle] {key}", f"the {key[:-2]} pose")
-    for pin in pins:
-        if pin.dwell_s < MIN_SEGMENT_STEPS * dt * (1 - 1e-9):
-            raise ModelFileError(case.path, f"{pin.source} dwell_s", f"{_pin_label(pin)}: a dwell of at least "
-                                 f"{MIN_SEGMENT_STEPS} time steps ({MIN_SEGMENT_STEPS * dt:g} s at time_step_s = "
-                                 f"{dt:g} s), got {pin.dwell_s:g} s")
-        for height, what in ((pin.approach_height_m, f"its approach point {pin.approach_height_m:g} m above the "
-                              "board face"), (-pin.interference_m, f"the bottom of its insertion "
-                                              f"{pin.interference_m:g} m below the board face")):
-            _require_reachable(case, machine, np.array([pin.x_m, board + height, pin.z_m]),
-                               f"{pin.source} (x_m, z_m)", f"{_pin_label(pin)}: {what}")
+    _check_poses(case, machine, pins)
     descent = cycle.descent or cycle.motion
     bound, previous = cycle.settle_s, np.asarray(cycle.start_m, float)  # the run without the drives' scaling
     for pin in pins:  # (which only lengthens the moves): refused at once if that is already too long
@@ -264,21 +274,21 @@ def plan_cycle(case: Case, machine: Machine | None = None, model: str | None = N
     trajectory = Trajectory(waypoints_m=np.array(points), durations_s=np.array([s.duration_s for s in segments]),
                             phases=tuple(s.phase for s in segments), shapes=tuple(s.profile for s in segments))
     steps = _check_length(case, trajectory.duration_s, dt, len(pins))
-    path, index = _path(trajectory)
+    path, index = planned_path(trajectory)
     ok = kinematics.is_reachable(machine, path)
     if not ok.all():
         first = int(np.flatnonzero(~ok)[0])
         seg = segments[index[first]]
         pin = pins[seg.pin - 1]
-        _require_reachable(case, machine, path[first], f"{pin.source} (x_m, z_m)" if seg.phase != "move" else
-                           "[cycle] end_m", f"{_pin_label(pin)}: the planned path ({seg.phase} segment)")
+        require_reachable_pose(case, machine, path[first], f"{pin.source} (x_m, z_m)" if seg.phase != "move" else
+                               "[cycle] end_m", f"{_pin_label(pin)}: the planned path ({seg.phase} segment)")
     check_preload(case, machine, drives, path, "[preload] a4_n")
     sim = cycle_simulation(cycle, pins[0], model or cycle.model)
-    _check_steps(case, sim, rigid, np.array([cycle.start_m, *points[1::4], cycle.end_m]), "cycle")  # start,
+    check_steps(case, sim, rigid, np.array([cycle.start_m, *points[1::4], cycle.end_m]), "cycle")  # start,
     # every approach point and the end
     check_oil_column(case, machine, sim, np.array([cycle.start_m, *points[1::4], cycle.end_m]), path,
                      "[cycle] time_step_s")
-    check_flexible_step(case, machine, sim, np.array(points), "[cycle] time_step_s")
+    check_model_step(case, machine, sim, np.array(points), "[cycle] time_step_s")
     limits = np.array([pins[s.pin - 1].force_limit_n for s in segments])
     warnings = (run_time_warning(steps, dt, trajectory.duration_s),) if steps > WARN_STEPS else ()
     scenario = ScenarioPlan(trajectory=trajectory, steps=steps, path_m=path, warnings=warnings, rigid=rigid,
@@ -344,7 +354,7 @@ def simulate_cycle(case: Case, model: str | None = None, progress: bool = False,
 
 @dataclass(frozen=True, kw_only=True)
 class _Rows:
-    """Rows whose first columns are ``columns`` (:func:`pressfit.dynamics.insertion.series_columns`: what run_sizing
+    """Rows whose first columns are ``columns`` (:func:`pressfit.dynamics.series.series_columns`: what run_sizing
     reads)."""
 
     series: np.ndarray
@@ -360,8 +370,9 @@ def summarise_cycle(series: np.ndarray, plan: CyclePlan, drives: drive_kinds.Dri
     """Per pin (``pins``), on the rows of its descent, dwell and retract: ``first_contact_time_s``,
     ``peak_contact_force_n`` (and its time), ``steady_insertion_force_n`` (at the end of the dwell),
     ``overshoot_n`` over the pin's ``force_limit_n``, ``tool_lateral_error_at_first_contact_m`` (the tool's
-    (x, z) against the pin's), ``settling_time_s`` (:func:`pressfit.dynamics.insertion.settling_time_s`),
-    ``insertion_completed`` (settled at ``COMPLETION_FRACTION`` of the target: the contact law at the pin's
+    (x, z) against the pin's), ``settling_time_s``, ``insertion_completed`` (the figures of
+    :func:`pressfit.dynamics.scenario.pin_figures`, computed there once for a pin and a board: settled at
+    ``COMPLETION_FRACTION`` of the target: the contact law at the pin's
     interference or its force limit if lower), ``checks`` (each given pin limit: ``max_overshoot_n`` on
     ``overshoot_n``, ``max_alignment_error_m`` on the lateral error) and ``passed`` (completed and every check
     holds). The cycle: ``cycle_time_s`` (:attr:`CyclePlan.cycle_time_s`), ``pins_per_minute``, ``segments``,
@@ -376,40 +387,23 @@ def summarise_cycle(series: np.ndarray, plan: CyclePlan, drives: drive_kinds.Dri
     for pin in plan.pins:
         mine = [s.index for s in plan.segments if s.pin == pin.index and s.phase in PIN_PHASES]
         rows = np.flatnonzero(np.isin(segment, mine))
-        dwell = np.flatnonzero(segment[rows] == mine[1])
-        f, tt = force[rows], t[rows]
-        touching = np.flatnonzero(f > 0.0)
-        first = int(touching[0]) if touching.size else None
-        peak = int(np.argmax(f))
-        settling, _, why = settling_time_s(tt, f, dwell)
-        target = min(contact_force_n(contact, pin.interference_m), pin.force_limit_n)
-        steady = float(f[dwell[-1]])
-        completed = settling is not None and steady >= COMPLETION_FRACTION * target
-        if settling is not None and not completed:
-            why = f"the steady contact force {steady:.4g} N is below {100 * COMPLETION_FRACTION:g}% of the target " \
-                  f"{target:.4g} N"
-        lateral = float(np.linalg.norm(tool[rows[first]] - [pin.x_m, pin.z_m])) if first is not None else None
-        overshoot = float(max(f[peak] - pin.force_limit_n, 0.0))
-        checks = []
-        if pin.max_overshoot_n is not None:
-            checks.append({"key": "max_overshoot_n", "value_n": overshoot, "limit_n": pin.max_overshoot_n,
-                           "passed": overshoot <= pin.max_overshoot_n})
-        if pin.max_alignment_error_m is not None:
-            checks.append({"key": "max_alignment_error_m", "value_m": lateral, "limit_m": pin.max_alignment_error_m,
-                           "passed": lateral is not None and lateral <= pin.max_alignment_error_m})
-        passed = completed and all(c["passed"] for c in checks)
-        if not completed:
-            warnings.append(f"{_pin_label(pin)}: the insertion did not complete: {why}")
+        fig = pin_figures(t[rows], force[rows], tool[rows], np.flatnonzero(segment[rows] == mine[1]),
+                          np.array([pin.x_m, pin.z_m]), min(contact_force_n(contact, pin.interference_m),
+                                                            pin.force_limit_n), pin.force_limit_n)
+        checks = _checks(pin, fig.overshoot_n, fig.lateral_m)
+        if not fig.completed:
+            warnings.append(f"{_pin_label(pin)}: the insertion did not complete: {fig.note}")
+        first = fig.first_contact
         pins.append({
             "index": pin.index, "x_m": pin.x_m, "z_m": pin.z_m, "source": pin.source,
             "force_limit_n": pin.force_limit_n, "interference_m": pin.interference_m, "dwell_s": pin.dwell_s,
-            "first_contact_time_s": float(tt[first]) if first is not None else None,
-            "peak_contact_force_n": float(f[peak]), "peak_contact_force_time_s": float(tt[peak]),
-            "steady_insertion_force_n": steady, "overshoot_n": overshoot,
-            "tool_lateral_error_at_first_contact_m": lateral,
-            "settling_time_s": settling, "insertion_completed": bool(completed),
-            "insertion_target_force_n": target, "insertion_note": why if not completed else "",
-            "checks": checks, "passed": bool(passed)})
+            "first_contact_time_s": float(t[rows[first]]) if first is not None else None,
+            "peak_contact_force_n": fig.peak_n, "peak_contact_force_time_s": float(t[rows[fig.peak]]),
+            "steady_insertion_force_n": fig.steady_n, "overshoot_n": fig.overshoot_n,
+            "tool_lateral_error_at_first_contact_m": fig.lateral_m,
+            "settling_time_s": fig.settling_s, "insertion_completed": fig.completed,
+            "insertion_target_force_n": fig.target_n, "insertion_note": fig.note,
+            "checks": checks, "passed": bool(fig.completed and all(c["passed"] for c in checks))})
     records = [s.to_dict() for s in plan.segments]
     slowest = max((r for r in records if r["phase"] != "settle"), key=lambda r: r["duration_s"])
     cycle_time = plan.cycle_time_s
@@ -430,3 +424,16 @@ def summarise_cycle(series: np.ndarray, plan: CyclePlan, drives: drive_kinds.Dri
                             f"{summary['actuator_saturation_time_s']:g} s")
     summary["warnings"] = [*plan.scenario.warnings, *warnings]
     return summary
+
+
+def _checks(pin: ResolvedPin, overshoot_n: float, lateral_m: float | None) -> list[dict[str, Any]]:
+    """Each limit the pin gives (``max_overshoot_n`` on the overshoot, ``max_alignment_error_m`` on the lateral
+    error at first contact, None without contact) with its value and whether it holds."""
+    checks = []
+    if pin.max_overshoot_n is not None:
+        checks.append({"key": "max_overshoot_n", "value_n": overshoot_n, "limit_n": pin.max_overshoot_n,
+                       "passed": overshoot_n <= pin.max_overshoot_n})
+    if pin.max_alignment_error_m is not None:
+        checks.append({"key": "max_alignment_error_m", "value_m": lateral_m, "limit_m": pin.max_alignment_error_m,
+                       "passed": lateral_m is not None and lateral_m <= pin.max_alignment_error_m})
+    return checks

@@ -65,6 +65,7 @@ from pressfit.dynamics.actuators import distribution
 from pressfit.dynamics.control import gravity_feedforward_n
 from pressfit.dynamics.drives.base import DrivePort
 from pressfit.dynamics.machine.flexible import FlexibleMachine
+from pressfit.dynamics.machine.registry import model_kind
 from pressfit.dynamics.modes import closure_jacobian, elastic_stiffness, mass_matrix, natural_modes, reduced_system
 from pressfit.dynamics.multibody import inverse_apparent_mass, rigid_leg_model
 from pressfit.errors import PressfitError
@@ -186,8 +187,7 @@ def linear_plant(machine: Machine, pose_m: np.ndarray, contact: Contact | None =
                  model: Model = "flexible", tensions_n: np.ndarray | None = None) -> Plant:
     """:class:`Plant` at the reachable pose ``pose_m`` (m); ``contact``: the contact spring engaged at the tool;
     ``tensions_n`` (n,), N: the drives' operating point (default :func:`static_tensions_n` without preload)."""
-    if model not in ("flexible", "rigid"):
-        raise PressfitError(f"model must be 'flexible' or 'rigid', got {model!r}")
+    elastic = model_kind(model).elastic
     pose = kinematics.require_reachable(machine, np.asarray(pose_m, dtype=float))
     legs = kinematics.inverse_kinematics(machine, pose)
     pinv, _ = distribution(legs.unit_vectors)
@@ -195,7 +195,7 @@ def linear_plant(machine: Machine, pose_m: np.ndarray, contact: Contact | None =
     drive = drive_kinds.of(machine)
     ports = [drive.linear_port(float(length), float(n)) for length, n in zip(legs.lengths_m, tensions, strict=True)]
     m_h, m_y = _apparent_vertical_mass(machine, pose)
-    if model == "rigid":
+    if not elastic:
         s = legs.unit_vectors  # (n, 3): dl = A^T dh
         mass, damping, stiffness = m_h, np.zeros((3, 3)), np.zeros((3, 3))
         plate = np.eye(3)

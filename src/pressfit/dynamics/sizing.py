@@ -31,7 +31,7 @@ force F, +y on the tool, held over the step after it was computed; on the rigid 
 compliance, whose quasi-static spring is the pin's side); K (armature and a drive side behind the plays included)
 and V_g from Pinocchio; V_el the flexible model's springs and D its Rayleigh damping's work per step
 (:class:`pressfit.dynamics.machine.flexible.FlexibleState`); V_play and P_play the cardan plays' stored energy and
-dissipation (flexible model with clearance: :class:`pressfit.dynamics.insertion.PlayLedger`, what the drives do
+dissipation (flexible model with clearance: :class:`.flexible_scenario.PlayLedger`, what the drives do
 on their side of the plays minus what reaches the legs); E_replacement the stems' re-placement, a jump of the
 flexible machine's energy no force works on (:meth:`FlexibleMachine.replacement_energy_j`, step-independent). The
 drives' own losses (copper, valve throttling) are upstream of the joints, so they are reported beside the balance,
@@ -74,6 +74,7 @@ from pressfit.dynamics import drives as drive_kinds
 from pressfit.dynamics.drives.base import Rating, rms
 from pressfit.dynamics.drives.electric import ElectricSizing
 from pressfit.dynamics.drives.hydraulic import HydraulicSizing
+from pressfit.dynamics.machine.registry import model_kind
 from pressfit.errors import PressfitError, ResidualError
 
 # the relative residual of the energy balance by (model, drive kind): about 3x the largest measured on the shipped
@@ -92,10 +93,6 @@ ENERGY_RESIDUAL_STEP_RATIO = {
     ("flexible", "linear_motor"): 2.0,
 }
 FIRST_ORDER_RATIO = 1.6  # a residual that shrinks by at least this when the step halves: a smaller step reduces it
-INTEGRATOR_ERROR = {  # what the residual is, by model (module docstring)
-    "rigid": "semi-implicit Euler's energy error sum 1/2 dv^T M dv",
-    "flexible": "generalised-alpha's energy error (the damping's rectangle rule, the numerical damping)",
-}
 PRELOAD_FIGURES = ("rms_force_n", "copper_loss_w", "positive_energy_j", "regenerative_energy_j",
                    "supply_energy_j")  # given again with a4 = 0 (the preload's cost)
 
@@ -220,7 +217,7 @@ class EnergyBalance:
     ``gross_drive_work_j``, held to ``tolerance`` (:func:`energy_balance_tolerance` of ``model`` and
     ``drive_kind``); ``drive_losses_j`` (copper, valve throttling) upstream of the joints, beside it;
     ``play_energy_change_j`` and ``play_dissipation_j`` the cardan plays' (flexible model with clearance,
-    :class:`pressfit.dynamics.insertion.PlayLedger`; 0 otherwise); ``step_convergent``: the residual of this
+    :class:`.flexible_scenario.PlayLedger`; 0 otherwise); ``step_convergent``: the residual of this
     model and drive kind shrinks with the step (:func:`converges_with_the_step`)."""
 
     drive_work_j: float
@@ -259,7 +256,7 @@ class EnergyBalance:
         error of the model; it suggests a smaller ``table``'s time step only where that residual was measured to
         shrink with the step (``step_convergent``), and says the step is not its cause otherwise."""
         if not self.relative_residual <= self.tolerance:
-            integrator = INTEGRATOR_ERROR.get(self.model, "the integrator's energy error")
+            integrator = model_kind(self.model).integrator_error
             if self.step_convergent:
                 advice = (f"first order in [{table}] time_step_s on the {self.model} model with {self.drive_kind} "
                           "drives (measured, docs/sizing.md): a smaller time_step_s reduces it")
@@ -324,7 +321,7 @@ class RunSizing:
 
 
 def _columns(result: Any, prefix: str) -> np.ndarray:
-    from pressfit.dynamics.insertion import leg_columns
+    from pressfit.dynamics.series import leg_columns
 
     return result.series[:, leg_columns(result.columns, prefix)]
 
@@ -365,7 +362,8 @@ def run_sizing(result: Any, drive: drive_kinds.Drive, dt_s: float, without_prelo
 def size_insertion(case: Any, result: Any, limiter: bool = True, progress: bool = False) -> RunSizing:
     """:func:`run_sizing` of a case's simulated insertion, the preload's cost from a second run of the same scenario
     with ``[preload] a4_n`` = 0 (``result`` itself when a4 is 0)."""
-    from pressfit.dynamics.insertion import simulate_insertion, without_preload
+    from pressfit.dynamics.insertion import simulate_insertion
+    from pressfit.dynamics.scenario import without_preload
 
     amplitudes = case.preload.amplitudes
     baseline = result

@@ -8,7 +8,7 @@ from typing import TYPE_CHECKING, Any
 
 import numpy as np
 
-from pressfit.dynamics.insertion import section_columns
+from pressfit.dynamics.series import section_columns
 from pressfit.output import files as io
 from pressfit.output.plots import plt
 from pressfit.studies.insertion_study import COLUMNS
@@ -64,7 +64,7 @@ def write_simulation(result: InsertionResult, out_dir: Path | str, overwrite: bo
     """``simulation.csv`` (one row per time step of ``result``), ``simulation.json`` (its summary, with the
     comparison's under ``"comparison"`` and the drive sizing's records, :meth:`RunSizing.to_dict`),
     ``simulation.png``; with the flexible model ``sections.csv`` (the leg section resultants per step, N and N m,
-    :func:`pressfit.dynamics.insertion.section_columns`)."""
+    :func:`pressfit.dynamics.series.section_columns`)."""
     out = Path(out_dir)
     summary = simulation_summary(result, comparison, sizing)
     paths = [io.write_csv(out / "simulation.csv", result.columns, result.series, overwrite),

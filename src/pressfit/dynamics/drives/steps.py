@@ -29,14 +29,14 @@ def leg_masses_kg(machine: Machine, pose_m: np.ndarray) -> np.ndarray:
     return 1.0 / np.einsum("ij,jk,ik->i", a, inverse, a)
 
 
-def hydraulic_step_refusal(machine: Machine, waypoints_m: np.ndarray, path_m: np.ndarray, model: str,
+def hydraulic_step_refusal(machine: Machine, waypoints_m: np.ndarray, path_m: np.ndarray, elastic: bool,
                            dt_s: float) -> str | None:
-    """None when ``dt_s`` integrates the oil columns over the planned ``path_m`` (n, 3) on ``model``, else the
+    """None when ``dt_s`` integrates the oil columns over the planned ``path_m`` (n, 3), else the
     reason (:func:`pressfit.dynamics.drives.hydraulic.refuse_step`): per leg the stiffest column over the path
     (k_h is largest at the ends of the stroke) on the lightest of the masses at the ``waypoints_m`` (the mass
-    changes slowly with the pose). A drive without an ``explicit_spring`` (not hydraulic), or the flexible model
-    (module doc): None."""
-    if not drives.drive_type(machine).explicit_spring or model == "flexible":
+    changes slowly with the pose). A drive without an ``explicit_spring`` (not hydraulic), or an ``elastic`` model
+    (the flexible machine steps the column implicitly, module doc): None."""
+    if not drives.drive_type(machine).explicit_spring or elastic:
         return None
     lengths = np.array([kinematics.inverse_kinematics(machine, p).lengths_m for p in np.atleast_2d(path_m)])
     legs = np.arange(lengths.shape[1])

@@ -401,12 +401,7 @@ class FlexibleMachine:
         iterate (``drive``'s last call: the caller's drive state is that call's).
         Refuses (PressfitError) a step longer than MAX_STEP_FRACTION of the first mode's period or one whose
         Newton does not converge."""
-        h = float(dt_s)
-        if not (math.isfinite(h) and 0.0 < h <= MAX_STEP_FRACTION * self.first_period_s):
-            bound = MAX_STEP_FRACTION * self.first_period_s
-            raise PressfitError(f"time step {dt_s!r} s is outside (0, {bound:.4g}] s: at most {MAX_STEP_FRACTION:g} "
-                                f"of the first mode's period ({1e3 * self.first_period_s:.4g} ms, "
-                                f"{self.modes.frequencies_hz[0]:.4g} Hz)")
+        h = self._step_length(dt_s)
         wrench = _wrench(plate_wrench)
         stem = self.stems_for(state)
         self._place(stem)
@@ -422,9 +417,7 @@ class FlexibleMachine:
         key = (h, drive_input.kind, self._placed.tobytes())
         fresh = False
         implicit = drive is not None and drive_input.kind == "force"
-        self._drive_tangent = drive_stiffness_n_per_m if implicit and callable(drive_stiffness_n_per_m) else None
-        self._drive_k = np.zeros(len(self.act)) if drive_stiffness_n_per_m is None or not implicit else \
-            np.asarray(drive_stiffness_n_per_m() if self._drive_tangent else drive_stiffness_n_per_m, dtype=float)
+        self._set_drive_tangent(drive_stiffness_n_per_m if implicit else None)
         if self._factor is None or self._factor_key[:2] != key[:2]:
             self._refresh(q_n, k, drive_input, rest, h)
             fresh = True
@@ -445,11 +438,7 @@ class FlexibleMachine:
                 tension = drive(q[self.act_q])
                 tau_ext[self.act_v] = held - tension
             r = pin.rnea(self.model, self.data, q, v, acc + alpha * rel) + bj.T @ lam - tau_ext
-            if self.nonlinear:
-                f, kt = self._springs(q, rest, k, drive_input)
-                r[sv] += f + beta * kt * rel[sv]
-            else:  # linear springs (force drives: k is 0 on the actuators)
-                r[sv] += k * (q[self.sq] - rest + beta * rel[sv])
+            r[sv] += self._spring_residual(q, rest, k, drive_input, rel[sv], beta)
             rhs[:nv], rhs[nv:] = r, phi
             dx = self._solve(rhs)
             size = float(np.abs(dx[:nv]).max())
@@ -474,15 +463,51 @@ class FlexibleMachine:
             if it >= 3 * MAX_ITERATIONS:
                 raise ConvergenceError(f"flexible step at t = {state.time_s + h:.6g} s", size, NEWTON_TOL, it)
             last = size
-        a_ps = ((1 - af) * acc + af * acc_n - am * a_n) / (1 - am)
-        q = pin.integrate(self.model, q_n, base_dq + h * h * b * a_ps)
+        # the drive at the last iterate: within drive_stiffness * NEWTON_TOL (~1e-5 N) of the end's
+        held = DriveInput.forces(tension) if implicit else drive_input
+        return self._end_state(state, h, acc, lam, (base_dq, base_v, v_r), rest, k, drive_input, held, it)
+
+    def _end_state(self, state: FlexibleState, h: float, acc: np.ndarray, lam: np.ndarray, base: tuple,
+                   rest: np.ndarray, k: np.ndarray, drive: DriveInput, held: DriveInput,
+                   iterations: int) -> FlexibleState:
+        """The state at the end of :meth:`step` from its converged accelerations ``acc`` and multipliers ``lam``
+        (``base``: the step's predictor of the position increment and the velocity, and the rigid velocity v_r);
+        the damping's work over the step under the drive input ``drive``; ``held``: the input the state records."""
+        am, af, g, b = self.alpha_m, self.alpha_f, self.gamma, self.beta
+        base_dq, base_v, v_r = base
+        a_ps = ((1 - af) * acc + af * state.acceleration - am * state.pseudo_acceleration) / (1 - am)
+        q = pin.integrate(self.model, state.q, base_dq + h * h * b * a_ps)
         v = base_v + h * g * a_ps
-        work = float(self._damping_force(q, v - v_r, rest, k, drive_input) @ pin.difference(self.model, q_n, q))
-        if implicit:  # the drive at the last iterate: within drive_stiffness * NEWTON_TOL (~1e-5 N) of the end's
-            drive_input = DriveInput.forces(tension)
+        work = float(self._damping_force(q, v - v_r, rest, k, drive) @ pin.difference(self.model, state.q, q))
         return FlexibleState(time_s=state.time_s + h, q=q, v=v, acceleration=acc, pseudo_acceleration=a_ps,
-                             multipliers=lam, drive=drive_input, stem_lengths_m=self._placed.copy(), iterations=it,
+                             multipliers=lam, drive=held, stem_lengths_m=self._placed.copy(), iterations=iterations,
                              damping_work_j=work)
+
+    def _step_length(self, dt_s: float) -> float:
+        """``dt_s`` as a float, refused (PressfitError) outside (0, MAX_STEP_FRACTION of the first period]."""
+        h = float(dt_s)
+        if not (math.isfinite(h) and 0.0 < h <= MAX_STEP_FRACTION * self.first_period_s):
+            bound = MAX_STEP_FRACTION * self.first_period_s
+            raise PressfitError(f"time step {dt_s!r} s is outside (0, {bound:.4g}] s: at most {MAX_STEP_FRACTION:g} "
+                                f"of the first mode's period ({1e3 * self.first_period_s:.4g} ms, "
+                                f"{self.modes.frequencies_hz[0]:.4g} Hz)")
+        return h
+
+    def _set_drive_tangent(self, stiffness: np.ndarray | Callable[[], np.ndarray] | None) -> None:
+        """The implicit drives' tangent -dN/dl (n,) for the iteration matrix: 0 without (None), or a function asked
+        again at each refactoring (:meth:`step`'s ``drive_stiffness_n_per_m``)."""
+        self._drive_tangent = stiffness if callable(stiffness) else None
+        self._drive_k = np.zeros(len(self.act)) if stiffness is None else \
+            np.asarray(stiffness() if self._drive_tangent else stiffness, dtype=float)
+
+    def _spring_residual(self, q: np.ndarray, rest: np.ndarray, k: np.ndarray, drive: DriveInput,
+                         rel_springs: np.ndarray, beta: float) -> np.ndarray:
+        """The springs' forces and their stiffness-proportional damping on the spring joints, at q with the elastic
+        velocities ``rel_springs`` (the Newton residual's spring part)."""
+        if self.nonlinear:
+            f, kt = self._springs(q, rest, k, drive)
+            return f + beta * kt * rel_springs
+        return k * (q[self.sq] - rest + beta * rel_springs)  # linear springs (force drives: k is 0 on the actuators)
 
     def _drive_tangent_moved(self) -> bool:
         """Whether a drive tangent given as a function moved by more than TANGENT_REFRESH of the factored one
