@@ -243,7 +243,7 @@ def test_fast_insertion_does_not_reproduce_it(slow_and_fast):
 def test_readme_shipped_scenario_on_the_flexible_model():
     """README (Insertion simulation): the shipped scenario, compensated, on the flexible model leaves 6.5 um
     lateral at the pin and 20 um at the final pose -- what the plate-load prediction of the sag misses
-    (tests/dynamics/test_static_deflection.py: 13-16% of a 70 um / 142 um sag) plus the end pose's transient.
+    (tests/dynamics/test_leg_weight.py: under 0.2% of a 77 um / 172 um sag) plus the end pose's transient.
     Drift protection for the printed digits; the bound that makes them right is the sag ratio test."""
     from readme import assert_printed, readme_fragment
 
