@@ -361,9 +361,10 @@ def test_readme_position_loop_frequency():
     gives the vertical acceleration 1 / m; independently, 1 / (e_y . M^-1 e_y) of the kinetic-energy matrix by hand,
     :func:`_hand_apparent_mass`: to 4e-6, asserted 1.2e-5), is not the loop's bandwidth: ``pressfit control``
     (rigid model) measures 11.6-15.0 Hz. The mass was 16.0 kg while the stem weighed its exposed length (1.14-1.71
-    kg at the pin); the 3.33 kg rod sliding with the plate adds 1.6-2.2 kg of axial mass per leg. The loop poles (2.9-32.2 Hz) are the roots of the quartics below per eigen-mass
-    (tests/dynamics/test_linearise.py, to 1e-6). Independent source of the free-motion bandwidths: with A A^+ = I and equal gains on
-    the three axes the loop decouples in the eigenbasis (m_k, e_k) of the apparent mass M_h, each axis with
+    kg at the pin); the 3.33 kg rod sliding with the plate adds 1.6-2.2 kg of axial mass per leg. The loop poles
+    (2.9-32.2 Hz) are the roots of the quartics below per eigen-mass (tests/dynamics/test_linearise.py, to 1e-6).
+    Independent source of the free-motion bandwidths: with A A^+ = I and equal gains on the three axes the loop
+    decouples in the eigenbasis (m_k, e_k) of the apparent mass M_h, each axis with
     T_k(s) = (K_d s^2 + K_p s + K_i) / (m_k tau s^4 + m_k s^3 + K_d s^2 + K_p s + K_i), so the reference -> tool
     response along a unit d is sum_k (e_k . d)^2 T_k(s): its -3 dB point by root finding equals python-control's
     to 1e-6 (python-control's ``bandwidth`` is the -3 dB point, not -3.0103 dB)."""

@@ -140,8 +140,7 @@ def test_readme_numbers_of_the_modes(machine):
     rocking pair (equal by the fourfold symmetry at pose A) moves the plate sideways and tilts it about a
     horizontal axis; the twist turns it about y alone; from the fourth mode on the plate moves less than 5% of the
     largest leg-point displacement (the legs' own bending; the rocking pair and the twist move it 45-110%). The
-    rocking pair's frequencies against a second formulation (:func:`_rigid_leg_rocking_hz`): within 0.8-2.7%
-    above, as rigid legs must be."""
+    rocking pair's frequencies against a second formulation (:func:`_rigid_leg_rocking_hz`): 0.8-2.7% above."""
     readme_fragment("held by the legs' bending and torsion) at 18.2 Hz at pose A (0, 0.72, 0); it is stiffer low in "
                     "the workspace and softer high and off-centre: 45.7 Hz at (0, 0.49, 0), 28.5 Hz at (0, 0.6, 0), "
                     "14.5 Hz at the corner (0.25, 0.72, 0.25), 13.4 Hz at (0.25, 0.75, 0.25); so it lies below the "
@@ -170,7 +169,7 @@ def test_readme_numbers_of_the_modes(machine):
     lowest[tuple(POSE_A)] = f[0]
     for pose, frequency in lowest.items():  # independent: rigid legs on the condensed stiffness (docstring below)
         estimate = _rigid_leg_rocking_hz(machine, np.array(pose))
-        assert frequency < estimate < 1.03 * frequency, (pose, frequency, estimate)
+        assert estimate == pytest.approx(frequency, rel=0.05), (pose, frequency, estimate)
 
 
 def _rigid_leg_rocking_hz(machine, pose):
@@ -179,9 +178,11 @@ def _rigid_leg_rocking_hz(machine, pose):
     bodies with their plate cardans (the plate box and tool; per leg, moving with the plate cardan's velocity
     v_P = v + omega x d_i: the leg's transverse mass (sum of m s^2 + the tubes' own transverse inertias) / l^2 across
     e and its rod body (the 0.60 m rod, the moving parts, the plate cardan, the reflected drive mass) along e; the
-    legs' spin about e and the cardan spheres' inertia left out). The legs do not bend in it, a constraint the VJM
-    does not have, so it lies above the VJM's rocking pair: measured 0.8% (pose A) to 2.7% (the corner) over the
-    README's six poses; asserted between the VJM value and 3% above it."""
+    legs' spin about e and the cardan spheres' inertia left out). Its legs do not bend (a constraint the VJM does
+    not have: it raises the estimate) and its stiffness is the unloaded one (the VJM's modes are about the
+    weight-loaded state: either sign): measured 0.8% (pose A) to 2.7% (the corner (0.25, 0.72, 0.25)) above the
+    VJM's rocking pair at the README's poses, -1.1% to +4.3% on the compared machines
+    (tests/studies/test_compare.py); asserted 5%."""
     ms, lc, rod = machine.mass, machine.cylinder.length_m, machine.stem.length_m
     ro = machine.cylinder.outer_diameter_m / 2
     ri = ro - machine.cylinder.wall_thickness_m
