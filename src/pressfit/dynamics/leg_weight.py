@@ -36,6 +36,9 @@ The tool's sag at rest is the condensed compliance (6 x 6, at the plate centre) 
 (:meth:`pressfit.dynamics.machine.flexible.FlexibleMachine.rest_state`) to a few 1e-3 (the VJM lumps the
 distributed weight on springs_per_segment springs: an error O(1/n^2)). Left out: the axial weight's distribution
 along the leg's axial compliance (the actuator spring takes the leg's whole axial compliance, as in the VJM).
+Assumed, as in the VJM chain: the rod's part inside the cylinder and the moving parts ride on the cylinder's end
+(the actuator body), so a cylinder section carries them whichever side of it they sit; carried instead by the bore
+where they sit (the piston's guide), the sag moves by 0.04-0.32% at the poses of tests/dynamics/test_leg_weight.py.
 Units: SI (m, kg, N, N m, rad).
 """
 
