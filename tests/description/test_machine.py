@@ -52,6 +52,18 @@ def test_a_stem_rod_must_outlast_the_stroke(tmp_path, length, accepted):
         load_machine().with_overrides({"stem": {"length_m": length}})
 
 
+def test_a_machine_file_without_the_stem_length_is_refused_naming_the_key(tmp_path):
+    """A machine file written before the stem became a rod of its own length (no ``[stem] length_m``) is refused:
+    exit 2, one ``error:`` line naming the file and the key (its mass cannot be guessed from the pose)."""
+    text = DEFAULT_MODEL.read_text(encoding="utf-8")
+    path = tmp_path / "old.toml"
+    path.write_text("\n".join(x for x in text.splitlines() if not x.startswith("length_m = 0.60")), encoding="utf-8")
+    res = CliRunner().invoke(main, ["kinematics", "--model", str(path), "0", "0.65", "0"])
+    assert res.exit_code == 2, res.output
+    lines = res.output.strip().splitlines()
+    assert len(lines) == 1 and lines[0].startswith("error:") and str(path) in lines[0] and "stem.length_m" in lines[0]
+
+
 def test_raising_l_max_needs_a_longer_rod(tmp_path):
     """Case C raises l_max to 1.05 m: with the shipped 0.60 m rod it is refused (the longest exposed stem is then
     0.60 m), the case's 0.65 m rod is accepted; the CLI says so in one error line (exit 2)."""
@@ -63,6 +75,7 @@ def test_raising_l_max_needs_a_longer_rod(tmp_path):
     res = CliRunner().invoke(main, ["kinematics", "--model", str(path), "0", "0.65", "0"])
     assert res.exit_code == 2, res.output
     assert len(res.output.strip().splitlines()) == 1 and "stem.length_m" in res.output and "error:" in res.output
+    assert str(path) in res.output and "0.55 m" in res.output
 
 
 def test_overrides_are_validated(machine):
