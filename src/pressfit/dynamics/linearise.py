@@ -30,7 +30,7 @@ W = K_p (r - h_est) + K_d (r' - h_est') + K_i int(r - h_est); F_cmd = -A^+ W (th
 gravity feed-forward are constants of the equilibrium). Left out, stated: the pose dependence of A^+, v_p
 (distribution) and of A (the legs' static tensions turning with the legs): in statics they cancel exactly
 (-A(h) N(h) = W for every h), dynamically they differ by the drive lag; the gravity feed-forward's
-|dG/dh| <= 58 N/m (``control`` module) against K_p = 2e4 N/m.
+|dG/dh| <= 17 N/m (``control`` module) against K_p = 2e4 N/m.
 
 Results: open loop broken at the force commands per Cartesian axis (the other two closed), margins from
 python-control's ``stability_margins``; closed-loop poles (frequency |s| / 2 pi, damping -Re s / |s|); the
