@@ -285,9 +285,10 @@ def test_readme_results_of_the_shipped_scenario(runs):
     assert paper["tool_lateral_error_at_insertion_m"] == pytest.approx(np.hypot(quasi[0], quasi[2]), rel=0.03)
     end_sag = static_deflection_columns(machine, plan.rigid, np.asarray(sim.end_m))[:, 1]
     assert paper["tool_final_error_m"] == pytest.approx(np.linalg.norm(end_sag), rel=0.02)
-    readme_fragment("0.0 um lateral at the\npin and 2 um at the final pose on the rigid model")
+    readme_fragment("0.0 um lateral at the pin\nand 3 um at the final pose on the rigid model")
     assert_printed(s["tool_lateral_error_at_insertion_m"] * 1e6, "0.0")
-    assert_printed(s["tool_final_error_m"] * 1e6, "2")
+    assert_printed(s["tool_final_error_m"] * 1e6, "3")
+    assert s["tool_final_error_m"] < 0.02 * np.linalg.norm(end_sag)  # the end pose's transient: 1.6% of the sag
     readme_fragment("Loop-closure drift 2.4e-6 m; actuator tensions up to 173 N, no\nsaturation; internal force "
                     "v_p . N = 100.0 N (the commanded preload)")
     assert case.preload.a4_n == 100.0
