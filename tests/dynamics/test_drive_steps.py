@@ -182,9 +182,9 @@ def test_explicit_drive_coupling_on_the_flexible_step_grows(closed_valves):
     the start of the step and its tension held over the generalised-alpha step (the rigid model's coupling) grows
     without bound, at a step 27 times under the explicit bound omega_h dt < 2 (omega_h h = 0.073 for the 115.7 Hz
     mode; the lag of one step acts as negative damping, weaker on slower modes and where the oil columns hold less
-    of a mode's strain energy, both the case with the rods): over 0.2 s the peak-to-peak of the last 50 ms is more than 1.5 times that of the first (measured 1.91; 3.96 with
-    the exposed-length stems' 93.5 and 129 Hz modes; the implicit coupling's ratio is 0.97 with the two modes'
-    beating, bound 1.2)."""
+    of a mode's strain energy, both the case with the rods): over 0.2 s the peak-to-peak of the last 50 ms is more
+    than 1.5 times that of the first (measured 1.91; 3.96 with the exposed-length stems' 93.5 and 129 Hz modes; the
+    implicit coupling's ratio is 0.97 with the two modes' beating, bound 1.2)."""
     machine, fm = closed_valves
     for implicit, grows in ((False, True), (True, False)):
         y = _hold(machine, fm, implicit, duration_s=0.2)
