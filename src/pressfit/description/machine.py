@@ -910,7 +910,8 @@ def require_rod_in_cylinder(machine: Machine, source: str) -> None:
     if not machine.stem.length_m > longest:
         raise ModelFileError(source or "<machine>", "stem.length_m",
                              f"the stem rod must be longer than the longest exposed stem, "
-                             f"limits.leg_length_max_m - cylinder.length_m = {longest:.6g} m (the actuator's full stroke must leave rod in the cylinder), got "
+                             f"limits.leg_length_max_m - cylinder.length_m = {longest:.6g} m (the actuator's full "
+                             f"stroke must leave rod in the cylinder), got "
                              f"{machine.stem.length_m:.6g} m")
 
 
