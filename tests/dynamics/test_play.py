@@ -187,14 +187,7 @@ def _lost_motion(case, free, played):
     return dx, moved, tool, estimate
 
 
-_ELECTRIC_OPEN = pytest.mark.xfail(strict=True, reason=(
-    "issue 28 (the stem as a 0.60 m rod, 3.33 kg): the electric pair's vertical estimate misses -(E^+ dx)_y by "
-    "0.91 um (tolerance 0.5 um), the lateral lost motion still within 0.05 um; leg 1's tension grazes zero "
-    "(0.07 N) on the way: not understood yet"))
-
-
-@pytest.mark.parametrize("key", [100.0, pytest.param("electric", marks=_ELECTRIC_OPEN), "hydraulic"],
-                         ids=["force", "electric", "hydraulic"])
+@pytest.mark.parametrize("key", [100.0, "electric", "hydraulic"], ids=["force", "electric", "hydraulic"])
 def test_lost_motion_at_the_pin_is_the_kinematics_of_the_reversed_plays(pairs, key):
     """At 100 N of preload the gravity of the plate redistributes between the start (-0.15, 0.65, 0.1) and the pin:
     legs 2 and 4 change sign (their plays cross the 2 G = 80 um gap), 1 and 3 do not. Zeroed at the start, the
