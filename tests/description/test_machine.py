@@ -7,6 +7,7 @@ import pytest
 from click.testing import CliRunner
 
 from pressfit.cli import main
+from pressfit.description.cases import load_case
 from pressfit.description.machine import DEFAULT_MODEL, load_machine
 from pressfit.errors import ModelFileError
 
@@ -22,13 +23,59 @@ def test_default_model(machine):
 
 
 def test_leg_tube_masses(machine):
-    """Tube masses from the sections by hand: steel 7850 kg/m^3, cylinder tube 60 x 5 mm over 0.45 m,
-    stem rod 30 mm over l - 0.45 m (the shipped defaults); exact up to round-off."""
+    """Tube masses from the sections by hand: steel 7850 kg/m^3, cylinder tube 60 x 5 mm over 0.45 m, the stem a
+    30 mm rod of 0.60 m whatever the pose (3.329 kg: it slides in the cylinder, it does not grow); its centre of
+    mass at l - 0.30 m from the base cardan (its outer end at the plate cardan); exact up to round-off."""
     rho = 7850.0
     assert machine.mass.density_kg_per_m3 == rho
+    assert machine.stem.length_m == 0.60
     assert machine.cylinder_tube_mass_kg == pytest.approx(rho * np.pi / 4 * (0.06**2 - 0.05**2) * 0.45, rel=1e-13)
-    np.testing.assert_allclose(machine.stem_mass_kg(np.array([0.5, 0.8])),
-                               rho * np.pi / 4 * 0.03**2 * np.array([0.05, 0.35]), rtol=1e-13)
+    assert machine.stem_mass_kg == pytest.approx(rho * np.pi / 4 * 0.03**2 * 0.60, rel=1e-13)
+    np.testing.assert_allclose(machine.stem_centre_of_mass_m(np.array([0.5, 0.8, 1.0])), [0.2, 0.5, 0.7],
+                               rtol=1e-13)
+
+
+@pytest.mark.parametrize(("length", "accepted"), [(0.55 * (1 + 1e-9), True), (0.55 * (1 - 1e-9), False),
+                                                  (0.55, False)])
+def test_a_stem_rod_must_outlast_the_stroke(tmp_path, length, accepted):
+    """The rod must be longer than the longest exposed stem the limits allow, l_max - L_c = 1.0 - 0.45 = 0.55 m
+    (the full stroke leaves rod in the cylinder): just over is accepted, just under and equal refused by a
+    ModelFileError naming the file, the key stem.length_m and the limit; the same through an override."""
+    path = _write(tmp_path, "length_m = 0.60 ", f"length_m = {length!r} ")
+    if accepted:
+        assert load_machine(path).stem.length_m == length
+        return
+    with pytest.raises(ModelFileError) as info:
+        load_machine(path)
+    assert info.value.key == "stem.length_m" and str(path) in str(info.value) and "0.55 m" in str(info.value)
+    with pytest.raises(ModelFileError, match="stem.length_m"):
+        load_machine().with_overrides({"stem": {"length_m": length}})
+
+
+def test_a_machine_file_without_the_stem_length_is_refused_naming_the_key(tmp_path):
+    """A machine file written before the stem became a rod of its own length (no ``[stem] length_m``) is refused:
+    exit 2, one ``error:`` line naming the file and the key (its mass cannot be guessed from the pose)."""
+    text = DEFAULT_MODEL.read_text(encoding="utf-8")
+    path = tmp_path / "old.toml"
+    path.write_text("\n".join(x for x in text.splitlines() if not x.startswith("length_m = 0.60")), encoding="utf-8")
+    res = CliRunner().invoke(main, ["kinematics", "--model", str(path), "0", "0.65", "0"])
+    assert res.exit_code == 2, res.output
+    lines = res.output.strip().splitlines()
+    assert len(lines) == 1 and lines[0].startswith("error:") and str(path) in lines[0] and "stem.length_m" in lines[0]
+
+
+def test_raising_l_max_needs_a_longer_rod(tmp_path):
+    """Case C raises l_max to 1.05 m: with the shipped 0.60 m rod it is refused (the longest exposed stem is then
+    0.60 m), the case's 0.65 m rod is accepted; the CLI says so in one error line (exit 2)."""
+    with pytest.raises(ModelFileError, match="stem.length_m"):
+        load_machine().with_overrides({"limits": {"leg_length_max_m": 1.05}})
+    case = load_case(DEFAULT_MODEL.parents[1] / "cases" / "paper" / "C.toml").machine()
+    assert case.stem.length_m == 0.65
+    path = _write(tmp_path, "length_m = 0.60 ", "length_m = 0.50 ")
+    res = CliRunner().invoke(main, ["kinematics", "--model", str(path), "0", "0.65", "0"])
+    assert res.exit_code == 2, res.output
+    assert len(res.output.strip().splitlines()) == 1 and "stem.length_m" in res.output and "error:" in res.output
+    assert str(path) in res.output and "0.55 m" in res.output
 
 
 def test_overrides_are_validated(machine):

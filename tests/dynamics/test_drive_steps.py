@@ -158,14 +158,16 @@ def _oil_column_modes(machine, fm):
 def test_flexible_hold_on_closed_valves_rings_at_the_oil_column_modes(closed_valves):
     """The hydraulic closed form on the flexible machine: a 5 N step at the tool, valves closed, the drives inside
     the step. The free response's poles (matrix pencil) are the oil-column modes of the linearised machine with
-    k_h = beta A^2 (1/V_a + 1/V_b) from the file (:func:`_oil_column_modes`; the two modes that carry 99.9% of the
-    vertical deflection, 93.5 and 129 Hz), each mapped through the trapezoidal rule's frequency tan(w_num h / 2) =
-    w h / 2: within 2e-4 (measured 2e-5: the drive's pressures follow the piston's travel to second order, the
-    amplitude is 1 um), undamped (|zeta| < 1e-4: the implicit coupling conserves the oil column's energy)."""
+    k_h = beta A^2 (1/V_a + 1/V_b) from the file (:func:`_oil_column_modes`; the two modes that carry 99.8% of the
+    vertical deflection, 91.4 and 115.7 Hz; the third, 292 Hz, carries 0.17%: the stem rods' mass, their inner part
+    on the cylinder's end, couples a leg-bending mode in; 93.5 and 129 Hz carried 99.9% with the exposed-length
+    stems), each mapped through the trapezoidal rule's frequency tan(w_num h / 2) = w h / 2: within 2e-4 (measured
+    4e-5: the drive's pressures follow the piston's travel to second order, the amplitude is 1 um), undamped
+    (|zeta| < 1e-4: the implicit coupling conserves the oil column's energy)."""
     machine, fm = closed_valves
     frequencies, share = _oil_column_modes(machine, fm)
     main = np.argsort(share)[::-1][:2]
-    assert share[main].sum() > 0.999
+    assert share[main].sum() > 0.995
     expected = 2.0 / HOLD_STEP_S * np.arctan(np.pi * frequencies[main] * HOLD_STEP_S) / (2 * np.pi)
     poles = _matrix_pencil(np.diff(_hold(machine, fm, implicit=True)), HOLD_STEP_S)
     fitted = np.abs(poles.imag) / (2 * np.pi)
@@ -178,12 +180,13 @@ def test_flexible_hold_on_closed_valves_rings_at_the_oil_column_modes(closed_val
 def test_explicit_drive_coupling_on_the_flexible_step_grows(closed_valves):
     """Why the flexible model takes the drive inside its step: the same hold with the drive stepped at the rate of
     the start of the step and its tension held over the generalised-alpha step (the rigid model's coupling) grows
-    without bound, at a step 25 times under the explicit bound omega_h dt < 2 (omega_h h = 0.081 for the 129 Hz
-    mode; the lag of one step acts as negative damping): over 0.2 s the peak-to-peak of the last 50 ms is more than
-    twice that of the first (measured 3.96; the implicit coupling's ratio is 0.99 with the two modes' beating,
-    bound 1.2)."""
+    without bound, at a step 27 times under the explicit bound omega_h dt < 2 (omega_h h = 0.073 for the 115.7 Hz
+    mode; the lag of one step acts as negative damping, weaker on slower modes and where the oil columns hold less
+    of a mode's strain energy, both the case with the rods): over 0.2 s the peak-to-peak of the last 50 ms is more
+    than 1.5 times that of the first (measured 1.91; 3.96 with the exposed-length stems' 93.5 and 129 Hz modes; the
+    implicit coupling's ratio is 0.97 with the two modes' beating, bound 1.2)."""
     machine, fm = closed_valves
     for implicit, grows in ((False, True), (True, False)):
         y = _hold(machine, fm, implicit, duration_s=0.2)
         ratio = np.ptp(y[-500:]) / np.ptp(y[:500])
-        assert (ratio > 2.0) == grows and (grows or ratio < 1.2), ratio
+        assert (ratio > 1.5) == grows and (grows or ratio < 1.2), ratio

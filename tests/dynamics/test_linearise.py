@@ -107,13 +107,24 @@ def test_control_writes_its_files(tmp_path):
 
 
 def test_drives_hold_most_of_the_axial_mode_and_little_of_the_rocking_pair(machine):
-    """The drives' share of each mode's strain energy (module doc), at pose A: the plate twist (83 Hz) stretches no
+    """The drives' share of each mode's strain energy (module doc), at pose A: the plate twist (80 Hz) stretches no
     leg, so the share is 0 to round-off (by the machine's symmetry: the twist turns every plate cardan
     perpendicular to its leg); the rocking pair sways and tilts about the legs' concurrency point, where a rigid
-    rotation changes no leg length, so only the legs' bending is left (measured 0.0118); the vertical mode
-    (441 Hz) lives in the actuator springs (measured 0.970). An independent share: the energy fraction from the
-    model's own stiffness matrix restricted to the actuator coordinates, phi^T K_act phi / phi^T K phi, with
-    omega^2 (mass-normalised shapes) as the denominator instead: equal to 1e-9."""
+    rotation changes no leg length, so only the legs' bending is left (measured 0.0117); the vertical mode
+    (386 Hz) is the plate and the stems moving along the legs on the actuator springs, but the inclined legs
+    (26.6 degrees from vertical at A: 0.45 of the plate's vertical motion is across each leg) also
+    swing, and the swinging mass loads the legs in bending. Why the share is 0.748, not the 0.970 of the old
+    masses: the stem is now the 0.60 m rod it is, 0.245 m of it inside the cylinder at A with the actuator's
+    moving parts (0.8 kg) at its inner end, and in the VJM chain that part rides on the actuator body, a rigid
+    extension of the cylinder's last segment: its transverse inertia acts 0.19 m behind the last cylinder spring
+    and bends the cylinder (measured: cylinder springs 0.189, stem springs 0.063 of the mode's strain energy; with
+    the moving parts removed the share is 0.952, with the inner rod and the moving parts lumped at the gland 0.986).
+    A rod guided in the bore passes that load into the cylinder where the piston sits; the chain cannot (one
+    prismatic joint between the cylinder's springs and the stem's), so the bending share is an upper bound and the
+    claim asserted is the one that holds for both: the drives hold most of the mode's strain energy (> 0.6, the
+    other modes < 0.03) and it is the mode with the largest share. An independent share: the energy fraction
+    from the model's own stiffness matrix restricted to the actuator coordinates, phi^T K_act phi / phi^T K phi,
+    with omega^2 (mass-normalised shapes) as the denominator instead: equal to 1e-9."""
     modes = structural_modes(machine, np.array([0.0, 0.72, 0.0]), count=12)
     share = np.array([m.drive_energy_fraction for m in modes])
     f = np.array([m.frequency_hz for m in modes])
@@ -121,7 +132,8 @@ def test_drives_hold_most_of_the_axial_mode_and_little_of_the_rocking_pair(machi
     assert 0.005 < share[0] < 0.03 and share[1] == pytest.approx(share[0], rel=1e-6)
     assert share[2] < 1e-12  # the twist
     axial = int(np.argmax(share))
-    assert share[axial] > 0.9 and 400 < f[axial] < 500
+    assert share[axial] > 0.6 and 350 < f[axial] < 450
+    assert np.all(np.delete(share, axial) < 0.03)
     ref = natural_modes(machine, np.array([0.0, 0.72, 0.0]), count=12)
     omega2 = (2 * np.pi * ref.frequencies_hz) ** 2
     rs = reduced_system(machine, np.array([0.0, 0.72, 0.0]))

@@ -109,11 +109,11 @@ def test_passive_plate_trajectories_agree(runs):
     """Gravity on, no actuator force, the plate thrown upward (admissible velocity), 0.5 s in both engines.
 
     Both integrate with semi-implicit Euler; their difference comes from the closure treatment and is first
-    order in the step h: Pinocchio's Baumgarte-corrected drift (largest 1.1e-5 m at h = 1e-4 s) falls as h,
-    MuJoCo's soft-weld violation (measured 5.6e-7 m) as h^2. Measured deviation of the plate positions:
-    2.6e-6 m at h = 1e-4 s over a 0.73 m path (tolerance 8e-6 m), halving with h (ratio 1.96; 2 within 10%,
+    order in the step h: Pinocchio's Baumgarte-corrected drift (largest 1.3e-5 m at h = 1e-4 s) falls as h,
+    MuJoCo's soft-weld violation (measured 6.6e-7 m) as h^2. Measured deviation of the plate positions:
+    3.0e-6 m at h = 1e-4 s over a 0.75 m path (tolerance 8e-6 m), halving with h (ratio 1.97; 2 within 10%,
     the signature of a first-order integrator error, not of a modelling difference, which would not scale).
-    Richardson-extrapolated to h -> 0 (2 D(h/2) - D(h)) the engines agree to 5.6e-8 m (tolerance 1.7e-7 m)."""
+    Richardson-extrapolated to h -> 0 (2 D(h/2) - D(h)) the engines agree to 5.3e-8 m (tolerance 1.7e-7 m)."""
     coarse, fine = runs[1e-4], runs[5e-5]
     assert coarse.time_s[-1] == pytest.approx(0.5)
     assert np.ptp(coarse.pinocchio_plate_m[:, 1]) > 0.4  # the run did move the plate
@@ -127,8 +127,8 @@ def test_passive_plate_trajectories_agree(runs):
 def test_closures_and_plate_orientation_hold_in_both_engines(runs):
     """The 4-UPU plate only translates: its rotation stays below 5e-6 rad in both engines (MuJoCo's soft welds
     give 1.8e-6 rad at h = 1e-4 s). MuJoCo's weld violation follows the h^2 law of its stiffest safe solref
-    (time constant 2 h): 5.6e-7 m at h = 1e-4 s (tolerance 1.7e-6 m), 4x less at h / 2 (ratio 3.98, 4 within
-    10%); Pinocchio's drift stays below 3e-5 m (1.1e-5 m) and halves with h (first-order Baumgarte drift)."""
+    (time constant 2 h): 6.6e-7 m at h = 1e-4 s (tolerance 1.7e-6 m), 4x less at h / 2 (ratio 3.98, 4 within
+    10%); Pinocchio's drift stays below 3e-5 m (1.3e-5 m) and halves with h (first-order Baumgarte drift)."""
     coarse, fine = runs[1e-4], runs[5e-5]
     for run in (coarse, fine):
         assert max(run.pinocchio_rotation_rad.max(), run.mujoco_rotation_rad.max()) < 5e-6
@@ -176,21 +176,21 @@ def test_readme_numbers_of_the_second_engine(rigid, exported, runs):
     assert np.abs(mass - reference).max() < 2e-15
     model = exported[0]
     readme_fragment("impedance 0.9999, time constant twice the time step, critically damped, which leaves a closure "
-                    "violation falling as h^2 (5.6e-7 m at h = 0.1 ms)")
+                    "violation falling as h^2 (6.6e-7 m at h = 0.1 ms)")
     np.testing.assert_array_equal(model.eq_solimp[:, :2], 0.9999)
     np.testing.assert_allclose(model.eq_solref, [[2 * model.opt.timestep, 1.0]] * 4, rtol=1e-15)
     coarse, fine = runs[1e-4], runs[5e-5]
-    assert_printed(coarse.mujoco_closure_error_m, "5.6e-7")
-    readme_fragment("For the plate thrown up at (0.2, 2.0, -0.2) m/s from (0.05, 0.65, -0.05) m (0.73 m of path "
-                    "in 0.5 s) the plate trajectories agree to 2.6 um at h = 0.1 ms and 1.35 um at 0.05 ms")
+    assert_printed(coarse.mujoco_closure_error_m, "6.6e-7")
+    readme_fragment("For the plate thrown up at (0.2, 2.0, -0.2) m/s from (0.05, 0.65, -0.05) m (0.75 m of path "
+                    "in 0.5 s) the plate trajectories agree to 3.0 um at h = 0.1 ms and 1.51 um at 0.05 ms")
     assert THROW_M_PER_S.tolist() == [0.2, 2.0, -0.2] and POSE.tolist() == [0.05, 0.65, -0.05]
     assert coarse.time_s[-1] == pytest.approx(0.5, abs=1e-12)
-    assert_printed(np.linalg.norm(np.diff(coarse.pinocchio_plate_m, axis=0), axis=1).sum(), "0.73")
-    assert_printed(coarse.deviation_m.max() * 1e6, "2.6")
-    assert_printed(fine.deviation_m.max() * 1e6, "1.35")
-    readme_fragment("(Pinocchio's Baumgarte-corrected drift, 1.1e-5 m at 0.1 ms), and extrapolated to h -> 0 the "
-                    "two engines agree to 0.06 um")
-    assert_printed(coarse.pinocchio_closure_error_m, "1.1e-5")
+    assert_printed(np.linalg.norm(np.diff(coarse.pinocchio_plate_m, axis=0), axis=1).sum(), "0.75")
+    assert_printed(coarse.deviation_m.max() * 1e6, "3.0")
+    assert_printed(fine.deviation_m.max() * 1e6, "1.51")
+    readme_fragment("(Pinocchio's Baumgarte-corrected drift, 1.3e-5 m at 0.1 ms), and extrapolated to h -> 0 the "
+                    "two engines agree to 0.05 um")
+    assert_printed(coarse.pinocchio_closure_error_m, "1.3e-5")
     d_coarse = coarse.pinocchio_plate_m - coarse.mujoco_plate_m
     d_fine = (fine.pinocchio_plate_m - fine.mujoco_plate_m)[::2]
-    assert_printed(np.linalg.norm(2 * d_fine - d_coarse, axis=1).max() * 1e6, "0.06")
+    assert_printed(np.linalg.norm(2 * d_fine - d_coarse, axis=1).max() * 1e6, "0.05")

@@ -163,16 +163,36 @@ def test_undamped_and_critical_steps_are_the_textbook_forms(machine, zeta, unit_
 
 
 def test_undamped_step_peaks_at_twice_the_static_deflection(machine):
-    """zeta = 0: each mode's step response is s_k (1 - cos omega_k t), so at the centre pose, where a vertical
-    step drives one mode (its contribution >= 99.9%, the leg-stretching 441 Hz mode), the peak is twice the static
-    deflection (the history samples the crest to (1 - cos(pi / 40)) ~ 3e-3; the other modes add < 1e-3) and the
-    response does not decay: the last period's peak is that peak to the other modes' beating (1.3%)."""
-    r = tool_response(machine, np.array([0.0, 0.72, 0.0]), STEP_N, duration_s=0.2, damping_ratio=0.0)
+    """zeta = 0: each mode's step response is s_k (1 - cos omega_k t), so one mode alone peaks at exactly twice its
+    static share, and the vertical step's peak is twice the static deflection only as far as one mode carries it.
+    At the centre pose the stem rods (3.33 kg each; their inner part and the moving parts ride on the actuator
+    body) bring a leg-bending mode next to the heave: the vertical static deflection is carried by the 386 Hz mode
+    (share 0.748) and the 421 Hz mode (0.247) (scipy's eigh of the reduced system here, not the module), and the
+    two crest together only where both cosines are -1 at once: within 0.2 s those two alone reach 1.9845 of 1.9899,
+    all modes 1.99185. So 1.9918 is mode coupling, not sampling: the history has 105 samples per dominant period,
+    and its peak equals the closed form's maximum on a grid 250 times finer to 1.1e-6 (asserted 4e-6). Before the
+    rod the heave mode alone carried 0.970 and the peak was 1.9990. The response does not decay: the last
+    period's peak is the peak to the modes' beating (measured 0.998)."""
+    pose = np.array([0.0, 0.72, 0.0])
+    r = tool_response(machine, pose, STEP_N, duration_s=0.2, damping_ratio=0.0)
     s = r.summary()
-    assert s["peak_vertical_m"] / s["static_vertical_m"] == pytest.approx(2.0, abs=5e-3)
+    ratio = s["peak_vertical_m"] / s["static_vertical_m"]
+    rs = reduced_system(machine, pose)
+    omega2, x = eigh(rs.stiffness, rs.mass_kg)
+    shapes = rs.plate_map[:3] @ x
+    vertical = (shapes * ((shapes.T @ STEP_N) / omega2))[1]
+    share = vertical / vertical.sum()
+    top = np.argsort(-np.abs(share))[:2]
+    assert share[top].sum() > 0.99 and share[top[1]] > 0.2  # two modes carry it, neither alone
+    t = np.linspace(0.0, r.time_s[-1], 250 * r.time_s.size)
+    dense = np.zeros_like(t)
+    for k in np.argsort(-np.abs(share))[:20]:
+        dense += share[k] * (1.0 - np.cos(np.sqrt(omega2[k]) * t))
+    assert ratio == pytest.approx(np.abs(dense).max(), abs=4e-6)
+    assert 1.99 < ratio < 2.0
     period = 1 / r.dominant_frequency_hz
     last = np.abs(r.displacement_m[r.time_s >= r.time_s[-1] - period, 1]).max()
-    assert last / abs(s["peak_vertical_m"]) >= 0.96  # achieved 0.987 (the other modes beat); 2% damping: < 1e-3
+    assert last / abs(s["peak_vertical_m"]) >= 0.99  # achieved 0.998 (the modes beat); 2% damping: < 1e-3
     assert np.all(np.isfinite(r.receptance_m_per_n))
 
 

@@ -26,24 +26,19 @@ SHIPPED = ROOT / "cases/paper/insertion.toml"
 OFF_CENTRE = np.array([[0.0, 0.68, 0.15], [0.10, 0.60, -0.05], [-0.15, 0.65, 0.10], [0.20, 0.55, 0.20]])
 
 
-def test_weight_column_is_the_elastic_models_static_sag_without_the_legs_own_bending():
+def test_weight_column_is_the_elastic_models_static_sag():
     """Independent computation: the flexible model's static equilibrium under gravity with the drives holding the
     pose's lengths (``FlexibleMachine.rest_state``: the elastic legs carrying their own distributed weight), both
-    models built at the pose (the same masses). The plate-load prediction points the same way (cosine > 0.99999;
-    measured 0.999995 or better) and is 84-87% of it in magnitude off centre (measured 0.845-0.866: the rest is the
-    legs bending under their own weight between their cardans, which no plate load produces); at the centre the sag
-    is axial only and the two agree within 0.05% (measured 0.02%)."""
+    models built at the pose (the same masses). The weight column (the condensed compliance times the weight
+    wrench, the legs' clamped bending between the cardans included: :mod:`pressfit.dynamics.leg_weight`) is that
+    sag to 0.5% (measured 0.02-0.18%; the plate-equivalent force alone was 4-5.5% short with the rod's masses,
+    13-16% with the old exposed-length stems)."""
     machine = load_machine()
     for pose in [*OFF_CENTRE, np.array([0.0, 0.6, 0.0])]:
         flexible = FlexibleMachine(machine, pose)
         exact = flexible.tool_point_m(flexible.rest_state()) - pose
         predicted = static_deflection_columns(machine, rigid_leg_model(machine, pose), pose)[:, 1]
-        ratio = np.linalg.norm(predicted) / np.linalg.norm(exact)
-        assert predicted @ exact / (np.linalg.norm(predicted) * np.linalg.norm(exact)) > 0.99999
-        if pose[0] == pose[2] == 0.0:
-            assert ratio == pytest.approx(1.0, abs=5e-4)
-        else:
-            assert 0.84 < ratio < 0.87, (pose, ratio)
+        assert np.linalg.norm(predicted - exact) < 5e-3 * np.linalg.norm(exact), (pose, predicted, exact)
 
 
 def test_the_extrapolated_columns_hold_over_the_update_distance():
@@ -65,7 +60,7 @@ def test_the_extrapolated_columns_hold_over_the_update_distance():
         query = pose + 0.999 * DEFLECTION_UPDATE_M * step / np.abs(step).max()  # within it, round-off aside
         extrapolated = ctrl.deflection(query)
         assert np.array_equal(ctrl.deflection.pose_m, pose)  # not refreshed: 2 mm is within the tolerance
-        exact = static_deflection_columns(machine, rigid, query, ctrl.gravity.value).T
+        exact = static_deflection_columns(machine, rigid, query).T
         scale = np.abs(exact).max(axis=1, keepdims=True)
         assert np.all(np.abs(extrapolated - exact) <= 3e-4 * scale), (pose, np.abs(extrapolated - exact) / scale)
         held_worst = max(held_worst, float((np.abs(first - exact) / scale).max()))
@@ -114,7 +109,7 @@ def test_compensation_puts_the_tool_on_the_pin(tmp_path):
     """With ``deflection_compensation`` the loop acts on pose estimate + predicted deflection. Rigid model: the
     prediction is its series deflection, so the tool lands on the pin to the loop's residual (< 0.1 um). Flexible
     model (the elastic legs, their own weight included, in the equations of motion): what is left is the part the
-    plate-load prediction misses (13-16% of the sag, test above) plus dynamics: at most a fifth of the
+    prediction misses (under 0.2% of the sag, test above) plus dynamics: at most a fifth of the
     uncompensated lateral error at the pin at the end of the dwell (the final error of this shortened scenario is
     the end pose's transient after a 0.3 s settle, not a static error)."""
     rigid = simulate_insertion(load_case(_variant(tmp_path, "rc", True, "rigid"))).summary

@@ -197,7 +197,14 @@ class Cylinder(StrictModel):
 
 
 class Stem(StrictModel):
+    """The stem: a solid rod of ``diameter_m`` and fixed ``length_m`` (m) sliding in the cylinder; the part beyond
+    the cylinder's end (l - L_c at leg length l) is exposed, the rest is inside the cylinder (its inner end, with
+    the actuator's moving parts, at l - length_m from the base cardan). ``length_m`` must exceed the longest
+    exposed stem the limits allow (l_max - L_c: the full stroke leaves rod in the cylinder), checked by
+    :func:`load_machine` and :meth:`Machine.with_overrides` (:func:`require_rod_in_cylinder`)."""
+
     diameter_m: Positive
+    length_m: Positive
 
 
 class DriveTable(StrictModel):
@@ -572,9 +579,10 @@ class Mass(StrictModel):
     """Inertial data (kg, kg/m^3) for modes and dynamics; the defaults are estimates (see the machine file).
 
     The leg tubes' masses follow from ``density_kg_per_m3`` and the cylinder and stem sections and lengths
-    (the stem's length varies with the pose). The tool is lumped at the plate centre with the plate (a
+    (the stem is a rod of fixed length ``stem.length_m``: its mass is the same at every pose, its centre of mass
+    moves with the extension). The tool is lumped at the plate centre with the plate (a
     uniform box of side 2 r and ``collision.plate_thickness_m``); the actuator housing is spread uniformly
-    along the cylinder, its moving parts (nut, piston, rod end) sit on the stem at the cylinder's end;
+    along the cylinder, its moving parts (nut, piston) ride on the rod at its inner end;
     each cardan is a small sphere at its centre (split between its spider and the next body).
     """
 
@@ -861,10 +869,16 @@ class Machine(StrictModel):
         """Mass of one cylinder tube (without the actuator housing), kg."""
         return self.mass.density_kg_per_m3 * self.cylinder_section.area_m2 * self.cylinder.length_m
 
-    def stem_mass_kg(self, leg_length_m: np.ndarray | float) -> np.ndarray:
-        """Mass of the stem of a leg of length l (from the cylinder end to the plate cardan), kg."""
-        stem_length_m = np.asarray(leg_length_m) - self.cylinder.length_m
-        return self.mass.density_kg_per_m3 * self.stem_section.area_m2 * stem_length_m
+    @cached_property
+    def stem_mass_kg(self) -> float:
+        """Mass of one stem, a rod of fixed length: rho pi d^2 / 4 L_rod, kg (the same at every pose)."""
+        return self.mass.density_kg_per_m3 * self.stem_section.area_m2 * self.stem.length_m
+
+    def stem_centre_of_mass_m(self, leg_length_m: np.ndarray | float) -> np.ndarray:
+        """Distance (m) from the base cardan, along the leg, of the stem's centre of mass at leg length l: the rod
+        spans [l - L_rod, l] (its outer end at the plate cardan), so its centre l - L_rod / 2 moves with the
+        extension."""
+        return np.asarray(leg_length_m, dtype=float) - self.stem.length_m / 2.0
 
     def with_overrides(self, overrides: dict[str, Any], source: str = "<overrides>") -> Machine:
         """A copy with nested keys replaced (e.g. ``{"actuator": {"axial_stiffness_n_per_m": 1e8}}``)."""
@@ -881,9 +895,24 @@ def _merge(base: dict[str, Any], new: dict[str, Any]) -> dict[str, Any]:
 
 def _validate(data: dict[str, Any], source: str) -> Machine:
     try:
-        return Machine.model_validate({**data, "source": source})
+        machine = Machine.model_validate({**data, "source": source})
     except ValidationError as exc:
         raise validation_error(source, exc) from None
+    require_rod_in_cylinder(machine, source)
+    return machine
+
+
+def require_rod_in_cylinder(machine: Machine, source: str) -> None:
+    """Refuse a stem rod no longer than the longest exposed stem the limits allow (l_max - L_c, m): at full
+    extension no rod would be left in the cylinder. ModelFileError naming the file, ``stem.length_m`` and the
+    limit."""
+    longest = machine.limits.leg_length_max_m - machine.cylinder.length_m
+    if not machine.stem.length_m > longest:
+        raise ModelFileError(source or "<machine>", "stem.length_m",
+                             f"the stem rod must be longer than the longest exposed stem, "
+                             f"limits.leg_length_max_m - cylinder.length_m = {longest:.6g} m (the actuator's full "
+                             f"stroke must leave rod in the cylinder), got "
+                             f"{machine.stem.length_m:.6g} m")
 
 
 def validation_error(path: Path | str, exc: ValidationError) -> ModelFileError:

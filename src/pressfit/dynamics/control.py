@@ -12,9 +12,10 @@ feed-forward (the Cartesian force that holds the moving parts, legs included, at
 G = V^T g(q), g Pinocchio's generalised gravity of the rigid-leg model, V its closed-loop velocities per
 unit plate velocity; by virtual work, since A tau_a = V^T g in static equilibrium). G is recomputed only when
 the estimate has moved more than ``GRAVITY_UPDATE_M`` (1 mm) from the pose it was last computed at
-(:class:`PoseCache`): |dG/dh| is at most 58 N/m per axis over the workspace (finite differences at 30 random
-poses), so the feed-forward is off by at most sqrt(3) * 58 N/m * 1 mm = 0.1 N (0.06% of the ~180 N weight
-it carries), a fixed force error the integrator removes.
+(:class:`PoseCache`): |dG/dh| is at most 17 N/m per axis over the workspace (finite differences at 30 random
+poses, measured 16.4 N/m with the stem as a rod of fixed length; 55 N/m with the old exposed-length stems), so the
+feed-forward is off by at most sqrt(3) * 17 N/m * 1 mm = 0.03 N (0.02% of the 180-233 N weight it carries), a
+fixed force error the integrator removes.
 
 Force limiter (on the measured contact force F_c along +y, limit F_lim: the gains' ``force_limit_n``, or the
 running segment's pin limit that a board's run sets in ``ForceLimitedController.force_limit_n``), both parts of
@@ -42,6 +43,7 @@ from pressfit.description.cases import Controller, Simulation
 from pressfit.description.machine import Machine
 from pressfit.dynamics import kernels
 from pressfit.dynamics.actuators import singular_error
+from pressfit.dynamics.leg_weight import weight_sag_m
 from pressfit.dynamics.multibody import PoseCache, RigidLegModel
 from pressfit.errors import PreloadError
 from pressfit.kinematics.profiles import quintic as _quintic
@@ -92,59 +94,53 @@ DEFLECTION_UPDATE_M = 2e-3
 DEFLECTION_GRADIENT_STEP_M = 1e-4  # central differences of the compliance (error ~ h^2: 1e-8 relative)
 
 
-def _deflection_rows(compliance: np.ndarray, gravity_n: np.ndarray) -> np.ndarray:
-    """Rows (c0, c1) (..., 2, 3) of the deflection columns from translational compliances (..., 3, 3), m/N."""
-    return np.stack([compliance[..., :, 1], -(compliance @ gravity_n)], axis=-2)
+def _gravity_on(rigid: RigidLegModel) -> bool:
+    """Whether the rigid-leg model has gravity (a model without it has no weight to sag under)."""
+    return bool(np.any(np.asarray(rigid.model.gravity.linear) != 0.0))
 
 
-def static_deflection_columns(machine: Machine, rigid: RigidLegModel, pose_m: np.ndarray,
-                              gravity_n: np.ndarray | None = None) -> np.ndarray:
+def static_deflection_columns(machine: Machine, rigid: RigidLegModel, pose_m: np.ndarray) -> np.ndarray:
     """The structure's quasi-static tool deflection at a pose, (3, 2), m: column 0 per newton of contact force
-    along +y, column 1 under the moving parts' weight (the condensed compliance,
-    :func:`pressfit.mechanics.condensed.condensed_plate_compliance`, under -G, G the Cartesian force that holds
-    them: :func:`gravity_feedforward_n`). The legs' own bending under their weight is not in a plate load: the
-    weight column is 12-14% short of the elastic model's static sag at four poses over the workspace
-    (tests/dynamics/test_static_deflection.py); zero when the model has no gravity. ``gravity_n``: G (3,), N, if the
-    caller holds it (the controller's cache, within ``GRAVITY_UPDATE_M``: 0.06% of G)."""
+    along +y (the condensed compliance, :func:`pressfit.mechanics.condensed.condensed_plate_compliance`), column 1
+    under the machine's own weight at that pose (:func:`pressfit.dynamics.leg_weight.weight_sag_m`: the condensed
+    compliance times the weight as a plate wrench, the legs' cardan forces and their clamped bending between the
+    cardans included; within 0.2% of the elastic model's static sag, tests/dynamics/test_leg_weight.py); zero when
+    the model ``rigid`` has no gravity."""
     compliance = condensed_plate_compliance(machine, pose_m)[:3, :3]
-    gravity = gravity_feedforward_n(rigid, pose_m) if gravity_n is None else gravity_n
-    return _deflection_rows(compliance, gravity).T
+    sag = weight_sag_m(machine, pose_m) if _gravity_on(rigid) else np.zeros(3)
+    return np.column_stack([compliance[:, 1], sag])
 
 
-def _linearised_compliance(machine: Machine, pose_m: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
-    """The condensed translational compliance (3, 3), m/N, at ``pose_m`` (m) and its gradient (3, 3, 3) in the
-    pose, m/N per m (central differences, one batched call of the closed form at seven poses)."""
+def _linearised_columns(machine: Machine, pose_m: np.ndarray, gravity: bool) -> tuple[np.ndarray, np.ndarray]:
+    """The deflection rows (c0, c1) (2, 3) at ``pose_m`` (m) and their gradient (2, 3, 3) in the pose, per m
+    (central differences, one batched call of the closed forms at seven poses)."""
     h = DEFLECTION_GRADIENT_STEP_M * np.eye(3)
-    c = condensed_plate_compliance(machine, np.vstack([pose_m, pose_m + h, pose_m - h]))[:, :3, :3]
-    return c[0], np.moveaxis((c[1:4] - c[4:7]) / (2.0 * DEFLECTION_GRADIENT_STEP_M), 0, -1)
+    poses = np.vstack([pose_m, pose_m + h, pose_m - h])
+    c0 = condensed_plate_compliance(machine, poses)[:, :3, 1]
+    c1 = weight_sag_m(machine, poses) if gravity else np.zeros((7, 3))
+    rows = np.stack([c0, c1], axis=1)  # (7, 2, 3)
+    return rows[0], np.moveaxis((rows[1:4] - rows[4:7]) / (2.0 * DEFLECTION_GRADIENT_STEP_M), 0, -1)
 
 
 @dataclass(kw_only=True)
 class DeflectionCache:
-    """The deflection columns as rows (c0, c1) (2, 3) at a pose (m) (:func:`static_deflection_columns`), G from
-    the gravity cache ``gravity``: the compliance and its gradient are computed where the pose moved more than
-    ``DEFLECTION_UPDATE_M`` (infinity norm) from ``pose_m``, and the rows, linear in the compliance, are
-    extrapolated to first order in between; ``value`` holds the rows at the last pose asked."""
+    """The deflection columns as rows (c0, c1) (2, 3) at a pose (m) (:func:`static_deflection_columns`): computed
+    with their pose gradient where the pose moved more than ``DEFLECTION_UPDATE_M`` (infinity norm) from
+    ``pose_m``, and extrapolated to first order in between; ``value`` holds the rows at the last pose asked;
+    ``gravity`` False: no weight (c1 = 0)."""
 
     machine: Machine
-    gravity: PoseCache
+    gravity: bool = True
     pose_m: np.ndarray | None = None
     value: np.ndarray | None = None
-    _compliance: tuple[np.ndarray, np.ndarray] | None = field(default=None, repr=False)  # C (3, 3), dC (3, 3, 3)
-    _gravity_n: np.ndarray | None = field(default=None, repr=False)  # the G the rows below were built with
     _rows: np.ndarray | None = field(default=None, repr=False)  # (2, 3) at pose_m
     _gradient: np.ndarray | None = field(default=None, repr=False)  # (2, 3, 3): d rows / d pose
 
     def __call__(self, pose_m: np.ndarray) -> np.ndarray:
-        gravity = self.gravity(pose_m)
         if self.pose_m is None or kernels.moved(pose_m, self.pose_m, DEFLECTION_UPDATE_M):
             self.pose_m = np.array(pose_m, dtype=float)
-            self._compliance, self._gravity_n = _linearised_compliance(self.machine, self.pose_m), None
-        if gravity is not self._gravity_n:  # new compliance or a refreshed G
-            compliance, gradient = self._compliance
-            self._gravity_n, self._rows = gravity, _deflection_rows(compliance, gravity)
-            self._gradient = np.ascontiguousarray(np.moveaxis(_deflection_rows(np.moveaxis(gradient, -1, 0), gravity),
-                                                              0, -1))
+            rows, gradient = _linearised_columns(self.machine, self.pose_m, self.gravity)
+            self._rows, self._gradient = rows, np.ascontiguousarray(gradient)
         self.value = self._rows + self._gradient @ (pose_m - self.pose_m)
         return self.value
 
@@ -248,7 +244,7 @@ class ForceLimitedController:
         self.force_limit_n = self.gains.force_limit_n
         self.gravity = PoseCache(function=lambda pose: gravity_feedforward_n(self.rigid, pose),
                                  tolerance_m=GRAVITY_UPDATE_M)
-        self.deflection = DeflectionCache(machine=self.machine, gravity=self.gravity)
+        self.deflection = DeflectionCache(machine=self.machine, gravity=_gravity_on(self.rigid))
         self.estimate_m = np.array(self.estimate_m, dtype=float)
         self.offsets_m = _offsets(self.machine)
         legs = len(self.offsets_m)

@@ -7,8 +7,14 @@ body of the VJM chain carries the piece of tube it spans between the virtual spr
 
 * the cylinder, s in [0, L_c] from B_i, split at the cylinder springs (s = (k + 1/2) L_c / n): tube mass
   density * A_c per metre plus the actuator housing spread uniformly (``actuator_housing_mass_kg`` / L_c);
-* the stem, s in [L_c, l_i], split at the stem springs: rod mass density * A_s per metre; the body after the
-  prismatic joint (the actuator) also carries the actuator's moving parts as a point mass at s = L_c;
+* the stem, a rod of fixed length L_r (``stem.length_m``) and mass density * A_s * L_r at every pose, spanning
+  s in [l_i - L_r, l_i] (its outer end at the plate cardan, so its centre of mass l_i - L_r / 2 moves with the
+  extension): its exposed part s in [L_c, l_i] is split at the stem springs; the part inside the cylinder,
+  s in [l_i - L_r, L_c], rides on the body after the prismatic joint (the actuator), which also carries the
+  actuator's moving parts (nut, piston) as a point mass at the rod's inner end s = l_i - L_r. The stem springs'
+  placements follow the stem length, so these pieces are written per pose in the bodies' own frames
+  (:func:`set_stem_inertias`; :class:`pressfit.dynamics.machine.flexible.FlexibleMachine` re-writes them with the
+  placements, the rigid-leg model lumps them onto one body whatever the pose);
 * each cardan, a solid sphere of the stem's radius at its centre, half of its mass on the spider (between the
   two revolutes) and half on the body after the cardan (every body then has rotational inertia about its
   joint axes, which keeps the mass matrix of the rigid-leg model positive definite);
@@ -31,6 +37,7 @@ from __future__ import annotations
 import numpy as np
 import pinocchio as pin
 
+from pressfit.description.machine import Machine
 from pressfit.mechanics.model import MachineModel
 
 GRAVITY_M_PER_S2 = 9.81  # standard gravity, along -y (world y is vertical, up)
@@ -81,27 +88,22 @@ def inertial_model(mm: MachineModel, mass_scale: float = 1.0) -> pin.Model:
     r_cyl = (machine.cylinder.outer_diameter_m / 2, machine.cylinder.outer_diameter_m / 2
              - machine.cylinder.wall_thickness_m)
     mu_cyl = mass_scale * (machine.cylinder_tube_mass_kg + mass.actuator_housing_mass_kg) / lc
-    mu_stem = mass_scale * mass.density_kg_per_m3 * machine.stem_section.area_m2
     for i, ids in enumerate(mm.leg_joint_ids):
         base = machine.base_points_m[i]
         axis = mm.pose_m + machine.plate_offsets_m[i] - base
         length = float(np.linalg.norm(axis))
         axis = axis / length
-        ls = length - lc
-        cuts = ((_chain(mm, i, ids["cylinder"], "cylinder"), 0.0, lc, mu_cyl, r_cyl),
-                (_chain(mm, i, ids["actuator"], "stem"), lc, ls, mu_stem, (machine.stem.diameter_m / 2, 0.0)))
-        for joints, start, span, mu, (r_out, r_in) in cuts:
-            bounds = start + span * np.concatenate([[0.0], (np.arange(n) + 0.5) / n, [1.0]])
-            for j, s0, s1 in zip(joints, bounds[:-1], bounds[1:], strict=True):
-                m = mu * (s1 - s0)
-                _add(model, placements[j], j, m, base + axis * (s0 + s1) / 2, _tube(m, s1 - s0, r_out, r_in, axis))
+        bounds = lc * np.concatenate([[0.0], (np.arange(n) + 0.5) / n, [1.0]])
+        for j, s0, s1 in zip(_chain(mm, i, ids["cylinder"], "cylinder"), bounds[:-1], bounds[1:], strict=True):
+            m = mu_cyl * (s1 - s0)
+            _add(model, placements[j], j, m, base + axis * (s0 + s1) / 2, _tube(m, s1 - s0, *r_cyl, axis))
         m_half = mass_scale * mass.cardan_spider_mass_kg / 2
         sphere = 0.4 * m_half * (machine.stem.diameter_m / 2) ** 2 * np.eye(3)
-        points = ((ids["actuator"], lc, mass_scale * mass.actuator_moving_mass_kg, np.zeros((3, 3))),
-                  (ids["base_cardan"], 0.0, m_half, sphere), (ids["cylinder"], 0.0, m_half, sphere),
+        points = ((ids["base_cardan"], 0.0, m_half, sphere), (ids["cylinder"], 0.0, m_half, sphere),
                   (ids["plate_cardan"], length, m_half, sphere), (ids["plate_end"], length, m_half, sphere))
         for j, s, m, inertia in points:
             _add(model, placements[j], j, m, base + axis * s, inertia)
+    set_stem_inertias(mm, model, mm.pose_values(mm.pose_m).stem_lengths_m, mass_scale)
     plate = mm.plate_joint_id
     side, t = 2 * machine.geometry.plate_half_side_m, machine.collision.plate_thickness_m
     m_plate = mass_scale * mass.plate_mass_kg
@@ -111,6 +113,40 @@ def inertial_model(mm: MachineModel, mass_scale: float = 1.0) -> pin.Model:
     for ids in mm.leg_joint_ids:
         model.armature[model.joints[ids["actuator"]].idx_v] += mass_scale * machine.drive_reflected_mass_kg
     return model
+
+
+def stem_pieces(machine: Machine, springs_per_segment: int, stem_length_m: float, mass_scale: float = 1.0
+                ) -> list[pin.Inertia]:
+    """The stem's pieces (module doc) as inertias in their bodies' own frames, in chain order: the actuator body
+    (origin at the plate cardan, z along the leg: the rod z in [-L_r, -L_s (1 - 1/(2n))] and the moving parts at
+    z = -L_r) and the body of each stem spring k (origin at the spring, L_c + (k + 1/2) L_s / n from the base
+    cardan: the exposed rod up to the next spring or the plate cardan), for an exposed stem length L_s (m);
+    kg, m, kg m^2. Their masses sum to the rod's and the moving parts' at every L_s."""
+    n, rod = springs_per_segment, machine.stem.length_m
+    ls = float(stem_length_m)
+    mu = mass_scale * machine.mass.density_kg_per_m3 * machine.stem_section.area_m2  # kg/m
+    radius, z_axis = machine.stem.diameter_m / 2, np.array([0.0, 0.0, 1.0])
+    # (z0, z1) of each piece in its body's frame: actuator, then springs 0 .. n-1
+    spans = [(-rod, -ls + ls / (2 * n))] + [(0.0, ls / n if k < n - 1 else ls / (2 * n)) for k in range(n)]
+    pieces = []
+    for z0, z1 in spans:
+        m = mu * (z1 - z0)
+        pieces.append(pin.Inertia(m, np.array([0.0, 0.0, (z0 + z1) / 2]), _tube(m, z1 - z0, radius, 0.0, z_axis)))
+    moving = mass_scale * machine.mass.actuator_moving_mass_kg
+    if moving > 0.0:
+        pieces[0] = pieces[0] + pin.Inertia(moving, np.array([0.0, 0.0, -rod]), np.zeros((3, 3)))
+    return pieces
+
+
+def set_stem_inertias(mm: MachineModel, model: pin.Model, stem_lengths_m: np.ndarray, mass_scale: float = 1.0
+                      ) -> None:
+    """Write the stem pieces (:func:`stem_pieces`) of exposed stem lengths (n,) (m) into ``model``'s actuator and
+    stem-spring bodies (a copy of ``mm.model`` with :meth:`MachineModel.place_stem` at the same lengths; those
+    bodies carry nothing else)."""
+    for i, ids in enumerate(mm.leg_joint_ids):
+        pieces = stem_pieces(mm.machine, mm.springs_per_segment, float(stem_lengths_m[i]), mass_scale)
+        for j, piece in zip(_chain(mm, i, ids["actuator"], "stem"), pieces, strict=True):
+            model.inertias[j] = piece
 
 
 def total_mass_kg(model: pin.Model) -> float:

@@ -30,7 +30,7 @@ W = K_p (r - h_est) + K_d (r' - h_est') + K_i int(r - h_est); F_cmd = -A^+ W (th
 gravity feed-forward are constants of the equilibrium). Left out, stated: the pose dependence of A^+, v_p
 (distribution) and of A (the legs' static tensions turning with the legs): in statics they cancel exactly
 (-A(h) N(h) = W for every h), dynamically they differ by the drive lag; the gravity feed-forward's
-|dG/dh| <= 58 N/m (``control`` module) against K_p = 2e4 N/m.
+|dG/dh| <= 17 N/m (``control`` module) against K_p = 2e4 N/m.
 
 Results: open loop broken at the force commands per Cartesian axis (the other two closed), margins from
 python-control's ``stability_margins``; closed-loop poles (frequency |s| / 2 pi, damping -Re s / |s|); the
@@ -39,9 +39,10 @@ python-control's ``stability_margins``; closed-loop poles (frequency |s| / 2 pi,
 drive forces act on, and the encoders measure, the actuator coordinates S phi_k (collocated: the controllability
 and the observability are the same vector), and the share of the mode's strain energy stored in the actuator
 springs, sum_i k_i (S phi_k)_i^2 / phi_k^T K phi_k (= / omega_k^2, phi mass-normalised), is that measure normalised
-by the mode itself: about 1 for the axial leg modes (97% at pose A's 441 Hz mode), 1-2% for the rocking pair (the
-plate sways and tilts about the legs' concurrency point, where a rigid rotation changes no leg length; what is left
-is the legs' bending), exactly 0 for the plate twist; one warning line per (pose, mode) when a loop pole (a
+by the mode itself: most of it for the axial leg modes (75% at pose A's 386 Hz mode: the legs' swing bends
+them, tests/dynamics/test_linearise.py), 1-2% for the rocking pair (the plate sways and tilts about the legs'
+concurrency point, where a rigid rotation changes no leg length; what is left is the legs' bending),
+exactly 0 for the plate twist; one warning line per (pose, mode) when a loop pole (a
 closed-loop pole the feedback moved by more than ``MOVED_RELATIVE`` from every open-loop pole) lies within
 ``WARNING_RATIO`` of a structural mode's frequency and the drives hold at least ``DRIVE_SHARE_THRESHOLD`` of that
 mode's strain energy (below it the loop neither excites nor damps the mode).

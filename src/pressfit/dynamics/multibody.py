@@ -4,8 +4,9 @@ The model (:func:`rigid_leg_model`) is the VJM model of :mod:`pressfit.mechanics
 virtual joints frozen: plate free flyer, per leg base cardan (2 revolutes), the actuated prismatic joint
 (coordinate = leg length l_i, m), plate cardan (2 revolutes), closed on the plate by one 6D loop closure per leg
 (``pin.RigidConstraintModel`` CONTACT_6D, the same anchor frames as the elastic model). Body inertias are
-those of :func:`pressfit.dynamics.inertia.inertial_model` lumped onto the rigid bodies (the stem's mass is
-that at the model's pose and moves with the plate cardan, like a rod sliding out of its cylinder), and the
+those of :func:`pressfit.dynamics.inertia.inertial_model` lumped onto the rigid bodies (the stem, a rod of fixed
+length, is one body after the prismatic joint: its mass and its place on that body are the same at every pose,
+so the model is the same wherever it is built), and the
 prismatic joints carry its armature (an electric drive's reflected rotor and screw inertia); gravity
 -9.81 m/s^2 along y. The elastic structure is left out because its modes (from 20 Hz for the plate's
 rocking up to kHz for the legs' axial modes, ``pressfit modes``) would need time steps of microseconds.

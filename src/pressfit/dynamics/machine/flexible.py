@@ -15,7 +15,10 @@ drives: a force drive puts -F_i (F_i > 0 tension) on actuator joint i, which the
 drive sets the rest length r_i of the actuator spring (the actuator stiffness in series with the segments'
 axial compliance, ``MachineModel.spring_stiffness``). The stem springs' placements and stiffnesses follow the
 leg length (re-placed when a stem changed by STEM_UPDATE_M: the stiffness n E I_s / L_s then moves by at most
-2e-4 relative at the shortest 50 mm stem); the stem's mass is that at the build pose (as in the rigid model).
+2e-4 relative at the shortest 50 mm stem), and so does the stem's mass: a rod of fixed length whose exposed part
+is spread over the stem springs' bodies and whose inner part rides on the actuator body
+(:func:`pressfit.dynamics.inertia.set_stem_inertias`, re-written with the placements), so a state sees the weight
+and inertia of the pose it stands at, not the build pose's.
 Cardan play: ``cardan_compliance`` (:class:`pressfit.mechanics.model.CardanCompliance`, e.g. the dead zones
 of :meth:`pressfit.mechanics.clearance.Clearance.cardan_compliance`) adds its virtual joints and laws.
 
@@ -100,7 +103,7 @@ from scipy.linalg.lapack import dgetrs as _getrs
 from scipy.linalg.lapack import dposv as _posv
 
 from pressfit.description.machine import Damping, Machine
-from pressfit.dynamics.inertia import inertial_model
+from pressfit.dynamics.inertia import inertial_model, set_stem_inertias
 from pressfit.dynamics.machine.base import SECTIONS, DriveInput, Energy, MachineState, SectionLoads
 from pressfit.errors import ConvergenceError, PressfitError
 from pressfit.mechanics.model import CardanComplianceSpec, LinearSpring, build_model
@@ -237,6 +240,7 @@ class FlexibleMachine:
             return
         self._placed_key = key
         self.mm.place_stem(self.model, stem_lengths_m)
+        set_stem_inertias(self.mm, self.model, np.asarray(stem_lengths_m, dtype=float))
         self._closure_key = None
         self._k = self.mm.spring_stiffness(stem_lengths_m + self.machine.cylinder.length_m)
         if self._series is not None:  # a stiffness in series with each actuator spring (closed cardan plays)
@@ -320,15 +324,18 @@ class FlexibleMachine:
 
     # --- states ------------------------------------------------------------------------------------
     def rest_state(self, plate_wrench: np.ndarray | None = None, drive: DriveInput | None = None,
-                   tol: float = NEWTON_TOL, max_iter: int = 30) -> FlexibleState:
-        """Static equilibrium at the build pose under gravity and a plate wrench (6,) (N, N m; default none)
-        with position drives at ``drive`` (default: the rigid leg lengths of the pose); v = 0."""
-        drive = DriveInput.positions(self.q0[self.act_q]) if drive is None else drive
+                   tol: float = NEWTON_TOL, max_iter: int = 30, pose_m: np.ndarray | None = None) -> FlexibleState:
+        """Static equilibrium at the build pose (or at the reachable ``pose_m``, m: the stems placed, stiffened and
+        weighed there) under gravity and a plate wrench (6,) (N, N m; default none) with position drives at
+        ``drive`` (default: the rigid leg lengths of the pose); v = 0."""
+        q_start = self.q0 if pose_m is None else self.mm.pose_values(pose_m).q0
+        drive = DriveInput.positions(q_start[self.act_q]) if drive is None else drive
         if drive.kind != "position":
             raise PressfitError("a rest state needs position drives: force drives hold no pose")
+        self._place(q_start[self.act_q] - self.machine.cylinder.length_m)
         wrench = _wrench(plate_wrench)
         rest, k = self._rest(drive)
-        q, lam, nv, nc = self.q0.copy(), np.zeros(6 * self.legs), self.nv, 6 * self.legs
+        q, lam, nv, nc = q_start.copy(), np.zeros(6 * self.legs), self.nv, 6 * self.legs
         zero = np.zeros(nv)
         for it in range(1, max_iter + 1):  # noqa: B007 (the count is reported)
             b, phi = self._jacobian(q)

@@ -1,0 +1,141 @@
+r"""The machine's own weight as a plate load, in closed form: what the rigid-leg model's quasi-static sag needs.
+
+The condensed model (:mod:`pressfit.mechanics.condensed`) takes loads at the plate. The weight of plate and tool is
+one; the legs' own weight is carried by the legs, and reaches the plate in two ways:
+
+* **the cardan forces.** Leg i (base cardan B_i, plate cardan P_i = h + d_i, length l, unit axis e from B_i) carries
+  masses along s in [0, l] from B_i (the ``[mass]`` table, as :mod:`pressfit.dynamics.inertia` places them): the
+  cylinder tube and the actuator housing spread over [0, L_c]; the stem, a rod of fixed length L_r spanning
+  [l - L_r, l] (its inner end may lie behind the base cardan, s < 0) with the actuator's moving parts at its inner
+  end; the cardan spiders at s = 0 and s = l. The leg is a prismatic pair between two cardans, so along e the
+  weight of the rod body (rod, moving parts, plate spider) reaches the plate and that of the cylinder the base;
+  across e the cardans carry it as a simply supported beam: the plate's share is Q g_perp / l with
+  Q = sum s m the first moment of the leg's masses about B_i (the couples at the two ends are equal and opposite,
+  so they take no part in the leg's force balance). The plate then sees that force at P_i, i.e. the force and its
+  moment d_i x F about the plate centre: together with the plate and the tool this is exactly the weight the
+  rigid-leg model's virtual work gives (tests/dynamics/test_leg_weight.py checks it against Pinocchio's
+  generalised gravity);
+* **the legs' bending between the cardans.** A cardan transmits the couple along c_i (normal to both its axes), so
+  each leg is clamped about c_i to the base at one end and to the plate at the other: the bending under its own
+  transverse weight, which the cardans leave free about their two axes, would turn the plate end relative to the
+  base end by
+
+  .. math:: \Delta\varphi_0 = c \cdot (e \times g) \int_0^l \frac{m(s)}{EI(s)}\, ds, \qquad
+            m(s) = q(s) - (l - s) \frac{Q}{l},
+
+  where q(s) = sum over the plate side of section s of (x - s) m_x is the first moment about s of the masses the
+  section carries toward the plate (for a cylinder section the whole rod is on that side: it rides on the actuator)
+  and (e x g) m(s) is the simply supported bending moment of the plate side on the base side (zero at both ends).
+  EI is the cylinder's over [0, L_c] and the stem's over [L_c, l], as in the VJM springs and in the condensed
+  couple stiffness k_r = 1 / (cos^2(beta) c_T + sin^2(beta) c_M). The couple spring is thus pre-strained:
+  C = k_r (c . phi - Delta phi_0), which is the plate moment k_r Delta phi_0 c (the fixed-end moment that a
+  plate-equivalent force leaves out).
+
+The tool's sag at rest is the condensed compliance (6 x 6, at the plate centre) times that wrench:
+:func:`weight_sag_m`. It agrees with the elastic VJM model's static equilibrium under the same masses
+(:meth:`pressfit.dynamics.machine.flexible.FlexibleMachine.rest_state`) to a few 1e-3 (the VJM lumps the
+distributed weight on springs_per_segment springs: an error O(1/n^2)). Left out: the axial weight's distribution
+along the leg's axial compliance (the actuator spring takes the leg's whole axial compliance, as in the VJM).
+Assumed, as in the VJM chain: the rod's part inside the cylinder and the moving parts ride on the cylinder's end
+(the actuator body), so a cylinder section carries them whichever side of it they sit; carried instead by the bore
+where they sit (the piston's guide), the sag moves by 0.04-0.32% at the poses of tests/dynamics/test_leg_weight.py.
+Units: SI (m, kg, N, N m, rad).
+"""
+
+from __future__ import annotations
+
+import numpy as np
+
+from pressfit.description.machine import Machine
+from pressfit.dynamics.inertia import GRAVITY_M_PER_S2
+from pressfit.kinematics import leg_vectors, require_reachable
+from pressfit.mechanics.condensed import condensed_plate_compliance, rotational_compliances
+
+_GAUSS = np.polynomial.legendre.leggauss(3)  # exact for m(s), piecewise quadratic in s
+
+
+def _leg_masses(machine: Machine, length_m: float) -> tuple[list[tuple[float, float, float]], list[tuple[float, float]],
+                                                             float]:
+    """Leg masses along s from the base cardan at leg length l: uniform pieces (kg/m, s0, s1), points (kg, s), and
+    the rod body's mass (rod, moving parts, plate spider: the part whose axial weight reaches the plate), kg."""
+    mass, lc, rod = machine.mass, machine.cylinder.length_m, machine.stem.length_m
+    mu_cyl = (machine.cylinder_tube_mass_kg + mass.actuator_housing_mass_kg) / lc
+    mu_rod = mass.density_kg_per_m3 * machine.stem_section.area_m2
+    pieces = [(mu_cyl, 0.0, lc), (mu_rod, length_m - rod, length_m)]
+    points = [(mass.actuator_moving_mass_kg, length_m - rod), (mass.cardan_spider_mass_kg, length_m),
+              (mass.cardan_spider_mass_kg, 0.0)]
+    return pieces, points, machine.stem_mass_kg + mass.actuator_moving_mass_kg + mass.cardan_spider_mass_kg
+
+
+def _first_moment(pieces: list, points: list, s: np.ndarray, lower: np.ndarray) -> np.ndarray:
+    """sum over the masses at x > lower of (x - s) m_x, kg m, at sections s (k,) (``lower`` (k,) per section)."""
+    q = np.zeros_like(s)
+    for mu, a, b in pieces:
+        lo = np.maximum(a, lower)
+        q += np.where(b > lo, mu * ((b - s) ** 2 - (lo - s) ** 2) / 2, 0.0)
+    for m, x in points:
+        q += np.where(x > lower, m * (x - s), 0.0)
+    return q
+
+
+def leg_weight_loads(machine: Machine, pose_m: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    """Per leg at a reachable pose (m): the force (n, 3), N, the leg's weight puts on the plate at its plate cardan
+    (module doc: axial share of the rod body, simply supported transverse share) and the plate moment (n, 3), N m,
+    of its clamped bending k_r Delta phi_0 c_i (world axes)."""
+    h = require_reachable(machine, np.asarray(pose_m, dtype=float).reshape(3))
+    u = leg_vectors(machine, h)
+    lengths = np.linalg.norm(u, axis=-1)
+    g = np.array([0.0, -GRAVITY_M_PER_S2, 0.0])
+    lc, e_mod = machine.cylinder.length_m, machine.material.youngs_modulus_pa
+    ei = (e_mod * machine.cylinder_section.second_moment_m4, e_mod * machine.stem_section.second_moment_m4)
+    forces, moments = np.zeros((len(lengths), 3)), np.zeros((len(lengths), 3))
+    nodes, weights = _GAUSS
+    for i, (ui, li) in enumerate(zip(u, lengths, strict=True)):
+        e = ui / li
+        pieces, points, rod_body = _leg_masses(machine, float(li))
+        q0 = sum(mu * (b * b - a * a) / 2 for mu, a, b in pieces) + sum(m * x for m, x in points)
+        g_perp = g - (g @ e) * e
+        forces[i] = rod_body * (g @ e) * e + q0 / li * g_perp
+        integral = 0.0
+        for (s0, s1), stiffness, cylinder in (((0.0, lc), ei[0], True), ((lc, float(li)), ei[1], False)):
+            breaks = np.unique(np.clip([s0, s1, li - machine.stem.length_m], s0, s1))
+            for a, b in zip(breaks[:-1], breaks[1:], strict=True):
+                s = (a + b) / 2 + (b - a) / 2 * nodes
+                # a cylinder section carries the whole rod (it rides on the actuator) and the cylinder beyond s
+                lower = np.full_like(s, -np.inf) if cylinder else s
+                q = _first_moment(pieces[:1], [], s, s) + _first_moment(pieces[1:], points[:2], s, lower)
+                integral += (b - a) / 2 * float(weights @ (q - (li - s) * q0 / li)) / stiffness
+        c_t, c_m, c, sin_beta = _couple(machine, e, i, li)
+        k_r = 1.0 / ((1.0 - sin_beta**2) * c_t + sin_beta**2 * c_m)
+        moments[i] = k_r * (c @ np.cross(e, g)) * integral * c
+    return forces, moments
+
+
+def _couple(machine: Machine, e: np.ndarray, leg: int, length_m: float) -> tuple[float, float, np.ndarray, float]:
+    """(c_T, c_M) of the leg (rad/(N m)), its couple direction c_i and sin(beta_i) (as in
+    :mod:`pressfit.mechanics.condensed`)."""
+    a = machine.cardan_axes[leg]
+    sin_beta = float(e @ a)
+    c = (e - sin_beta * a) / np.sqrt(1.0 - sin_beta**2)
+    c_t, c_m = rotational_compliances(machine, length_m)
+    return float(c_t), float(c_m), c, sin_beta
+
+
+def weight_wrench_n(machine: Machine, pose_m: np.ndarray) -> np.ndarray:
+    """The machine's weight as a plate wrench (6,) at a reachable pose (m): force N, moment N m about the plate centre,
+    world axes (plate and tool at the centre, the legs' cardan forces and clamped bending: module doc)."""
+    h = np.asarray(pose_m, dtype=float).reshape(3)
+    forces, moments = leg_weight_loads(machine, h)
+    plate = (machine.mass.plate_mass_kg + machine.mass.tool_mass_kg) * np.array([0.0, -GRAVITY_M_PER_S2, 0.0])
+    return np.concatenate([plate + forces.sum(0),
+                           np.cross(machine.plate_offsets_m, forces).sum(0) + moments.sum(0)])
+
+
+def weight_sag_m(machine: Machine, poses_m: np.ndarray) -> np.ndarray:
+    """The tool's static deflection (..., 3), m, under the machine's own weight at reachable poses (..., 3), m: the
+    condensed plate compliance times :func:`weight_wrench_n` (module doc)."""
+    h = np.asarray(poses_m, dtype=float)
+    flat = h.reshape(-1, 3)
+    wrenches = np.array([weight_wrench_n(machine, p) for p in flat])
+    compliance = condensed_plate_compliance(machine, flat).reshape(-1, 6, 6)
+    return np.einsum("kij,kj->ki", compliance[:, :3], wrenches).reshape(h.shape)
