@@ -10,8 +10,9 @@ import numpy as np
 import pytest
 
 from pressfit.description.cases import load_case
+from pressfit.description.measured_curves import read_curve
 from pressfit.dynamics.cycle import simulate_cycle
-from pressfit.dynamics.press_monitor import tared_sensed_depth
+from pressfit.dynamics.press_monitor import tare_row, tared_sensed_depth
 from pressfit.mechanics.compliance import vjm_plate_compliance
 from pressfit.output.curve import monitor_curve_columns
 from pressfit.output.cycle import write_cycle
@@ -34,7 +35,9 @@ def board_run(tmp_path_factory):
 
 
 def test_each_pin_has_its_curve_with_its_own_poses_compliance(board_run, tmp_path):
-    """Per pin, curves/pin_<nn>.csv with the monitor's columns, its rows the pin's descent, dwell and retract; the
+    """Per pin, curves/pin_<nn>.csv with the monitor's columns, its rows the pin's stroke from the row before its
+    first contact (readable by `pressfit curves check` with --displacement-column sensed_depth_m: the sensed depth
+    never runs backwards before its maximum); the
     summary's machine_compliance_along_press_m_per_n the Pinocchio VJM compliance C_yy at the pin's pose to 1e-6
     (a second formulation of the condensed one), and sensed minus true depth at the peak that C_yy times the pin's
     peak force within 5% (achieved 1.5% and 1.0%: the board's 10 mm/s descent is not quasi-static, the rigid
@@ -49,6 +52,9 @@ def test_each_pin_has_its_curve_with_its_own_poses_compliance(board_run, tmp_pat
         table = np.loadtxt(csv, delimiter=",", skiprows=1)
         assert table.shape == (curve.time_s.size, 6)
         assert np.array_equal(table[:, 3], table[:, 4])  # one pin: its force is the total
+        assert table[0, 3] == 0.0 and table[1, 3] > 0.0 and table[0, 0] == 0.0
+        measured = read_curve(csv, columns={"displacement": "sensed_depth_m"})
+        assert measured.force_n.max() == pytest.approx(record["peak_contact_force_n"])
         c_yy = vjm_plate_compliance(case.machine(), np.array([pin["x_m"], 0.6, pin["z_m"]]))[1, 1]
         assert record["machine_compliance_along_press_m_per_n"] == pytest.approx(c_yy, rel=1e-6)
         assert record["peak_force_n"] == pytest.approx(record["peak_contact_force_n"])  # no shoulder: the peak
@@ -58,13 +64,12 @@ def test_each_pin_has_its_curve_with_its_own_poses_compliance(board_run, tmp_pat
     assert smt[1] > 4.0 * smt[0]
 
 
-def test_the_sensed_depth_is_tared_at_the_last_row_before_contact():
-    """h_b - kinematic_y shifted so that it equals the true depth on the row before the first contact (the weight's
-    sag out, as a monitor zeroes at first contact); a stroke that never touches is tared on its first row."""
+def test_the_curve_starts_at_the_last_row_before_contact_where_the_sensed_depth_is_tared():
+    """The monitor's start is the row before the first contact (0 if it never touches); there h_b - kinematic_y is
+    shifted onto the true depth (the weight's sag out, as a monitor zeroes at its start), the deflection kept."""
     depth = np.array([-2e-3, -1e-3, 0.5e-3, 1e-3])
     kinematic_y = 0.6 - depth - np.array([7e-6, 7e-6, 9e-6, 1.1e-5])  # sag 7 um, then 2 and 4 um of deflection
     force = np.array([0.0, 0.0, 10.0, 20.0])
+    assert tare_row(force) == 1 and tare_row(np.zeros(4)) == 0 and tare_row(np.ones(4)) == 0
     sensed = tared_sensed_depth(0.6, kinematic_y, depth, force)
     assert np.allclose(sensed - depth, [0.0, 0.0, 2e-6, 4e-6], atol=1e-15)
-    assert np.allclose(tared_sensed_depth(0.6, kinematic_y, depth, np.zeros(4)) - depth,
-                       [0.0, 0.0, 2e-6, 4e-6], atol=1e-15)
