@@ -238,8 +238,9 @@ def test_pin_pass_fail_turns_at_its_limits_recomputed_from_the_csv(tmp_path):
     res = run("cycle", path, "--out", out, "--no-progress")
     assert res.exit_code == 1, res.output
     assert "FAIL" in res.output
-    assert sorted(p.name for p in out.iterdir()) == ["cycle.csv", "cycle.json", "cycle_drives.png", "cycle_force.png",
-                                                     "cycle_operating_points.png", "cycle_path.png"]
+    assert sorted(p.name for p in out.iterdir()) == ["curves", "cycle.csv", "cycle.json", "cycle_drives.png",
+                                                     "cycle_force.png", "cycle_operating_points.png", "cycle_path.png"]
+    assert sorted(p.name for p in (out / "curves").iterdir()) == ["pin_01.csv"]
     header = (out / "cycle.csv").read_text().splitlines()[0].split(",")
     assert tuple(header) == cycle_columns(4)
     series = np.loadtxt(out / "cycle.csv", delimiter=",", skiprows=1)

@@ -191,8 +191,10 @@ def test_simulate_cli_json_files_and_bad_input(tmp_path):
     out = json.loads(res.stdout)  # warnings, if any, go to stderr
     assert {"peak_contact_force_n", "overshoot_n", "max_insertion_depth_m", "tool_final_error_m",
             "tool_lateral_error_at_insertion_m", "max_closure_drift_m", "actuator_saturation_time_s",
-            "steady_insertion_force_n", "limiter"} <= set(out)
-    assert {p.name for p in (tmp_path / "o").iterdir()} == {"simulation.csv", "simulation.json", "simulation.png"}
+            "steady_insertion_force_n", "limiter", "peak_force_n", "plateau_force_n", "seated", "seating_depth_m",
+            "sensed_minus_true_depth_at_peak_m", "machine_compliance_along_press_m_per_n"} <= set(out)
+    assert {p.name for p in (tmp_path / "o").iterdir()} == {"simulation.csv", "simulation.json", "simulation.png",
+                                                            "curve.csv"}
     again = CliRunner().invoke(main, ["simulate", str(path), "--no-progress", "--out", str(tmp_path / "o")])
     assert again.exit_code == 2 and "exists" in again.output
     for bad in (tmp_path / "missing.toml", ROOT / "cases/paper/A.toml", short_case(tmp_path, time_step_s=-1.0)):

@@ -49,6 +49,7 @@ from pressfit.dynamics.actuators import distribution
 from pressfit.dynamics.contact import contact_force_n
 from pressfit.dynamics.control import Trajectory, gravity_feedforward_n
 from pressfit.dynamics.multibody import rigid_leg_model
+from pressfit.dynamics.press_monitor import SUMMARY_KEYS, MonitorCurve, monitor_curve
 from pressfit.dynamics.scenario import (
     MAX_STEPS,
     MIN_SEGMENT_STEPS,
@@ -310,6 +311,7 @@ class CycleResult:
     summary: dict[str, Any]
     sections: np.ndarray | None = None
     sizing: RunSizing | None = None
+    curves: tuple[MonitorCurve, ...] = ()  # per pin, the press monitor's view of its stroke (cycle_monitor_curves)
 
     def column(self, name: str) -> np.ndarray:
         return self.series[:, self.columns.index(name)]
@@ -333,6 +335,9 @@ def simulate_cycle(case: Case, model: str | None = None, progress: bool = False,
     pin = np.array([plan.segments[k].pin if plan.segments[k].phase in PIN_PHASES else 0 for k in phases])
     series = np.column_stack([rows, pin, phases])
     summary = summarise_cycle(series, plan, drives)
+    curves = cycle_monitor_curves(series, plan, machine)
+    for record, curve in zip(summary["pins"], curves, strict=True):
+        record.update({k: curve.summary[k] for k in SUMMARY_KEYS})
     sized = None
     if sizing:
         amplitudes, columns = case.preload.amplitudes, series_columns(len(machine.legs))
@@ -349,7 +354,26 @@ def simulate_cycle(case: Case, model: str | None = None, progress: bool = False,
         sized.energy.require_closed(f"of the board of {case.path}", "cycle")
         summary.update(sized.to_dict())
     return CycleResult(series=series, columns=cycle_columns(len(machine.legs)), plan=plan, summary=summary,
-                       sections=sections, sizing=sized)
+                       sections=sections, sizing=sized, curves=curves)
+
+
+def cycle_monitor_curves(series: np.ndarray, plan: CyclePlan, machine: Machine) -> tuple[MonitorCurve, ...]:
+    """Per pin, the press monitor's view of its stroke (its descent, dwell and retract rows,
+    :func:`pressfit.dynamics.press_monitor.monitor_curve`) at that pin's pose: the board's contact with
+    ``pin_position_m`` the pin's (x, z), so each pin's curve carries the compliance of its own pose."""
+    col = {name: k for k, name in enumerate(cycle_columns(len(machine.legs)))}
+    segment = series[:, col["segment"]].astype(int)
+    contact = plan.scenario.simulation.contact
+    curves = []
+    for pin in plan.pins:
+        mine = [s.index for s in plan.segments if s.pin == pin.index and s.phase in PIN_PHASES]
+        rows = np.flatnonzero(np.isin(segment, mine))
+        dwell = np.flatnonzero(segment[rows] == mine[1])
+        curves.append(monitor_curve(machine, contact.model_copy(update={"pin_position_m": [pin.x_m, pin.z_m]}),
+                                    *(series[rows, col[c]] for c in ("time_s", "depth_m", "kinematic_y_m",
+                                                                     "contact_force_n")),
+                                    int(dwell[-1]), where=f"{plan.run_case.path}: {_pin_label(pin)}"))
+    return tuple(curves)
 
 
 @dataclass(frozen=True, kw_only=True)

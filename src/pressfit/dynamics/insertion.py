@@ -42,6 +42,7 @@ from pressfit.dynamics.control import Trajectory
 from pressfit.dynamics.machine.base import SECTIONS
 from pressfit.dynamics.machine.registry import model_kind
 from pressfit.dynamics.multibody import rigid_leg_model
+from pressfit.dynamics.press_monitor import SUMMARY_KEYS, MonitorCurve, monitor_curve, stroke_rows
 from pressfit.dynamics.scenario import (
     MAX_STEPS,
     MIN_SEGMENT_STEPS,
@@ -93,6 +94,7 @@ class InsertionResult:
     phase_names: tuple[str, ...]
     summary: dict[str, Any] = field(default_factory=dict)
     sections: np.ndarray | None = None  # (n, legs, 3, 6) flexible model: section resultants (section_columns)
+    monitor: MonitorCurve | None = None  # the press monitor's view of the stroke (:func:`insertion_monitor_curve`)
 
     def column(self, name: str) -> np.ndarray:
         return self.series[:, self.columns.index(name)]
@@ -169,7 +171,18 @@ def simulate_insertion(case: Case, limiter: bool = True, progress: bool = False)
                              phase_names=plan.trajectory.phases, sections=sections)
     summary = summarise(result, case, drives)
     summary["warnings"] = [*plan.warnings, *summary["warnings"]]
-    return dataclasses.replace(result, summary=summary)
+    monitor = insertion_monitor_curve(result, case, machine)
+    summary.update({k: monitor.summary[k] for k in SUMMARY_KEYS})
+    return dataclasses.replace(result, summary=summary, monitor=monitor)
+
+
+def insertion_monitor_curve(result: InsertionResult, case: Case, machine: Machine) -> MonitorCurve:
+    """The press monitor's view of the insertion's stroke (descent, dwell, retract:
+    :func:`pressfit.dynamics.press_monitor.monitor_curve`) at the case's pin pose."""
+    rows, end = stroke_rows(result.phases, result.phase_names)
+    return monitor_curve(machine, case.simulation.contact, result.column("time_s")[rows],
+                         result.column("depth_m")[rows], result.column("kinematic_y_m")[rows],
+                         result.column("contact_force_n")[rows], end, where=str(case.path))
 
 
 def _reversals_unseen(time_s: np.ndarray, tensions_n: np.ndarray) -> list[str]:

@@ -179,6 +179,49 @@ class PressCurve:
         return out
 
 
+@dataclass(frozen=True, kw_only=True)
+class StrokeFigures:
+    """A press stroke's monitor figures (:func:`stroke_figures`): the row of the insertion's peak and its force (N),
+    the pins' plateaus summed (N; None when a law has none), whether every pin is seated at the end of the stroke,
+    the true tool depth where the last pin seats (m; None if never or without a shoulder), the sensed minus the
+    true depth at the peak (m), and per pin whether it is seated at the end and its peak before its shoulder (N)."""
+
+    peak_row: int
+    peak_force_n: float
+    plateau_force_n: float | None
+    seated: bool
+    seating_depth_m: float | None
+    sensed_minus_true_depth_at_peak_m: float
+    pin_seated: tuple[bool, ...]
+    pin_peak_force_n: tuple[float, ...]
+
+
+def stroke_figures(pins: PinField, depth_m: np.ndarray, force_n: np.ndarray, pin_forces_n: np.ndarray,
+                   pin_depths_m: np.ndarray, sensed_depth_m: np.ndarray, end_row: int = -1) -> StrokeFigures:
+    """The monitor's figures of a stroke sampled in rows (the predicted curve's depths, or a simulation's time
+    steps): true tool depth (m), total force (N), the pins' forces (rows, n), N, and depths (rows, n), m, the
+    sensed depth (m); ``end_row`` the end of the stroke (the deepest point: the last depth of a predicted curve,
+    the end of a simulated dwell). The peak is the insertion's: before the first shoulder touches the board, over
+    the whole stroke without one."""
+    seats = np.array([law.seat_depth_m if law.seat_depth_m is not None else np.inf for law in pins.laws])
+    shoulder = bool(np.all(np.isfinite(seats)))
+    touched = np.flatnonzero(np.any(pin_depths_m >= seats, axis=1))
+    before = touched[0] if touched.size else force_n.size
+    peak = int(np.argmax(force_n[:max(before, 1)]))
+    pin_seated = tuple(bool(x >= s) and bool(np.isfinite(s)) for x, s in zip(pin_depths_m[end_row], seats,
+                                                                           strict=True))
+    seated_rows = np.flatnonzero(np.all(pin_depths_m >= seats, axis=1))
+    plateaus = [law.plateau_force_n for law in pins.laws]
+    return StrokeFigures(
+        peak_row=peak, peak_force_n=float(force_n[peak]),
+        plateau_force_n=None if any(p is None for p in plateaus) else float(sum(plateaus)),
+        seated=bool(shoulder and all(pin_seated)),
+        seating_depth_m=float(depth_m[seated_rows[0]]) if shoulder and seated_rows.size else None,
+        sensed_minus_true_depth_at_peak_m=float(sensed_depth_m[peak] - depth_m[peak]), pin_seated=pin_seated,
+        pin_peak_force_n=tuple(float(np.max(np.where(pin_depths_m[:, i] < s, pin_forces_n[:, i], 0.0)))
+                               for i, s in enumerate(seats)))
+
+
 def pin_pose_m(contact: Contact) -> np.ndarray:
     """The plate pose of the insertion: the tool tip (the plate centre) on the pin, at the board face (m)."""
     return np.array([contact.pin_position_m[0], contact.board_height_m, contact.pin_position_m[1]], dtype=float)
@@ -228,30 +271,20 @@ def predict_curve(machine: Machine, case_or_contact: Case | Contact, *, pose_m: 
         spread = float(np.max(np.ptp(sol.pin_depths_m, axis=1)))
         end += max(spread, 1e-6)
     force = sol.pin_forces_n.sum(axis=1)
-    touched = np.flatnonzero(np.any(sol.pin_depths_m >= np.array([s if s is not None else np.inf for s in seats]),
-                                    axis=1))
-    before = touched[0] if touched.size else force.size  # the insertion's peak, before a shoulder touches
-    peak = int(np.argmax(force[:max(before, 1)]))
     sensed = depth + sol.displacement[:, 1]
     tilt = sol.displacement[:, 3:]
-    seated_rows = np.flatnonzero(np.all(sol.pin_depths_m >= np.array([s if s is not None else np.inf
-                                                                       for s in seats]), axis=1))
-    plateaus = [law.plateau_force_n for law in pins.laws]
+    fig = stroke_figures(pins, depth, force, sol.pin_forces_n, sol.pin_depths_m, sensed)
     notes = tuple(dict.fromkeys(n for law in pins.laws for n in law.notes))
     return PressCurve(
         depth_m=depth, force_n=force, pin_forces_n=sol.pin_forces_n, pin_depths_m=sol.pin_depths_m,
-        sensed_depth_m=sensed, tilt_rad=tilt, peak_force_n=float(force[peak]), final_force_n=float(force[-1]),
-        plateau_force_n=None if any(p is None for p in plateaus) else float(sum(plateaus)),
-        seated=bool(shoulder and all(pin_seated)),
-        seating_depth_m=float(depth[seated_rows[0]]) if shoulder and seated_rows.size else None,
-        sensed_minus_true_depth_at_peak_m=float(sensed[peak] - depth[peak]),
+        sensed_depth_m=sensed, tilt_rad=tilt, peak_force_n=fig.peak_force_n, final_force_n=float(force[-1]),
+        plateau_force_n=fig.plateau_force_n, seated=fig.seated, seating_depth_m=fig.seating_depth_m,
+        sensed_minus_true_depth_at_peak_m=fig.sensed_minus_true_depth_at_peak_m,
         machine_compliance_along_press_m_per_n=float(compliance[1, 1]),
         tool_tilt_max_rad=float(np.max(np.linalg.norm(tilt, axis=1))),
         max_pin_depth_spread_m=float(np.max(np.ptp(sol.pin_depths_m, axis=1))),
-        all_pins_seated=bool(shoulder and all(pin_seated)),
-        pin_peak_force_n=tuple(float(np.max(np.where(sol.pin_depths_m[:, i] < (s if s is not None else np.inf),
-                                                      sol.pin_forces_n[:, i], 0.0))) for i, s in enumerate(seats)),
-        pin_final_depth_m=tuple(float(x) for x in sol.pin_depths_m[-1]), pin_seated=pin_seated,
+        all_pins_seated=fig.seated, pin_peak_force_n=fig.pin_peak_force_n,
+        pin_final_depth_m=tuple(float(x) for x in sol.pin_depths_m[-1]), pin_seated=fig.pin_seated,
         pin_offsets_m=tuple((float(a), float(b)) for a, b in pins.offsets_m), series_residual_n=sol.residual_n,
         pose_m=(float(pose[0]), float(pose[1]), float(pose[2])), notes=notes)
 

@@ -12,6 +12,7 @@ from typing import TYPE_CHECKING, Any
 import numpy as np
 
 from pressfit.output import files as io
+from pressfit.output.curve import write_monitor_curve
 from pressfit.output.plots import plt
 
 if TYPE_CHECKING:
@@ -113,11 +114,15 @@ def operating_points_figure(result: CycleResult) -> plt.Figure:
 
 def write_cycle(result: CycleResult, out_dir: Path | str, overwrite: bool = False) -> list[Path]:
     """``cycle.csv`` (one row per time step, :func:`pressfit.dynamics.cycle.cycle_columns`), ``cycle.json``,
+    ``curves/pin_<nn>.csv`` (each pin's press monitor view, :func:`pressfit.output.curve.write_monitor_curve`),
     ``cycle_path.png``, ``cycle_force.png`` (and with the drive sizing ``cycle_drives.png``,
     ``cycle_operating_points.png``) into a fresh directory (through :func:`io.write_directory`)."""
     out = Path(out_dir)
     paths = [io.write_csv(out / "cycle.csv", result.columns, result.series, overwrite),
              io.write_json(out / "cycle.json", result.summary, overwrite)]
+    width = max(2, len(str(len(result.curves))))
+    paths += [write_monitor_curve(out / "curves" / f"pin_{pin.index:0{width}d}.csv", curve, overwrite)
+              for pin, curve in zip(result.plan.pins, result.curves, strict=True)]
     figures = [("cycle_path.png", path_figure), ("cycle_force.png", force_figure)]
     if "drives" in result.summary:
         figures += [("cycle_drives.png", drives_figure), ("cycle_operating_points.png", operating_points_figure)]

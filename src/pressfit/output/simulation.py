@@ -10,6 +10,7 @@ import numpy as np
 
 from pressfit.dynamics.series import section_columns
 from pressfit.output import files as io
+from pressfit.output.curve import write_monitor_curve
 from pressfit.output.plots import plt
 from pressfit.studies.insertion_study import COLUMNS
 
@@ -63,12 +64,15 @@ def write_simulation(result: InsertionResult, out_dir: Path | str, overwrite: bo
                      comparison: InsertionResult | None = None, sizing: RunSizing | None = None) -> list[Path]:
     """``simulation.csv`` (one row per time step of ``result``), ``simulation.json`` (its summary, with the
     comparison's under ``"comparison"`` and the drive sizing's records, :meth:`RunSizing.to_dict`),
-    ``simulation.png``; with the flexible model ``sections.csv`` (the leg section resultants per step, N and N m,
+    ``simulation.png``, ``curve.csv`` (the press monitor's view of the stroke, :func:`write_monitor_curve`); with
+    the flexible model ``sections.csv`` (the leg section resultants per step, N and N m,
     :func:`pressfit.dynamics.series.section_columns`)."""
     out = Path(out_dir)
     summary = simulation_summary(result, comparison, sizing)
     paths = [io.write_csv(out / "simulation.csv", result.columns, result.series, overwrite),
              io.write_json(out / "simulation.json", summary, overwrite)]
+    if result.monitor is not None:
+        paths.append(write_monitor_curve(out / "curve.csv", result.monitor, overwrite))
     if result.sections is not None:
         table = np.column_stack([result.column("time_s"), result.sections.reshape(len(result.series), -1)])
         paths.append(io.write_csv(out / "sections.csv", section_columns(result.sections.shape[1]), table, overwrite))
