@@ -12,7 +12,7 @@ def test_the_preload_section_on_a_3_leg_machine_shows_the_clearance_alone(tmp_pa
     """3 legs: preload 0 only, stated; the lost motion with play is positive (the play is not taken up) and the
     critical preload does not exist (NaN)."""
     parts: dict[str, object] = {}
-    md = report._preload_section(tsai, tmp_path, False, True, parts)
+    md = report._preload_section(tsai, tmp_path, False, report.QUICK, parts)
     assert any("no redundant actuation, so no internal preload" in line for line in md)
     (name, study), = parts["studies"]
     assert study.preloads.tolist() == [0.0]
@@ -29,7 +29,7 @@ def test_a_report_on_a_baseline_compares_it_once_and_bars_keep_machines_apart(tm
     from pressfit.studies.compare import Comparison
 
     parts: dict[str, object] = {}
-    report._compare_section(tsai, tmp_path, False, True, parts)
+    report._compare_section(tsai, tmp_path, False, report.QUICK, parts)
     names = [m.name for m in parts["comparison"].machines]
     assert names == ["tsai-3upu", "gantry-cartesian", "pressfit-4upu-rotated45"]
     first = parts["comparison"].machines[0]
