@@ -94,7 +94,8 @@ def resolution_note(res: Resolution) -> str:
                       "(about twice the time); `--quick` is a coarser preview.",
            "quick": "A preview (`--quick`): coarse grids, no static PNG maps; `pressfit report` for the design grids, "
                     "`--full` for the full resolution."}[res.name]
-    return (f"Resolution ({res.name}): kinematic maps at {len(res.kinematic_heights_m)} heights; envelope "
+    return (f"Resolution ({res.name}): kinematic maps at y_h = {', '.join(f'{y:g}' for y in res.kinematic_heights_m)}"
+            f" m; envelope "
             f"{res.envelope_heights} heights x {res.envelope_grid} x {res.envelope_grid} poses; stiffness maps "
             f"{res.stiffness_grid} x {res.stiffness_grid} at {len(res.stiffness_heights_m)} heights; preload study "
             f"{len(res.preloads_n)} preloads x {res.preload_load_steps} load steps at {res.preload_poses} poses; "
