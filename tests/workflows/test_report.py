@@ -46,11 +46,10 @@ def test_a_report_on_a_baseline_compares_it_once_and_bars_keep_machines_apart(tm
 def test_each_kind_states_the_grids_steps_and_samples_it_runs():
     """report.md's first paragraph (:func:`report.resolution_note`) states each kind's grids, sample counts and
     steps as the sections are handed them; the default is the full report's grids (the design ones) with only the
-    insertion and the board cycle at 2 ms and the machines compared on a 3 x 3 x 3 box; --full runs them at the
-    cases' own 1 ms step and on pressfit compare's 3 x 5 x 5 box."""
+    insertion and the board cycle at 2 ms; --full runs them at the cases' own 1 ms step."""
     full, default = report.FULL, report.DEFAULT
-    assert {k: v for k, v in vars(default).items() if getattr(full, k) != v} == {
-        "name": "default", "time_step_s": 2e-3, "compare_box": (3, 3)}
+    assert {k: v for k, v in vars(default).items() if getattr(full, k) != v} == {"name": "default",
+                                                                               "time_step_s": 2e-3}
     assert (full.envelope_grid, full.stiffness_grid, full.interference_points, full.band_samples) == (41, 51, 41, 300)
     for res in (report.QUICK, default, full):
         text = report.resolution_note(res)

@@ -75,9 +75,10 @@ FULL = Resolution(name="full", figures=True, kinematic_heights_m=tuple(workspace
                   interference_heights=9, time_step_s=None, quick_board=False, compare_box=None,
                   band_samples=joint_curves.REPORT_BAND_SAMPLES, cad_fit_without_couple_stress=True)
 # The README's main command: the full report's grids, with the insertion and the board cycle at 2 ms (the step
-# --quick uses; their figures within 0.1% of 1 ms, docs/benchmarks.md) and the machines compared on the corners,
-# edge and face centres of their boxes (3 x 3 x 3 instead of pressfit compare's 3 x 5 x 5)
-DEFAULT = dataclasses.replace(FULL, name="default", time_step_s=2e-3, compare_box=(3, 3))
+# --quick uses): cycle time, pins passed and settling unchanged, forces and drive figures within 0.4% of 1 ms, the
+# overshoot within 2%, the sub-micron lateral error at first contact within 60% (docs/benchmarks.md). The compare box
+# stays 3 x 5 x 5: on 3 x 3 x 3 the share of the box where a claim holds moves (84% -> 56%: corners over-weighted).
+DEFAULT = dataclasses.replace(FULL, name="default", time_step_s=2e-3)
 QUICK = Resolution(name="quick", figures=False, kinematic_heights_m=(0.6,), envelope_heights=3, envelope_grid=11,
                    stiffness_heights_m=(0.72,), stiffness_grid=21, preloads_n=(0.0, 200.0, 400.0, 600.0),
                    preload_poses=1, preload_load_steps=10, interference_points=11, interference_heights=3,
@@ -92,8 +93,7 @@ def resolution_note(res: Resolution) -> str:
     box = f"{heights} x {grid} x {grid}"
     how = {"full": "This is the full-resolution report (`--full`).",
            "default": "`pressfit report --full` runs the insertion and the board cycle at the cases' own 1 ms step "
-                      "and compares the machines on `pressfit compare`'s 3 x 5 x 5 box (about 60 s more CPU); "
-                      "`--quick` is a coarser preview.",
+                      "(about 30 s more CPU); `--quick` is a coarser preview.",
            "quick": "A preview (`--quick`): coarse grids, no static PNG maps; `pressfit report` for the design grids, "
                     "`--full` for the full resolution."}[res.name]
     return (f"Resolution ({res.name}): kinematic maps at y_h = {', '.join(f'{y:g}' for y in res.kinematic_heights_m)}"
