@@ -93,7 +93,7 @@ def resolution_note(res: Resolution) -> str:
     box = f"{heights} x {grid} x {grid}"
     how = {"full": "This is the full-resolution report (`--full`).",
            "default": "`pressfit report --full` runs the insertion and the board cycle at the cases' own 1 ms step "
-                      "(about 30 s more CPU); `--quick` is a coarser preview.",
+                      "(about 20 s more CPU); `--quick` is a coarser preview.",
            "quick": "A preview (`--quick`): coarse grids, no static PNG maps; `pressfit report` for the design grids, "
                     "`--full` for the full resolution."}[res.name]
     return (f"Resolution ({res.name}): kinematic maps at y_h = {', '.join(f'{y:g}' for y in res.kinematic_heights_m)}"
