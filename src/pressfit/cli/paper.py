@@ -49,21 +49,23 @@ def tables_cmd(as_json: bool, out_dir: Path | None, overwrite: bool, cad: bool) 
 @OVERWRITE_OPTION
 @click.option("--quick", is_flag=True,
               help="A preview: coarse grids, no static PNG maps (report.html has them, interactive).")
+@click.option("--full", is_flag=True,
+              help="Full resolution: the insertion and the board cycle at the cases' own 1 ms step (default: 2 ms).")
 @click.option("--cycle-study", "cycle_study", type=click.Path(path_type=Path, exists=True, file_okay=False),
               help="The --out directory of a `pressfit study cycle` run: its Pareto front in the board's section.")
 @click.option("--calibration", "calibration", type=click.Path(path_type=Path, exists=True, file_okay=False),
               help="The --out directory of a `pressfit calibrate` run: its values, intervals and residuals.")
 @MODEL_OPTION
 @user_errors
-def report_cmd(out_dir: Path, overwrite: bool, quick: bool, cycle_study: Path | None, calibration: Path | None,
-               model_path: Path) -> None:
+def report_cmd(out_dir: Path, overwrite: bool, quick: bool, full: bool, cycle_study: Path | None,
+               calibration: Path | None, model_path: Path) -> None:
     """Reproduce Tables 5 and 6 and write the full report (maps, envelope, stiffness, ...) as report.md and .html."""
     from pressfit.output.files import check_directory, write_directory
     from pressfit.workflows.report import write_report
 
     check_directory(out_dir, overwrite)
     machine = load_machine(model_path)
-    path, = write_directory(out_dir, overwrite, lambda tmp: [write_report(machine, tmp, quick=quick,
+    path, = write_directory(out_dir, overwrite, lambda tmp: [write_report(machine, tmp, quick=quick, full=full,
                                                                                  cycle_study=cycle_study,
                                                                                  calibration=calibration)])
     click.echo((path.parent / "tables.md").read_text())  # the Tables 5-6 comparison the report just wrote

@@ -147,9 +147,9 @@ class DeflectionCache:
 
 class Shape(Protocol):
     """The time law of one straight segment: the fraction of it covered at time t from its start and its
-    rate (1/s), e.g. :class:`pressfit.kinematics.profiles.SCurve`."""
+    rate (1/s), elementwise on an array of times, e.g. :class:`pressfit.kinematics.profiles.SCurve`."""
 
-    def fraction(self, t_s: float) -> tuple[float, float]: ...
+    def fraction(self, t_s: np.ndarray) -> tuple[np.ndarray, np.ndarray]: ...
 
 
 @dataclass(frozen=True, kw_only=True)
@@ -204,9 +204,9 @@ class Trajectory:
         profile, rate = _quintic(local / self.durations_s[k])
         rate = rate / self.durations_s[k]
         for j, shape in enumerate(self.shapes or ()):
-            if shape is not None:
-                for i in np.flatnonzero(k == j):
-                    profile[i], rate[i] = shape.fraction(float(local[i]))
+            on = k == j
+            if shape is not None and on.any():  # one call per segment, over all its times
+                profile[on], rate[on] = shape.fraction(local[on])
         delta = self.waypoints_m[k + 1] - self.waypoints_m[k]
         return self.waypoints_m[k] + profile[:, None] * delta, rate[:, None] * delta
 

@@ -150,6 +150,7 @@ class GantryMetrics:
     worst_bending_pose_m: np.ndarray
     min_tool_stiffness_n_per_m: float  # smallest eigenvalue of the tool's 3x3 translational stiffness, worst pose
     median_tool_stiffness_n_per_m: float  # the same, median over the poses
+    vertical_stiffness_n_per_m: np.ndarray  # (p,) 1 / C_yy per pose: the tool's compliance along y, rotation free
     max_tool_displacement_m: float  # |tool translation| under the loads, worst
     median_tool_displacement_m: float
     max_tool_tilt_rad: float  # |tool rotation vector| under the loads, worst
@@ -181,7 +182,7 @@ def gantry_metrics(gantry: Gantry, poses_m: np.ndarray, load_n: float | np.ndarr
     drive = np.zeros((len(poses), 3))
     bending = np.zeros(len(poses))
     member: list[str] = []
-    stiffness, disp, tilt, f1, residual = (np.zeros(len(poses)) for _ in range(5))
+    stiffness, vertical, disp, tilt, f1, residual = (np.zeros(len(poses)) for _ in range(6))
     for i, pose in enumerate(poses):
         gm = build_gantry_model(gantry, pose, **model_options)
         eqs = [gm.solve(w) for w in wrenches]
@@ -191,6 +192,7 @@ def gantry_metrics(gantry: Gantry, poses_m: np.ndarray, load_n: float | np.ndarr
         member.append(name)
         k = gm.tool_stiffness_n_per_m()
         stiffness[i] = float(np.linalg.eigvalsh(0.5 * (k + k.T))[0])
+        vertical[i] = 1.0 / np.linalg.inv(k)[1, 1]
         disp[i] = max(float(np.linalg.norm(e.tool_displacement_m)) for e in eqs)
         tilt[i] = max(float(np.linalg.norm(e.tool_rotation_rad)) for e in eqs)
         residual[i] = max(e.residuals.worst() for e in eqs)
@@ -201,7 +203,8 @@ def gantry_metrics(gantry: Gantry, poses_m: np.ndarray, load_n: float | np.ndarr
         worst_drive_axis=GANTRY_AXES[int(i_d[1])], worst_drive_pose_m=poses[i_d[0]].copy(),
         worst_bending_moment_nm=float(bending[i_b]), worst_bending_member=member[i_b],
         worst_bending_pose_m=poses[i_b].copy(), min_tool_stiffness_n_per_m=float(stiffness.min()),
-        median_tool_stiffness_n_per_m=float(np.median(stiffness)), max_tool_displacement_m=float(disp.max()),
+        median_tool_stiffness_n_per_m=float(np.median(stiffness)), vertical_stiffness_n_per_m=vertical,
+        max_tool_displacement_m=float(disp.max()),
         median_tool_displacement_m=float(np.median(disp)), max_tool_tilt_rad=float(tilt.max()),
         median_tool_tilt_rad=float(np.median(tilt)), first_frequency_hz=float(f1[i_f]),
         first_frequency_pose_m=poses[i_f].copy(), moving_mass_kg=gantry.axis_moving_masses_kg[0],

@@ -100,13 +100,14 @@ class SCurve:
         x, v, a = self._first_half(tau)
         return np.where(mirrored, self.distance_m - x, x), v, np.where(mirrored, -a, a)
 
-    def fraction(self, t_s: float) -> tuple[float, float]:
-        """The fraction of the distance covered at ``t_s`` and its rate (1/s): the shape of a straight segment
-        (:class:`pressfit.dynamics.control.Trajectory`); (0, 0) for D = 0."""
+    def fraction(self, t_s: np.ndarray | float) -> tuple[np.ndarray, np.ndarray]:
+        """The fraction of the distance covered at ``t_s`` (s; elementwise on an array) and its rate (1/s): the
+        shape of a straight segment (:class:`pressfit.dynamics.control.Trajectory`); (0, 0) for D = 0."""
         if self.distance_m <= 0.0:
-            return 0.0, 0.0
+            zero = np.zeros_like(np.asarray(t_s, dtype=float))
+            return zero, zero
         x, v, _ = self.at(t_s)
-        return float(x) / self.distance_m, float(v) / self.distance_m
+        return x / self.distance_m, v / self.distance_m
 
     def _first_half(self, tau: np.ndarray) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
         """The first half (jerk +j, 0, -j, then the cruise up to T/2), integrated exactly from the knots."""
@@ -179,12 +180,14 @@ class Quintic:
     def limits_reached(self) -> tuple[str, ...]:
         return (self.binding_limit,) if self.binding_limit else ()
 
-    def fraction(self, t_s: float) -> tuple[float, float]:
-        """The fraction covered at ``t_s`` and its rate (1/s), as the insertion's reference computes it."""
+    def fraction(self, t_s: np.ndarray | float) -> tuple[np.ndarray, np.ndarray]:
+        """The fraction covered at ``t_s`` (s; elementwise on an array) and its rate (1/s), as the insertion's
+        reference computes it."""
         if self.duration_s <= 0.0:
-            return 0.0, 0.0
-        s, ds = quintic(t_s / self.duration_s)
-        return float(s), float(ds) / self.duration_s
+            zero = np.zeros_like(np.asarray(t_s, dtype=float))
+            return zero, zero
+        s, ds = quintic(np.asarray(t_s, dtype=float) / self.duration_s)
+        return s, ds / self.duration_s
 
 
 def quintic_move(distance_m: float, speed_m_per_s: float, acceleration_m_per_s2: float,

@@ -358,7 +358,8 @@ def _cycle_section(page: _Page, c: ReportContent) -> None:
     s = c.cycle.summary
     page.section("cycle", "9. The shipped board's work cycle",
                  f"cases/paper/board.toml (<code>pressfit cycle</code>, model {html.escape(str(s['model']))}, "
-                 f"{s['pin_count']} pins; <code>pressfit report --quick</code> runs its first pins only, with a short "
+                 f"{s['pin_count']} pins, a {c.cycle.plan.scenario.simulation.time_step_s * 1e3:g} ms step; "
+                 "<code>pressfit report --quick</code> runs its first pins only, with a short "
                  f"dwell): cycle time {s['cycle_time_s']:.4g} s, {s['pins_per_minute']:.4g} pins per minute, "
                  f"{s['pins_passed']} of {s['pin_count']} pins pass. The contact force of every pin over the cycle "
                  "(dashed: the pins' force limits), the per-pin figures and the drive sizing over the cycle (with "

@@ -368,7 +368,6 @@ class Comparison:
 def gantry_figures(gantry: Gantry, heights: int = COMPARE_HEIGHTS, grid: int = COMPARE_GRID) -> MachineFigures:
     """The comparison figures of a gantry (module docstring)."""
     from pressfit.dynamics.gantry_modes import gantry_metrics
-    from pressfit.mechanics.gantry import build_gantry_model
 
     ws = gantry.workspace
     x, z = np.linspace(-ws.x_half_width_m, ws.x_half_width_m, grid), np.linspace(-ws.z_half_width_m,
@@ -378,8 +377,7 @@ def gantry_figures(gantry: Gantry, heights: int = COMPARE_HEIGHTS, grid: int = C
     poses = np.stack([xx, yy, zz], -1).reshape(-1, 3)
     loads = press_loads(PRESS_LOAD_N, CONE_HALF_ANGLE_RAD, CONE_DIRECTIONS)
     m = gantry_metrics(gantry, poses, np.column_stack([loads, np.zeros_like(loads)]))
-    vertical = np.array([1.0 / np.linalg.inv(build_gantry_model(gantry, p).tool_stiffness_n_per_m())[1, 1]
-                         for p in poses])
+    vertical = m.vertical_stiffness_n_per_m  # from the same model per pose (not built twice)
     nan = np.full(len(poses), np.nan)
     return MachineFigures(
         name=gantry.name, source=str(gantry.source or gantry.name), kind="gantry", legs=None,
