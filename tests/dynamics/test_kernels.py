@@ -83,7 +83,8 @@ def test_distribution_refuses_a_singular_a_just_below_the_limit(sigma, singular)
 def test_axial_forces_are_the_closure_forces_along_the_leg_axes(rigid):
     """The closed form N_i = f . (Ry(c) Rx(d))^T e_z from the plate cardan angles equals the closure force
     rotated to the world by Pinocchio's placement of the leg's last body, along the leg axis (its placement
-    minus the base point), at moving, off-closure states: to 1e-12 N on forces of tens of N."""
+    minus the base point), at moving, off-closure states: to 1e-14 of the largest force (achieved 2.3e-15:
+    1.25e-12 N on 546 N; the forces are hundreds of N since the stems are rods of fixed mass)."""
     machine = rigid.machine
     for pose in POSES[kinematics.is_reachable(machine, POSES)][:10]:
         q = pin.integrate(rigid.model, rigid.configuration_at(pose), RNG.normal(scale=1e-3, size=rigid.model.nv))
@@ -97,7 +98,7 @@ def test_axial_forces_are_the_closure_forces_along_the_leg_axes(rigid):
             axis = placement.translation - machine.base_points_m[i]
             expected.append(placement.rotation @ lam[i] @ axis / np.linalg.norm(axis))
         assert np.abs(np.abs(expected)).max() > 1.0
-        assert np.abs(rigid.axial_forces_n(q) - expected).max() < 1e-12
+        assert np.abs(rigid.axial_forces_n(q) - expected).max() <= 1e-14 * np.abs(expected).max()
 
 
 @pytest.mark.parametrize("law", ["elastic", "linear", "saturating"])

@@ -20,7 +20,8 @@ from pressfit.studies.cycle_study import FACTORS, grid, pareto_front, variant
 from tests.dynamics.test_cycle import board
 
 PINS = [{"x_m": 0.10, "z_m": -0.05}, {"x_m": 0.0, "z_m": 0.0}]
-# descent x 10 (7 mm at 0.1 m/s) overshoots the 30 N limit by ~7 N, beyond the 1 N allowed; x 1 by ~0.6 N
+# descent x 10 (7 mm at 0.1 m/s) overshoots the 30 N limit by 12.6-12.7 N, beyond the 2 N allowed; x 1 by 1.09 N
+# (0.6 N before the stems became rods of fixed mass: a heavier moving plate)
 GRID = {"speed_scale": [1.0, 4.0], "descent_scale": [1.0, 10.0]}
 
 
@@ -29,7 +30,7 @@ def run(*args: object):
 
 
 def study_case(tmp, name="study.toml", **study):
-    return board(tmp, name, pins=PINS, dwell_s=0.1, settle_s=0.1, max_overshoot_n=1.0, study=study or GRID)
+    return board(tmp, name, pins=PINS, dwell_s=0.1, settle_s=0.1, max_overshoot_n=2.0, study=study or GRID)
 
 
 def test_pareto_front_of_a_known_set():
@@ -103,7 +104,7 @@ def test_study_on_a_local_cluster_writes_the_front_and_a_fastest_case_that_passe
     objectives = np.column_stack([table[k] for k in ("cycle_time_s", "worst_alignment_error_m", "worst_overshoot_n")])
     assert sorted(pareto_front(objectives).tolist()) == sorted(r["sample"] for r in s["front"])
     assert table["on_front"] == [i in {r["sample"] for r in s["front"]} for i in range(4)]
-    # the fast descent overshoots beyond the pins' 1 N: the fastest within the limits is the fast traverse with the
+    # the fast descent overshoots beyond the pins' 2 N: the fastest within the limits is the fast traverse with the
     # slow descent, and it is faster than the case's own setting
     ok = [i for i in range(4) if table["within_limits"][i]]
     assert all(table["descent_scale"][i] == 1.0 for i in ok) and ok
