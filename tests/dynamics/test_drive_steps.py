@@ -190,3 +190,18 @@ def test_explicit_drive_coupling_on_the_flexible_step_grows(closed_valves):
         y = _hold(machine, fm, implicit, duration_s=0.2)
         ratio = np.ptp(y[-500:]) / np.ptp(y[:500])
         assert (ratio > 1.5) == grows and (grows or ratio < 1.2), ratio
+
+
+def test_the_oil_column_step_bound_holds_for_the_rigid_model_only(hydraulic):
+    """hydraulic_step_refusal: a 10 ms step over the shipped path is refused for the rigid model (its explicit
+    coupling is held to omega_h dt / 2 <= 0.5: leg 2's column, f_h = 64.75 Hz on 23.2 kg, allows 2.46 ms), accepted for
+    an elastic model, which steps the oil column implicitly (the flexible machine); a drive without an explicit
+    spring is never refused."""
+    from pressfit.dynamics.drives.steps import hydraulic_step_refusal
+
+    path = np.array([[-0.15, 0.65, 0.10], [0.10, 0.62, -0.05], [0.10, 0.60, -0.05]])
+    reason = hydraulic_step_refusal(hydraulic, path, path, False, 1e-2)
+    assert reason is not None and "oil column of leg 2" in reason
+    assert hydraulic_step_refusal(hydraulic, path, path, True, 1e-2) is None
+    assert hydraulic_step_refusal(hydraulic, path, path, False, 1e-5) is None
+    assert hydraulic_step_refusal(load_machine(ROOT / "models/pressfit_4upu.toml"), path, path, False, 1e-2) is None
