@@ -51,7 +51,7 @@ def five(machine):
 EXPENSIVE = {"quick_report", "pairs", "both_models", "runs", "slow_and_fast", "measured", "short_runs", "sized",
              "free_run", "simulated", "rigid_runs", "study", "small_study", "every_pair", "loose_result", "cluster",
              "installed", "paper_fit", "report_dir", "calibrated", "compliant_pin_simulation",
-             "shipped_play_runs"}
+             "shipped_play_runs", "board_run"}
 
 
 @pytest.fixture(scope="session")

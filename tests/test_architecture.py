@@ -159,6 +159,7 @@ def test_physics_neither_plots_nor_writes(layer, path):
             assert not set(text) & set("wax+"), f"{path}:{node.lineno} opens a file for writing"
 
 
+@pytest.mark.slow
 @pytest.mark.parametrize(("layer", "path"), MODULES, ids=[str(p.relative_to(SRC)) for _, p in MODULES])
 def test_no_global_mutable_state(layer, path):
     tree = ast.parse(path.read_text())
@@ -308,6 +309,7 @@ def missing_documents(text: str, outputs: set[str]) -> list[str]:
             and not (ROOT / ref).is_file() and not (ROOT / "docs" / ref).is_file()]
 
 
+@pytest.mark.slow
 def test_cited_documents_exist():
     """A test or source file that gives a document as its source must name one that is in the repository."""
     outputs = _written_markdown_names()
@@ -317,6 +319,7 @@ def test_cited_documents_exist():
     assert not bad, "cites a document that is not in the repository: " + "; ".join(bad)
 
 
+@pytest.mark.slow
 def test_missing_document_check_catches_a_phantom_source():
     outputs = _written_markdown_names()
     phantom, nested = "DESIGN" + ".md", "notes/derivation" + ".md"  # split so that this file cites neither
@@ -364,6 +367,7 @@ def _import_cycles(paths: list[Path], root: Path = SRC) -> list[list[str]]:
     return cycles
 
 
+@pytest.mark.slow
 def test_no_import_circle():
     assert _import_cycles(sorted(SRC.rglob("*.py"))) == []
 
@@ -415,6 +419,7 @@ def long_functions(paths: list[Path], root: Path = SRC) -> list[str]:
     return out
 
 
+@pytest.mark.slow
 def test_no_function_is_longer_than_80_lines():
     """A function over ``MAX_FUNCTION_LINES`` lines is several steps that want names of their own."""
     assert long_functions(sorted(SRC.rglob("*.py"))) == []

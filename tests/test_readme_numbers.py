@@ -216,6 +216,7 @@ def test_clearance_geometries(machine):
     printed(100 * (curves["box"].deflection_m[-1] / curves["axial"].deflection_m[-1] - 1), "3.1")
 
 
+@pytest.mark.slow
 def test_interference(machine):
     says("the tightest pair is a leg's cylinder and the plate, 10.3 mm at the lowest height (a capsule's rounded "
          "end; 39 mm with flat-ended cylinders), neighbouring stems 84 mm, legs and base 253 mm")

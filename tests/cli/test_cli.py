@@ -74,6 +74,7 @@ def test_unreadable_inputs_and_outputs_exit_2(tmp_path):
     assert run("workspace", "--y", "2", "--out", tmp_path / "ws").exit_code == 2
 
 
+@pytest.mark.slow
 def test_tables_cad_fit_json():
     """`tables --cad-fit --json`: the identified CAD model as JSON (values are tested in test_cad_fit.py)."""
     res = run("tables", "--cad-fit", "--json")

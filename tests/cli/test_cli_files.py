@@ -57,6 +57,7 @@ def test_a_non_empty_directory_is_refused_before_computing(tmp_path, monkeypatch
     assert tree(tmp_path) == ["out", "out/mine.txt"] and (out / "mine.txt").read_text() == "keep"
 
 
+@pytest.mark.slow
 def test_modes_out_leaves_nothing_when_a_file_fails(tmp_path, monkeypatch):
     """modes.json and modes.csv are written before the figure: a failing figure must leave neither."""
     def failing_figure(modes):
@@ -71,6 +72,7 @@ def test_modes_out_leaves_nothing_when_a_file_fails(tmp_path, monkeypatch):
     assert tree(tmp_path) == ["m", "m/modes.csv", "m/modes.json", "m/modes.png"]
 
 
+@pytest.mark.slow
 def test_simulate_out_leaves_nothing_when_a_file_fails(tmp_path, monkeypatch):
     def failing_figure(result, comparison=None):
         raise PressfitError("figure refused")
@@ -255,6 +257,7 @@ def test_a_stem_as_wide_as_the_cylinder_bore_is_refused(tmp_path):
     one_error_line(run("modes", "0", "0.72", "0", "--model", write_machine(tmp_path, 1.2 * bore)), "stem.diameter_m")
 
 
+@pytest.mark.slow
 def test_a_directory_output_never_replaces_an_input_file(tmp_path):
     """modes --out D --overwrite with the machine file read from D/modes.json: refused before any file is
     moved in (D keeps exactly its input)."""

@@ -85,6 +85,7 @@ INVALID = st.one_of(st.sampled_from([float("nan"), float("inf"), -1.0, -1e9, Tru
                                                                                              st.integers(), max_size=1))
 
 
+@pytest.mark.slow
 @FUZZ
 @given(leaf=st.sampled_from(NUMERIC_LEAVES), value=INVALID, command=st.sampled_from(["check", "solve"]))
 def test_fuzz_invalid_case_values(tmp_path, leaf, value, command):

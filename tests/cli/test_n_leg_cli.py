@@ -59,6 +59,7 @@ def _tsai_insertion(tmp_path, preload: str) -> str:
     return str(path)
 
 
+@pytest.mark.slow
 def test_simulate(tmp_path):
     """`pressfit simulate` on the 3-UPU: exit 0, the series' per-leg columns 1..3 (no leg 4, no internal force
     column), the printed line names no preload; with a preload the case is refused up front (exit 2, one line)."""

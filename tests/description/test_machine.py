@@ -184,6 +184,7 @@ def test_near_zero_masses_are_refused_by_the_dynamics_naming_the_key(tmp_path, c
     assert len(res.output.strip().splitlines()) == 1 and f"mass.{key}" in res.output
 
 
+@pytest.mark.slow
 def test_a_massless_gantry_is_refused_by_compare_naming_the_key(tmp_path):
 
     root = Path(__file__).resolve().parents[2]

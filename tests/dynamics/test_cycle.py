@@ -228,6 +228,7 @@ def test_the_drive_force_limit_scales_a_hard_acceleration(tmp_path):
 
 
 # --- pass/fail at a pin's limits, recomputed from the CSV -----------------------------------------------------
+@pytest.mark.slow
 def test_pin_pass_fail_turns_at_its_limits_recomputed_from_the_csv(tmp_path):
     """A pin whose limits cannot hold (0 N of overshoot, 1 nm of alignment) fails: exit 1, files written. The
     overshoot (peak contact force over the pin's rows minus its 30 N limit) and the lateral error at the first
@@ -270,6 +271,7 @@ def test_pin_pass_fail_turns_at_its_limits_recomputed_from_the_csv(tmp_path):
         assert summarise_cycle(series, plan_cycle(variant))["pins"][0]["passed"], limits  # a limit met exactly holds
 
 
+@pytest.mark.slow
 def test_each_pin_is_pressed_at_its_own_force_limit(tmp_path):
     """Two pins, the second with a 20 N limit: the limiter of each pin's segments uses that pin's limit (the
     contact law reaches 100 N at the 2 mm commanded, so the limit sets the steady force: within the 2% settling
@@ -315,6 +317,7 @@ def test_shipped_board_cycle_time_in_closed_form():
     assert "62.25" in text
 
 
+@pytest.mark.slow
 def test_cli_runs_the_flexible_model_and_refuses_an_existing_output_before_computing(tmp_path):
     """``--model flexible`` overrides the case's rigid model: the same step loop as ``simulate``'s flexible runs
     (elastic legs, contact on the elastic tool point); a short fast board (2.6 s at 1.75 ms steps: 2 ms is over the
@@ -351,6 +354,7 @@ def test_a_flexible_board_over_the_paths_step_bound_is_refused(tmp_path):
     refused(path, "[cycle] time_step_s")
 
 
+@pytest.mark.slow
 def test_a_tool_deeper_than_the_boards_depth_limit_stops_the_run(tmp_path, monkeypatch):
     """A board's run stops when the tool goes deeper below the face than MAX_DEPTH_FACTOR x its deepest pin's
     interference: with the factor cut to 1e-3 (2 um) the first press stops the run with one line naming the depth,

@@ -177,6 +177,7 @@ def test_flexible_hold_on_closed_valves_rings_at_the_oil_column_modes(closed_val
         assert abs(poles[k].real / abs(poles[k])) < 1e-4
 
 
+@pytest.mark.slow
 def test_explicit_drive_coupling_on_the_flexible_step_grows(closed_valves):
     """Why the flexible model takes the drive inside its step: the same hold with the drive stepped at the rate of
     the start of the step and its tension held over the generalised-alpha step (the rigid model's coupling) grows

@@ -290,6 +290,7 @@ def test_electric_speed_limit_stops_accelerating_torque(electric):
 
 
 # --- hydraulic --------------------------------------------------------------------------------------------------
+@pytest.mark.slow
 def test_oil_column_natural_frequency_against_free_oscillation(hydraulic):
     """A mass m on the leg, valve closed (no loop gain, no leakage), kicked at 1 mm/s: it rings at
     sqrt(k_h / m) / (2 pi) with k_h = beta A^2 (1/V_a + 1/V_b). The run: the drive stepped with the mass by
@@ -433,6 +434,7 @@ def test_registry_picks_the_kind(machine, electric, hydraulic):
 
 
 # --- shipped files ------------------------------------------------------------------------------------------
+@pytest.mark.slow
 @pytest.mark.parametrize("kind", ["electric", "hydraulic"])
 def test_shipped_insertion_cases_load_and_check(kind):
     case = load_case(cases_dir() / "paper" / f"insertion_{kind}.toml")
@@ -493,6 +495,7 @@ def test_readme_drive_numbers(electric, hydraulic):
     assert_printed(_closed_form_crossing(_pressure_loop_magnitude(hydraulic, 0.75)), "355")
 
 
+@pytest.mark.slow
 def test_electric_back_emf_is_rejected_by_the_current_loop_integral(electric):
     """A leg moving at a constant rate with no force commanded: the motor's back-EMF e = K_t omega is a voltage
     step on the winding, L di/dt = v - R i - e with v = k_p (i_ref - i) + k_i z, z' = i_ref - i. From

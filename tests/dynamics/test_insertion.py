@@ -150,6 +150,7 @@ def test_without_limiter_the_steady_force_is_the_contact_stiffness_times_interfe
     assert s["steady_insertion_force_n"] == pytest.approx(s["contact_law_at_steady_depth_n"], rel=1e-6)
 
 
+@pytest.mark.slow
 def test_without_limiter_or_compensation_the_structure_is_in_series(tmp_path):
     """The paper's loop (no compensation) drives the length-based estimate, i.e. the rigid plate, to the reference
     2 mm below the board; the structure is in series with the contact (vertical compliance C_yy of the condensed
@@ -182,6 +183,7 @@ def test_scenario_tracks_and_keeps_the_loops_closed(runs):
         assert s["actuator_saturation_time_s"] == 0.0 and max(s["peak_actuator_tension_n"]) < 1000.0
 
 
+@pytest.mark.slow
 def test_simulate_cli_json_files_and_bad_input(tmp_path):
     path = short_case(tmp_path, move_time_s=0.3, descent_time_s=0.3, dwell_s=0.2, settle_s=0.0,
                       baumgarte_rad_per_s=400.0)  # fast moves: 1.7e-5 m of closure drift at 400 rad/s
@@ -358,6 +360,7 @@ def _hand_apparent_mass(machine, pose):
     return mass
 
 
+@pytest.mark.slow
 def test_readme_position_loop_frequency():
     """README: sqrt(k_p / m) / (2 pi) = 4.8 Hz with m = 21.6 kg, the plate's apparent vertical mass at the pin (a unit
     vertical force on the plate of the rigid-leg model, Pinocchio's constraint dynamics, gravity off, at rest,

@@ -44,6 +44,7 @@ def drive_case(tmp_path: Path, kind: str, simulation: dict | None = None, table:
     return path
 
 
+@pytest.mark.slow
 @pytest.mark.parametrize("kind", ["electric", "hydraulic"])
 def test_shipped_drive_cases_simulate_on_the_rigid_model(tmp_path, kind):
     """`pressfit simulate` runs the shipped electric and hydraulic cases (with the limiter and the comparison run
@@ -81,6 +82,7 @@ def _short_electric(tmp_path: Path, name: str, current_limit_a: float | None = N
     return insertion.simulate_insertion(load_case(drive_case(sub, "electric", {"model": "rigid", **SHORT}, electric)))
 
 
+@pytest.mark.slow
 def test_electric_drive_below_the_needed_current_saturates_and_says_so(tmp_path):
     """The shortened electric scenario needs a peak command P (N, largest |cmd_n| of the run, unsaturated). With
     the current limit set so that k_f i_max = 1.02 P the run never reaches it (no saturation, the same commands);
@@ -123,6 +125,7 @@ class _OldLoop:
         return self.first_order.saturated(command_n)
 
 
+@pytest.mark.slow
 def test_force_kind_through_the_drive_seam_is_bit_identical(tmp_path, monkeypatch):
     """The shipped (shortened) rigid scenario on `drives.of(machine)` (the force kind) and on ForceActuators
     stepping the tension alone give the same series and summary, bit for bit."""
@@ -248,6 +251,7 @@ def test_flexible_drive_insertion_agrees_with_the_rigid_model_at_the_paper_speed
 FORCE_CASE_GAINS = {"kp_n_per_m": 2.0e4, "kd_n_s_per_m": 1.0e3, "ki_n_per_m_s": 2.0e5}  # insertion.toml's
 
 
+@pytest.mark.slow
 @pytest.mark.parametrize("model", ["rigid", "flexible"])
 def test_a_tool_through_the_board_face_is_refused_not_reported(tmp_path, model):
     """The electric case with the force case's gains (a vertical loop with 0.5 deg of phase margin: docs/drives.md)

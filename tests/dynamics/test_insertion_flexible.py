@@ -54,6 +54,7 @@ def test_kinematic_columns_are_forward_kinematics_of_the_lengths(runs):
     assert np.abs(r).max() < 1e-6
 
 
+@pytest.mark.slow
 def test_kinematic_columns_rigid_model_reproduce_the_lengths(tmp_path):
     """Rigid legs: the four lengths are those of one pose up to the loop closures' drift, so the closed-form
     inverse kinematics of the kinematic pose reproduces them to 1e-9 m plus the row's closure drift."""
@@ -250,6 +251,7 @@ def test_fast_insertion_does_not_reproduce_it(slow_and_fast):
     assert abs(fast - 1.0) > 0.5, fast
 
 
+@pytest.mark.slow
 def test_readme_shipped_scenario_on_the_flexible_model():
     """README (Insertion simulation): the shipped scenario, compensated, on the flexible model leaves 1.1 um
     lateral at the pin and 3.7 um at the final pose -- what the prediction of the sag misses (under 0.2% of a
@@ -291,6 +293,7 @@ def _first_mode_bound_s(case, pose_m):
     return MAX_STEP_FRACTION / float(modes.frequencies_hz[0])
 
 
+@pytest.mark.slow
 def test_flexible_step_bound_is_the_stiffest_pose_on_the_path(tmp_path):
     """The first mode rises from 21.5 Hz at the shipped start pose to 27.7 Hz at the bottom of the descent: a
     1.9 ms step is within MAX_STEP_FRACTION of the start pose's period (2.32 ms) but not of the bottom's (1.81 ms),

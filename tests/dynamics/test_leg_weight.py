@@ -97,6 +97,7 @@ def _reciprocal_sag(machine, pose):
     return sag
 
 
+@pytest.mark.slow
 def test_the_rigid_and_the_elastic_model_give_one_sag_at_rest(machine):
     """At rest under the machine's own weight, the drives holding the pose's lengths: the rigid model's sag (the
     condensed compliance times the weight wrench, the legs' clamped bending included) against (a) the elastic VJM

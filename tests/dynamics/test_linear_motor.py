@@ -176,6 +176,7 @@ def test_an_unknown_drive_kind_is_one_error_line_naming_the_key_and_the_file(tmp
     assert "actuator.kind" in lines[0] and str(bad) in lines[0] and "linear_motor" in lines[0]
 
 
+@pytest.mark.slow
 def test_control_linearises_the_linear_motor_case():
     """The shipped gains (x1.5 the force case's) keep every pose stable; the vertical mass carries the four forcers
     (2 kg each, as armature) above the force drive's (no reflected mass) at the pin."""

@@ -66,6 +66,7 @@ def test_control_missing_file_exits_2(tmp_path):
     assert r.exit_code == 2 and len(r.output.strip().splitlines()) == 1
 
 
+@pytest.mark.slow
 def test_unstable_controller_is_reported_not_refused(tmp_path):
     """K_d = 0 with the integrator: per axis m tau s^4 + m s^3 + K_p s + K_i has no s^2 term, so by Routh it
     has right-half-plane roots: reported as UNSTABLE, exit 0."""
@@ -77,6 +78,7 @@ def test_unstable_controller_is_reported_not_refused(tmp_path):
     assert "UNSTABLE" in r.output
 
 
+@pytest.mark.slow
 def test_control_writes_its_files(tmp_path):
     """What the files hold, against closed forms: each pole s = sigma + j omega_d in poles.csv has
     frequency |s| / (2 pi) and damping -sigma / |s|; one pole of each conjugate pair is listed (a real system);
@@ -173,6 +175,7 @@ def test_frequency_responses_by_laubs_method_hold_against_a_refined_solve():
         assert abs(value - exact) <= 1e-4 * abs(exact), (x, value, exact)
 
 
+@pytest.mark.slow
 def test_control_with_the_plays_on_says_it_linearises_without_them(tmp_path):
     """[simulation] clearance = true: the linearised loop has no dead zone in it, and says so (a warning at the
     pin pose); without clearance no such line (the rest of the design is the same either way)."""

@@ -197,6 +197,7 @@ def test_mode_proximity_warns_only_near_a_mode_the_drives_hold(ratio, share, war
         assert lines[0].startswith("pin: structural mode 1 at 27 Hz") and "2 loop pole(s)" in lines[0]
 
 
+@pytest.mark.slow
 def test_shipped_case_rocking_pair_is_near_loop_poles_but_not_warned():
     """The paper case (rigid, force drives) at the pin: loop poles do lie within 20% of the rocking pair
     (26-29 Hz poles, modes near 27.5 Hz), but the drives hold 2% of its strain energy: no warning (there used to

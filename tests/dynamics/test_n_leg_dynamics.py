@@ -103,6 +103,7 @@ def _tsai_case(tmp_path, preload: str = "a4_n = 0.0"):
     return load_case(path)
 
 
+@pytest.mark.slow
 @pytest.mark.parametrize("model", ["rigid", "flexible"])
 def test_tsai_presses_the_paper_pin_with_its_contact_force_settling_at_the_limit(tmp_path, model):
     """The paper's scenario (cases/paper/insertion.toml: 30 N limit, 2 mm commanded interference, ~100 N of
@@ -144,6 +145,7 @@ def test_tsai_rigid_closed_loop_poles_are_the_closed_form(tsai):
     assert np.max(np.abs(poles - expected) / np.abs(expected)) < 1e-6
 
 
+@pytest.mark.slow
 def test_control_and_export_mjcf_run_on_tsai(tmp_path):
     """`pressfit control` (flexible plant, --model flexible) and `pressfit export-mjcf` on the 3-UPU case: exit 0, the
     plant's inputs and outputs are the three drives and lengths, the loop stable, the MJCF has three welds."""
@@ -173,6 +175,7 @@ def test_tsai_passive_motion_agrees_in_pinocchio_and_mujoco(tsai):
     assert coarse < 1e-5 and coarse / fine == pytest.approx(2.0, rel=0.15)
 
 
+@pytest.mark.slow
 def test_five_leg_insertion_carries_its_two_amplitudes(tmp_path):
     """The paper's scenario on a 5-leg machine (Tsai's file with five legs at 72 degrees, tests/n_legs.py) with
     the 2-D preload a = (60, -35) N (`amplitudes_n`): the run completes at the 30 N limit and its internal force
@@ -194,6 +197,7 @@ def test_five_leg_insertion_carries_its_two_amplitudes(tmp_path):
     assert s["commanded_preload_amplitudes_n"] == [60.0, -35.0] and len(s["peak_leg_axial_force_n"]) == 5
 
 
+@pytest.mark.slow
 def test_tsai_board_passes_its_pins_with_three_drives_sized(tmp_path):
     """Two pins of the paper's board (cases/paper/board.toml, its grid cut to 2 x 1) on the 3-UPU: both pins pass,
     the drive sizing has three drives (legs 1..3) and the energy balance closes within its tolerance (simulate_cycle

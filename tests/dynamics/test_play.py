@@ -266,6 +266,7 @@ def test_a_drive_mass_falls_freely_across_the_gap():
             assert s.length_m == pytest.approx(q - c * t * t / (2 * m), abs=1e-8)
 
 
+@pytest.mark.slow
 def test_the_drive_sides_bounce_keeps_its_energy_when_resolved_and_never_gains_it_at_the_run_step():
     """The bounce off the 5e8 N/m contact (904 Hz against 15.5 kg): resolved at h = 10 us, the energy after 25 ms
     is the initial one within 1e-3 of the impact's kinetic energy m v^2 / 2 = c G (measured 3e-4); at the runs'

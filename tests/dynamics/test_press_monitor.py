@@ -34,6 +34,7 @@ def board_run(tmp_path_factory):
     return case, simulate_cycle(case, sizing=False)
 
 
+@pytest.mark.slow
 def test_each_pin_has_its_curve_with_its_own_poses_compliance(board_run, tmp_path):
     """Per pin, curves/pin_<nn>.csv with the monitor's columns, its rows the pin's stroke from the row before its
     first contact (readable by `pressfit curves check` with --displacement-column sensed_depth_m: the sensed depth

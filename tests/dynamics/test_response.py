@@ -73,6 +73,7 @@ def test_step_response_matches_an_exact_discretisation(machine):
     assert np.abs(u - r.displacement_m[::20]).max() <= 3e-10 * peak
 
 
+@pytest.mark.slow
 def test_off_centre_vertical_step_rings_at_the_rocking_mode(machine):
     """Off-centre a vertical force tilts and sways the plate (docs/conventions.md): the dominant mode is the
     rocking mode of `pressfit modes` (its 2nd mode here, 26.0 Hz), the lateral response overshoots its static
@@ -97,6 +98,7 @@ def test_off_centre_vertical_step_rings_at_the_rocking_mode(machine):
         assert_printed(value, printed)
 
 
+@pytest.mark.slow
 def test_mirror_image_pose_and_force_give_the_mirror_image_response(machine):
     """The machine is symmetric in x -> -x (legs 2 and 4 swap): mirrored pose and force give the mirrored
     displacement history, to round-off of the largest displacement."""
@@ -122,6 +124,7 @@ def test_bad_requests_are_refused(machine, kwargs, message):
         tool_response(machine, OFF_CENTRE, **args)
 
 
+@pytest.mark.slow
 def test_cli_json_files_and_refusals(tmp_path):
     runner = CliRunner()
     out = tmp_path / "resp"
@@ -162,6 +165,7 @@ def test_undamped_and_critical_steps_are_the_textbook_forms(machine, zeta, unit_
     assert np.abs(ref - r.displacement_m).max() <= 1e-9 * np.abs(ref).max()
 
 
+@pytest.mark.slow
 def test_undamped_step_peaks_at_twice_the_static_deflection(machine):
     """zeta = 0: each mode's step response is s_k (1 - cos omega_k t), so one mode alone peaks at exactly twice its
     static share, and the vertical step's peak is twice the static deflection only as far as one mode carries it.
@@ -196,6 +200,7 @@ def test_undamped_step_peaks_at_twice_the_static_deflection(machine):
     assert np.all(np.isfinite(r.receptance_m_per_n))
 
 
+@pytest.mark.slow
 def test_the_weight_loaded_static_limit_against_stiffness(machine):
     """What `pressfit response` prints is linearised about the weight-loaded equilibrium: its static limit differs
     from the condensed closed form of `pressfit stiffness` (the unloaded pose) by at most 2e-3 at the poses of
@@ -231,6 +236,7 @@ def test_a_step_beyond_buckling_is_refused_as_solve_refuses_it(force):
     assert factor < 1 and "at least 10" in res.output
 
 
+@pytest.mark.slow
 def test_a_step_near_buckling_is_refused_below_the_stated_factor(machine):
     """20 kN down at the centre has a buckling factor of 5 (10x the 0.5 of 200 kN: the factor is inverse in the
     load, the weight being 1e-4 of it), below the 10 a linear response needs; 5 kN (factor 20) is answered."""
@@ -241,6 +247,7 @@ def test_a_step_near_buckling_is_refused_below_the_stated_factor(machine):
                                                              duration_s=0.01).static_m[1], rel=1e-12)
 
 
+@pytest.mark.slow
 def test_a_large_rotation_or_translation_is_refused(machine, monkeypatch):
     """A lateral step high in the workspace rocks the plate (the soft 18 Hz mode): 260 N at (0, 0.8, 0) turns it
     beyond 0.01 rad at the peak (0.109 rad static under 2.7 kN, linear in the force, about twice at the peak);

@@ -188,6 +188,7 @@ def test_segment_shorter_than_its_minimum_steps_is_refused(tmp_path):
     plan_scenario(load_case(write_case(tmp_path, "c.toml", simulation={"descent_time_s": 10 * dt, "settle_s": 0.0})))
 
 
+@pytest.mark.slow
 def test_series_grows_in_chunks_with_the_same_rows(tmp_path, monkeypatch):
     """The series is not preallocated: grown 7 rows at a time, a short run gives the same rows bit for bit."""
     path = write_case(tmp_path, simulation={"move_time_s": 0.3, "descent_time_s": 0.3, "dwell_s": 0.2,
@@ -232,6 +233,7 @@ def test_baumgarte_rate_is_bounded_in_the_schema_and_against_the_step(tmp_path):
     load_case(write_case(tmp_path, "d.toml", simulation={"baumgarte_rad_per_s": 10.0}))
 
 
+@pytest.mark.slow
 def test_closure_drift_over_the_tolerance_stops_the_run(tmp_path, monkeypatch):
     """The short scenario's closures open by D (its summary); with the tolerance 1% under D the run stops with
     one line naming the drift, the time and baumgarte_rad_per_s (exit 2); 1% over D it completes."""
@@ -421,6 +423,7 @@ def test_saturation_fraction_and_warning():
         assert any("saturated" in w for w in s["warnings"]) is (over > 1)
 
 
+@pytest.mark.slow
 def test_saturating_run_warns_on_stderr(tmp_path):
     """Drives limited to 145 N (the short scenario peaks near 150 N): simulate exits 0 and warns on stderr. (At
     140 N the saturated machine sags 4.05 mm into the board face during the approach, beyond the 4 mm penetration

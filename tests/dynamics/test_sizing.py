@@ -238,6 +238,7 @@ def test_energy_balance_closes_on_the_rigid_model(rigid_runs, tmp_path):
     assert 1.6 < balance.residual_j / finer.residual_j < 2.4
 
 
+@pytest.mark.slow
 def test_energy_balance_closes_on_the_flexible_model(tmp_path):
     """The same balance on the flexible model, with the springs' elastic energy and the Rayleigh damping's work
     (``FlexibleState.damping_work_j``): the residual is generalised-alpha's energy error (the damping's work by the
@@ -295,6 +296,7 @@ def test_energy_balance_over_its_tolerance_is_refused(rigid_runs):
 
 
 # --- item 4: pressfit simulate -------------------------------------------------------------------------------
+@pytest.mark.slow
 def test_simulate_reports_the_drive_sizing(tmp_path):
     """`pressfit simulate --json` on the electric case (rigid, shortened) holds a ``drives`` record per drive with
     rms_force_n beside rms_force_without_preload_n, the motor figures with their ratings, and the energy balance;

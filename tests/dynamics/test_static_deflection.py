@@ -90,6 +90,7 @@ def _variant(tmp_path: Path, name: str, compensation: bool, model: str) -> Path:
     return path
 
 
+@pytest.mark.slow
 def test_without_compensation_the_tool_misses_the_pin_by_the_static_deflection(tmp_path):
     """The length-based estimate sees the rigid plate, which the loop puts on the pin; the tool then sits off it by
     the series deflection under the weight and the steady contact force F (closed form u = C e_y F + s at the
@@ -105,6 +106,7 @@ def test_without_compensation_the_tool_misses_the_pin_by_the_static_deflection(t
     assert s["tool_lateral_error_at_insertion_m"] > 40e-6  # over the shipped 50 um budget's reach: the finding
 
 
+@pytest.mark.slow
 def test_compensation_puts_the_tool_on_the_pin(tmp_path):
     """With ``deflection_compensation`` the loop acts on pose estimate + predicted deflection. Rigid model: the
     prediction is its series deflection, so the tool lands on the pin to the loop's residual (< 0.1 um). Flexible

@@ -77,6 +77,7 @@ def check_against_reference(im, pc, ref, tol):
     assert err < tol, err
 
 
+@pytest.mark.slow
 @pytest.mark.parametrize("rig", ["closed-form", "auto"])
 def test_capsules_match_segment_distance_at_random_poses(machine, rig):
     """Leg-leg capsule distances = closed-form segment distance - radii, 1e-9 m (random poses in a box
@@ -253,6 +254,7 @@ def test_model_rig_matches_closed_form_rig(machine):
     np.testing.assert_allclose(a.pair_min_m, b.pair_min_m, atol=1e-12)
 
 
+@pytest.mark.slow
 def test_cli_pose_and_workspace(tmp_path):
     r = CliRunner().invoke(main, ["interference", "0.1", "0.6", "-0.2", "--json"])
     assert r.exit_code == 0, r.output
@@ -289,6 +291,7 @@ def test_flat_cylinders_are_contained_in_the_capsules(machine):
     assert cyl["leg1.cylinder|plate"] > cap["leg1.cylinder|plate"] + 0.02
 
 
+@pytest.mark.slow
 @pytest.mark.parametrize("which", ["tsai", "five"])
 def test_n_legs_capsules_match_segment_distance(request, which):
     """Issue 21: n legs' bodies leg1..legn, every leg-leg pair (n (n - 1) / 2 leg pairs of 4 body pairs),

@@ -45,6 +45,7 @@ def test_plane_map(machine):
     assert rows[i * 17 + j, :3].tolist() == [pm.x_m[j], 0.6, pm.z_m[i]]
 
 
+@pytest.mark.slow
 def test_cli_workspace(tmp_path):
     runner = CliRunner()
     res = runner.invoke(main, ["workspace", "--y", "0.55", "--out", str(tmp_path), "--json", "--no-progress"])

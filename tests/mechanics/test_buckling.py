@@ -52,6 +52,7 @@ def _euler_factor(machine, pose, leg, compression_n):
     return leg_critical_load_n(machine, length) / compression_n
 
 
+@pytest.mark.slow
 @pytest.mark.parametrize("load,leg,first", [([0, -700, 0, 0, 0, 0], 0, 2), ([0, 0, 700, 0, 0, 0], 2, 1)])
 def test_leg_modes_converge_to_euler_as_one_over_n_squared(machine, load, leg, first):
     """The legs' own buckling modes in the machine spectrum against Euler's pinned-pinned stepped column

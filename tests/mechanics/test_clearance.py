@@ -127,6 +127,7 @@ def test_preload_alone_is_along_vp_without_bending(machine):
     assert np.allclose(small.loading.axial_forces_n[0], a4 * vp, rtol=1e-10, atol=1e-9)
 
 
+@pytest.mark.slow
 def test_results_converge_as_smoothing_shrinks(machine):
     """Reference: the sharp dead zone (w -> 0): the critical preload tends to 391.31 N and the lost motion
     to 2g / sin(alpha); the error falls with w (about linearly, the edge force being k_c w / 2)."""
@@ -184,6 +185,7 @@ def test_clearance_variants_and_errors(machine):
     assert cp.preload > 0  # a4 in m in length mode
 
 
+@pytest.mark.slow
 def test_study_case_and_cli(machine, tmp_path):
     """The one-command answer: the case-file form and the option form write CSV, JSON and two PNGs,
     refuse to overwrite, and report the critical preload of the closed form at pose A (0.5%)."""

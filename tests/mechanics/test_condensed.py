@@ -198,6 +198,7 @@ def test_stiffness_is_the_energy_hessian(machine, h):
 
 
 # --- maps, envelope, preload, errors --------------------------------------------------------------------
+@pytest.mark.slow
 def test_stiffness_maps(machine, tmp_path):
     maps = condensed.stiffness_maps(machine, 0.72, n=5)
     assert maps.vertical_n_per_m.shape == (5, 5) and np.all(maps.reachable)
@@ -222,6 +223,7 @@ def test_stiffness_maps(machine, tmp_path):
         map_files.write_stiffness_maps(maps, tmp_path)
 
 
+@pytest.mark.slow
 def test_load_envelope_matches_brute_force(machine, tmp_path):
     ys = np.array([0.5, 0.62, 0.74])
     loads = workspace_envelope.press_loads(cone_half_angle_rad=math.radians(10), n_azimuth=4)
@@ -277,6 +279,7 @@ def test_bad_input_is_a_pressfit_error(machine):
         condensed.solve_linear(elastic, [0, 0.6, 0], [0, 700, 0])
 
 
+@pytest.mark.slow
 def test_cli_stiffness(tmp_path):
     import json
 

@@ -103,6 +103,7 @@ def test_ram_is_a_cantilever(pose):
     assert axial.tool_displacement_m[1] == pytest.approx(F * length / (E * area), rel=RTOL)
 
 
+@pytest.mark.slow
 @pytest.mark.parametrize("n", [1, 2, 4, 8])
 def test_springs_per_segment_convergence(n):
     """With model.py's law alone (midpoint rotational springs, transverse='none') a cantilever's tip deflection is

@@ -6,6 +6,7 @@ second-order condition of a stable minimum (Stability), linearity of the small-d
 """
 
 import numpy as np
+import pytest
 from hypothesis import HealthCheck, assume, given, settings
 from hypothesis import strategies as st
 
@@ -24,6 +25,7 @@ def _load(p):  # a press force (N) within ~17 degrees of +y
     return np.concatenate([p[3] * d / np.linalg.norm(d), np.zeros(3)])
 
 
+@pytest.mark.slow
 @SETTINGS
 @given(pose=poses, p=press)
 def test_nonlinear_press_solutions_are_stable_equilibria(machine, pose, p):
@@ -33,6 +35,7 @@ def test_nonlinear_press_solutions_are_stable_equilibria(machine, pose, p):
     assert eq.stability.stable and eq.stability.kkt_negative_eigenvalues == 24
 
 
+@pytest.mark.slow
 @SETTINGS
 @given(pose=poses, p=press, q=press, a=st.floats(-2.0, 2.0))
 def test_linear_solve_superposes_and_scales(machine, pose, p, q, a):

@@ -312,6 +312,7 @@ def test_constraint_jacobian_equals_pinocchios_frame_anchor_jacobian(machine):
         assert np.allclose(-rot @ jp[6 * i:6 * i + 6], mine, atol=1e-9)  # Pinocchio: d log6(c1^-1 c2), c2 rel. c1
 
 
+@pytest.mark.slow
 def test_plate_compliance_by_finite_differences(machine):
     """Nonlinear solves at +-1 N (each component): d(displacement)/d(load) by central differences equals
     the exact linear compliance of the condensation; what remains is O((1 N / 700 N)^2 x 3%) ~ 1e-8."""
@@ -328,6 +329,7 @@ def test_plate_compliance_by_finite_differences(machine):
         assert np.allclose(fd_r, dr, rtol=0, atol=1e-6 * np.abs(dr).max())
 
 
+@pytest.mark.slow
 def test_segment_spring_error_falls_as_one_over_n_squared(machine):
     """Nonlinear axial forces with n = 1, 2, 4, 8 springs per segment against the Richardson limit
     (4 N_8 - N_4) / 3 (error model C / n^2). Measured at this corner pose (case B + 40 N m): relative errors

@@ -97,6 +97,7 @@ def test_special_and_oversized_input_files_are_refused(tmp_path):
         read_toml(big)
 
 
+@pytest.mark.slow
 @pytest.mark.parametrize("name", ["fifo", "/dev/zero"])
 def test_check_of_a_fifo_or_device_returns_at_once(tmp_path, name):
     """In a subprocess with a timeout: reading a FIFO blocks and /dev/zero never ends without the stat check."""

@@ -30,6 +30,7 @@ def check(*args):
     return CliRunner().invoke(main, ["check", *map(str, args), "--no-progress"])
 
 
+@pytest.mark.slow
 def test_refine_worst_0_takes_the_worst_of_every_pose_and_load(tmp_path, machine):
     """Reference: the linear Pinocchio solve (independent of the condensed sweep) at all 4 x 9 pairs. Its
     largest tension (760 N) is far above the largest at the first load (467 N, what the old code looked at),

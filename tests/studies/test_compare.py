@@ -417,6 +417,7 @@ def test_the_readme_table_is_what_compare_computes(shipped):
     assert f"at {int(np.sum(~holds[2]))} of the 75 poses" in section
 
 
+@pytest.mark.slow
 @pytest.mark.parametrize("legs", [5, 6, 12])
 def test_compare_runs_on_machines_of_more_legs(tmp_path, legs):
     """UPU rings of 5, 6 and 12 legs (tests/n_legs.py) on a 2 x 2 x 2 box: every pose gets a critical preload along a

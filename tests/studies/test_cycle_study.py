@@ -89,6 +89,7 @@ def test_summary_of_a_pin_never_touched_is_json(tmp_path):
     assert s["fastest_within_limits"] is None
 
 
+@pytest.mark.slow
 def test_study_on_a_local_cluster_writes_the_front_and_a_fastest_case_that_passes(tmp_path):
     case = study_case(tmp_path)
     out = tmp_path / "out"

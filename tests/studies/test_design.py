@@ -60,6 +60,7 @@ def vertical_stiffness(machine, stem_diameter_m: float) -> float:
     return 4 * (u[1] / length) ** 2 / c
 
 
+@pytest.mark.slow
 def test_the_front_ends_at_the_closed_form_optimum(tmp_path):
     """The least moving mass under a binding stiffness limit is the smallest feasible stem: the first grid value
     at or above d*, where the closed-form vertical stiffness equals the limit (exact to the grid step)."""
@@ -179,6 +180,7 @@ def test_a_grid_beyond_the_cap_is_refused_before_it_is_built(tmp_path):
     assert not (tmp_path / "o").exists()
 
 
+@pytest.mark.slow
 def test_overwrite_never_replaces_the_case_file_with_a_design(tmp_path):
     """A case file that sits where the study writes a design (``designs/design-NNNNNN.toml``) is an input: a rerun
     with --overwrite is refused before anything is moved in, and the case file is unchanged."""

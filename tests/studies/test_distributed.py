@@ -104,6 +104,7 @@ def test_a_killed_worker_leaves_every_sample_exactly_once(case, cluster):
         np.testing.assert_array_equal(got[5][key], single[key])
 
 
+@pytest.mark.slow
 def test_scheduler_and_worker_as_separate_processes(case, tmp_path):
     dask = [sys.executable, "-m", "distributed.cli.dask_scheduler"]
     file = tmp_path / "scheduler.json"

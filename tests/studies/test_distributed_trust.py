@@ -241,6 +241,7 @@ def _self_signed(tmp_path: Path) -> tuple[Path, Path]:
     return cert, key
 
 
+@pytest.mark.slow
 def test_a_tls_scheduler_with_certificates_from_the_dask_configuration(case, tmp_path):
     """A scheduler and a worker on tls://127.0.0.1 with a self-signed certificate; the client takes its
     certificates from the Dask configuration (distributed.comm.tls.*, as documented): the study runs and
@@ -297,6 +298,7 @@ def test_one_or_two_samples_work_and_say_the_sensitivity_is_undefined(case, clus
     assert (tmp_path / "mc" / "histograms.png").exists()
 
 
+@pytest.mark.slow
 def test_a_study_where_every_sample_fails_exits_2_with_the_reasons_counted(tmp_path):
     """120 kN down at pose A buckles the machine (factor 0.83): every sample is unstable; the command exits 2
     with one line counting the reasons (old code: a traceback from the plots), the chunks kept."""

@@ -108,6 +108,7 @@ def test_cli_exit_codes_junit_and_json(tmp_path):
     assert runner.invoke(main, ["check", str(tmp_path / "nope.toml")]).exit_code == 2
 
 
+@pytest.mark.slow
 def test_shipped_cases_pass_and_example_fails():
     runner = CliRunner()
     assert runner.invoke(main, ["check", str(ROOT / "cases"), "--no-progress"]).exit_code == 0

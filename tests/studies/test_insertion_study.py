@@ -62,6 +62,7 @@ def test_preload_above_critical_removes_the_play(study):
     assert study.column("play_error_m")[0] > 1e3 * 1e-8
 
 
+@pytest.mark.slow
 def test_study_cli_files_and_json(tmp_path):
     out = tmp_path / "o"
     args = ["study", "insertion", str(short_case(tmp_path)), "--preload", "0", "--clearance", "1e-5", "--out",

@@ -29,6 +29,7 @@ def joint():
     return joint_curves(load_case(PIN_CASE), load_case(BOARD), samples=60)
 
 
+@pytest.mark.slow
 def test_each_pins_deflection_is_the_vjm_compliance_times_the_force(board):
     """Every pin (one on the tool axis, no tilt): the sensed minus the true depth at the peak is C_yy F with C the
     Pinocchio VJM model's compliance at the pin's pose (x, 0.60, z) and F the peak force (achieved 8.1e-10

@@ -45,6 +45,7 @@ def _all_chunks(plan):
 
 
 # --- item 1: one buckling key, one definition ----------------------------------------------------------------
+@pytest.mark.slow
 def test_buckling_key_is_the_machine_factor_that_check_reports(tmp_path):
     """`pressfit check` on this case reports the whole-machine linearised buckling factor 143.08 at pose A
     under 700 N down (the per-leg Euler factor is ~900): the Monte Carlo's key is the same quantity. A sample

@@ -47,6 +47,7 @@ def test_baseline_is_always_a4_0_even_when_not_asked(machine, closed_form):
     assert closed_form["lost"] == pytest.approx(44.7e-6, abs=0.05e-6)  # the number the issue states
 
 
+@pytest.mark.slow
 def test_small_load_secant_does_not_depend_on_steps(machine, closed_form):
     """The secant at the stated small load (10% of 700 N) from its own solve: identical for 5 and 400 steps
     (1e-9: solver tolerance), and equal to the closed form F / (2 g / sin(alpha) + F / K_contact) without
@@ -61,6 +62,7 @@ def test_small_load_secant_does_not_depend_on_steps(machine, closed_form):
     assert fine.small_load_secant_stiffness_n_per_m[0, 1] == pytest.approx(closed_form["contact"], rel=1e-6)
 
 
+@pytest.mark.slow
 def test_both_no_clearance_stiffnesses_are_named_and_8_percent_apart(machine, closed_form, tmp_path):
     """Contact springs in series (1e9 N/m) vs rigid cardans: closed forms to 1e-9 (both linear), and the
     rigid one is 2 / (k_c c) = 8.0% stiffer. Both appear, named, in the text and the JSON."""

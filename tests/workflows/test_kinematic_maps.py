@@ -9,6 +9,7 @@ from pressfit.errors import OutputExistsError
 from pressfit.workflows import kinematic_maps as maps
 
 
+@pytest.mark.slow
 def test_write_outputs_and_no_silent_overwrite(machine, tmp_path):
     (tmp_path / "summary.json").write_text("keep")
     with pytest.raises(OutputExistsError):  # checked before anything is computed or written

@@ -4,6 +4,7 @@ redundant actuation) runs the clearance alone and says why, instead of refusing 
 from __future__ import annotations
 
 import numpy as np
+import pytest
 
 from pressfit.workflows import report
 
@@ -19,6 +20,7 @@ def test_the_preload_section_on_a_3_leg_machine_shows_the_clearance_alone(tmp_pa
     assert np.all(study.lost_motion_m[1:, 0] > 0) and np.all(np.isnan(study.critical_preload))
 
 
+@pytest.mark.slow
 def test_a_report_on_a_baseline_compares_it_once_and_bars_keep_machines_apart(tmp_path, tsai):
     """The report's comparison on Tsai's 3-UPU lists it once (the shipped baselines minus itself); two machines of
     one name get one bar each in compare.png (labelled by position), not one merged bar."""
@@ -67,6 +69,7 @@ def test_each_kind_states_the_grids_steps_and_samples_it_runs():
             assert fragment in text, (res.name, fragment)
 
 
+@pytest.mark.slow
 def test_the_default_insertion_runs_at_the_step_its_section_states(tmp_path, machine):
     """The default report's insertion section: both runs at 2 ms (the series' time column), stated in its text."""
     parts: dict[str, object] = {}
