@@ -18,46 +18,17 @@ quantity; the Python functions of :mod:`pressfit.dynamics.control`, :mod:`pressf
 * :func:`axial_forces`: the legs' axial forces from the closure forces and the plate cardan angles;
 * :func:`rigid_post_step`: after one rigid-leg step, all of the above that the step's row needs.
 
-Compiled with ``error_model="numpy"`` (a division by zero gives inf or nan, which the callers' finiteness
-checks refuse, rather than an exception from inside a kernel) and ``cache=True``: the first call in a fresh
-install compiles (about 10 s of CPU, once) and numba keeps the result in the user's cache directory
-(:func:`cache_directory`, created on demand), never in the installed package's directory (a leftover
-``__pycache__`` there outlives ``pip uninstall`` and shadows a later editable install as a namespace package);
-where that directory is not writable, each process compiles (:func:`_compiled`).
+Compiled by :func:`pressfit.compiled.compiled` (``error_model="numpy"``, the cache in the user's cache directory,
+:func:`cache_directory`): the first call in a fresh install compiles (about 10 s of CPU, once).
 """
 
 from __future__ import annotations
 
 import math
-import os
-from pathlib import Path
 
 import numpy as np
-import platformdirs
-from numba import config, njit
 
-
-def cache_directory() -> Path:
-    """The compiled kernels' cache: numba's own ``NUMBA_CACHE_DIR`` when the user set it, else
-    ``<user cache dir>/pressfit/numba`` (platformdirs: ``$XDG_CACHE_HOME/pressfit/numba`` on Linux)."""
-    own = os.environ.get("NUMBA_CACHE_DIR")
-    return Path(own) if own else platformdirs.user_cache_path("pressfit", appauthor=False) / "numba"
-
-
-def _compiled(function):
-    """``njit`` with the cache in :func:`cache_directory` only (numba's user-provided locator, the other
-    locators, which fall back to the package's ``__pycache__``, switched off while this kernel is declared);
-    where that directory cannot be created or written, numba finds no locator and the kernel is compiled in each
-    process instead."""
-    saved = config.CACHE_DIR, config.CACHE_LOCATOR_CLASSES
-    config.CACHE_DIR, config.CACHE_LOCATOR_CLASSES = str(cache_directory()), "UserProvidedCacheLocator"
-    try:
-        return njit(cache=True, error_model="numpy")(function)
-    except RuntimeError:  # numba: "cannot cache function ...: no locator available"
-        return njit(error_model="numpy")(function)
-    finally:
-        config.CACHE_DIR, config.CACHE_LOCATOR_CLASSES = saved
-
+from pressfit.compiled import cache_directory, compiled  # noqa: F401 (cache_directory: where the kernels live)
 
 # contact laws (contact_law's ``law``): elastic, press fit with a linear or a saturating (tanh) fit force, and any
 # other law tabulated on a depth grid (TABLE: :func:`pressfit.dynamics.contact.contact_parameters`)
@@ -78,7 +49,7 @@ ROW_PLATE, ROW_TOOL, ROW_FORCE, ROW_DEPTH, ROW_AXIAL, ROW_KINEMATIC, ROW_LENGTHS
 ROW_TIME, ROW_REFERENCE, ROW_ESTIMATE, ROW_COMMAND, ROW_TENSION, ROW_LIFT, ROW_INTERNAL = range(7)
 
 
-@_compiled
+@compiled
 def _legs(offsets, lengths, hx, hy, hz, units, residuals):
     """Unit vectors e_i (n, 3) and length residuals l_i(h) - l_i (n,) at h (equation 1: u_i = h + d_i - B_i)."""
     for i in range(offsets.shape[0]):
@@ -88,7 +59,7 @@ def _legs(offsets, lengths, hx, hy, hz, units, residuals):
         residuals[i] = n - lengths[i]
 
 
-@_compiled
+@compiled
 def gauss_newton(offsets, lengths, pose, iterations, units):
     """Gauss-Newton on the n leg lengths (m) from ``pose`` (3,), m, updated in place; fills ``units`` (n, 3) with
     the leg unit vectors at the result and returns the largest |length residual| there (m)."""
@@ -120,7 +91,7 @@ def gauss_newton(offsets, lengths, pose, iterations, units):
     return np.max(np.abs(r))
 
 
-@_compiled
+@compiled
 def _triple(units, i, j, k):
     """det(e_i, e_j, e_k) of rows i, j, k of ``units``."""
     return (units[i, 0] * (units[j, 1] * units[k, 2] - units[j, 2] * units[k, 1])
@@ -128,7 +99,7 @@ def _triple(units, i, j, k):
             + units[i, 2] * (units[j, 0] * units[k, 1] - units[j, 1] * units[k, 0]))
 
 
-@_compiled
+@compiled
 def distribution(units, pinv, null):
     """A^+ (n, 3) into ``pinv`` and the preload basis V (n, n - 3) into ``null`` from the leg unit vectors
     ``units`` (n, 3) (rows e_i: A = E^T); returns A's smallest singular value (0 where, on n >= 5 legs, legs 1-3
@@ -186,7 +157,7 @@ def distribution(units, pinv, null):
     return math.sqrt(max(smallest, 0.0))
 
 
-@_compiled
+@compiled
 def moved(pose, reference, tolerance):
     """True when ``pose`` moved more than ``tolerance`` from ``reference`` (infinity norm; same units)."""
     for k in range(pose.size):  # noqa: SIM110 (numba compiles the loop, not a generator in any())
@@ -195,7 +166,7 @@ def moved(pose, reference, tolerance):
     return False
 
 
-@_compiled
+@compiled
 def control(params, estimate, units, rates, target, target_velocity, contact_force, dt, integral, lift,
             gravity_pose, gravity, deflection_pose, deflection, pinv, null, force, tension, preload):
     """Figure 12's loop at the estimate (m) with leg unit vectors ``units`` (:mod:`pressfit.dynamics.control`):
@@ -245,7 +216,7 @@ def control(params, estimate, units, rates, target, target_velocity, contact_for
     return 0, lift, clamped, sigma
 
 
-@_compiled
+@compiled
 def first_order(force, command, limit, decay, out):
     """The saturated first-order drive's zero-order-hold step (:class:`pressfit.dynamics.actuators.ForceActuators`):
     out = s + (force - s) decay, s = the command clipped to +-limit (N), decay = exp(-dt / tau)."""
@@ -254,7 +225,7 @@ def first_order(force, command, limit, decay, out):
         out[i] = target + (force[i] - target) * decay
 
 
-@_compiled
+@compiled
 def contact_law(contact, depth, rate):
     """F(d, d_dot) (N, >= 0) of :func:`pressfit.dynamics.contact.contact_force_n` (``contact`` as in
     :func:`solve_contact`)."""
@@ -276,7 +247,7 @@ def contact_law(contact, depth, rate):
     return max(force, 0.0)
 
 
-@_compiled
+@compiled
 def _deflect(force, column, sag, loads, disp, u):
     if loads.size == 0:
         for k in range(3):
@@ -286,7 +257,7 @@ def _deflect(force, column, sag, loads, disp, u):
             u[k] = sag[k] + np.interp(force, loads, disp[:, k])
 
 
-@_compiled
+@compiled
 def solve_contact(contact, rigid_depth, previous_depth, dt, column, sag, loads, disp, u):
     """The contact force F (N) with the structure's deflection u(F) in series (:mod:`pressfit.dynamics.contact`):
     u = ``column`` F + ``sag``, or, when ``loads`` is not empty, ``sag`` + the table ``loads`` (n,), N -> ``disp``
@@ -316,7 +287,7 @@ def solve_contact(contact, rigid_depth, previous_depth, dt, column, sag, loads, 
     return hi, rigid_depth - u[1]
 
 
-@_compiled
+@compiled
 def axial_forces(closure_forces, q, actuator_q, out):
     """Axial force N_i (N, > 0 tension) of each leg at its plate cardan into ``out`` (n,): the closure force f
     (the first three of each leg's six in ``closure_forces``, in the frame of the leg's last body) along the leg
@@ -329,7 +300,7 @@ def axial_forces(closure_forces, q, actuator_q, out):
         out[i] = -fx * math.sin(c) + (fy * math.sin(d) + fz * math.cos(d)) * math.cos(c)
 
 
-@_compiled
+@compiled
 def internal_forces(null, tension, out):
     """The preload amplitudes a (n - 3,), N, that the tensions N (n,) carry, into ``out``: the coordinates of N's
     projection on the preload space in the basis V (n, n - 3), (V^T V)^-1 V^T N (v_p . N on the 4-UPU, V's one
@@ -349,7 +320,7 @@ def internal_forces(null, tension, out):
     out[:] = np.linalg.solve(gram, projection)
 
 
-@_compiled
+@compiled
 def rigid_pre_step(row, t, reference, lift, estimate, command, tension, null, tau, actuator_v, contact_tau, layout):
     """Before one rigid-leg step: the step's row at the columns ``layout`` names (ROW_TIME ...): time (s), the
     reference with its lift (m), the estimate (m), the commanded and delivered tensions (N), the lift (m) and the
@@ -371,7 +342,7 @@ def rigid_pre_step(row, t, reference, lift, estimate, command, tension, null, ta
         row[layout[ROW_INTERNAL] + k] = internal[k]
 
 
-@_compiled
+@compiled
 def rigid_post_step(row, previous_q, q, v, closure_forces, actuator_q, actuator_v, contact, previous_depth, dt,
                     column, sag, loads, disp, offsets, estimate, units, iterations, kinematic_iterations, tau, layout,
                     lengths, rates):
@@ -415,3 +386,60 @@ def rigid_post_step(row, previous_q, q, v, closure_forces, actuator_q, actuator_
     tau[0], tau[1], tau[2] = 2.0 * (x * y + z * w) * force, (1.0 - 2.0 * (x * x + z * z)) * force, \
         2.0 * (y * z - x * w) * force
     return True, force, depth, residual
+
+
+# hydraulic_substeps' ``params``: the valve, the oil and the cylinder (:mod:`pressfit.dynamics.drives.hydraulic`)
+(HYD_GAIN, HYD_FLOW_GAIN, HYD_LAMINAR, HYD_SUPPLY, HYD_TANK, HYD_LEAKAGE, HYD_BULK, HYD_AREA, HYD_DEAD_A, HYD_DEAD_B,
+ HYD_STROKE, HYD_LENGTH_MIN, HYD_MARGIN) = range(13)
+
+
+@compiled
+def _orifice(kv, lam, opening, drop):
+    """Q = K_v x sqrt(dp) (laminar below dp_lam) and dQ/d(dp) of one orifice, m^3/s and m^3/(s Pa)."""
+    mag = abs(drop)
+    root = math.sqrt(max(mag, lam))
+    if mag >= lam:
+        sign = 1.0 if drop > 0.0 else (-1.0 if drop < 0.0 else 0.0)
+        return kv * opening * (sign * root), kv * opening * (0.5 / root)
+    return kv * opening * (drop / math.sqrt(lam)), kv * opening * (1.0 / math.sqrt(lam))
+
+
+@compiled
+def hydraulic_substeps(pa, pb, xv, dp_cmd, feedforward, length, rate, h, n, decay, dt, params):
+    """The servo-valve cylinders' n pressure substeps of h (s) per leg, in place on the chamber pressures pa, pb
+    (Pa) and the spools xv (:meth:`pressfit.dynamics.drives.hydraulic.HydraulicDrive.step`): the spool's first-order
+    lag toward the pressure loop's command (``dp_cmd`` Pa, ``feedforward`` per leg), the chambers' volumes at the
+    mid-substep length, linearly implicit Euler on the two pressures. Returns whether every piston stays in its
+    stroke over the step of dt (s) at its rate, and every pressure in [-0.1 p_s, 10 p_s] at its end (the drive's
+    refusals)."""
+    gain, kv, lam, ps, pt = params[HYD_GAIN], params[HYD_FLOW_GAIN], params[HYD_LAMINAR], params[HYD_SUPPLY], \
+        params[HYD_TANK]
+    cl, beta, area = params[HYD_LEAKAGE], params[HYD_BULK], params[HYD_AREA]
+    stroke_ok, pressures_ok = True, True
+    for i in range(pa.shape[0]):
+        for end in (length[i], length[i] + rate[i] * dt):
+            piston = end - params[HYD_LENGTH_MIN] + params[HYD_MARGIN]
+            stroke_ok = stroke_ok and piston >= 0.0 and piston <= params[HYD_STROKE]
+        a, b, x = pa[i], pb[i], xv[i]
+        for k in range(n):
+            x_cmd = min(max(gain * (dp_cmd[i] - (a - b)) - feedforward[i], -1.0), 1.0)
+            x = x_cmd + (x - x_cmd) * decay
+            piston = length[i] + rate[i] * (k + 0.5) * h - params[HYD_LENGTH_MIN] + params[HYD_MARGIN]
+            v_a = params[HYD_DEAD_A] + area * (params[HYD_STROKE] - piston)
+            v_b = params[HYD_DEAD_B] + area * piston
+            up, down = max(x, 0.0), min(x, 0.0)
+            qa1, da1 = _orifice(kv, lam, up, ps - a)
+            qa2, da2 = _orifice(kv, lam, down, a - pt)
+            qb1, db1 = _orifice(kv, lam, up, b - pt)
+            qb2, db2 = _orifice(kv, lam, down, ps - b)
+            leak = cl * (a - b)
+            ga, gb = beta / v_a, beta / v_b
+            fa = ga * (qa1 + qa2 + area * rate[i] - leak)
+            fb = gb * (-qb1 - qb2 - area * rate[i] + leak)
+            jaa, jab, jba, jbb = ga * (-da1 + da2 - cl), ga * cl, gb * cl, gb * (-db1 + db2 - cl)
+            m00, m01, m10, m11 = 1.0 - h * jaa, -h * jab, -h * jba, 1.0 - h * jbb
+            det = m00 * m11 - m01 * m10
+            a, b = a + h * (m11 * fa - m01 * fb) / det, b + h * (m00 * fb - m10 * fa) / det
+        pa[i], pb[i], xv[i] = a, b, x
+        pressures_ok = pressures_ok and a >= -0.1 * ps and a <= 10.0 * ps and b >= -0.1 * ps and b <= 10.0 * ps
+    return stroke_ok, pressures_ok

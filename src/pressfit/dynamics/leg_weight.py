@@ -48,27 +48,15 @@ import numpy as np
 
 from pressfit.description.machine import Machine
 from pressfit.dynamics.inertia import GRAVITY_M_PER_S2
-from pressfit.kinematics import leg_vectors, require_reachable
+from pressfit.kinematics import is_reachable, leg_vectors, require_reachable
 from pressfit.mechanics.condensed import condensed_plate_compliance, rotational_compliances
 
 _GAUSS = np.polynomial.legendre.leggauss(3)  # exact for m(s), piecewise quadratic in s
 
 
-def _leg_masses(machine: Machine, length_m: float) -> tuple[list[tuple[float, float, float]], list[tuple[float, float]],
-                                                             float]:
-    """Leg masses along s from the base cardan at leg length l: uniform pieces (kg/m, s0, s1), points (kg, s), and
-    the rod body's mass (rod, moving parts, plate spider: the part whose axial weight reaches the plate), kg."""
-    mass, lc, rod = machine.mass, machine.cylinder.length_m, machine.stem.length_m
-    mu_cyl = (machine.cylinder_tube_mass_kg + mass.actuator_housing_mass_kg) / lc
-    mu_rod = mass.density_kg_per_m3 * machine.stem_section.area_m2
-    pieces = [(mu_cyl, 0.0, lc), (mu_rod, length_m - rod, length_m)]
-    points = [(mass.actuator_moving_mass_kg, length_m - rod), (mass.cardan_spider_mass_kg, length_m),
-              (mass.cardan_spider_mass_kg, 0.0)]
-    return pieces, points, machine.stem_mass_kg + mass.actuator_moving_mass_kg + mass.cardan_spider_mass_kg
-
-
 def _first_moment(pieces: list, points: list, s: np.ndarray, lower: np.ndarray) -> np.ndarray:
-    """sum over the masses at x > lower of (x - s) m_x, kg m, at sections s (k,) (``lower`` (k,) per section)."""
+    """sum over the masses at x > lower of (x - s) m_x, kg m, at sections s (..., k) (``lower`` per section;
+    a piece (kg/m, s0, s1) and a point (kg, s) give their bounds as numbers or arrays (..., 1))."""
     q = np.zeros_like(s)
     for mu, a, b in pieces:
         lo = np.maximum(a, lower)
@@ -79,56 +67,66 @@ def _first_moment(pieces: list, points: list, s: np.ndarray, lower: np.ndarray) 
 
 
 def leg_weight_loads(machine: Machine, pose_m: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
-    """Per leg at a reachable pose (m): the force (n, 3), N, the leg's weight puts on the plate at its plate cardan
-    (module doc: axial share of the rod body, simply supported transverse share) and the plate moment (n, 3), N m,
-    of its clamped bending k_r Delta phi_0 c_i (world axes)."""
-    h = require_reachable(machine, np.asarray(pose_m, dtype=float).reshape(3))
+    """Per leg at reachable poses (..., 3) (m): the force (..., n, 3), N, the leg's weight puts on the plate at its
+    plate cardan (module doc: axial share of the rod body, simply supported transverse share) and the plate moment
+    (..., n, 3), N m, of its clamped bending k_r Delta phi_0 c_i (world axes). Batched over poses and legs: the leg's
+    masses along s (``[mass]``) are the cylinder tube and housing over [0, L_c], the rod over [l - L_r, l], the
+    moving parts at l - L_r and the spiders at 0 and l; the integral of m(s) / EI(s) is 3-point Gauss on each
+    piece between the breaks 0, L_c, l and l - L_r (a piece of zero length adds nothing)."""
+    h = _reachable(machine, pose_m)
     u = leg_vectors(machine, h)
-    lengths = np.linalg.norm(u, axis=-1)
+    lengths = np.linalg.norm(u, axis=-1)[..., None]  # (..., n, 1)
+    e = u / lengths
     g = np.array([0.0, -GRAVITY_M_PER_S2, 0.0])
-    lc, e_mod = machine.cylinder.length_m, machine.material.youngs_modulus_pa
-    ei = (e_mod * machine.cylinder_section.second_moment_m4, e_mod * machine.stem_section.second_moment_m4)
-    forces, moments = np.zeros((len(lengths), 3)), np.zeros((len(lengths), 3))
+    mass, lc, rod = machine.mass, machine.cylinder.length_m, machine.stem.length_m
+    e_mod, spider = machine.material.youngs_modulus_pa, mass.cardan_spider_mass_kg
+    mu_cyl = (machine.cylinder_tube_mass_kg + mass.actuator_housing_mass_kg) / lc
+    mu_rod = mass.density_kg_per_m3 * machine.stem_section.area_m2
+    inner = lengths - rod  # the rod's inner end and the moving parts, s
+    cylinder, rod_piece = (mu_cyl, 0.0, lc), (mu_rod, inner, lengths)
+    points = [(mass.actuator_moving_mass_kg, inner), (spider, lengths)]
+    q0 = mu_cyl * lc * lc / 2 + mu_rod * (lengths**2 - inner**2) / 2 + points[0][0] * inner + spider * lengths
+    ge = (e @ g)[..., None]
+    forces = (machine.stem_mass_kg + mass.actuator_moving_mass_kg + spider) * ge * e + q0 / lengths * (g - ge * e)
     nodes, weights = _GAUSS
-    for i, (ui, li) in enumerate(zip(u, lengths, strict=True)):
-        e = ui / li
-        pieces, points, rod_body = _leg_masses(machine, float(li))
-        q0 = sum(mu * (b * b - a * a) / 2 for mu, a, b in pieces) + sum(m * x for m, x in points)
-        g_perp = g - (g @ e) * e
-        forces[i] = rod_body * (g @ e) * e + q0 / li * g_perp
-        integral = 0.0
-        for (s0, s1), stiffness, cylinder in (((0.0, lc), ei[0], True), ((lc, float(li)), ei[1], False)):
-            breaks = np.unique(np.clip([s0, s1, li - machine.stem.length_m], s0, s1))
-            for a, b in zip(breaks[:-1], breaks[1:], strict=True):
-                s = (a + b) / 2 + (b - a) / 2 * nodes
-                # a cylinder section carries the whole rod (it rides on the actuator) and the cylinder beyond s
-                lower = np.full_like(s, -np.inf) if cylinder else s
-                q = _first_moment(pieces[:1], [], s, s) + _first_moment(pieces[1:], points[:2], s, lower)
-                integral += (b - a) / 2 * float(weights @ (q - (li - s) * q0 / li)) / stiffness
-        c_t, c_m, c, sin_beta = _couple(machine, e, i, li)
-        k_r = 1.0 / ((1.0 - sin_beta**2) * c_t + sin_beta**2 * c_m)
-        moments[i] = k_r * (c @ np.cross(e, g)) * integral * c
+    integral = np.zeros_like(lengths)
+    for s0, s1, stiffness, in_cylinder in ((0.0, lc, e_mod * machine.cylinder_section.second_moment_m4, True),
+                                           (lc, lengths, e_mod * machine.stem_section.second_moment_m4, False)):
+        split = np.clip(inner, s0, s1)
+        for a, b in ((s0, split), (split, s1)):
+            s = (a + b) / 2 + (b - a) / 2 * nodes
+            # a cylinder section carries the whole rod (it rides on the actuator) and the cylinder beyond s
+            lower = np.full_like(s, -np.inf) if in_cylinder else s
+            q = _first_moment([cylinder], [], s, s) + _first_moment([rod_piece], points, s, lower)
+            integral += (b - a) / 2 * ((q - (lengths - s) * q0 / lengths) @ weights)[..., None] / stiffness
+    sin_beta = (e * machine.cardan_axes).sum(-1, keepdims=True)
+    c = (e - sin_beta * machine.cardan_axes) / np.sqrt(1.0 - sin_beta**2)
+    c_t, c_m = rotational_compliances(machine, lengths)
+    k_r = 1.0 / ((1.0 - sin_beta**2) * c_t + sin_beta**2 * c_m)
+    moments = k_r * (c * np.cross(e, g)).sum(-1, keepdims=True) * integral * c
     return forces, moments
 
 
-def _couple(machine: Machine, e: np.ndarray, leg: int, length_m: float) -> tuple[float, float, np.ndarray, float]:
-    """(c_T, c_M) of the leg (rad/(N m)), its couple direction c_i and sin(beta_i) (as in
-    :mod:`pressfit.mechanics.condensed`)."""
-    a = machine.cardan_axes[leg]
-    sin_beta = float(e @ a)
-    c = (e - sin_beta * a) / np.sqrt(1.0 - sin_beta**2)
-    c_t, c_m = rotational_compliances(machine, length_m)
-    return float(c_t), float(c_m), c, sin_beta
+def _reachable(machine: Machine, pose_m: np.ndarray) -> np.ndarray:
+    """The poses (..., 3) as floats, or the first unreachable one refused (UnreachablePoseError naming leg and
+    limit)."""
+    h = np.asarray(pose_m, dtype=float)
+    flat = h.reshape(-1, 3)
+    ok = np.all(np.isfinite(flat), axis=-1)
+    ok[ok] = is_reachable(machine, flat[ok])
+    if not np.all(ok):
+        require_reachable(machine, flat[np.argmin(ok)])
+    return h
 
 
 def weight_wrench_n(machine: Machine, pose_m: np.ndarray) -> np.ndarray:
-    """The machine's weight as a plate wrench (6,) at a reachable pose (m): force N, moment N m about the plate centre,
-    world axes (plate and tool at the centre, the legs' cardan forces and clamped bending: module doc)."""
-    h = np.asarray(pose_m, dtype=float).reshape(3)
-    forces, moments = leg_weight_loads(machine, h)
+    """The machine's weight as a plate wrench (..., 6) at reachable poses (..., 3) (m): force N, moment N m about the
+    plate centre, world axes (plate and tool at the centre, the legs' cardan forces and clamped bending: module
+    doc)."""
+    forces, moments = leg_weight_loads(machine, pose_m)
     plate = (machine.mass.plate_mass_kg + machine.mass.tool_mass_kg) * np.array([0.0, -GRAVITY_M_PER_S2, 0.0])
-    return np.concatenate([plate + forces.sum(0),
-                           np.cross(machine.plate_offsets_m, forces).sum(0) + moments.sum(0)])
+    return np.concatenate([plate + forces.sum(-2),
+                           np.cross(machine.plate_offsets_m, forces).sum(-2) + moments.sum(-2)], axis=-1)
 
 
 def weight_sag_m(machine: Machine, poses_m: np.ndarray) -> np.ndarray:
@@ -136,6 +134,6 @@ def weight_sag_m(machine: Machine, poses_m: np.ndarray) -> np.ndarray:
     condensed plate compliance times :func:`weight_wrench_n` (module doc)."""
     h = np.asarray(poses_m, dtype=float)
     flat = h.reshape(-1, 3)
-    wrenches = np.array([weight_wrench_n(machine, p) for p in flat])
+    wrenches = weight_wrench_n(machine, flat)
     compliance = condensed_plate_compliance(machine, flat).reshape(-1, 6, 6)
     return np.einsum("kij,kj->ki", compliance[:, :3], wrenches).reshape(h.shape)

@@ -138,7 +138,7 @@ def check_model_step(case: Case, machine: Machine, sim: Simulation, waypoints_m:
         return
     points = np.unique(np.asarray(waypoints_m, dtype=float), axis=0)
     poses = np.concatenate([points, 0.5 * (waypoints_m[1:] + waypoints_m[:-1])])
-    frequencies = np.array([first_mode_hz(machine, p) for p in poses])
+    frequencies = first_mode_hz(machine, poses)
     worst = int(np.argmax(frequencies))
     bound = MAX_STEP_FRACTION / frequencies[worst]
     if sim.time_step_s > bound:

@@ -44,6 +44,7 @@ series with the leg's couple stiffness k_r, it lets the plate rock before torsio
 
 from __future__ import annotations
 
+import math
 from dataclasses import dataclass, replace
 from typing import Any, Literal, get_args
 
@@ -51,6 +52,7 @@ import numpy as np
 from numpy.typing import ArrayLike
 
 from pressfit import kinematics
+from pressfit.compiled import compiled
 from pressfit.description.machine import Machine
 from pressfit.errors import ClearanceError, ConvergenceError
 
@@ -67,21 +69,24 @@ GEOMETRY_DESCRIPTIONS: dict[str, str] = {
 
 
 # --- the law -----------------------------------------------------------------------------------------------
-def _s(u: np.ndarray, w: float) -> np.ndarray:
-    """(u + sqrt(u^2 + w^2)) / 2 without cancellation for u < 0."""
-    r = np.sqrt(u * u + w * w)
-    with np.errstate(divide="ignore"):  # the branch np.where drops may divide by an underflowed r - u
-        return np.where(u >= 0, 0.5 * (u + r), 0.5 * w * w / (r - u))
+@compiled
+def _ramp(u: float, w: float) -> tuple[float, float, float]:
+    """s(u) = (u + sqrt(u^2 + w^2)) / 2 (without cancellation for u < 0), its derivative and its integral
+    S(u) = u s / 2 + w^2 asinh(u / w) / 4 (S' = s)."""
+    r = math.sqrt(u * u + w * w)
+    if u >= 0:
+        s, ds = 0.5 * (u + r), 0.5 * (1.0 + u / r)
+    else:  # an underflowed r - u divides to inf (error_model numpy), as the branch it stands for needs
+        s, ds = 0.5 * w * w / (r - u), 0.5 * w * w / (r * (r - u))
+    return s, ds, 0.5 * u * s + 0.25 * w * w * math.asinh(u / w)
 
 
-def _ds(u: np.ndarray, w: float) -> np.ndarray:
-    r = np.sqrt(u * u + w * w)
-    with np.errstate(divide="ignore"):
-        return np.where(u >= 0, 0.5 * (1.0 + u / r), 0.5 * w * w / (r * (r - u)))
-
-
-def _big_s(u: np.ndarray, w: float) -> np.ndarray:
-    return 0.5 * u * _s(u, w) + 0.25 * w * w * np.arcsinh(u / w)
+@compiled
+def _dead_zone_kernel(x, g, k, w, energy, force, tangent):
+    for i in range(x.shape[0]):
+        sa, dsa, big_a = _ramp(x[i] - g[i], w)
+        sb, dsb, big_b = _ramp(-x[i] - g[i], w)
+        energy[i], force[i], tangent[i] = k * (big_a + big_b), k * (sa - sb), k * (dsa + dsb)
 
 
 @dataclass(frozen=True, kw_only=True)
@@ -94,20 +99,25 @@ class DeadZone:
     width: float = DEFAULT_SMOOTHING_M
 
     def energy(self, x: ArrayLike) -> np.ndarray:
-        return self.stiffness * (_big_s(x - self.gap, self.width) + _big_s(-x - self.gap, self.width))
+        return dead_zones(x, self.gap, self.stiffness, self.width)[0]
 
     def force(self, x: ArrayLike) -> np.ndarray:
-        return self.stiffness * (_s(x - self.gap, self.width) - _s(-x - self.gap, self.width))
+        return dead_zones(x, self.gap, self.stiffness, self.width)[1]
 
     def tangent(self, x: ArrayLike) -> np.ndarray:
-        return self.stiffness * (_ds(x - self.gap, self.width) + _ds(-x - self.gap, self.width))
+        return dead_zones(x, self.gap, self.stiffness, self.width)[2]
 
 
-def dead_zones(x: np.ndarray, g: np.ndarray, k: float, w: float) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+def dead_zones(x: ArrayLike, g: ArrayLike, k: float, w: float) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
     """Energy (J), force (N) and tangent (N/m) of dead zones of stiffness k (N/m) and smoothing width w (m) at
-    x (m), with per-entry gaps g (m, broadcast with x)."""
-    a, b = x - g, -x - g
-    return (k * (_big_s(a, w) + _big_s(b, w)), k * (_s(a, w) - _s(b, w)), k * (_ds(a, w) + _ds(b, w)))
+    x (m), with per-entry gaps g (m, broadcast with x): k (S(x - g) + S(-x - g)), k (s(x - g) - s(-x - g)),
+    k (s'(x - g) + s'(-x - g)) (:func:`_ramp`, compiled: the plays' solve calls it in every Newton iteration of
+    every flexible step)."""
+    x, g = np.broadcast_arrays(np.asarray(x, dtype=float), np.asarray(g, dtype=float))
+    out = np.empty((3, x.size))
+    _dead_zone_kernel(np.ascontiguousarray(x).reshape(-1), np.ascontiguousarray(g).reshape(-1), float(k), float(w),
+                      out[0], out[1], out[2])
+    return out[0].reshape(x.shape), out[1].reshape(x.shape), out[2].reshape(x.shape)
 
 
 def invert_law(force: np.ndarray, gap: np.ndarray, stiffness: float, width: float) -> np.ndarray:

@@ -50,6 +50,7 @@ import numpy as np
 
 from pressfit.description.machine import HydraulicDrive as HydraulicTable
 from pressfit.description.machine import Machine
+from pressfit.dynamics import kernels
 from pressfit.dynamics.drives.base import DrivePort, Rating, minus_3db_hz, require_step
 from pressfit.errors import DriveStepError
 
@@ -102,6 +103,12 @@ class HydraulicDrive:
         self.null_flow_gain = t.valve_flow_gain_m3_per_s_sqrt_pa * math.sqrt(0.5 * (t.supply_pressure_pa -
                                                                                    t.tank_pressure_pa))
         self.feedforward_per_rate = t.flow_feedforward * self.area_m2 / self.null_flow_gain  # spool per m/s
+        lim = machine.limits
+        self._params = np.array([t.pressure_loop_gain_per_pa, t.valve_flow_gain_m3_per_s_sqrt_pa, self.laminar_pa,
+                                 t.supply_pressure_pa, t.tank_pressure_pa, t.leakage_m3_per_s_pa, t.bulk_modulus_pa,
+                                 self.area_m2, t.dead_volume_a_m3, t.dead_volume_b_m3, t.stroke_m,
+                                 lim.leg_length_min_m,  # and x(l_min), the stroke's margin
+                                 float(machine.piston_position_m(lim.leg_length_min_m))])
 
     @classmethod
     def of(cls, machine: Machine) -> HydraulicDrive:
@@ -146,57 +153,30 @@ class HydraulicDrive:
         p0 = self.null_pressure_pa
         return HydraulicState(pressure_a_pa=p0 + dp / 2, pressure_b_pa=p0 - dp / 2, spool=0 * dp)
 
-    def _orifice(self, opening: np.ndarray, drop: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
-        """Q = K_v x sqrt(dp) (laminar below dp_lam) and dQ/d(dp), m^3/s and m^3/(s Pa)."""
-        kv, lam = self.table.valve_flow_gain_m3_per_s_sqrt_pa, self.laminar_pa
-        mag = np.abs(drop)
-        turbulent = mag >= lam
-        root = np.sqrt(np.maximum(mag, lam))
-        q = kv * opening * np.where(turbulent, np.sign(drop) * root, drop / math.sqrt(lam))
-        dq = kv * opening * np.where(turbulent, 0.5 / root, 1.0 / math.sqrt(lam))
-        return q, dq
-
-    def _rates(self, pa: np.ndarray, pb: np.ndarray, xv: np.ndarray, v_a: np.ndarray, v_b: np.ndarray,
-               rate: np.ndarray) -> tuple[np.ndarray, ...]:
-        """dp_a/dt, dp_b/dt and the Jacobian entries (J_aa, J_ab, J_ba, J_bb)."""
-        t = self.table
-        ps, pt, cl, beta, area = (t.supply_pressure_pa, t.tank_pressure_pa, t.leakage_m3_per_s_pa,
-                                  t.bulk_modulus_pa, self.area_m2)
-        up, down = np.maximum(xv, 0.0), np.minimum(xv, 0.0)
-        qa1, da1 = self._orifice(up, ps - pa)
-        qa2, da2 = self._orifice(down, pa - pt)
-        qb1, db1 = self._orifice(up, pb - pt)
-        qb2, db2 = self._orifice(down, ps - pb)
-        leak = cl * (pa - pb)
-        ga, gb = beta / v_a, beta / v_b
-        fa = ga * (qa1 + qa2 + area * rate - leak)
-        fb = gb * (-qb1 - qb2 - area * rate + leak)
-        return fa, fb, ga * (-da1 + da2 - cl), ga * cl, gb * cl, gb * (-db1 + db2 - cl)
-
     def step(self, state: HydraulicState, command_n: np.ndarray, lengths_m: np.ndarray, rates_m_per_s: np.ndarray,
              dt_s: float) -> tuple[HydraulicState, np.ndarray]:
         dt_s = require_step(dt_s)
-        t = self.table
         n = math.ceil(dt_s / SUBSTEP_S - 1e-9)
         if n > MAX_SUBSTEPS:
             raise DriveStepError(self.kind, 1, "time step dt_s", dt_s, f"at most {MAX_SUBSTEPS * SUBSTEP_S:g} s "
                                  f"({MAX_SUBSTEPS} pressure substeps of {SUBSTEP_S:g} s)")
         h = dt_s / n
-        length, rate = np.asarray(lengths_m, dtype=float), np.asarray(rates_m_per_s, dtype=float)
-        self._check_stroke(length, rate, dt_s)
-        dp_cmd = np.clip(np.asarray(command_n, dtype=float), -self.force_limit_n, self.force_limit_n) / self.area_m2
+        arrays = [np.array(a, dtype=float) for a in (state.pressure_a_pa, state.pressure_b_pa, state.spool,
+                                                      command_n, lengths_m, rates_m_per_s)]  # copies: pa, pb, xv
+        shape = arrays[0].shape
+        if any(a.shape != shape for a in arrays) or arrays[0].ndim != 1:  # one leg, or per-leg values broadcast
+            shape = np.broadcast_shapes(*(a.shape for a in arrays))
+            arrays = [np.array(np.broadcast_to(a, shape), dtype=float).reshape(-1) for a in arrays]
+        pa, pb, xv, command, length, rate = arrays
+        dp_cmd = np.clip(command, -self.force_limit_n, self.force_limit_n) / self.area_m2
         decay = math.exp(-h / self.valve_time_constant_s)
-        pa, pb, xv = state.pressure_a_pa, state.pressure_b_pa, state.spool
-        feedforward = self.feedforward_per_rate * rate
-        for k in range(n):
-            x_cmd = np.clip(t.pressure_loop_gain_per_pa * (dp_cmd - (pa - pb)) - feedforward, -1.0, 1.0)
-            xv = x_cmd + (xv - x_cmd) * decay
-            v_a, v_b = self.volumes_m3(length + rate * (k + 0.5) * h)
-            fa, fb, jaa, jab, jba, jbb = self._rates(pa, pb, xv, v_a, v_b, rate)
-            m00, m01, m10, m11 = 1.0 - h * jaa, -h * jab, -h * jba, 1.0 - h * jbb
-            det = m00 * m11 - m01 * m10
-            pa, pb = pa + h * (m11 * fa - m01 * fb) / det, pb + h * (m00 * fb - m10 * fa) / det
-        self._check_pressures(pa, pb)
+        stroke_ok, pressures_ok = kernels.hydraulic_substeps(pa, pb, xv, dp_cmd, self.feedforward_per_rate * rate,
+                                                             length, rate, h, n, decay, dt_s, self._params)
+        if not stroke_ok:  # the piston leaves its stroke over the step: refused before the substeps' result is used
+            self._check_stroke(length, rate, dt_s)
+        if not pressures_ok:
+            self._check_pressures(pa, pb)
+        pa, pb, xv = pa.reshape(shape), pb.reshape(shape), xv.reshape(shape)
         return HydraulicState(pressure_a_pa=pa, pressure_b_pa=pb, spool=xv), self.area_m2 * (pa - pb)
 
     def _check_stroke(self, length: np.ndarray, rate: np.ndarray, dt_s: float) -> None:
