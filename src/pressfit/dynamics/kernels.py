@@ -29,6 +29,7 @@ import math
 import numpy as np
 
 from pressfit.compiled import cache_directory, compiled  # noqa: F401 (cache_directory: where the kernels live)
+from pressfit.mechanics.clearance_law import dead_zone
 
 # contact laws (contact_law's ``law``): elastic, press fit with a linear or a saturating (tanh) fit force, and any
 # other law tabulated on a depth grid (TABLE: :func:`pressfit.dynamics.contact.contact_parameters`)
@@ -443,3 +444,34 @@ def hydraulic_substeps(pa, pb, xv, dp_cmd, feedforward, length, rate, h, n, deca
         pa[i], pb[i], xv[i] = a, b, x
         pressures_ok = pressures_ok and a >= -0.1 * ps and a <= 10.0 * ps and b >= -0.1 * ps and b <= 10.0 * ps
     return stroke_ok, pressures_ok
+
+
+@compiled
+def play_iteration(x, tension, inertia, g, k, w, kd, trust, lo, hi, previous, tol, f):
+    """One iteration of the plays' safeguarded Newton (:meth:`pressfit.dynamics.play.PlayedDrive.__call__`) per leg
+    at extensions x (m) under the drive's tensions (N) and its side's inertia forces (N) at the step's end: the
+    residual r = f(x) - tension - inertia of the dead zones (gaps g m, stiffness k N/m, width w m), the bracket
+    [lo, hi] it tightens, a Newton step on r' = f' + kd (N/m) within +-trust (m), halving the bracket where Newton
+    leaves it or does not halve its last step (``previous``, m). Writes f(x) (N) into ``f``; returns True when
+    every step is within tol (m), x then unchanged, else advances x, lo, hi and ``previous`` in place."""
+    done = True
+    step = np.empty(x.shape[0])
+    for i in range(x.shape[0]):
+        _, f[i], tangent = dead_zone(x[i], g[i], k, w)
+        r = f[i] - tension[i] - inertia[i]
+        if r <= 0:
+            lo[i] = max(lo[i], x[i])
+        if r >= 0:
+            hi[i] = min(hi[i], x[i])
+        newton = min(max(x[i] - r / max(tangent + kd[i], 1e-300), x[i] - trust[i]), x[i] + trust[i])
+        slow = newton < lo[i] or newton > hi[i] or abs(newton - x[i]) > 0.5 * previous[i]
+        if slow and math.isfinite(lo[i]) and math.isfinite(hi[i]):
+            step[i] = 0.5 * (lo[i] + hi[i]) - x[i]
+        else:
+            step[i] = newton - x[i]
+        previous[i] = abs(step[i])
+        done = done and previous[i] <= tol
+    if not done:
+        for i in range(x.shape[0]):
+            x[i] += step[i]
+    return done

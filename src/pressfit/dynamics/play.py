@@ -53,6 +53,7 @@ from dataclasses import dataclass
 import numpy as np
 
 from pressfit.description.machine import Machine
+from pressfit.dynamics import kernels
 from pressfit.dynamics.machine.flexible import generalized_alpha
 from pressfit.errors import ConvergenceError, PressfitError
 from pressfit.mechanics.clearance_law import Clearance, dead_zones, invert_law
@@ -197,29 +198,22 @@ class PlayedDrive:
         return self.play.drive_mass_kg * self._accelerations(length_m)[1]
 
     def __call__(self, lengths_m: np.ndarray) -> np.ndarray:
-        k, w, g = self.play.stiffness_n_per_m, self.play.width_m, self.gaps
-        x = self.x.copy()
+        k, w = self.play.stiffness_n_per_m, self.play.width_m
+        x, f = np.array(self.x, dtype=float), np.empty(np.shape(self.x))
+        g, kd = (np.ascontiguousarray(np.broadcast_to(a, x.shape), dtype=float) for a in (self.gaps, self.kd))
         lo, hi = np.full(x.shape, -np.inf), np.full(x.shape, np.inf)
         trust = 2.0 * g + 10.0 * w + 1e-6  # m: the largest step before a bracket is known
         previous = np.full(x.shape, np.inf)  # the last step's size: Newton must halve it, or the bracket is halved
         for _ in range(PLAY_ITERATIONS):
             end = lengths_m - x + self.play.zero_m
             tension = self.drive(end)
-            _, f, t = dead_zones(x, g, k, w)
-            r = f - tension - self._inertia_n(end)
-            lo, hi = np.where(r <= 0, np.maximum(lo, x), lo), np.where(r >= 0, np.minimum(hi, x), hi)
-            newton = np.clip(x - r / np.maximum(t + self.kd, 1e-300), x - trust, x + trust)
-            slow = (newton < lo) | (newton > hi) | (np.abs(newton - x) > 0.5 * previous)
-            bisect = slow & np.isfinite(lo) & np.isfinite(hi)
-            step = np.where(bisect, 0.5 * (lo + hi), newton) - x
-            previous = np.abs(step)
-            if np.all(np.abs(step) <= PLAY_TOL):
+            if kernels.play_iteration(x, np.asarray(tension, dtype=float), self._inertia_n(end), g, k, w, kd, trust,
+                                      lo, hi, previous, PLAY_TOL, f):
                 if self._last is not None:
                     self._previous = (*self._last, self._point_tangent(self.x))
                 self.x, self.side, self._last = x, self._side(end), (lengths_m.copy(), f)
                 return f  # the play's force on the leg: the drive's tension plus its side's inertia
-            x = x + step
-        raise ConvergenceError("cardan play in series with the drive (m)", float(np.max(np.abs(step))), PLAY_TOL,
+        raise ConvergenceError("cardan play in series with the drive (m)", float(np.max(previous)), PLAY_TOL,
                                PLAY_ITERATIONS)
 
     def _side(self, end: np.ndarray) -> DriveSide:

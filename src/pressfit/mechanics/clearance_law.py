@@ -82,11 +82,17 @@ def _ramp(u: float, w: float) -> tuple[float, float, float]:
 
 
 @compiled
+def dead_zone(x: float, g: float, k: float, w: float) -> tuple[float, float, float]:
+    """Energy (J), force (N) and tangent (N/m) of one dead zone (:func:`dead_zones`), compiled, for other kernels."""
+    sa, dsa, big_a = _ramp(x - g, w)
+    sb, dsb, big_b = _ramp(-x - g, w)
+    return k * (big_a + big_b), k * (sa - sb), k * (dsa + dsb)
+
+
+@compiled
 def _dead_zone_kernel(x, g, k, w, energy, force, tangent):
     for i in range(x.shape[0]):
-        sa, dsa, big_a = _ramp(x[i] - g[i], w)
-        sb, dsb, big_b = _ramp(-x[i] - g[i], w)
-        energy[i], force[i], tangent[i] = k * (big_a + big_b), k * (sa - sb), k * (dsa + dsb)
+        energy[i], force[i], tangent[i] = dead_zone(x[i], g[i], k, w)
 
 
 @dataclass(frozen=True, kw_only=True)
