@@ -597,18 +597,15 @@ def read_force_table(path: str | Path) -> tuple[np.ndarray, np.ndarray]:
     return d, f
 
 
-class Contact(ContactLaw):
-    """Tool-board contact of ``[simulation]``: the law (:class:`ContactLaw`) on the board's top face, the plane
-    y = ``board_height_m``, with the pin to insert on it at (x, z) = ``pin_position_m`` (the tool axis). ``pins``:
-    a component of several pins pressed at once (``[[simulation.contact.pins]]``, each at its ``offset_m`` from
-    the tool axis, with overrides of the law's keys); without it one pin on the axis."""
+class PinFieldLaw(ContactLaw):
+    """A contact law with its component's pin field: ``pins``, a component of several pins pressed at once (each at
+    its ``offset_m`` = [dx, dz] (m) from the tool axis, with overrides of the law's keys); without it one pin on
+    the axis. ``[cycle.contact]`` (every board position presses the component) and the base of :class:`Contact`."""
 
-    board_height_m: Positive
-    pin_position_m: Annotated[list[Finite], Field(min_length=2, max_length=2)]
     pins: Annotated[list[ContactPin], Field(max_length=MAX_CONTACT_PINS)] = []
 
     @model_validator(mode="after")
-    def _pin_keys(self) -> Contact:
+    def _pin_keys(self) -> PinFieldLaw:
         base = self.law_keys()
         for k, pin in enumerate(self.pins):
             own = {key: getattr(pin, key) for key in LAW_KEY_NAMES if key in type(pin).model_fields}
@@ -631,6 +628,16 @@ class Contact(ContactLaw):
             out.append(ResolvedContactPin(offset_m=(float(pin.offset_m[0]), float(pin.offset_m[1])), law=self.law,
                                           keys={**base, **own}, source=f"[simulation.contact] pins[{k}]"))
         return out
+
+
+class Contact(PinFieldLaw):
+    """Tool-board contact of ``[simulation]``: the law (:class:`ContactLaw`) on the board's top face, the plane
+    y = ``board_height_m``, with the pin to insert on it at (x, z) = ``pin_position_m`` (the tool axis). ``pins``:
+    a component of several pins pressed at once (``[[simulation.contact.pins]]``, :class:`PinFieldLaw`); without
+    it one pin on the axis."""
+
+    board_height_m: Positive
+    pin_position_m: Annotated[list[Finite], Field(min_length=2, max_length=2)]
 
 
 class Controller(StrictModel):
@@ -889,7 +896,7 @@ class Cycle(StrictModel):
     time_step_s: TimeStep = 5e-4
     baumgarte_rad_per_s: BaumgarteRate = 200.0
     model: Literal["flexible", "rigid"] = "flexible"
-    contact: ContactLaw = ContactLaw()
+    contact: PinFieldLaw = PinFieldLaw()
     controller: Controller = Controller()
     limits: CycleLimits = CycleLimits()
     study: CycleStudy | None = None

@@ -222,6 +222,21 @@ def stroke_figures(pins: PinField, depth_m: np.ndarray, force_n: np.ndarray, pin
                                for i, s in enumerate(seats)))
 
 
+def component_figures(pins: PinField, sol: FieldSolution, fig: StrokeFigures, end_row: int = -1) -> dict:
+    """The component's figures of a stroke solved by :func:`solve_field` (its rows the stroke's) with its
+    :func:`stroke_figures`: ``tool_tilt_max_rad`` (the largest |theta| of the tool, rad), ``max_pin_depth_spread_m``
+    (the largest spread of the pins' depths, m), ``all_pins_seated`` and ``component_pins``: per pin its
+    ``offset_m`` ([dx, dz], m), ``peak_force_n`` (before its shoulder touches, N), ``final_depth_m`` (at ``end_row``,
+    the end of the stroke, m) and ``seated`` (JSON-ready)."""
+    final = sol.pin_depths_m[end_row]
+    return {"tool_tilt_max_rad": float(np.max(np.linalg.norm(sol.displacement[:, 3:], axis=1), initial=0.0)),
+            "max_pin_depth_spread_m": float(np.max(np.ptp(sol.pin_depths_m, axis=1), initial=0.0)),
+            "all_pins_seated": fig.seated,
+            "component_pins": [{"offset_m": [float(o[0]), float(o[1])], "peak_force_n": f, "final_depth_m": float(d),
+                                "seated": s} for o, f, d, s in zip(pins.offsets_m, fig.pin_peak_force_n, final,
+                                                                    fig.pin_seated, strict=True)]}
+
+
 def pin_pose_m(contact: Contact) -> np.ndarray:
     """The plate pose of the insertion: the tool tip (the plate centre) on the pin, at the board face (m)."""
     return np.array([contact.pin_position_m[0], contact.board_height_m, contact.pin_position_m[1]], dtype=float)
@@ -274,6 +289,7 @@ def predict_curve(machine: Machine, case_or_contact: Case | Contact, *, pose_m: 
     sensed = depth + sol.displacement[:, 1]
     tilt = sol.displacement[:, 3:]
     fig = stroke_figures(pins, depth, force, sol.pin_forces_n, sol.pin_depths_m, sensed)
+    component = component_figures(pins, sol, fig)
     notes = tuple(dict.fromkeys(n for law in pins.laws for n in law.notes))
     return PressCurve(
         depth_m=depth, force_n=force, pin_forces_n=sol.pin_forces_n, pin_depths_m=sol.pin_depths_m,
@@ -281,10 +297,9 @@ def predict_curve(machine: Machine, case_or_contact: Case | Contact, *, pose_m: 
         plateau_force_n=fig.plateau_force_n, seated=fig.seated, seating_depth_m=fig.seating_depth_m,
         sensed_minus_true_depth_at_peak_m=fig.sensed_minus_true_depth_at_peak_m,
         machine_compliance_along_press_m_per_n=float(compliance[1, 1]),
-        tool_tilt_max_rad=float(np.max(np.linalg.norm(tilt, axis=1))),
-        max_pin_depth_spread_m=float(np.max(np.ptp(sol.pin_depths_m, axis=1))),
+        tool_tilt_max_rad=component["tool_tilt_max_rad"], max_pin_depth_spread_m=component["max_pin_depth_spread_m"],
         all_pins_seated=fig.seated, pin_peak_force_n=fig.pin_peak_force_n,
-        pin_final_depth_m=tuple(float(x) for x in sol.pin_depths_m[-1]), pin_seated=fig.pin_seated,
+        pin_final_depth_m=tuple(p["final_depth_m"] for p in component["component_pins"]), pin_seated=fig.pin_seated,
         pin_offsets_m=tuple((float(a), float(b)) for a, b in pins.offsets_m), series_residual_n=sol.residual_n,
         pose_m=(float(pose[0]), float(pose[1]), float(pose[2])), notes=notes)
 
