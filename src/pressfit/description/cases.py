@@ -813,12 +813,15 @@ class CycleLimits(StrictModel):
     """Limits ``pressfit check`` asserts on the simulated board (all optional; SI), one report line each: the
     cycle time (s), every pin's overshoot over its insertion limit (N) and lateral alignment error at first
     contact (m; a pin never touched fails), the worst pin named, the worst drive's RMS and peak force over the
-    cycle (N), and the energy per cycle: the drives' positive (motoring) mechanical energy summed over the
-    drives, regeneration not credited (J)."""
+    cycle (N), the energy per cycle: the drives' positive (motoring) mechanical energy summed over the
+    drives, regeneration not credited (J), and ``max_pin_depth_spread_m``: at the worst board position, the
+    largest spread of the depths of the component's pins (``[[cycle.contact.pins]]``, tilted by the machine's
+    compliance there) over its stroke (m; the uneven seating of a multi-pin component)."""
 
     max_cycle_time_s: NonNegative | None = None
     max_overshoot_n: NonNegative | None = None
     max_alignment_error_m: NonNegative | None = None
+    max_pin_depth_spread_m: NonNegative | None = None
     max_rms_drive_force_n: NonNegative | None = None
     max_peak_drive_force_n: NonNegative | None = None
     max_energy_per_cycle_j: NonNegative | None = None
