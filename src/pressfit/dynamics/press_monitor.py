@@ -113,7 +113,8 @@ def monitor_curve(machine: Machine, contact: Contact, time_s: np.ndarray, depth_
     pin_forces = force[:, None] * share
     end = max(end_row - start, 0)
     fig = stroke_figures(pins, depth, force, pin_forces, sol.pin_depths_m, sensed, end)
-    summary = {**component_figures(pins, sol, fig, end),"peak_force_n": fig.peak_force_n, "plateau_force_n": fig.plateau_force_n, "seated": fig.seated,
+    summary = {**component_figures(pins, sol, fig, end),
+               "peak_force_n": fig.peak_force_n, "plateau_force_n": fig.plateau_force_n, "seated": fig.seated,
                "seating_depth_m": fig.seating_depth_m,
                "sensed_minus_true_depth_at_peak_m": fig.sensed_minus_true_depth_at_peak_m,
                "machine_compliance_along_press_m_per_n": float(compliance[1, 1]), "pin_count": n,
