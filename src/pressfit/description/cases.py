@@ -879,7 +879,8 @@ class Cycle(StrictModel):
     pin, ..., and after the last to ``end_m``, where it holds ``settle_s``; each move is the minimum-time S-curve
     under ``motion`` (lift and traverse) or ``descent`` (descent and retract; default ``motion``), scaled down
     where the drives' speed or force limit would bind. ``time_step_s``, ``baumgarte_rad_per_s``, ``model``,
-    ``contact`` (the law) and ``controller`` mean what they mean in ``[simulation]``. ``limits``: what
+    ``contact`` (the law, and with ``[[cycle.contact.pins]]`` a component of several pins pressed at every board
+    position: :class:`PinFieldLaw`) and ``controller`` mean what they mean in ``[simulation]``. ``limits``: what
     ``pressfit check`` asserts on the board (:class:`CycleLimits`); ``study``: the grid of ``pressfit study
     cycle`` (:class:`CycleStudy`)."""
 

@@ -95,13 +95,46 @@ class FieldSolution:
     residual_n: float
 
 
+def series_matrix(pins: PinField, compliance: np.ndarray) -> np.ndarray:
+    """A = G_r^T C_r. G (n, n), m/N: pin i's depth lost to the tool's tilt per newton of pin j's force."""
+    g = pins.wrench_map
+    return g[3:].T @ compliance[3:] @ g
+
+
+def field_stiffness(pins: PinField, compliance: np.ndarray, depth_m: float) -> tuple[float, float]:
+    """The component's total force (N) and its local slope dF/dd (N/m) at the tool's true depth ``depth_m`` (m),
+    the tilt by ``compliance`` included: differentiating F = f(d 1 - A F), (I + diag(f'(d_i)) A) dF = f'(d_i) dd,
+    so dF/dd = 1^T (I + diag(f') A)^-1 f', each law's slope f' in closed form (``force_and_slope``) at the solved
+    pin depths. One pin on the tool axis (A = 0): its law's own slope f'(d)."""
+    sol = solve_field(pins, compliance, np.array([float(depth_m)]))
+    slopes = pins.forces_and_slopes(sol.pin_depths_m)[1][0]
+    jac = np.eye(slopes.size) + slopes[:, None] * series_matrix(pins, compliance)
+    return float(sol.pin_forces_n.sum()), float(np.linalg.solve(jac, slopes).sum())
+
+
+def operating_depth_m(pins: PinField, compliance: np.ndarray, interference_m: float, force_limit_n: float,
+                      samples: int = 2001) -> float:
+    """Where a force-limited insertion holds the tool (m): the first true depth at which the component's total force
+    (tilt included) reaches ``force_limit_n`` (N), linear between ``samples`` depths from 0 to ``interference_m``
+    (the commanded depth, m); the commanded depth if the force stays below the limit there."""
+    depth = np.linspace(0.0, float(interference_m), samples)
+    total = solve_field(pins, compliance, depth).pin_forces_n.sum(axis=1)
+    over = np.flatnonzero(total >= force_limit_n)
+    if not over.size:
+        return float(interference_m)
+    k = int(over[0])
+    if k == 0:
+        return 0.0
+    return float(np.interp(force_limit_n, total[k - 1:k + 1], depth[k - 1:k + 1]))
+
+
 def solve_field(pins: PinField, compliance: np.ndarray, depth_m: np.ndarray) -> FieldSolution:
     """F = f(d 1 - A F) at every tool depth (module docstring): Newton from F = 0 (whose first step is the untilted
     forces f(d 1) through the linearised tilt, (I + diag(f'(d 1)) A)^-1 f(d 1)), each depth iterated until its pins'
     residual is at most ``NEWTON_TOLERANCE_N`` (N) and then left alone."""
     d = np.asarray(depth_m, dtype=float)
     g = pins.wrench_map
-    a = g[3:].T @ compliance[3:] @ g  # (n, n), m/N
+    a = series_matrix(pins, compliance)  # (n, n), m/N
     n = g.shape[1]
     eye = np.eye(n)
     forces = np.zeros((d.size, n))
