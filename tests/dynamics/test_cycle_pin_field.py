@@ -24,6 +24,8 @@ from pressfit.description.cases import load_case
 from pressfit.dynamics.contact import contact_force_n
 from pressfit.dynamics.cycle import plan_cycle, simulate_cycle
 from pressfit.dynamics.insertion import simulate_insertion
+from pressfit.dynamics.scenario import apparent_mass_kg, step_stability
+from pressfit.errors import ModelFileError
 from pressfit.mechanics.compliance import vjm_plate_compliance
 from pressfit.output.curve import monitor_curve_columns
 from pressfit.output.cycle import write_cycle
@@ -226,3 +228,29 @@ def test_a_pin_of_the_board_component_with_another_laws_key_is_refused_naming_it
     assert res.exit_code == 2, res.output
     (line,) = res.output.strip().splitlines()
     assert str(path) in line and "cycle.contact" in line and "pins[0].zone_width_m" in line and "compliant_pin" in line
+
+
+def test_the_explicit_step_check_sums_the_component_pins_stiffness(tmp_path):
+    """The position loop's step check (``check_steps``: (k dt^2 / m + 2 c dt / m) / 4 at most 0.5, semi-implicit
+    Euler stable below 1) takes the contact's steepest slope, for a pin field the pins' stiffnesses summed (before,
+    one pin's ``stiffness_n_per_m``, so a two-pin board at twice the stiffness passed unchecked). With K the total
+    contact stiffness at index 0.5 (solved here from the index, m the plate's lightest apparent mass at the
+    waypoints), two pins of K / 2 x (1 + 1e-3) are refused naming [cycle] time_step_s, x (1 - 1e-3) plan."""
+    case = load_case(board_case(tmp_path / "probe.toml"))
+    plan = plan_cycle(case)
+    cycle = case.cycle
+    points = np.array([cycle.start_m, *plan.scenario.trajectory.waypoints_m[1::4], cycle.end_m])
+    mass = min(apparent_mass_kg(plan.scenario.rigid, p) for p in points)
+    dt, gains = cycle.time_step_s, cycle.controller
+    total = (2.0 - 2.0 * gains.kd_n_s_per_m * dt / mass) * mass / dt**2 - gains.kp_n_per_m
+    assert step_stability(mass, gains.kp_n_per_m + total, gains.kd_n_s_per_m, dt) == pytest.approx(0.5, rel=1e-12)
+    for factor, refused in ((1 + 1e-3, True), (1 - 1e-3, False)):
+        path = board_case(tmp_path / f"k{factor}.toml")
+        data = tomllib.loads(path.read_text())
+        data["cycle"]["contact"]["stiffness_n_per_m"] = 0.5 * total * factor
+        path.write_text(tomli_w.dumps(data))
+        if refused:
+            with pytest.raises(ModelFileError, match=r"\[cycle\] time_step_s"):
+                plan_cycle(load_case(path))
+        else:
+            plan_cycle(load_case(path))
