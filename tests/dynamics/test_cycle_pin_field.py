@@ -20,6 +20,7 @@ import tomli_w
 from click.testing import CliRunner
 
 from pressfit.cli import main
+from pressfit.cli.dynamics import _echo_components
 from pressfit.description.cases import load_case
 from pressfit.dynamics.contact import contact_force_n
 from pressfit.dynamics.cycle import plan_cycle, simulate_cycle
@@ -158,11 +159,17 @@ def test_a_mirrored_board_gives_mirrored_figures(field_runs):
 
 
 @pytest.mark.slow
-def test_each_board_position_writes_its_pins_force_columns(field_runs, tmp_path):
+def test_each_board_position_writes_its_pins_force_columns(field_runs, tmp_path, capsys):
     """curves/pin_NN.csv per board position with simulate's curve.csv columns for a two-pin component: the pins'
     forces sum to the total (to 1e-9 N) and at the centred position are equal; cycle.json's pins carry the
-    component's figures."""
+    component's figures, and ``pressfit cycle`` prints them per board position (tilt in mrad, spread in um)."""
     _, board, _, _ = field_runs
+    _echo_components(board.summary)
+    lines = capsys.readouterr().out.splitlines()
+    off = board.summary["pins"][1]
+    assert lines[0].split()[:3] == ["pin", "tilt", "[mrad]"] and len(lines) == 3
+    assert lines[2].split()[:4] == ["2", f"{off['tool_tilt_max_rad'] * 1e3:.4f}",
+                                    f"{off['max_pin_depth_spread_m'] * 1e6:.3f}", "no"]
     write_cycle(board, tmp_path)
     for k in (1, 2):
         csv = tmp_path / "curves" / f"pin_{k:02d}.csv"
