@@ -286,6 +286,18 @@ def control_cmd(case_path: Path, plant_model: str | None, out_dir: Path | None, 
     echo_written(paths)
 
 
+def _echo_components(s: dict) -> None:
+    """With a component of several pins (``[[cycle.contact.pins]]``): per board position the tool's largest tilt,
+    the pins' largest depth spread, whether every pin seated, and each component pin's peak force."""
+    if not s["pins"] or len(s["pins"][0]["component_pins"]) < 2:
+        return
+    click.echo(" pin  tilt [mrad]  spread [um]  seated  component pins' peak force [N]")
+    for p in s["pins"]:
+        peaks = " ".join(f"{c['peak_force_n']:.2f}" for c in p["component_pins"])
+        click.echo(f"{p['index']:>4}  {p['tool_tilt_max_rad'] * 1e3:>11.4f}  {p['max_pin_depth_spread_m'] * 1e6:>11.3f}"
+                   f"  {'yes' if p['all_pins_seated'] else 'no':>6}  {peaks}")
+
+
 @click.command("cycle")
 @click.argument("case_path", type=click.Path(path_type=Path))
 @click.option("--model", "plant_model", type=click.Choice(["flexible", "rigid"]), default=None,
@@ -330,6 +342,7 @@ def cycle_cmd(case_path: Path, plant_model: str | None, out_dir: Path | None, ov
                        + "  " + ("{:>12}".format("none" if p["settling_time_s"] is None else
                                                  f"{p['settling_time_s']:.3f}"))
                        + f"  {'pass' if p['passed'] else 'FAIL'}")
+        _echo_components(s)
         echo_written(paths)
     if s["pins_passed"] < s["pin_count"]:
         sys.exit(1)

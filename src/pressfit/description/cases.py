@@ -597,18 +597,15 @@ def read_force_table(path: str | Path) -> tuple[np.ndarray, np.ndarray]:
     return d, f
 
 
-class Contact(ContactLaw):
-    """Tool-board contact of ``[simulation]``: the law (:class:`ContactLaw`) on the board's top face, the plane
-    y = ``board_height_m``, with the pin to insert on it at (x, z) = ``pin_position_m`` (the tool axis). ``pins``:
-    a component of several pins pressed at once (``[[simulation.contact.pins]]``, each at its ``offset_m`` from
-    the tool axis, with overrides of the law's keys); without it one pin on the axis."""
+class PinFieldLaw(ContactLaw):
+    """A contact law with its component's pin field: ``pins``, a component of several pins pressed at once (each at
+    its ``offset_m`` = [dx, dz] (m) from the tool axis, with overrides of the law's keys); without it one pin on
+    the axis. ``[cycle.contact]`` (every board position presses the component) and the base of :class:`Contact`."""
 
-    board_height_m: Positive
-    pin_position_m: Annotated[list[Finite], Field(min_length=2, max_length=2)]
     pins: Annotated[list[ContactPin], Field(max_length=MAX_CONTACT_PINS)] = []
 
     @model_validator(mode="after")
-    def _pin_keys(self) -> Contact:
+    def _pin_keys(self) -> PinFieldLaw:
         base = self.law_keys()
         for k, pin in enumerate(self.pins):
             own = {key: getattr(pin, key) for key in LAW_KEY_NAMES if key in type(pin).model_fields}
@@ -631,6 +628,16 @@ class Contact(ContactLaw):
             out.append(ResolvedContactPin(offset_m=(float(pin.offset_m[0]), float(pin.offset_m[1])), law=self.law,
                                           keys={**base, **own}, source=f"[simulation.contact] pins[{k}]"))
         return out
+
+
+class Contact(PinFieldLaw):
+    """Tool-board contact of ``[simulation]``: the law (:class:`ContactLaw`) on the board's top face, the plane
+    y = ``board_height_m``, with the pin to insert on it at (x, z) = ``pin_position_m`` (the tool axis). ``pins``:
+    a component of several pins pressed at once (``[[simulation.contact.pins]]``, :class:`PinFieldLaw`); without
+    it one pin on the axis."""
+
+    board_height_m: Positive
+    pin_position_m: Annotated[list[Finite], Field(min_length=2, max_length=2)]
 
 
 class Controller(StrictModel):
@@ -806,12 +813,15 @@ class CycleLimits(StrictModel):
     """Limits ``pressfit check`` asserts on the simulated board (all optional; SI), one report line each: the
     cycle time (s), every pin's overshoot over its insertion limit (N) and lateral alignment error at first
     contact (m; a pin never touched fails), the worst pin named, the worst drive's RMS and peak force over the
-    cycle (N), and the energy per cycle: the drives' positive (motoring) mechanical energy summed over the
-    drives, regeneration not credited (J)."""
+    cycle (N), the energy per cycle: the drives' positive (motoring) mechanical energy summed over the
+    drives, regeneration not credited (J), and ``max_pin_depth_spread_m``: at the worst board position, the
+    largest spread of the depths of the component's pins (``[[cycle.contact.pins]]``, tilted by the machine's
+    compliance there) over its stroke (m; the uneven seating of a multi-pin component)."""
 
     max_cycle_time_s: NonNegative | None = None
     max_overshoot_n: NonNegative | None = None
     max_alignment_error_m: NonNegative | None = None
+    max_pin_depth_spread_m: NonNegative | None = None
     max_rms_drive_force_n: NonNegative | None = None
     max_peak_drive_force_n: NonNegative | None = None
     max_energy_per_cycle_j: NonNegative | None = None
@@ -869,7 +879,8 @@ class Cycle(StrictModel):
     pin, ..., and after the last to ``end_m``, where it holds ``settle_s``; each move is the minimum-time S-curve
     under ``motion`` (lift and traverse) or ``descent`` (descent and retract; default ``motion``), scaled down
     where the drives' speed or force limit would bind. ``time_step_s``, ``baumgarte_rad_per_s``, ``model``,
-    ``contact`` (the law) and ``controller`` mean what they mean in ``[simulation]``. ``limits``: what
+    ``contact`` (the law, and with ``[[cycle.contact.pins]]`` a component of several pins pressed at every board
+    position: :class:`PinFieldLaw`) and ``controller`` mean what they mean in ``[simulation]``. ``limits``: what
     ``pressfit check`` asserts on the board (:class:`CycleLimits`); ``study``: the grid of ``pressfit study
     cycle`` (:class:`CycleStudy`)."""
 
@@ -889,7 +900,7 @@ class Cycle(StrictModel):
     time_step_s: TimeStep = 5e-4
     baumgarte_rad_per_s: BaumgarteRate = 200.0
     model: Literal["flexible", "rigid"] = "flexible"
-    contact: ContactLaw = ContactLaw()
+    contact: PinFieldLaw = PinFieldLaw()
     controller: Controller = Controller()
     limits: CycleLimits = CycleLimits()
     study: CycleStudy | None = None

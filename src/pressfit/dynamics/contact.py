@@ -64,6 +64,23 @@ def contact_parameters(contact: Contact, machine: Machine | None = None) -> np.n
     return np.concatenate([values, head, table.depth_m, table.force_n])
 
 
+def contact_stiffness_bound_n_per_m(contact: Contact) -> float:
+    """The steepest slope of the contact's force against the tool depth (N/m), for the explicit step's stability
+    check (:func:`pressfit.dynamics.scenario.check_steps`). One pin on the tool axis with the elastic or press-fit
+    law and no shoulder: k + k_fit (linear fit) or k + F_fit / d_fit (the saturating fit's slope at 0). Any other
+    law, a shoulder or a pin field: the largest slope of the component's total force over its table
+    (:func:`pressfit.mechanics.press_curve.force_table`, the pins at the tool's depth: every pin's slope summed, the
+    seated shoulders' included) and past its end."""
+    pins = contact.resolved_pins()
+    law = build_law(pins[0].law, pins[0].keys)
+    if len(pins) == 1 and pins[0].offset_m == (0.0, 0.0) and isinstance(law, ElasticLaw):
+        fit = {"none": 0.0, "linear": law.fit_stiffness_n_per_m}.get(law.fit, law.fit_force_n / law.fit_depth_m)
+        return float(law.stiffness_n_per_m + fit)
+    table = force_table(None, contact)
+    slopes = np.diff(table.force_n) / np.diff(table.depth_m)
+    return float(max(np.max(slopes, initial=0.0), table.slope_n_per_m))
+
+
 def contact_force_n(contact: Contact | np.ndarray, depth_m: float, depth_rate_m_per_s: float = 0.0) -> float:
     """The contact law F(d, d_dot) (N, >= 0) at interference ``depth_m`` (m) and its rate (m/s); ``contact``: the
     case's contact or its :func:`contact_parameters` (computed once: a tabulated law's table costs a solve)."""

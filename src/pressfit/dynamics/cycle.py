@@ -46,7 +46,7 @@ from pressfit.description.cases import Case, Contact, Cycle, MotionLimits, Resol
 from pressfit.description.machine import Machine
 from pressfit.dynamics import drives as drive_kinds
 from pressfit.dynamics.actuators import distribution
-from pressfit.dynamics.contact import contact_force_n
+from pressfit.dynamics.contact import contact_force_n, contact_parameters
 from pressfit.dynamics.control import Trajectory, gravity_feedforward_n
 from pressfit.dynamics.multibody import rigid_leg_model
 from pressfit.dynamics.press_monitor import SUMMARY_KEYS, MonitorCurve, monitor_curve
@@ -194,12 +194,32 @@ def _scaled(case: Case, rigid: Any, machine: Machine, drives: drive_kinds.Drive,
 
 
 def cycle_simulation(cycle: Cycle, first: ResolvedPin, model: str) -> Simulation:
-    """The cycle's run settings as the insertion's :class:`Simulation` (the keys mean the same in both)."""
+    """The cycle's run settings as the insertion's :class:`Simulation` (the keys mean the same in both; the
+    contact's pin pose the first pin's, its pin field ``[[cycle.contact.pins]]``'s)."""
     return Simulation(start_m=cycle.start_m, end_m=cycle.end_m, settle_s=cycle.settle_s,
                       time_step_s=cycle.time_step_s, baumgarte_rad_per_s=cycle.baumgarte_rad_per_s, model=model,
                       contact=Contact(board_height_m=cycle.board_height_m, pin_position_m=[first.x_m, first.z_m],
-                                      **cycle.contact.model_dump(exclude_unset=True)),
+                                      pins=list(cycle.contact.pins),
+                                      **cycle.contact.model_dump(exclude_unset=True, exclude={"pins"})),
                       controller=cycle.controller)
+
+
+def pin_contact(contact: Contact, pin: ResolvedPin) -> Contact:
+    """The board's contact at one board position: the tool axis (``pin_position_m``) on the pin's (x, z), m."""
+    return contact.model_copy(update={"pin_position_m": [pin.x_m, pin.z_m]})
+
+
+def segment_contacts(contact: Contact, machine: Machine, pins: tuple[ResolvedPin, ...],
+                     segments: tuple[Segment, ...]) -> tuple[np.ndarray, ...]:
+    """Per segment, the contact as the kernels take it (:func:`pressfit.dynamics.contact.contact_parameters`) at
+    the board position of the segment's pin, when the component has a pin field (``[[cycle.contact.pins]]``): its
+    total force against the tool depth carries the tilt by the machine's compliance at that position, so each
+    board position has its own table. Empty without a pin field (one pin on the tool axis: its law does not
+    depend on the pose)."""
+    if not contact.pins:
+        return ()
+    tables = [contact_parameters(pin_contact(contact, pin), machine) for pin in pins]
+    return tuple(tables[s.pin - 1] for s in segments)
 
 
 def _check_poses(case: Case, machine: Machine, pins: tuple[ResolvedPin, ...]) -> None:
@@ -294,7 +314,8 @@ def plan_cycle(case: Case, machine: Machine | None = None, model: str | None = N
     warnings = (run_time_warning(steps, dt, trajectory.duration_s),) if steps > WARN_STEPS else ()
     scenario = ScenarioPlan(trajectory=trajectory, steps=steps, path_m=path, warnings=warnings, rigid=rigid,
                             simulation=sim, force_limits_n=limits,
-                            depth_limit_m=MAX_DEPTH_FACTOR * max(pin.interference_m for pin in pins), table="cycle")
+                            depth_limit_m=MAX_DEPTH_FACTOR * max(pin.interference_m for pin in pins), table="cycle",
+                            contact_params=segment_contacts(sim.contact, machine, pins, tuple(segments)))
     return CyclePlan(scenario=scenario, pins=pins, segments=tuple(segments),
                      run_case=case.model_copy(update={"simulation": sim}))
 
@@ -369,7 +390,7 @@ def cycle_monitor_curves(series: np.ndarray, plan: CyclePlan, machine: Machine) 
         mine = [s.index for s in plan.segments if s.pin == pin.index and s.phase in PIN_PHASES]
         rows = np.flatnonzero(np.isin(segment, mine))
         dwell = np.flatnonzero(segment[rows] == mine[1])
-        curves.append(monitor_curve(machine, contact.model_copy(update={"pin_position_m": [pin.x_m, pin.z_m]}),
+        curves.append(monitor_curve(machine, pin_contact(contact, pin),
                                     *(series[rows, col[c]] for c in ("time_s", "depth_m", "kinematic_y_m",
                                                                      "contact_force_n")),
                                     int(dwell[-1]), where=f"{plan.run_case.path}: {_pin_label(pin)}"))
@@ -411,8 +432,9 @@ def summarise_cycle(series: np.ndarray, plan: CyclePlan, drives: drive_kinds.Dri
     for pin in plan.pins:
         mine = [s.index for s in plan.segments if s.pin == pin.index and s.phase in PIN_PHASES]
         rows = np.flatnonzero(np.isin(segment, mine))
+        law = plan.scenario.contact_params[mine[0]] if plan.scenario.contact_params else contact
         fig = pin_figures(t[rows], force[rows], tool[rows], np.flatnonzero(segment[rows] == mine[1]),
-                          np.array([pin.x_m, pin.z_m]), min(contact_force_n(contact, pin.interference_m),
+                          np.array([pin.x_m, pin.z_m]), min(contact_force_n(law, pin.interference_m),
                                                             pin.force_limit_n), pin.force_limit_n)
         checks = _checks(pin, fig.overshoot_n, fig.lateral_m)
         if not fig.completed:

@@ -70,7 +70,10 @@ from pressfit.dynamics.machine.registry import model_kind
 from pressfit.dynamics.modes import closure_jacobian, elastic_stiffness, mass_matrix, natural_modes, reduced_system
 from pressfit.dynamics.multibody import inverse_apparent_mass, rigid_leg_model
 from pressfit.errors import PressfitError
+from pressfit.mechanics.condensed import condensed_plate_compliance
+from pressfit.mechanics.contact_laws.elastic import ElasticLaw
 from pressfit.mechanics.preload import ActuatorPreload, self_stress_forces_n
+from pressfit.mechanics.press_curve import PinField, field_stiffness, operating_depth_m, pin_pose_m
 
 WARNING_RATIO = 0.2  # a loop pole within 20% of a structural mode's frequency is reported ...
 DRIVE_SHARE_THRESHOLD = 0.1  # ... when the drives hold at least this share of the mode's strain energy
@@ -101,6 +104,8 @@ class Plant:
     vertical_mass_kg: float  # 1 / (e_y^T M_h^-1 e_y) of the rigid model: the apparent vertical mass
     drive_kind: str = "force"
     tensions_n: np.ndarray | None = None  # (legs,) the drives' operating tensions, N
+    contact_stiffness_n_per_m: float = 0.0  # k_c: the contact law's local slope (0 out of contact), N/m
+    contact_depth_m: float | None = None  # the tool depth it is taken at (None: a law of constant slope), m
 
     def system(self) -> ct.StateSpace:
         """python-control state space, inputs n_cmd1..n, f_contact; outputs l1..n, tool_x..z, f_contact."""
@@ -184,12 +189,33 @@ def static_tensions_n(machine: Machine, pose_m: np.ndarray, preload_n: float | n
     return -pinv @ gravity + self_stress_forces_n(machine, pose, preload_n)
 
 
+def contact_stiffness_n_per_m(machine: Machine, pose_m: np.ndarray, contact: Contact,
+                              depth_m: float | None = None) -> float:
+    """The contact's linearised stiffness k_c (N/m) at the tool depth ``depth_m`` (m): the local slope of the
+    component's total force against the depth, its pins' laws' closed-form slopes with the tilt by the machine's
+    compliance at ``pose_m`` (:func:`pressfit.mechanics.press_curve.field_stiffness`; the elastic law's k exactly).
+    Without a depth only a law of constant slope (one pin on the axis, ``elastic`` or a linear ``press_fit``, no
+    shoulder) is linearised; any other is refused (PressfitError)."""
+    pins = PinField.from_contact(contact)
+    constant = (len(pins.laws) == 1 and not pins.offsets_m.any() and isinstance(pins.laws[0], ElasticLaw)
+                and pins.laws[0].fit != "saturating")
+    if depth_m is None:
+        if not constant:
+            raise PressfitError(f"the contact law {contact.law!r} (a shoulder, a pin field or a nonlinear law) has "
+                                "no single stiffness: linearise it at an operating depth (contact_depth_m)")
+        depth_m = 1.0
+    return field_stiffness(pins, condensed_plate_compliance(machine, np.asarray(pose_m, dtype=float)), depth_m)[1]
+
+
 def linear_plant(machine: Machine, pose_m: np.ndarray, contact: Contact | None = None,
-                 model: Model = "flexible", tensions_n: np.ndarray | None = None) -> Plant:
-    """:class:`Plant` at the reachable pose ``pose_m`` (m); ``contact``: the contact spring engaged at the tool;
+                 model: Model = "flexible", tensions_n: np.ndarray | None = None,
+                 contact_depth_m: float | None = None) -> Plant:
+    """:class:`Plant` at the reachable pose ``pose_m`` (m); ``contact``: the contact spring engaged at the tool,
+    its stiffness the law's local slope at the tool depth ``contact_depth_m`` (m; :func:`contact_stiffness_n_per_m`);
     ``tensions_n`` (n,), N: the drives' operating point (default :func:`static_tensions_n` without preload)."""
     elastic = model_kind(model).elastic
     pose = kinematics.require_reachable(machine, np.asarray(pose_m, dtype=float))
+    k_c = 0.0 if contact is None else contact_stiffness_n_per_m(machine, pose, contact, contact_depth_m)
     legs = kinematics.inverse_kinematics(machine, pose)
     pinv, _ = distribution(legs.unit_vectors)
     tensions = static_tensions_n(machine, pose) if tensions_n is None else np.asarray(tensions_n, dtype=float)
@@ -223,12 +249,12 @@ def linear_plant(machine: Machine, pose_m: np.ndarray, contact: Contact | None =
         mass = rs.mass_kg
     if contact is not None:
         py = plate[1]
-        stiffness = stiffness + contact.stiffness_n_per_m * np.outer(py, py)
+        stiffness = stiffness + k_c * np.outer(py, py)
         damping = damping + contact.damping_n_s_per_m * np.outer(py, py)
     mass, damping, stiffness, drive_on, s, plate = _with_series(mass, damping, stiffness, s, plate, ports)
     c_contact_z = np.zeros((2, mass.shape[0]))
     if contact is not None:
-        c_contact_z = np.vstack([-contact.stiffness_n_per_m * plate[1], -contact.damping_n_s_per_m * plate[1]])
+        c_contact_z = np.vstack([-k_c * plate[1], -contact.damping_n_s_per_m * plate[1]])
     a, b, bf = _assemble(mass, damping, stiffness, drive_on, plate[1], ports)
     r = mass.shape[0]
     n = a.shape[0]
@@ -241,7 +267,8 @@ def linear_plant(machine: Machine, pose_m: np.ndarray, contact: Contact | None =
     c_contact = (pad(c_contact_z[:1], 0) + pad(c_contact_z[1:], r))[0]
     return Plant(model=model, pose_m=pose, in_contact=contact is not None, a=a, b_command=b, b_contact=bf,
                  c_lengths=pad(s, 0), c_rates=pad(s, r), c_tool=pad(plate, 0), c_contact=c_contact, pinv=pinv,
-                 vertical_mass_kg=float(m_y), drive_kind=getattr(drive, "kind", "force"), tensions_n=tensions)
+                 vertical_mass_kg=float(m_y), drive_kind=getattr(drive, "kind", "force"), tensions_n=tensions,
+                 contact_stiffness_n_per_m=k_c, contact_depth_m=contact_depth_m)
 
 
 @dataclass(frozen=True, kw_only=True)
@@ -331,6 +358,8 @@ class PoseDesign:
     bode_frequency_hz: np.ndarray
     bode_open_loop: np.ndarray  # (2, f) complex: vertical and lateral axis loops
     bode_reference: np.ndarray  # (2, f) complex: r_y -> tool_y, r_x -> tool_x
+    contact_stiffness_n_per_m: float = 0.0  # the linearised contact's stiffness (0 out of contact), N/m
+    contact_depth_m: float | None = None  # the tool depth it is taken at, m
 
     @property
     def pole_frequencies_hz(self) -> np.ndarray:
@@ -346,6 +375,7 @@ class PoseDesign:
         order = np.argsort(self.pole_frequencies_hz[loop])
         return {"name": self.name, "pose_m": self.pose_m, "in_contact": self.in_contact, "model": self.model,
                 "stable": self.stable, "vertical_mass_kg": self.vertical_mass_kg,
+                "contact_stiffness_n_per_m": self.contact_stiffness_n_per_m, "contact_depth_m": self.contact_depth_m,
                 "bandwidth_vertical_hz": _finite(self.bandwidth_vertical_hz),
                 "bandwidth_lateral_hz": _finite(self.bandwidth_lateral_hz),
                 "margins": [{k: _finite(v) if isinstance(v, float) else v for k, v in m.__dict__.items()}
@@ -410,9 +440,10 @@ def proximity_warnings(poles: np.ndarray, loop_poles: np.ndarray, modes: tuple[S
 
 def design_at(machine: Machine, gains: Controller, pose_m: np.ndarray, name: str, contact: Contact | None,
               model: Model = "flexible", frequencies_hz: np.ndarray | None = None,
-              tensions_n: np.ndarray | None = None) -> PoseDesign:
-    """The loop at one pose (module doc); ``tensions_n``: the drives' operating point (:func:`linear_plant`)."""
-    plant = linear_plant(machine, pose_m, contact, model, tensions_n)
+              tensions_n: np.ndarray | None = None, contact_depth_m: float | None = None) -> PoseDesign:
+    """The loop at one pose (module doc); ``tensions_n``: the drives' operating point, ``contact_depth_m`` the
+    contact's (:func:`linear_plant`)."""
+    plant = linear_plant(machine, pose_m, contact, model, tensions_n, contact_depth_m)
     loop = close_loop(plant, gains)
     poles = np.linalg.eigvals(loop.a)
     open_poles = np.concatenate([np.linalg.eigvals(plant.a), np.zeros(3)])
@@ -436,7 +467,8 @@ def design_at(machine: Machine, gains: Controller, pose_m: np.ndarray, name: str
                       poles=poles, loop_poles=moved, bandwidth_vertical_hz=_bandwidth_hz(ref_y) if stable else math.nan,
                       bandwidth_lateral_hz=_bandwidth_hz(ref_x) if stable else math.nan, stable=stable, modes=modes,
                       warnings=tuple(warnings), vertical_mass_kg=plant.vertical_mass_kg, bode_frequency_hz=f,
-                      bode_open_loop=bode_ol, bode_reference=bode_ref)
+                      bode_open_loop=bode_ol, bode_reference=bode_ref,
+                      contact_stiffness_n_per_m=plant.contact_stiffness_n_per_m, contact_depth_m=plant.contact_depth_m)
 
 
 @dataclass(frozen=True, kw_only=True)
@@ -455,7 +487,10 @@ class ControlDesign:
 
 def control_design(case: Case, model: Model | None = None) -> ControlDesign:
     """The case's loop (``[simulation]``, ``[simulation.controller]``) linearised at the pin (contact engaged)
-    and at the waypoints start, approach (above the pin) and end, on ``model`` (default: ``[simulation] model``)."""
+    and at the waypoints start, approach (above the pin) and end, on ``model`` (default: ``[simulation] model``).
+    The contact is linearised where the insertion holds the tool
+    (:func:`pressfit.mechanics.press_curve.operating_depth_m`: the depth where the component's force reaches the
+    force limit, else the commanded interference)."""
     sim = case.simulation
     if sim is None:
         raise PressfitError(f"{case.path}: no [simulation] table: pressfit control needs the insertion scenario")
@@ -468,8 +503,10 @@ def control_design(case: Case, model: Model | None = None) -> ControlDesign:
     poses = [("pin", pin_pose, c), ("start", np.array(sim.start_m), None), ("approach", approach, None),
              ("end", np.array(sim.end_m), None)]
     preload = ActuatorPreload.from_case(case.preload).a4
-    designs = [design_at(machine, sim.controller, p, n, con, model, tensions_n=static_tensions_n(machine, p, preload))
-               for n, p, con in poses]
+    depth = operating_depth_m(PinField.from_contact(c), condensed_plate_compliance(machine, pin_pose_m(c)),
+                              sim.interference_m, sim.controller.force_limit_n)
+    designs = [design_at(machine, sim.controller, p, n, con, model, tensions_n=static_tensions_n(machine, p, preload),
+                         contact_depth_m=depth if con is not None else None) for n, p, con in poses]
     if sim.clearance:  # a dead zone has no linearisation at its edge: say what the loop leaves out
         designs[0] = dataclasses.replace(designs[0], warnings=(
             "linearised without the cardan plays of [simulation] clearance = true (a dead zone has no linearisation "

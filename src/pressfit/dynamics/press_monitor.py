@@ -27,7 +27,11 @@ The summary (:func:`pressfit.mechanics.press_curve.stroke_figures`, the predicte
 rows, the end of the stroke the end of the dwell): ``peak_force_n`` (the insertion's peak, before the first
 shoulder touches the board), ``plateau_force_n`` (the laws' plateaus summed: solid and compliant pins; None for
 the others), ``seated``, ``seating_depth_m``, ``sensed_minus_true_depth_at_peak_m``,
-``machine_compliance_along_press_m_per_n`` (C_yy at the pin pose), ``pin_count``, ``curve_start_time_s`` (the run's
+``machine_compliance_along_press_m_per_n`` (C_yy at the pin pose), the component's figures
+(:func:`pressfit.mechanics.press_curve.component_figures`, as ``pressfit curve``'s: ``tool_tilt_max_rad``,
+``max_pin_depth_spread_m``, ``all_pins_seated`` and per pin ``component_pins``: its peak force, its depth at the
+end of the dwell and whether it is seated; the tilt and the pins' depths those of the quasi-static solve at the
+simulated true depth), ``pin_count``, ``curve_start_time_s`` (the run's
 time of the first row) and ``series_residual_n`` (the pin-field solve's worst residual, refused over
 ``RESIDUAL_LIMIT_N``).
 """
@@ -43,11 +47,19 @@ from pressfit.description.cases import Contact
 from pressfit.description.machine import Machine
 from pressfit.errors import ResidualError
 from pressfit.mechanics.condensed import condensed_plate_compliance
-from pressfit.mechanics.press_curve import RESIDUAL_LIMIT_N, PinField, pin_pose_m, solve_field, stroke_figures
+from pressfit.mechanics.press_curve import (
+    RESIDUAL_LIMIT_N,
+    PinField,
+    component_figures,
+    pin_pose_m,
+    solve_field,
+    stroke_figures,
+)
 
 MONITOR_PHASES = ("descent", "dwell", "retract")  # a pin's press stroke: the rows its monitor records
 SUMMARY_KEYS = ("peak_force_n", "plateau_force_n", "seated", "seating_depth_m", "sensed_minus_true_depth_at_peak_m",
-                "machine_compliance_along_press_m_per_n")
+                "machine_compliance_along_press_m_per_n", "tool_tilt_max_rad", "max_pin_depth_spread_m",
+                "all_pins_seated", "component_pins")
 
 
 @dataclass(frozen=True, kw_only=True)
@@ -99,8 +111,10 @@ def monitor_curve(machine: Machine, contact: Contact, time_s: np.ndarray, depth_
     total = sol.pin_forces_n.sum(axis=1, keepdims=True)
     share = np.divide(sol.pin_forces_n, total, out=np.full_like(sol.pin_forces_n, 1.0 / n), where=total > 0.0)
     pin_forces = force[:, None] * share
-    fig = stroke_figures(pins, depth, force, pin_forces, sol.pin_depths_m, sensed, max(end_row - start, 0))
-    summary = {"peak_force_n": fig.peak_force_n, "plateau_force_n": fig.plateau_force_n, "seated": fig.seated,
+    end = max(end_row - start, 0)
+    fig = stroke_figures(pins, depth, force, pin_forces, sol.pin_depths_m, sensed, end)
+    summary = {**component_figures(pins, sol, fig, end),
+               "peak_force_n": fig.peak_force_n, "plateau_force_n": fig.plateau_force_n, "seated": fig.seated,
                "seating_depth_m": fig.seating_depth_m,
                "sensed_minus_true_depth_at_peak_m": fig.sensed_minus_true_depth_at_peak_m,
                "machine_compliance_along_press_m_per_n": float(compliance[1, 1]), "pin_count": n,

@@ -29,6 +29,7 @@ from pressfit import kinematics
 from pressfit.description.cases import Case, Simulation
 from pressfit.description.machine import ForceSource, Machine
 from pressfit.dynamics import drives as drive_kinds
+from pressfit.dynamics.contact import contact_stiffness_bound_n_per_m
 from pressfit.dynamics.control import Trajectory
 from pressfit.dynamics.drives.steps import hydraulic_step_refusal
 from pressfit.dynamics.machine.flexible import MAX_STEP_FRACTION, first_mode_hz
@@ -194,7 +195,8 @@ def require_reachable_pose(case: Case, machine: Machine, pose: np.ndarray, key: 
 
 def check_steps(case: Case, sim: Simulation, rigid: RigidLegModel, poses_m: np.ndarray,
                  table: str = "simulation") -> None:
-    """The explicit step against the position loop (PD gains plus the contact's stiffness and damping on the
+    """The explicit step against the position loop (PD gains plus the contact's steepest slope,
+    :func:`pressfit.dynamics.contact.contact_stiffness_bound_n_per_m`, and its damping on the
     plate's lightest apparent mass at the poses ``poses_m`` (n, 3), m, the waypoints) and the Baumgarte corrector
     (m = 1, k = omega_b^2, c = 2 omega_b): refused beyond ``STABILITY_FRACTION`` of the stability limit
     (:func:`step_stability`), the margin left for the drives' lag and the sampled estimator the index does not see;
@@ -207,14 +209,14 @@ def check_steps(case: Case, sim: Simulation, rigid: RigidLegModel, poses_m: np.n
                      f"corrector is stable below 2 sqrt(2) - 2 = 0.83), got {omega:g} rad/s x time_step_s "
                      f"{dt:g} s = {omega * dt:.3g}")
     mass = min(apparent_mass_kg(rigid, p) for p in poses_m)
-    fit = (c.fit_stiffness_n_per_m if c.fit == "linear" else c.fit_force_n / c.fit_depth_m) if c.law == "press_fit" \
-        else 0.0
-    stiffness, damping = g.kp_n_per_m + c.stiffness_n_per_m + fit, g.kd_n_s_per_m + c.damping_n_s_per_m
+    stiffness = g.kp_n_per_m + contact_stiffness_bound_n_per_m(c)
+    damping = g.kd_n_s_per_m + c.damping_n_s_per_m
     index = step_stability(mass, stiffness, damping, dt)
     if index > STABILITY_FRACTION:
         raise refuse(case, f"[{table}] time_step_s", f"a step the position loop is stable with: (k dt^2 / m + "
                      f"2 c dt / m) / 4 = {index:.3g} > {STABILITY_FRACTION:g} (semi-implicit Euler is stable below 1) "
-                     f"with k = kp_n_per_m + the contact stiffness = {stiffness:.4g} N/m, c = kd_n_s_per_m + the "
+                     f"with k = kp_n_per_m + the contact's steepest slope (its pins summed) = {stiffness:.4g} N/m, "
+                     f"c = kd_n_s_per_m + the "
                      f"contact damping = {damping:.4g} N s/m, m = {mass:.4g} kg the plate's lightest apparent mass, "
                      f"dt = {dt:g} s: reduce time_step_s or the [{table}.controller] gains")
 
@@ -224,16 +226,21 @@ def run_plan(case: Case, machine: Machine, plan: ScenarioPlan, drives: drive_kin
     """Run a validated plan on its model (``plan.simulation.model``, :func:`model_kind`): the series (one row per
     step, :func:`pressfit.dynamics.series.series_columns`), the segment index of each row and, on an elastic model,
     the section resultants. The step loop: per step k (ending at t = (k + 1) dt) the reference and the running
-    segment's force limit, one model step; the model's failures become the guard's one-line errors."""
+    segment's force limit (and, with ``plan.contact_params``, its contact: the model's ``params``), one model step;
+    the model's failures become the guard's one-line errors."""
     kind, trajectory, guard = model_kind(plan.simulation.model), plan.trajectory, Guard(case, machine, plan)
     times = plan.simulation.time_step_s * np.arange(1, plan.steps + 1)
     ref_position, ref_velocity = trajectory.sample(times)
-    limits = plan.force_limits_n[trajectory.segments(times)]  # the running segment's insertion limit
+    running = trajectory.segments(times)
+    limits = plan.force_limits_n[running]  # the running segment's insertion limit
+    contacts = plan.contact_params
     one_thread = getattr(kind, "one_blas_thread", False)
     with threadpool_limits(limits=1, user_api="blas") if one_thread else nullcontext():
         model = kind(case, machine, plan, drives, limiter, guard)
         for k in tqdm(range(plan.steps), desc="simulate", unit="step", disable=not progress, mininterval=0.5):
             t = float(times[k])
+            if contacts and (k == 0 or running[k] != running[k - 1]):
+                model.params = contacts[running[k]]
             try:
                 model.step(k, t, (ref_position[k], ref_velocity[k]), float(limits[k]))
             except UnreachablePoseError as exc:  # the estimate (feed-forward, compliance) left the workspace

@@ -91,6 +91,8 @@ class ScenarioPlan:
     force_limits_n: np.ndarray
     depth_limit_m: float = math.inf  # the run stops beyond this depth below the board face (MAX_DEPTH_FACTOR)
     table: str = "simulation"  # the case table whose keys the run's errors name: [simulation], a board's [cycle]
+    contact_params: tuple[np.ndarray, ...] = ()  # per segment, the contact as the kernels take it (a board's pin
+    # field at each board position: dynamics.cycle.segment_contacts); empty: the models' own of simulation.contact
 
 
 def preload_amplitudes_n(case: Case, machine: Machine) -> np.ndarray:
@@ -181,10 +183,13 @@ class ScenarioStep(Protocol):
     Capabilities the planning and the summaries ask of the class: ``elastic`` (the structure's modes in the
     equations of motion: the step is bounded by the first mode, the leg sections are objective, the cardan plays
     are modelled between the drives and the legs, a hydraulic oil column is stepped implicitly) and
-    ``integrator_error`` (what the energy balance's residual is made of)."""
+    ``integrator_error`` (what the energy balance's residual is made of). ``params``: the contact as the kernels
+    take it (:func:`pressfit.dynamics.contact.contact_parameters`), which the step loop replaces per segment when
+    the plan gives ``contact_params`` (a board's pin field at each board position)."""
 
     elastic: bool
     integrator_error: str
+    params: np.ndarray
 
     def step(self, k: int, t: float, reference: tuple[np.ndarray, np.ndarray], force_limit_n: float) -> None:
         """Advance time step k (ending at ``t``, s) towards the reference (position m, velocity m/s) under the

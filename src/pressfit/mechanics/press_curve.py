@@ -95,13 +95,46 @@ class FieldSolution:
     residual_n: float
 
 
+def series_matrix(pins: PinField, compliance: np.ndarray) -> np.ndarray:
+    """A = G_r^T C_r. G (n, n), m/N: pin i's depth lost to the tool's tilt per newton of pin j's force."""
+    g = pins.wrench_map
+    return g[3:].T @ compliance[3:] @ g
+
+
+def field_stiffness(pins: PinField, compliance: np.ndarray, depth_m: float) -> tuple[float, float]:
+    """The component's total force (N) and its local slope dF/dd (N/m) at the tool's true depth ``depth_m`` (m),
+    the tilt by ``compliance`` included: differentiating F = f(d 1 - A F), (I + diag(f'(d_i)) A) dF = f'(d_i) dd,
+    so dF/dd = 1^T (I + diag(f') A)^-1 f', each law's slope f' in closed form (``force_and_slope``) at the solved
+    pin depths. One pin on the tool axis (A = 0): its law's own slope f'(d)."""
+    sol = solve_field(pins, compliance, np.array([float(depth_m)]))
+    slopes = pins.forces_and_slopes(sol.pin_depths_m)[1][0]
+    jac = np.eye(slopes.size) + slopes[:, None] * series_matrix(pins, compliance)
+    return float(sol.pin_forces_n.sum()), float(np.linalg.solve(jac, slopes).sum())
+
+
+def operating_depth_m(pins: PinField, compliance: np.ndarray, interference_m: float, force_limit_n: float,
+                      samples: int = 2001) -> float:
+    """Where a force-limited insertion holds the tool (m): the first true depth at which the component's total force
+    (tilt included) reaches ``force_limit_n`` (N), linear between ``samples`` depths from 0 to ``interference_m``
+    (the commanded depth, m); the commanded depth if the force stays below the limit there."""
+    depth = np.linspace(0.0, float(interference_m), samples)
+    total = solve_field(pins, compliance, depth).pin_forces_n.sum(axis=1)
+    over = np.flatnonzero(total >= force_limit_n)
+    if not over.size:
+        return float(interference_m)
+    k = int(over[0])
+    if k == 0:
+        return 0.0
+    return float(np.interp(force_limit_n, total[k - 1:k + 1], depth[k - 1:k + 1]))
+
+
 def solve_field(pins: PinField, compliance: np.ndarray, depth_m: np.ndarray) -> FieldSolution:
     """F = f(d 1 - A F) at every tool depth (module docstring): Newton from F = 0 (whose first step is the untilted
     forces f(d 1) through the linearised tilt, (I + diag(f'(d 1)) A)^-1 f(d 1)), each depth iterated until its pins'
     residual is at most ``NEWTON_TOLERANCE_N`` (N) and then left alone."""
     d = np.asarray(depth_m, dtype=float)
     g = pins.wrench_map
-    a = g[3:].T @ compliance[3:] @ g  # (n, n), m/N
+    a = series_matrix(pins, compliance)  # (n, n), m/N
     n = g.shape[1]
     eye = np.eye(n)
     forces = np.zeros((d.size, n))
@@ -222,6 +255,21 @@ def stroke_figures(pins: PinField, depth_m: np.ndarray, force_n: np.ndarray, pin
                                for i, s in enumerate(seats)))
 
 
+def component_figures(pins: PinField, sol: FieldSolution, fig: StrokeFigures, end_row: int = -1) -> dict:
+    """The component's figures of a stroke solved by :func:`solve_field` (its rows the stroke's) with its
+    :func:`stroke_figures`: ``tool_tilt_max_rad`` (the largest |theta| of the tool, rad), ``max_pin_depth_spread_m``
+    (the largest spread of the pins' depths, m), ``all_pins_seated`` and ``component_pins``: per pin its
+    ``offset_m`` ([dx, dz], m), ``peak_force_n`` (before its shoulder touches, N), ``final_depth_m`` (at ``end_row``,
+    the end of the stroke, m) and ``seated`` (JSON-ready)."""
+    final = sol.pin_depths_m[end_row]
+    return {"tool_tilt_max_rad": float(np.max(np.linalg.norm(sol.displacement[:, 3:], axis=1), initial=0.0)),
+            "max_pin_depth_spread_m": float(np.max(np.ptp(sol.pin_depths_m, axis=1), initial=0.0)),
+            "all_pins_seated": fig.seated,
+            "component_pins": [{"offset_m": [float(o[0]), float(o[1])], "peak_force_n": f, "final_depth_m": float(d),
+                                "seated": s} for o, f, d, s in zip(pins.offsets_m, fig.pin_peak_force_n, final,
+                                                                    fig.pin_seated, strict=True)]}
+
+
 def pin_pose_m(contact: Contact) -> np.ndarray:
     """The plate pose of the insertion: the tool tip (the plate centre) on the pin, at the board face (m)."""
     return np.array([contact.pin_position_m[0], contact.board_height_m, contact.pin_position_m[1]], dtype=float)
@@ -274,6 +322,7 @@ def predict_curve(machine: Machine, case_or_contact: Case | Contact, *, pose_m: 
     sensed = depth + sol.displacement[:, 1]
     tilt = sol.displacement[:, 3:]
     fig = stroke_figures(pins, depth, force, sol.pin_forces_n, sol.pin_depths_m, sensed)
+    component = component_figures(pins, sol, fig)
     notes = tuple(dict.fromkeys(n for law in pins.laws for n in law.notes))
     return PressCurve(
         depth_m=depth, force_n=force, pin_forces_n=sol.pin_forces_n, pin_depths_m=sol.pin_depths_m,
@@ -281,10 +330,9 @@ def predict_curve(machine: Machine, case_or_contact: Case | Contact, *, pose_m: 
         plateau_force_n=fig.plateau_force_n, seated=fig.seated, seating_depth_m=fig.seating_depth_m,
         sensed_minus_true_depth_at_peak_m=fig.sensed_minus_true_depth_at_peak_m,
         machine_compliance_along_press_m_per_n=float(compliance[1, 1]),
-        tool_tilt_max_rad=float(np.max(np.linalg.norm(tilt, axis=1))),
-        max_pin_depth_spread_m=float(np.max(np.ptp(sol.pin_depths_m, axis=1))),
+        tool_tilt_max_rad=component["tool_tilt_max_rad"], max_pin_depth_spread_m=component["max_pin_depth_spread_m"],
         all_pins_seated=fig.seated, pin_peak_force_n=fig.pin_peak_force_n,
-        pin_final_depth_m=tuple(float(x) for x in sol.pin_depths_m[-1]), pin_seated=fig.pin_seated,
+        pin_final_depth_m=tuple(p["final_depth_m"] for p in component["component_pins"]), pin_seated=fig.pin_seated,
         pin_offsets_m=tuple((float(a), float(b)) for a, b in pins.offsets_m), series_residual_n=sol.residual_n,
         pose_m=(float(pose[0]), float(pose[1]), float(pose[2])), notes=notes)
 

@@ -519,12 +519,16 @@ CYCLE_LIMITS: dict[str, Limit] = {  # [cycle.limits] key -> its line (descriptio
     "max_overshoot_n": Limit(label="worst pin's contact force overshoot over its insertion limit", unit="N",
                              sense="max"),
     "max_alignment_error_m": Limit(label="worst pin's lateral alignment error at first contact", unit="m", sense="max"),
+    "max_pin_depth_spread_m": Limit(label="worst board position's spread of its component's pin depths", unit="m",
+                                    sense="max"),
     "max_rms_drive_force_n": Limit(label="worst drive's RMS force over the cycle", unit="N", sense="max"),
     "max_peak_drive_force_n": Limit(label="worst drive's peak force over the cycle", unit="N", sense="max"),
     "max_energy_per_cycle_j": Limit(label="drives' positive mechanical energy per cycle (regeneration not credited)",
                                     unit="J", sense="max"),
 }
 CYCLE_DRIVE_LIMITS = ("max_rms_drive_force_n", "max_peak_drive_force_n", "max_energy_per_cycle_j")
+PIN_LIMIT_FIGURES = {"max_overshoot_n": "overshoot_n", "max_alignment_error_m": "tool_lateral_error_at_first_contact_m",
+                     "max_pin_depth_spread_m": "max_pin_depth_spread_m"}  # a per-pin limit: its figure in cycle.json
 
 
 def _cycle_limits(case: Case) -> dict[str, float]:
@@ -556,8 +560,8 @@ def cycle_lines(wanted: dict[str, float], summary: dict[str, Any], start_m: list
         spec, leg, pose, method = CYCLE_LIMITS[key], None, np.asarray(start_m, float), how
         if key == "max_cycle_time_s":
             value = summary["cycle_time_s"]
-        elif key in ("max_overshoot_n", "max_alignment_error_m"):
-            name = "overshoot_n" if key == "max_overshoot_n" else "tool_lateral_error_at_first_contact_m"
+        elif key in PIN_LIMIT_FIGURES:
+            name = PIN_LIMIT_FIGURES[key]
             values = [math.inf if p[name] is None else p[name] for p in summary["pins"]]
             worst = int(np.argmax(values))
             pin = summary["pins"][worst]
