@@ -9,11 +9,13 @@ the machine file's numbers for the ratings."""
 
 import json
 import math
+import tomllib
 import typing
 from pathlib import Path
 
 import numpy as np
 import pytest
+import tomli_w
 from click.testing import CliRunner
 from scipy import signal
 
@@ -210,8 +212,16 @@ def test_cycle_sizes_the_linear_motor(tmp_path):
 
 
 @pytest.mark.slow
-def test_simulate_runs_the_shipped_linear_motor_case():
-    res = CliRunner().invoke(main, ["simulate", str(CASE), "--no-progress"])
+def test_simulate_prints_the_linear_motors_winding_and_sizing(tmp_path):
+    """`pressfit simulate` on the shipped linear-motor case, shortened (0.5 s moves, 0.3 s dwell): the winding and the
+    drive sizing reported. The shipped case itself, whole, is simulated against its limits by `pressfit check`
+    (tests/studies/test_envelope.py::test_shipped_cases_pass_and_example_fails)."""
+    data = tomllib.loads(CASE.read_text())
+    data["model"] = str(MODEL)
+    data["simulation"].update({"move_time_s": 0.5, "descent_time_s": 0.5, "dwell_s": 0.3, "settle_s": 0.2})
+    path = tmp_path / "linear_motor.toml"
+    path.write_text(tomli_w.dumps(data))
+    res = CliRunner().invoke(main, ["simulate", str(path), "--no-progress"])
     assert res.exit_code == 0, res.output
     assert "winding" in res.output and "drive sizing" in res.output
 

@@ -8,6 +8,7 @@ test_condensed.py and test_interference.py).
 """
 
 import math
+import re
 import xml.etree.ElementTree as ET
 from pathlib import Path
 
@@ -110,8 +111,16 @@ def test_cli_exit_codes_junit_and_json(tmp_path):
 
 @pytest.mark.slow
 def test_shipped_cases_pass_and_example_fails():
+    """Every shipped case passes `pressfit check` (its envelope statically and, with a [simulation], the run against
+    its limits), each insertion case by name with its static plate-deflection line; a too tight example fails."""
     runner = CliRunner()
-    assert runner.invoke(main, ["check", str(ROOT / "cases"), "--no-progress"]).exit_code == 0
+    res = runner.invoke(main, ["check", str(ROOT / "cases"), "--no-progress"])
+    assert res.exit_code == 0, res.output
+    blocks = {b.split()[0]: b for b in re.split(r"^PASS  ", res.output, flags=re.M)[1:]}
+    for name in ("paper-insertion", "paper-insertion-electric", "paper-insertion-hydraulic",
+                 "paper-insertion-linear-motor"):
+        assert "insertion simulation, limiter on" in blocks[name], res.output
+        assert ("max_plate_deflection_m" in blocks[name]) == (name != "paper-insertion"), blocks[name]
     res = runner.invoke(main, ["check", str(ROOT / "docs/examples/too_tight.toml"), "--no-progress"])
     assert res.exit_code == 1 and "FAIL plate tilt" in res.output
 

@@ -17,6 +17,10 @@ quantity; the Python functions of :mod:`pressfit.dynamics.control`, :mod:`pressf
   (:mod:`pressfit.dynamics.contact`);
 * :func:`axial_forces`: the legs' axial forces from the closure forces and the plate cardan angles;
 * :func:`rigid_post_step`: after one rigid-leg step, all of the above that the step's row needs.
+* :func:`hydraulic_substeps`: the servo-valve cylinders' pressure substeps (:mod:`pressfit.dynamics.drives.hydraulic`),
+  called in every Newton iteration of a flexible step with a hydraulic drive;
+* :func:`play_iteration`: one iteration of the cardan plays' safeguarded Newton (:mod:`pressfit.dynamics.play`), on
+  the compiled dead zone of :mod:`pressfit.mechanics.clearance_law`.
 
 Compiled by :func:`pressfit.compiled.compiled` (``error_model="numpy"``, the cache in the user's cache directory,
 :func:`cache_directory`): the first call in a fresh install compiles (about 10 s of CPU, once).
