@@ -170,7 +170,7 @@ class DriveStepError(PressfitError):
 
     def __init__(self, kind: str, leg: int, quantity: str, value: float, limit: str) -> None:
         self.kind, self.leg, self.quantity, self.value, self.limit = kind, leg, quantity, value, limit
-        super().__init__(f"{kind} drive of leg {leg}: {quantity} = {value:.6g} breaks {limit}")
+        super().__init__(f"{kind} drive of leg {leg}: {quantity} = {value:.10g} breaks {limit}")
 
 
 class InterferenceError(PressfitError):

@@ -373,6 +373,59 @@ def test_hydraulic_refuses_leaving_the_stroke(hydraulic):
         drive.step(state, np.zeros(4), lengths, rates, 1e-3)
 
 
+def test_closed_valve_chambers_follow_the_piston_by_the_log_law(hydraulic):
+    """Valve closed (no loop gain, no feed-forward, no leakage), the piston driven out at 10 mm/s for 10 ms: each
+    chamber's oil is compressed or expanded by the moving piston alone, beta dV / V, so exactly
+    p_a(t) = p_a(0) + beta ln(V_a(0) / V_a(t)) and p_b(t) = p_b(0) - beta ln(V_b(t) / V_b(0)). The drive's substeps
+    evaluate the volumes at each substep's midpoint (a midpoint rule on this integral): 1.3e-12 of the pressure
+    change achieved; at the substep's start (a mutation, stop 36) it is 1.4e-6."""
+    machine = hydraulic.with_overrides({"actuator": {"hydraulic": {"pressure_loop_gain_per_pa": 1e-300,
+                                                                   "flow_feedforward": 0.0,
+                                                                   "leakage_m3_per_s_pa": 0.0}}})
+    hy, drive = machine.actuator.hydraulic, drives.of(machine)
+    l0, rate, dt, steps = 0.7, 0.01, 1e-3, 10
+    state = start = drive.initial_state(np.full(1, 200.0), np.full(1, l0))
+    for k in range(steps):
+        state, tension = drive.step(state, np.full(1, 200.0), np.full(1, l0 + rate * k * dt), np.full(1, rate), dt)
+    x0 = float(machine.piston_position_m(l0))
+    x1 = x0 + rate * steps * dt
+    v_a = [hy.dead_volume_a_m3 + hy.area_m2 * (hy.stroke_m - x) for x in (x0, x1)]
+    v_b = [hy.dead_volume_b_m3 + hy.area_m2 * x for x in (x0, x1)]
+    dp_a, dp_b = hy.bulk_modulus_pa * math.log(v_a[0] / v_a[1]), -hy.bulk_modulus_pa * math.log(v_b[1] / v_b[0])
+    assert state.pressure_a_pa[0] - start.pressure_a_pa[0] == pytest.approx(dp_a, rel=1e-9)
+    assert state.pressure_b_pa[0] - start.pressure_b_pa[0] == pytest.approx(dp_b, rel=1e-9)
+    assert tension[0] == pytest.approx(hy.area_m2 * (state.pressure_a_pa[0] - state.pressure_b_pa[0]), rel=1e-12)
+    assert dp_a > 1e5 and dp_b < -1e5  # a real compression over the 0.1 mm travel
+
+
+@pytest.mark.parametrize(("chamber", "sign"), [("a", 1.0), ("b", -1.0)])
+@pytest.mark.parametrize("margin", [-1e-4, 1e-4], ids=["just under", "just over"])
+def test_a_chamber_compressed_past_ten_times_supply_is_refused(hydraulic, chamber, sign, margin):
+    """Both chambers at 9.9 p_s, valve closed, the piston moved in one 1 ms step by the travel that takes one chamber
+    exactly to 10 p_s by the log law of the closed chambers (p = p_0 + beta ln(V_0 / V_1), the drive's substeps to
+    1.3e-12): 1e-4 of that travel less passes, 1e-4 more (30 Pa over, printed with ten digits) is refused naming
+    the chamber and the bound; the other chamber expands and stays far inside its own."""
+    machine = hydraulic.with_overrides({"actuator": {"hydraulic": {"pressure_loop_gain_per_pa": 1e-300,
+                                                                   "flow_feedforward": 0.0,
+                                                                   "leakage_m3_per_s_pa": 0.0}}})
+    hy, drive = machine.actuator.hydraulic, drives.of(machine)
+    l0, ps = 0.7, hy.supply_pressure_pa
+    x0 = float(machine.piston_position_m(l0))
+    v0 = (hy.dead_volume_a_m3 + hy.area_m2 * (hy.stroke_m - x0) if chamber == "a"
+          else hy.dead_volume_b_m3 + hy.area_m2 * x0)
+    travel = v0 * (1.0 - math.exp(-0.1 * ps / hy.bulk_modulus_pa)) / hy.area_m2 * (1.0 + margin)  # m, + for a
+    state = type(drive.initial_state(np.zeros(1), np.full(1, l0)))(
+        pressure_a_pa=np.full(1, 9.9 * ps), pressure_b_pa=np.full(1, 9.9 * ps), spool=np.zeros(1))
+    step = (state, np.zeros(1), np.full(1, l0), np.full(1, sign * travel / 1e-3), 1e-3)
+    if margin < 0:
+        after, _ = drive.step(*step)
+        assert getattr(after, f"pressure_{chamber}_pa")[0] == pytest.approx(10.0 * ps, rel=2e-5)
+        return
+    with pytest.raises(DriveStepError, match=rf"leg 1: pressure_{chamber}_pa = 3000003\d\.?\d* breaks "
+                                             r"\[-300000, 3e\+07\] Pa"):
+        drive.step(*step)
+
+
 def test_hydraulic_step_converges_at_one_millisecond(hydraulic):
     """The 1 ms caller step (10 implicit substeps) against the same run at 10 us (one substep each), 30 ms of a
     command step while the leg extends at 50 mm/s."""

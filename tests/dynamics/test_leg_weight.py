@@ -5,13 +5,15 @@ model (:mod:`pressfit.dynamics.leg_weight`, :func:`pressfit.dynamics.control.sta
 import numpy as np
 import pinocchio as pin
 import pytest
+from scipy.integrate import quad
 
 from pressfit.description.machine import load_machine
 from pressfit.dynamics.control import gravity_feedforward_n, static_deflection_columns
 from pressfit.dynamics.inertia import GRAVITY_M_PER_S2, inertial_model, joint_placements, total_mass_kg
-from pressfit.dynamics.leg_weight import weight_sag_m, weight_wrench_n
+from pressfit.dynamics.leg_weight import leg_weight_loads, weight_sag_m, weight_wrench_n
 from pressfit.dynamics.machine.flexible import FlexibleMachine
 from pressfit.dynamics.multibody import rigid_leg_model
+from pressfit.errors import UnreachablePoseError
 from pressfit.mechanics.condensed import condensed_plate_compliance, rotational_compliances
 from pressfit.mechanics.model import build_model
 
@@ -208,3 +210,56 @@ def test_a_run_that_ends_at_a_pose_carries_that_poses_masses(machine):
     assert np.abs(m_stale - m_fresh).max() > 1e-2 * np.abs(m_fresh).max()
     np.testing.assert_allclose(weight_sag_m(machine, end), static_deflection_columns(
         machine, rigid_leg_model(machine, start), end)[:, 1], rtol=1e-12)
+
+
+def test_each_legs_clamped_bending_is_the_integral_of_its_moment_over_ei(machine):
+    """The plate moment of each leg's clamped bending, k_r (c . (e x g)) c int_0^l m(s) / EI(s) ds (module doc),
+    against scipy's adaptive quadrature of m(s) = q(s) - (l - s) Q / l written here from the masses (cylinder and
+    housing over [0, L_c], the 0.60 m rod over [l - L_r, l] with the moving parts at its inner end, the plate
+    spider at l: a cylinder section carries the whole rod, a stem section what lies beyond it), with the breaks at
+    L_c and l - L_r given to it: 1e-12 achieved, asserted 1e-9, at six poses (the rod's inner end inside the
+    cylinder at all of them, l > L_r) and all six at once (batched)."""
+    mass, lc, rod = machine.mass, machine.cylinder.length_m, machine.stem.length_m
+    e_mod = machine.material.youngs_modulus_pa
+    ei_c, ei_s = e_mod * machine.cylinder_section.second_moment_m4, e_mod * machine.stem_section.second_moment_m4
+    mu_c = (machine.cylinder_tube_mass_kg + mass.actuator_housing_mass_kg) / lc
+    mu_r = mass.density_kg_per_m3 * np.pi * machine.stem.diameter_m**2 / 4
+    m_move, m_spider = mass.actuator_moving_mass_kg, mass.cardan_spider_mass_kg
+    batched = leg_weight_loads(machine, POSES)[1]
+    for pose, moments in zip(POSES, batched, strict=True):
+        np.testing.assert_allclose(leg_weight_loads(machine, pose)[1], moments, rtol=1e-12, atol=1e-15)
+        for i in range(len(machine.legs)):
+            u = pose + machine.plate_offsets_m[i] - machine.base_points_m[i]
+            length = float(np.linalg.norm(u))
+            e, inner = u / length, length - rod
+            assert 0.0 < inner < lc
+            first = mu_c * lc**2 / 2 + mu_r * (length**2 - inner**2) / 2 + m_move * inner + m_spider * length
+
+            def q(s, length=length, inner=inner):
+                if s <= lc:  # the cylinder beyond s, the whole rod and the moving parts, the spider
+                    return (mu_c * (lc - s) ** 2 / 2 + mu_r * ((length - s) ** 2 - (inner - s) ** 2) / 2
+                            + m_move * (inner - s) + m_spider * (length - s))
+                return mu_r * (length - s) ** 2 / 2 + m_spider * (length - s)  # the exposed rod and the spider
+
+            def m_over_ei(s, length=length, first=first, q=q):
+                return (q(s) - (length - s) * first / length) / (ei_c if s <= lc else ei_s)
+
+            integral = (quad(m_over_ei, 0.0, lc, points=[inner], epsabs=0, epsrel=1e-13, limit=200)[0]
+                        + quad(m_over_ei, lc, length, epsabs=0, epsrel=1e-13, limit=200)[0])
+            a = machine.cardan_axes[i]
+            sin_b = e @ a
+            c = (e - sin_b * a) / np.sqrt(1 - sin_b**2)
+            c_t, c_m = rotational_compliances(machine, length)
+            k_r = 1 / ((1 - sin_b**2) * c_t + sin_b**2 * c_m)
+            expected = k_r * (c @ np.cross(e, G)) * integral * c
+            np.testing.assert_allclose(moments[i], expected, rtol=1e-9, atol=1e-12 * np.abs(expected).max())
+
+
+def test_the_weight_at_an_unreachable_pose_is_refused_naming_the_leg(machine):
+    """A batch of poses with one beyond the legs' reach: refused (UnreachablePoseError naming the leg and the
+    limit), not a sag computed for a machine that cannot stand there."""
+    poses = np.vstack([POSES[:2], [[0.0, 1.5, 0.0]]])
+    with pytest.raises(UnreachablePoseError, match=r"leg 1: leg length l \[m\] = [0-9.]+ breaks maximum"):
+        weight_sag_m(machine, poses)
+    with pytest.raises(UnreachablePoseError):
+        leg_weight_loads(machine, [0.0, 0.6, np.nan])
