@@ -15,7 +15,8 @@ from click.testing import CliRunner
 from pressfit import kinematics
 from pressfit.cli import main
 from pressfit.description.cases import load_case
-from pressfit.dynamics import sizing
+from pressfit.dynamics import drives, sizing
+from pressfit.dynamics.machine.registry import model_kind
 from tests.dynamics.test_cycle import board
 
 TWO_PINS = [{"x_m": 0.10, "z_m": -0.05}, {"x_m": 0.0, "z_m": 0.0}]
@@ -121,12 +122,13 @@ def test_balance_over_its_tolerance_is_refused(sized, monkeypatch):
     pin = np.sum(cols["contact_force_n"][:-1] * -np.diff(cols["plate_y_m"]))
     relative = abs(step.sum() - dk - dv - pin - cols["damping_work_j"][1:].sum() - _plays_and_stems(cols)
                    ) / np.abs(step).sum()
-    key = (s["energy_balance"]["model"], s["energy_balance"]["drive_kind"])
-    monkeypatch.setitem(sizing.ENERGY_BALANCE_TOLERANCES, key, relative * 0.999)
+    key = (model_kind(s["energy_balance"]["model"]), drives.by_kind(s["energy_balance"]["drive_kind"]))
+    ratio = sizing.ENERGY_BALANCE[key][1]
+    monkeypatch.setitem(sizing.ENERGY_BALANCE, key, (relative * 0.999, ratio))
     res = run("cycle", case, "--no-progress", "--json")
     lines = res.output.strip().splitlines()
     assert res.exit_code == 2 and len(lines) == 1 and "energy balance" in lines[0], res.output
     assert "Traceback" not in res.output
-    monkeypatch.setitem(sizing.ENERGY_BALANCE_TOLERANCES, key, relative * 1.001)
+    monkeypatch.setitem(sizing.ENERGY_BALANCE, key, (relative * 1.001, ratio))
     res = run("cycle", case, "--no-progress", "--json")
     assert res.exit_code == 0, res.output

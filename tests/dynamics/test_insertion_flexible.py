@@ -9,11 +9,11 @@ import pytest
 
 from pressfit import kinematics
 from pressfit.description.cases import load_case
-from pressfit.dynamics.insertion import VIBRATION_WINDOW_S, series_columns, simulate_insertion
+from pressfit.dynamics.insertion import VIBRATION_WINDOW_S, plan_scenario, series_columns, simulate_insertion
 from pressfit.dynamics.series import section_columns
 from pressfit.errors import ModelFileError
 from pressfit.output.simulation import write_simulation
-from tests.dynamics.test_simulation_trust import write_case
+from tests.dynamics.test_simulation_trust import refused, write_case
 
 COL = {c: k for k, c in enumerate(series_columns(4))}  # the 4-UPU's
 SHORT = {"move_time_s": 0.25, "descent_time_s": 0.25, "dwell_s": 0.3, "settle_s": 0.25}
@@ -126,13 +126,18 @@ def test_mirror_scenario_mirror_section_loads(runs):
 
 
 def test_torsion_and_bending_limits_only_with_the_flexible_model(tmp_path):
-    """[simulation.limits] max_torsion_nm / max_bending_nm: refused with model = "rigid" (naming the reason),
-    accepted with model = "flexible"."""
+    """[simulation.limits] max_torsion_nm / max_bending_nm: refused before a run with model = "rigid" (its class's
+    ``objective_couples``; exit 2, one line naming the file, the key and the reason), planned with model =
+    "flexible"."""
     for key in ("max_torsion_nm", "max_bending_nm"):
-        with pytest.raises(ModelFileError, match=f"{key} is not offered with model = \"rigid\""):
-            load_case(write_case(tmp_path, simulation={"model": "rigid", "limits": {key: 5.0}}))
+        rigid = write_case(tmp_path, f"rigid_{key}.toml", simulation={"model": "rigid", "limits": {key: 5.0}})
+        with pytest.raises(ModelFileError, match=rf"key '\[simulation.limits\] {key}': no {key} limit with "
+                                                 r'model = "rigid" \(the rigid-leg model'):
+            plan_scenario(load_case(rigid))
+        refused(rigid, str(rigid), f"[simulation.limits] {key}", "statically indeterminate")
         case = load_case(write_case(tmp_path, simulation={"model": "flexible", "limits": {key: 5.0}}))
         assert getattr(case.simulation.limits, key) == 5.0
+        assert plan_scenario(case).simulation.limits == case.simulation.limits
 
 
 def test_model_key_is_strict_and_defaults_to_flexible(tmp_path):

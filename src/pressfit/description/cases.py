@@ -666,7 +666,7 @@ TimeStep = Annotated[float, Field(gt=0, le=2e-3, allow_inf_nan=False)]  # s
 # at most 1e4 rad/s (the explicit corrector needs omega_b dt < 0.83, checked against time_step_s before a
 # run: dt <= 45 us at the cap). The run also refuses a closure drift over its tolerance (dynamics.insertion).
 BaumgarteRate = Annotated[float, Field(ge=10.0, le=1e4, allow_inf_nan=False)]
-NOT_OBJECTIVE_LIMITS = ("max_torsion_nm", "max_bending_nm")  # refused in [simulation.limits] (SimulationLimits)
+NOT_OBJECTIVE_LIMITS = ("max_torsion_nm", "max_bending_nm")  # offered by a model with objective leg couples only
 
 
 class SimulationLimits(StrictModel):
@@ -720,15 +720,6 @@ class Simulation(StrictModel):
     limits: SimulationLimits = SimulationLimits()
     model: Literal["flexible", "rigid"] = "flexible"
 
-    @model_validator(mode="after")
-    def _objective_couples(self) -> Simulation:
-        bad = [k for k in NOT_OBJECTIVE_LIMITS if getattr(self.limits, k) is not None]
-        if bad and self.model == "rigid":
-            raise ValueError(f"limits.{bad[0]} is not offered with model = \"rigid\": the rigid-leg model's leg "
-                             "couples are statically indeterminate (a minimum-norm split that is not "
-                             "mirror-objective); use model = \"flexible\" (the elastic model's sections) or check "
-                             "them statically in [envelope]")
-        return self
 
 
 CURVE_POSE_KEYS = ("pin_x_m", "pin_z_m")  # [curve.tolerances]: the pin's position on the board (the pose)

@@ -48,6 +48,7 @@ from pressfit.dynamics.scenario import (
     MIN_SEGMENT_STEPS,
     SETTLING_BAND,
     WARN_STEPS,
+    check_limits_offered,
     check_model_step,
     check_oil_column,
     check_preload,
@@ -112,6 +113,7 @@ def plan_scenario(case: Case, machine: Machine | None = None, preload_key: str =
     if sim is None:
         raise PressfitError(f"{case.path}: the case has no [simulation] table")
     require_force_preload(case)
+    check_limits_offered(case, sim)
     machine = machine or case.machine()
     dt, board = sim.time_step_s, sim.contact.board_height_m
     for key in ("move_time_s", "descent_time_s", "dwell_s", "settle_s"):

@@ -26,7 +26,7 @@ from threadpoolctl import threadpool_limits
 from tqdm import tqdm
 
 from pressfit import kinematics
-from pressfit.description.cases import Case, Simulation
+from pressfit.description.cases import NOT_OBJECTIVE_LIMITS, Case, Simulation
 from pressfit.description.machine import ForceSource, Machine
 from pressfit.dynamics import drives as drive_kinds
 from pressfit.dynamics.contact import contact_stiffness_bound_n_per_m
@@ -127,6 +127,18 @@ def check_oil_column(case: Case, machine: Machine, sim: Simulation, waypoints_m:
     reason = hydraulic_step_refusal(machine, waypoints_m, path_m, model_kind(sim.model).elastic, sim.time_step_s)
     if reason:
         raise refuse(case, key, reason)
+
+
+def check_limits_offered(case: Case, sim: Simulation) -> None:
+    """Torsion and bending limits (``NOT_OBJECTIVE_LIMITS`` of ``[simulation.limits]``) only on a model whose leg
+    couples are objective (its class's ``objective_couples``: the elastic model's sections; the rigid-leg model's
+    couples are a statically indeterminate minimum-norm split that is not mirror-objective)."""
+    bad = [k for k in NOT_OBJECTIVE_LIMITS if getattr(sim.limits, k) is not None]
+    if bad and not model_kind(sim.model).objective_couples:
+        raise refuse(case, f"[simulation.limits] {bad[0]}", f"no {bad[0]} limit with model = \"{sim.model}\" (the "
+                     "rigid-leg model's leg couples are statically indeterminate: a minimum-norm split that is not "
+                     "mirror-objective); use model = \"flexible\" (the elastic model's sections) or check them "
+                     "statically in [envelope]")
 
 
 def check_model_step(case: Case, machine: Machine, sim: Simulation, waypoints_m: np.ndarray, key: str) -> None:

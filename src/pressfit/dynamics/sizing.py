@@ -42,9 +42,8 @@ integrators' own energy error, first order in dt on both models (docs/sizing.md)
 sum 1/2 dv^T M dv per step (its velocity update is explicit) on the rigid model, generalised-alpha's with its
 rectangle-rule damping work and numerical damping (rho_inf) on the flexible one.
 
-Tolerance per model and drive kind (``ENERGY_BALANCE_TOLERANCES``, about 3x the largest relative residual measured
-on the shipped insertions at 1 ms, with the limiter; ratio = residual(1 ms) / residual(0.5 ms),
-``ENERGY_RESIDUAL_STEP_RATIO``):
+Tolerance per model and drive kind (``ENERGY_BALANCE``, about 3x the largest relative residual measured
+on the shipped insertions at 1 ms, with the limiter; ratio = residual(1 ms) / residual(0.5 ms)):
 
     model     drive         largest measured (case)              ratio  tolerance
     rigid     force         0.275% (insertion_fast; 1.00% the suite's 0.3 s moves)  2.00   3%
@@ -74,23 +73,24 @@ from pressfit.dynamics import drives as drive_kinds
 from pressfit.dynamics.drives.base import Rating, rms
 from pressfit.dynamics.drives.electric import ElectricSizing
 from pressfit.dynamics.drives.hydraulic import HydraulicSizing
+from pressfit.dynamics.machine.flexible_scenario import FlexibleScenario
 from pressfit.dynamics.machine.registry import model_kind
+from pressfit.dynamics.machine.rigid import RigidScenario
 from pressfit.errors import PressfitError, ResidualError
 
 # the relative residual of the energy balance by (model, drive kind): about 3x the largest measured on the shipped
 # insertions at 1 ms (module docstring's table, docs/sizing.md)
-ENERGY_BALANCE_TOLERANCES = {
-    ("rigid", "force"): 0.03, ("rigid", "electric"): 0.0075, ("rigid", "hydraulic"): 0.0055,
-    ("rigid", "linear_motor"): 0.0065,
-    ("flexible", "force"): 0.03, ("flexible", "electric"): 0.0075, ("flexible", "hydraulic"): 0.0055,
-    ("flexible", "linear_motor"): 0.0065,
-}
-# residual(1 ms) / residual(0.5 ms) measured on the shipped insertions (the same table): first order is 2
-ENERGY_RESIDUAL_STEP_RATIO = {
-    ("rigid", "force"): 2.00, ("rigid", "electric"): 2.00, ("rigid", "hydraulic"): 2.00,
-    ("rigid", "linear_motor"): 2.00,
-    ("flexible", "force"): 2.00, ("flexible", "electric"): 2.00, ("flexible", "hydraulic"): 2.0,
-    ("flexible", "linear_motor"): 2.0,
+# (model, drive) -> (tolerance on the relative residual, residual(1 ms) / residual(0.5 ms) measured on the shipped
+# insertions: first order is 2; None where not measured), the table of the module docstring; keyed by the registries'
+# classes (a run's names reach them through model_kind and drives.by_kind only)
+_R, _F = RigidScenario, FlexibleScenario
+_FORCE, _ELECTRIC, _HYDRAULIC, _LINEAR = (drive_kinds.ForceDrive, drive_kinds.ElectricDrive, drive_kinds.HydraulicDrive,
+                                          drive_kinds.LinearMotorDrive)
+ENERGY_BALANCE: dict[tuple[type, type], tuple[float, float | None]] = {
+    (_R, _FORCE): (0.03, 2.00), (_R, _ELECTRIC): (0.0075, 2.00), (_R, _HYDRAULIC): (0.0055, 2.00),
+    (_R, _LINEAR): (0.0065, 2.00),
+    (_F, _FORCE): (0.03, 2.00), (_F, _ELECTRIC): (0.0075, 2.00), (_F, _HYDRAULIC): (0.0055, 2.0),
+    (_F, _LINEAR): (0.0065, 2.0),
 }
 FIRST_ORDER_RATIO = 1.6  # a residual that shrinks by at least this when the step halves: a smaller step reduces it
 PRELOAD_FIGURES = ("rms_force_n", "copper_loss_w", "positive_energy_j", "regenerative_energy_j",
@@ -195,20 +195,27 @@ def with_preload_cost(sizing: tuple[DriveSizing, ...], tensions_n: np.ndarray, w
                  for i, (s, w) in enumerate(zip(sizing, without, strict=True)))
 
 
-def energy_balance_tolerance(model: str, drive_kind: str) -> float:
-    """The relative residual a run of the model ("rigid", "flexible") with drives of the kind is held to
-    (``ENERGY_BALANCE_TOLERANCES``; module docstring)."""
+def _measured(model: str, drive_kind: str) -> tuple[float, float | None]:
+    """The measured (tolerance, step ratio) of the model and drive kind named by a run (``ENERGY_BALANCE``)."""
     try:
-        return ENERGY_BALANCE_TOLERANCES[(model, drive_kind)]
+        return ENERGY_BALANCE[(model_kind(model), drive_kinds.by_kind(drive_kind))]
     except KeyError:
+        known = ", ".join(f"{m.__name__}/{d.kind}" for m, d in ENERGY_BALANCE)
         raise PressfitError(f"no energy-balance tolerance for the {model} model with {drive_kind} drives (known: "
-                            f"{', '.join(f'{m}/{k}' for m, k in ENERGY_BALANCE_TOLERANCES)})") from None
+                            f"{known})") from None
+
+
+def energy_balance_tolerance(model: str, drive_kind: str) -> float:
+    """The largest relative residual accepted for the model with drives of the kind (``ENERGY_BALANCE``; module
+    docstring)."""
+    return _measured(model, drive_kind)[0]
 
 
 def converges_with_the_step(model: str, drive_kind: str) -> bool:
     """Whether the residual of the model with drives of the kind was measured to shrink at least in proportion to
-    the step (``ENERGY_RESIDUAL_STEP_RATIO``, residual(dt) / residual(dt / 2) >= ``FIRST_ORDER_RATIO``)."""
-    return ENERGY_RESIDUAL_STEP_RATIO.get((model, drive_kind), 0.0) >= FIRST_ORDER_RATIO
+    the step (``ENERGY_BALANCE``'s residual(dt) / residual(dt / 2) >= ``FIRST_ORDER_RATIO``)."""
+    ratio = _measured(model, drive_kind)[1]
+    return ratio is not None and ratio >= FIRST_ORDER_RATIO
 
 
 @dataclass(frozen=True, kw_only=True)

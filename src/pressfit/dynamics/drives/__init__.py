@@ -32,9 +32,18 @@ def drive_type(machine: Machine) -> type:
     return DRIVES[table]
 
 
+def by_kind(kind: str) -> type:
+    """The drive class whose ``kind`` is ``kind`` (:data:`DRIVES`; the name a run's summary records)."""
+    for drive in DRIVES.values():
+        if drive.kind == kind:
+            return drive
+    raise PressfitError(f"unknown drive kind {kind!r} (known: {', '.join(d.kind for d in DRIVES.values())})")
+
+
 def of(machine: Machine) -> Drive:
     """The machine's drive model (:data:`DRIVES`)."""
     return drive_type(machine).of(machine)
 
 
-__all__ = ["DRIVES", "Drive", "ElectricDrive", "ForceDrive", "HydraulicDrive", "LinearMotorDrive", "drive_type", "of"]
+__all__ = ["DRIVES", "Drive", "ElectricDrive", "ForceDrive", "HydraulicDrive", "LinearMotorDrive", "by_kind",
+           "drive_type", "of"]

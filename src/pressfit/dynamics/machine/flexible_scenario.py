@@ -36,6 +36,7 @@ class FlexibleScenario:
 
     elastic = True
     integrator_error = "generalised-alpha's energy error (the damping's rectangle rule, the numerical damping)"
+    objective_couples = True  # the elastic legs' section resultants: torsion and bending limits are offered
     one_blas_thread = True
 
     def __init__(self, case: Case, machine: Machine, plan: ScenarioPlan, drives: drive_kinds.Drive, limiter: bool,

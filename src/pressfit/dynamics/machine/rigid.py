@@ -118,6 +118,9 @@ class RigidScenario:
 
     elastic = False
     integrator_error = "semi-implicit Euler's energy error sum 1/2 dv^T M dv"
+    # the legs' couples are statically indeterminate here (a minimum-norm split, not mirror-objective): no torsion or
+    # bending limits ([simulation.limits], scenario.check_limits_offered)
+    objective_couples = False
 
     def __init__(self, case: Case, machine: Machine, plan: ScenarioPlan, drives: drive_kinds.Drive, limiter: bool,
                  guard: Guard) -> None:
