@@ -382,11 +382,13 @@ def test_mirror_scenario_reports_mirror_equal_results(short_runs):
 
 
 def test_torsion_and_bending_are_not_offered_or_reported(tmp_path, short_runs):
-    """They depend on the frames' handedness in the rigid model: [simulation.limits] refuses them with the
-    reason, and neither the series nor the summary reports them."""
+    """They depend on the frames' handedness in the rigid model: its run refuses them before computing, with the
+    reason (the model class's ``objective_couples``), and neither the series nor the summary reports them."""
     for key in ("max_torsion_nm", "max_bending_nm"):
-        with pytest.raises(ModelFileError, match=f"{key} is not offered.*elastic model"):
-            load_case(write_case(tmp_path, simulation={"limits": {key: 50.0}}))
+        case = load_case(write_case(tmp_path, simulation={"limits": {key: 50.0}}))
+        assert case.simulation.model == "rigid"
+        with pytest.raises(ModelFileError, match=f"no {key} limit with model = \"rigid\".*elastic model"):
+            simulate_insertion(case)
     run = short_runs[1]
     assert not [c for c in SERIES_COLUMNS if "torsion" in c or "bending" in c]
     assert not [k for k in run.summary if "torsion" in k or "bending" in k]
