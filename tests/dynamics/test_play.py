@@ -6,6 +6,7 @@ from pathlib import Path
 
 import numpy as np
 import pytest
+from scipy.optimize import brentq
 
 from pressfit import kinematics
 from pressfit.description.cases import load_case
@@ -360,6 +361,29 @@ def test_the_play_solve_converges_with_an_underestimated_drive_tangent():
     sign = np.sign(q - l0)
     expected = sign * (K * G + kd * np.abs(q - l0)) / (K + kd)
     assert through.extension_m == pytest.approx(expected, abs=2e-12)
+
+
+def test_the_play_solve_converges_inside_the_gap_with_an_overestimated_drive_tangent():
+    """Inside the gap the drive alone resists the motion; a tangent hint 8x the drive's true stiffness makes Newton
+    cover an eighth of the way per iteration without ever crossing the root (no bracket to halve): at that rate
+    the solve needed about 150 iterations to reach PLAY_TOL and was refused after 80 (seen on a hydraulic run with
+    the plays and 0.2 s moves). With the secant step it converges in a few drive calls to the root of
+    f(x) = kd (q - x - l0) found here by bisection of the dead-zone law (brentq, 1e-18 m)."""
+    play = _play()
+    kd = np.full(4, 1e6)
+    l0 = 0.7
+    q = l0 + np.array([5e-6, -4e-6, 3e-6, -6e-6])  # every leg well inside its gap
+    drive = _LinearDrive(kd, l0)
+    through = play.over_step(drive, POSE, np.zeros(4), 8.0 * kd, _at_rest(q), 1e-3)
+    through(q)
+    gaps = play.gaps_m(POSE)
+    for i in range(4):
+        def residual(x, i=i):
+            return float(dead_zones(np.array(x), gaps[i], play.stiffness_n_per_m, play.width_m)[1]) \
+                - kd[i] * (q[i] - (x - play.zero_m[i]) - l0)
+        root = brentq(residual, -1e-4, 1e-4, xtol=1e-18) - play.zero_m[i]
+        assert through.extension_m[i] == pytest.approx(root, abs=1e-13)
+    assert drive.calls < 20
 
 
 def test_the_mirror_image_scenario_with_the_plays_is_the_mirror_image(pairs):

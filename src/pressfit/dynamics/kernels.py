@@ -451,13 +451,16 @@ def hydraulic_substeps(pa, pb, xv, dp_cmd, feedforward, length, rate, h, n, deca
 
 
 @compiled
-def play_iteration(x, tension, inertia, g, k, w, kd, trust, lo, hi, previous, tol, f):
+def play_iteration(x, tension, inertia, g, k, w, kd, trust, lo, hi, previous, tol, f, last):
     """One iteration of the plays' safeguarded Newton (:meth:`pressfit.dynamics.play.PlayedDrive.__call__`) per leg
     at extensions x (m) under the drive's tensions (N) and its side's inertia forces (N) at the step's end: the
     residual r = f(x) - tension - inertia of the dead zones (gaps g m, stiffness k N/m, width w m), the bracket
-    [lo, hi] it tightens, a Newton step on r' = f' + kd (N/m) within +-trust (m), halving the bracket where Newton
-    leaves it or does not halve its last step (``previous``, m). Writes f(x) (N) into ``f``; returns True when
-    every step is within tol (m), x then unchanged, else advances x, lo, hi and ``previous`` in place."""
+    [lo, hi] it tightens, a Newton step on r' = f' + kd (N/m) within +-trust (m). Where Newton leaves the bracket or
+    does not halve its last step (``previous``, m): the bracket's midpoint once both ends are known, else a secant
+    step through the last iterate (``last`` (2, n): its x and r; nan before one), so a tangent hint kd that
+    overestimates the drive's stiffness (inside a gap, where the drive alone resists) converges superlinearly, not at
+    the rate 1 - r' / (f' + kd). Writes f(x) (N) into ``f``; returns True when every step is within tol (m), x then
+    unchanged, else advances x, lo, hi, ``previous`` and ``last`` in place."""
     done = True
     step = np.empty(x.shape[0])
     for i in range(x.shape[0]):
@@ -471,8 +474,12 @@ def play_iteration(x, tension, inertia, g, k, w, kd, trust, lo, hi, previous, to
         slow = newton < lo[i] or newton > hi[i] or abs(newton - x[i]) > 0.5 * previous[i]
         if slow and math.isfinite(lo[i]) and math.isfinite(hi[i]):
             step[i] = 0.5 * (lo[i] + hi[i]) - x[i]
+        elif slow and last[0, i] != x[i] and (r - last[1, i]) * (x[i] - last[0, i]) > 0:  # r is increasing in x
+            secant = x[i] - r * (x[i] - last[0, i]) / (r - last[1, i])
+            step[i] = min(max(secant, x[i] - trust[i]), x[i] + trust[i]) - x[i]
         else:
             step[i] = newton - x[i]
+        last[0, i], last[1, i] = x[i], r
         previous[i] = abs(step[i])
         done = done and previous[i] <= tol
     if not done:

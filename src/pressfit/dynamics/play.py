@@ -25,7 +25,8 @@ the tensions -- as the rigid model's load-deflection curve does from zero contac
   (D the drive over the step as a function of its end length, k_d its step stiffness, a_d the end acceleration
   of the generalised-alpha scheme with rho_inf = ``DRIVE_SIDE_RHO_INF``, k_i = m_d (1 - alpha_m) / ((1 - alpha_f)
   beta h^2)) is solved at every Newton iteration of the flexible step (:class:`PlayedDrive`: safeguarded Newton
-  on a bracket, halving it where Newton leaves it or does not halve its last step, to ``PLAY_TOL``), which
+  on a bracket, halving it where Newton leaves it or does not halve its last step, a secant step
+  instead while the bracket has no second end, to ``PLAY_TOL``), which
   returns the play's force f(x) on the leg. The step's iteration matrix gets the series tangent
   k_e f' / (k_e + f'), k_e = k_d + k_i, where the last solve left it, or the chord of the last two solves where
   they straddle a contact edge (Newton cycles across a kink; the chord interpolates it). The sensors read the
@@ -204,11 +205,12 @@ class PlayedDrive:
         lo, hi = np.full(x.shape, -np.inf), np.full(x.shape, np.inf)
         trust = 2.0 * g + 10.0 * w + 1e-6  # m: the largest step before a bracket is known
         previous = np.full(x.shape, np.inf)  # the last step's size: Newton must halve it, or the bracket is halved
+        last = np.full((2, x.size), np.nan)  # the last iterate's x and r (the secant's other point)
         for _ in range(PLAY_ITERATIONS):
             end = lengths_m - x + self.play.zero_m
             tension = self.drive(end)
             if kernels.play_iteration(x, np.asarray(tension, dtype=float), self._inertia_n(end), g, k, w, kd, trust,
-                                      lo, hi, previous, PLAY_TOL, f):
+                                      lo, hi, previous, PLAY_TOL, f, last):
                 if self._last is not None:
                     self._previous = (*self._last, self._point_tangent(self.x))
                 self.x, self.side, self._last = x, self._side(end), (lengths_m.copy(), f)
