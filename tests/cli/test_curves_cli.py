@@ -94,3 +94,21 @@ def test_compensation_moves_the_curve_by_compliance_times_force(tmp_path):
         assert _run(p, "--windows", w).exit_code == 0
         r = _run(p, "--windows", w, "--case", CASE, "--compensate")
         assert r.exit_code == (0 if ok else 1), r.output
+
+
+def test_a_limiter_backoff_is_one_stroke_only_within_the_reversal_tolerance(tmp_path):
+    """A press curve whose displacement steps back 2 um before its maximum (a force limiter backing the tool off):
+    bad input at the default 1 um jitter tolerance (exit 2, naming the row), one forward stroke judged at
+    --reversal-tolerance-m 2.5e-6 and refused again at 1.5e-6 (just under the 2 um step); a negative or NaN tolerance
+    is a usage error (exit 2)."""
+    rows = ["x_mm,force_n", "0,0", "0.5,0", "1.0,100", "1.2,120", "1.198,119", "1.4,140", "2.2,200", "2.25,300"]
+    curve = tmp_path / "backoff.csv"
+    curve.write_text("\n".join(rows) + "\n")
+    r = _run(curve, "--windows", WINDOWS)
+    assert r.exit_code == 2 and "runs backwards" in r.output and "row 6, column 'x_mm'" in r.output, r.output
+    r = _run(curve, "--windows", WINDOWS, "--reversal-tolerance-m", "2.5e-6")
+    assert r.exit_code in (0, 1) and "backoff.csv" in r.output and "runs backwards" not in r.output, r.output
+    assert _run(curve, "--windows", WINDOWS, "--reversal-tolerance-m", "1.5e-6").exit_code == 2
+    for bad in ("-1e-6", "nan"):
+        r = _run(curve, "--windows", WINDOWS, "--reversal-tolerance-m", bad)
+        assert r.exit_code == 2 and "--reversal-tolerance-m" in r.output, r.output

@@ -12,6 +12,12 @@ from pressfit.cli.common import OVERWRITE_OPTION, user_errors
 UNIT_CHOICES = {"time": ("s", "ms"), "displacement": ("m", "mm", "um"), "force": ("N", "kN")}
 
 
+def _finite(param: click.Parameter, value: float | None) -> float | None:
+    if value is not None and value != value:  # NaN passes FloatRange's comparisons
+        raise click.BadParameter("must be a finite length in m", param=param)
+    return value
+
+
 @click.group("curves")
 def curves_group() -> None:
     """Measured force-displacement curves of a press monitor."""
@@ -38,12 +44,16 @@ def curves_group() -> None:
               help="Unit of a force column whose header names none.")
 @click.option("--displacement-column", help="The displacement column's name (where the header is ambiguous).")
 @click.option("--force-column", help="The force column's name (where the header is ambiguous).")
+@click.option("--reversal-tolerance-m", type=click.FloatRange(min=0.0, max=1e-3), default=None,
+              callback=lambda ctx, param, v: _finite(param, v),
+              help="How far (m) the displacement may step back before its maximum and still be one forward stroke "
+                   "(default 1e-6: encoder jitter; a force limiter backing the tool off needs more).")
 @OVERWRITE_OPTION
 @user_errors
 def check_cmd(paths: tuple[Path, ...], windows_path: Path, case_path: Path | None, compensate: bool,
               junit_path: Path | None, json_path: Path | None, png_path: Path | None, time_unit: str | None,
               displacement_unit: str | None, force_unit: str | None, displacement_column: str | None,
-              force_column: str | None, overwrite: bool) -> None:
+              force_column: str | None, reversal_tolerance_m: float | None, overwrite: bool) -> None:
     """Judge each measured curve against the windows: one OK or NOK line per curve, naming the element that
     failed and where (x, y). Exit 0 all OK, 1 any NOK, 2 bad input (the file, row and column named)."""
     from pressfit.description.cases import load_case
@@ -63,7 +73,8 @@ def check_cmd(paths: tuple[Path, ...], windows_path: Path, case_path: Path | Non
     windows = load_windows(windows_path)
     units = {k: v for k, v in (("time", time_unit), ("displacement", displacement_unit), ("force", force_unit)) if v}
     columns = {k: v for k, v in (("displacement", displacement_column), ("force", force_column)) if v}
-    curves = [read_curve(p, units=units, columns=columns) for p in paths]
+    tolerance = {} if reversal_tolerance_m is None else {"reversal_tolerance_m": reversal_tolerance_m}
+    curves = [read_curve(p, units=units, columns=columns, **tolerance) for p in paths]
     case = load_case(case_path) if case_path is not None else None
     compliance = press_compliance_m_per_n(case) if compensate and case is not None else None
     verdicts = judge_curves(curves, windows, compliance)
