@@ -116,8 +116,9 @@ def _linearised_columns(machine: Machine, pose_m: np.ndarray, gravity: bool) -> 
     (central differences, one batched call of the closed forms at seven poses)."""
     h = DEFLECTION_GRADIENT_STEP_M * np.eye(3)
     poses = np.vstack([pose_m, pose_m + h, pose_m - h])
-    c0 = condensed_plate_compliance(machine, poses)[:, :3, 1]
-    c1 = weight_sag_m(machine, poses) if gravity else np.zeros((7, 3))
+    compliance = condensed_plate_compliance(machine, poses)
+    c0 = compliance[:, :3, 1]
+    c1 = weight_sag_m(machine, poses, compliance) if gravity else np.zeros((7, 3))
     rows = np.stack([c0, c1], axis=1)  # (7, 2, 3)
     return rows[0], np.moveaxis((rows[1:4] - rows[4:7]) / (2.0 * DEFLECTION_GRADIENT_STEP_M), 0, -1)
 

@@ -129,11 +129,12 @@ def weight_wrench_n(machine: Machine, pose_m: np.ndarray) -> np.ndarray:
                            np.cross(machine.plate_offsets_m, forces).sum(-2) + moments.sum(-2)], axis=-1)
 
 
-def weight_sag_m(machine: Machine, poses_m: np.ndarray) -> np.ndarray:
+def weight_sag_m(machine: Machine, poses_m: np.ndarray, compliance: np.ndarray | None = None) -> np.ndarray:
     """The tool's static deflection (..., 3), m, under the machine's own weight at reachable poses (..., 3), m: the
-    condensed plate compliance times :func:`weight_wrench_n` (module doc)."""
+    condensed plate compliance times :func:`weight_wrench_n` (module doc); ``compliance`` (..., 6, 6): the condensed
+    compliance at those poses where the caller has it already."""
     h = np.asarray(poses_m, dtype=float)
     flat = h.reshape(-1, 3)
     wrenches = weight_wrench_n(machine, flat)
-    compliance = condensed_plate_compliance(machine, flat).reshape(-1, 6, 6)
+    compliance = (condensed_plate_compliance(machine, flat) if compliance is None else compliance).reshape(-1, 6, 6)
     return np.einsum("kij,kj->ki", compliance[:, :3], wrenches).reshape(h.shape)
