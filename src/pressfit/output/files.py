@@ -81,6 +81,19 @@ def check_distinct(outputs: dict[str, Path | str | None], inputs: Iterable[Path 
                                           "it would replace the input; give another output file")
 
 
+def check_inputs_outside(out_dir: Path | str, inputs: Iterable[Path | str]) -> None:
+    """Refuse, before any computation, an input file inside the output directory ``out_dir`` of a command whose
+    output names are known only from its results (a design study's ``designs/design-NNNNNN.toml``): with
+    ``--overwrite`` one of them could replace the input (OutputConflictError naming both)."""
+    out = Path(os.path.realpath(out_dir))
+    for f in inputs:
+        real = Path(os.path.realpath(f))
+        if out == real or out in real.parents:
+            raise OutputConflictError("--out", out_dir, str(f), f"--out {out_dir} holds the input file {f}: the "
+                                      "study's files are named by its results and could replace it; give another "
+                                      "--out or move the input out of it")
+
+
 def check_directory(out_dir: Path | str, overwrite: bool) -> Path:
     """Check before any computation that a multi-file output directory can be written: it must be new or
     empty unless ``overwrite`` (then files of the same names are replaced), and its parent writable."""

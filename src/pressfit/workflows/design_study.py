@@ -32,9 +32,10 @@ def run_design_study(case: Case, out_dir: Path | str, *, trials: int | None = No
     replaced without ``overwrite``)."""
     plan = design.plan_from_case(case, trials)
     io.check_directory(out_dir, overwrite)
-    result = design.run_design(plan, workers=workers, scheduler=scheduler, progress=progress, dashboard=dashboard)
     source = case.machine().source
     inputs = [p for p in (case.path, source) if p and Path(str(p)).is_file()]  # a designs/*.toml never replaces them
+    io.check_inputs_outside(out_dir, inputs)
+    result = design.run_design(plan, workers=workers, scheduler=scheduler, progress=progress, dashboard=dashboard)
     return DesignRun(result, io.write_directory(out_dir, overwrite,
                                                 lambda tmp: write_design(result, tmp, best_machines(result)),
                                                 inputs=inputs))
