@@ -221,3 +221,24 @@ def test_the_front_figure_shows_the_samples_the_front_and_the_fastest(tmp_path):
             assert lo < t.min() and hi > t.max() and ax.get_ylim()[0] < y.min() and ax.get_ylim()[1] > y.max()
     finally:
         plt.close(fig)
+
+
+def test_a_case_named_like_the_studys_fastest_case_in_out_is_refused_before_the_study(tmp_path, monkeypatch):
+    """The study writes ``fastest.toml`` into --out: a case file there under that name is an input that
+    --overwrite would replace, refused before the study is computed (exit 2, one line naming --out's file and the
+    input) and left unchanged."""
+    from pressfit.workflows import throughput_study
+
+    out = tmp_path / "out"
+    out.mkdir()
+    case = study_case(out, "fastest.toml")
+    before = case.read_text()
+
+    def computed(*args, **kwargs):
+        raise AssertionError("the study was computed before the refusal")
+
+    monkeypatch.setattr(throughput_study, "cycle_study", computed)
+    res = run("study", "cycle", case, "--out", out, "--overwrite", "--no-progress")
+    lines = res.output.strip().splitlines()
+    assert res.exit_code == 2 and len(lines) == 1 and "fastest.toml" in lines[0] and "input" in lines[0], res.output
+    assert case.read_text() == before

@@ -39,6 +39,9 @@ def front_figure(result: CycleStudyResult) -> plt.Figure:
     return fig
 
 
+FASTEST_CASE = "fastest.toml"  # the fastest setting's case file in the study's directory
+
+
 def write_cycle_study(result: CycleStudyResult, out_dir: Path | str, fastest_toml: str | None = None) -> list[Path]:
     """``samples.parquet``, ``summary.json``, ``front.png`` and, when given, ``fastest_toml`` as ``fastest.toml``
     (the case file of the fastest setting within the limits:
@@ -52,5 +55,5 @@ def write_cycle_study(result: CycleStudyResult, out_dir: Path | str, fastest_tom
     finally:
         plt.close(fig)
     if fastest_toml is not None:
-        paths.append(io.write_text(out / "fastest.toml", fastest_toml))
+        paths.append(io.write_text(out / FASTEST_CASE, fastest_toml))
     return paths

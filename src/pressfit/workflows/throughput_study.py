@@ -12,7 +12,7 @@ import tomli_w
 from pressfit.description.cases import Case, load_case
 from pressfit.description.machine import read_toml
 from pressfit.output import files as io
-from pressfit.output.cycle_study import write_cycle_study
+from pressfit.output.cycle_study import FASTEST_CASE, write_cycle_study
 from pressfit.studies.cycle_study import FACTOR_LABELS, FACTORS, CycleStudyResult, cycle_study, judged_limits, variant
 
 
@@ -50,11 +50,12 @@ def run_cycle_study(case_path: Path | str, model: str | None, out_dir: Path, ove
     (the directory checked before the study, written through a temporary directory)."""
     io.check_directory(out_dir, overwrite)
     case: Case = load_case(case_path)
-    result = cycle_study(case, model, workers, scheduler, progress, dashboard)
     source = case.machine().source
+    inputs = [Path(case_path), *([source] if source else [])]
+    io.check_distinct({"--out": Path(out_dir) / FASTEST_CASE}, inputs)  # the study's case file: before the study
+    result = cycle_study(case, model, workers, scheduler, progress, dashboard)
     paths = io.write_directory(out_dir, overwrite,
-                               lambda tmp: write_cycle_study(result, tmp, fastest_case_toml(result)),
-                               inputs=[Path(case_path), *([source] if source else [])])
+                               lambda tmp: write_cycle_study(result, tmp, fastest_case_toml(result)), inputs=inputs)
     return result, paths
 
 
