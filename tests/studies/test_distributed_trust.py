@@ -314,3 +314,32 @@ def test_a_study_where_every_sample_fails_exits_2_with_the_reasons_counted(tmp_p
     assert "every sample failed (4 x UnstableEquilibriumError)" in result.output
     assert result.output.strip().count("\n") == 0
     assert len(list((tmp_path / "mc" / "samples").glob("chunk-*.parquet"))) == 2
+
+
+def test_a_local_cluster_beyond_four_workers_per_core_is_refused_before_it_starts(monkeypatch):
+    """--workers beyond WORKERS_PER_CORE x the cores the study may use is a huge request (500 processes on two
+    cores thrashed the machine): refused naming the number and the cores, before any process starts; at the cap the
+    cluster is started (a recording stand-in here)."""
+    import distributed as dd
+    from click.testing import CliRunner
+
+    from pressfit.cli import main
+    from pressfit.shipped import cases_dir
+
+    started = []
+
+    class Cluster:
+        def __init__(self, n_workers, **kwargs):
+            started.append(n_workers)
+
+    monkeypatch.setattr(dd, "LocalCluster", Cluster)
+    monkeypatch.setattr(dd, "Client", lambda cluster: cluster)
+    cap = distributed.WORKERS_PER_CORE * distributed.default_workers()
+    assert isinstance(distributed._client(cap, None, False), Cluster) and started == [cap]
+    with pytest.raises(ClusterError, match=rf"--workers {cap + 1}: this machine gives the study "
+                                           rf"{distributed.default_workers()} core\(s\).*more than {cap} worker"):
+        distributed._client(cap + 1, None, False)
+    assert started == [cap]
+    res = CliRunner().invoke(main, ["study", "curve", str(cases_dir() / "paper" / "insertion_compliant_pin.toml"),
+                                    "--samples", "10", "--workers", "500", "--no-progress"])
+    assert res.exit_code == 2 and res.output.startswith("error: --workers 500:") and started == [cap], res.output

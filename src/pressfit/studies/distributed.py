@@ -28,6 +28,7 @@ if TYPE_CHECKING:
 
 
 IN_FLIGHT_PER_THREAD = 4  # chunks queued per worker thread: keeps every worker busy, memory bounded
+WORKERS_PER_CORE = 4  # a local cluster of more worker processes per core is refused before it starts
 
 
 def default_workers() -> int:
@@ -72,9 +73,13 @@ def _client(workers: int | None, scheduler: str | None, dashboard: bool) -> Clie
         except (OSError, TimeoutError, ValueError) as exc:
             raise ClusterError(f"cannot reach the Dask scheduler at {scheduler!r}: {exc}", scheduler=scheduler,
                                cause=str(exc)) from None
-    n = workers or default_workers()
+    n, cores = workers or default_workers(), default_workers()
     if n < 1:
         raise ClusterError(f"the number of workers must be at least 1, got {n}", workers=n)
+    if n > WORKERS_PER_CORE * cores:  # each worker is a process with its own model: beyond the cores they only queue
+        raise ClusterError(f"--workers {n}: this machine gives the study {cores} core(s); a local cluster of more than "
+                           f"{WORKERS_PER_CORE * cores} worker processes is refused (they would only share the cores); "
+                           "use --scheduler for a bigger cluster", workers=n)
     # scheduler and (only when asked) dashboard on loopback: a local study opens nothing to the network
     cluster = LocalCluster(n_workers=n, threads_per_worker=1, processes=True, host="127.0.0.1",
                            dashboard_address="127.0.0.1:0" if dashboard else None, silence_logs=40,
