@@ -261,3 +261,21 @@ def test_the_explicit_step_check_sums_the_component_pins_stiffness(tmp_path):
                 plan_cycle(load_case(path))
         else:
             plan_cycle(load_case(path))
+
+
+@pytest.mark.parametrize(("fit", "expected"), [("linear", 5e4 + 2e5), ("saturating", 5e4 + 40.0 / 2e-4)])
+def test_the_step_checks_contact_slope_of_a_press_fit_pin_in_closed_form(fit, expected):
+    """The stability check's contact slope for one pin on the axis with the press-fit law: k + k_fit (linear fit),
+    k + F_fit / d_fit (the saturating fit's slope at 0, its steepest); the same law as a two-pin field (each pin at
+    half the keys) goes through the force table and gives the same slope (its largest secant, 1e-6)."""
+    from pressfit.description.cases import Contact
+    from pressfit.dynamics.contact import contact_stiffness_bound_n_per_m
+
+    keys = {"law": "press_fit", "stiffness_n_per_m": 5e4, "fit": fit, "fit_stiffness_n_per_m": 2e5,
+            "fit_force_n": 40.0, "fit_depth_m": 2e-4}
+    one = Contact(board_height_m=0.6, pin_position_m=[0.1, -0.05], **keys)
+    assert contact_stiffness_bound_n_per_m(one) == pytest.approx(expected, rel=1e-12)
+    half = {k: v / 2 for k, v in keys.items() if k in ("stiffness_n_per_m", "fit_stiffness_n_per_m", "fit_force_n")}
+    two = Contact(board_height_m=0.6, pin_position_m=[0.1, -0.05], **{**keys, **half},
+                  pins=[{"offset_m": [0.0, 0.0]}, {"offset_m": [0.0, 0.0]}])
+    assert contact_stiffness_bound_n_per_m(two) == pytest.approx(expected, rel=1e-6 if fit == "linear" else 2e-2)

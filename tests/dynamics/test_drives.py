@@ -426,6 +426,33 @@ def test_a_chamber_compressed_past_ten_times_supply_is_refused(hydraulic, chambe
         drive.step(*step)
 
 
+@pytest.mark.parametrize("feedforward", [0.0, 1.0])
+def test_the_flow_feedforward_takes_the_moving_legs_pressure_drag_away(hydraulic, feedforward):
+    """Commanded zero force while the leg extends at 50 mm/s, no leakage: without feed-forward the pressure loop
+    opens the valve for the leg's flow A v only through a pressure error D = p_a - p_b, a drag force A D. Steady
+    state: the spool x = g D (g the loop gain), each land passing A v = K_v |x| sqrt(drop) with the chambers
+    symmetric about the null (drops p_a - p_t = p_s - p_b), so D^3 + (p_s - p_t) D^2 = 2 (A v / (g K_v))^2: 80.65 N
+    here (3% under the small-D estimate A^2 v / (g K_v sqrt((p_s - p_t) / 2)) = 83.3 N), matched to 1e-4. With the
+    full feed-forward (``flow_feedforward = 1``) the spool opens for that flow from the measured rate and the force
+    left is under 1e-4 of it."""
+    machine = hydraulic.with_overrides({"actuator": {"hydraulic": {"leakage_m3_per_s_pa": 0.0,
+                                                                   "flow_feedforward": feedforward}}})
+    hy, drive = machine.actuator.hydraulic, drives.of(machine)
+    rate, l0 = 0.05, 0.7
+    state = drive.initial_state(np.zeros(1), np.full(1, l0))
+    for k in range(100):  # 0.1 s: the loop settles in milliseconds
+        state, force = drive.step(state, np.zeros(1), np.full(1, l0 + rate * k * 1e-3), np.full(1, rate), 1e-3)
+    roots = np.roots([1.0, hy.supply_pressure_pa - hy.tank_pressure_pa, 0.0,
+                      -2.0 * (hy.area_m2 * rate / (hy.pressure_loop_gain_per_pa * hy.valve_flow_gain_m3_per_s_sqrt_pa))
+                      ** 2])
+    drag = hy.area_m2 * float(max(r.real for r in roots if abs(r.imag) < 1e-9 * abs(r)))
+    assert 50.0 < drag < 150.0
+    if feedforward:
+        assert abs(force[0]) < 1e-4 * drag
+    else:
+        assert abs(force[0]) == pytest.approx(drag, rel=1e-4)
+
+
 def test_hydraulic_step_converges_at_one_millisecond(hydraulic):
     """The 1 ms caller step (10 implicit substeps) against the same run at 10 us (one substep each), 30 ms of a
     command step while the leg extends at 50 mm/s."""
