@@ -146,6 +146,9 @@ class PlayedDrive:
         am, af, _, beta = play.scheme
         self.inertia_n_per_m = play.drive_mass_kg * (1 - am) / ((1 - af) * beta * dt_s * dt_s)
         self.kd = drive_stiffness_n_per_m + self.inertia_n_per_m
+        shape = np.shape(start_m)  # the solve's per-leg constants, as its compiled iteration takes them
+        self._g, self._kd = (np.ascontiguousarray(np.broadcast_to(a, shape), dtype=float) for a in (gaps_m, self.kd))
+        self._trust = 2.0 * self._g + 10.0 * play.width_m + 1e-6  # m: the largest step before a bracket is known
         self._last: tuple[np.ndarray, np.ndarray] | None = None  # the last solve's (q_a, f)
         self._previous: tuple[np.ndarray, np.ndarray, np.ndarray] | None = None  # the one before, with its tangent
 
@@ -199,11 +202,9 @@ class PlayedDrive:
         return self.play.drive_mass_kg * self._accelerations(length_m)[1]
 
     def __call__(self, lengths_m: np.ndarray) -> np.ndarray:
-        k, w = self.play.stiffness_n_per_m, self.play.width_m
+        k, w, g, kd, trust = self.play.stiffness_n_per_m, self.play.width_m, self._g, self._kd, self._trust
         x, f = np.array(self.x, dtype=float), np.empty(np.shape(self.x))
-        g, kd = (np.ascontiguousarray(np.broadcast_to(a, x.shape), dtype=float) for a in (self.gaps, self.kd))
         lo, hi = np.full(x.shape, -np.inf), np.full(x.shape, np.inf)
-        trust = 2.0 * g + 10.0 * w + 1e-6  # m: the largest step before a bracket is known
         previous = np.full(x.shape, np.inf)  # the last step's size: Newton must halve it, or the bracket is halved
         last = np.full((2, x.size), np.nan)  # the last iterate's x and r (the secant's other point)
         for _ in range(PLAY_ITERATIONS):
