@@ -87,10 +87,12 @@ def test_preload_share_is_a4_vp_along_the_path(sized):
 
 
 def _plays_and_stems(cols):
-    """The plays' stored energy change and dissipation less the stems' re-placement energy, J (0 on the rigid
-    model, which the board runs on unless its case says otherwise)."""
-    return (cols["play_energy_j"][-1] - cols["play_energy_j"][0] + cols["play_dissipation_j"][1:].sum()
-            - cols["stem_replacement_j"][1:].sum())
+    """The elastic energy change, the plays' stored energy change and dissipation and the sensors' series springs'
+    loss less the stems' re-placement energy, J (0 on the rigid model, which the board runs on unless its case says
+    otherwise)."""
+    return (cols["elastic_energy_j"][-1] - cols["elastic_energy_j"][0]
+            + cols["play_energy_j"][-1] - cols["play_energy_j"][0] + cols["play_dissipation_j"][1:].sum()
+            + cols["series_loss_j"][1:].sum() - cols["stem_replacement_j"][1:].sum())
 
 
 def test_energy_balance_closes(sized):

@@ -135,6 +135,35 @@ def test_screw_stiffness_in_series_with_nut_and_bearing(electric):
     np.testing.assert_allclose(electric.axial_compliance_m_per_n(lengths), 1 / expected + segments, rtol=1e-14)
 
 
+def test_the_sensors_see_the_tubes_and_the_drive_unless_they_read_past_it(machine, electric, hydraulic):
+    """The axial compliance between a drive's position sensor and the cardans: the whole leg's for the force kind and
+    the electric drive (its motor encoder sits before the ball screw), the tubes' alone, lc / (E A_c) + (l - lc) /
+    (E A_s) in closed form, for the hydraulic cylinder (its piston sensor reads past the oil column)."""
+    lengths = np.array([0.55, 0.75, 0.95])
+    for m in (machine, electric):
+        np.testing.assert_array_equal(m.sensed_axial_compliance_m_per_n(lengths), m.axial_compliance_m_per_n(lengths))
+    e, lc = hydraulic.material.youngs_modulus_pa, hydraulic.cylinder.length_m
+    tubes = lc / (e * hydraulic.cylinder_section.area_m2) + (lengths - lc) / (e * hydraulic.stem_section.area_m2)
+    np.testing.assert_allclose(hydraulic.sensed_axial_compliance_m_per_n(lengths), tubes, rtol=1e-12)
+    assert np.all(hydraulic.axial_compliance_m_per_n(lengths) > 20 * tubes)  # the oil column dominates the leg
+
+
+def test_the_condensed_compliance_from_the_sensors_is_the_machine_with_a_rigid_oil_column(machine, hydraulic):
+    """``condensed_plate_compliance(..., sensed=True)`` of the hydraulic machine against a second machine: the same
+    file with the oil's bulk modulus 1e6 times larger (the oil column 1e6 times stiffer), its full condensed
+    compliance (to 1e-5); the sensed C_yy is 41% below the full one at the shipped end pose (the oil column's share);
+    the force-kind machine's is its full compliance exactly."""
+    poses = np.array([[0.0, 0.68, 0.15], [0.10, 0.60, -0.05], [-0.15, 0.65, 0.10]])
+    stiff = hydraulic.with_overrides({"actuator": {"hydraulic": {"bulk_modulus_pa": 1.2e15}}})
+    sensed = condensed.condensed_plate_compliance(hydraulic, poses, sensed=True)
+    np.testing.assert_allclose(sensed, condensed.condensed_plate_compliance(stiff, poses), rtol=1e-5,
+                               atol=1e-5 * np.abs(sensed).max())
+    full = condensed.condensed_plate_compliance(hydraulic, poses)
+    assert sensed[0, 1, 1] < 0.65 * full[0, 1, 1]
+    np.testing.assert_array_equal(condensed.condensed_plate_compliance(machine, poses, sensed=True),
+                                  condensed.condensed_plate_compliance(machine, poses))
+
+
 def test_oil_column_stiffness_lowest_at_mid_stroke(hydraulic):
     hy = hydraulic.actuator.hydraulic
     area = math.pi / 4 * (0.032**2 - 0.022**2)

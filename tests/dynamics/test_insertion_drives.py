@@ -17,6 +17,7 @@ from pressfit.cli import main
 from pressfit.description.cases import load_case, load_machine
 from pressfit.dynamics import insertion
 from pressfit.dynamics.actuators import ForceActuators
+from pressfit.dynamics.leg_weight import weight_sag_m
 from pressfit.dynamics.machine.flexible import FlexibleMachine
 from pressfit.dynamics.multibody import rigid_leg_model
 from pressfit.mechanics.condensed import condensed_plate_compliance
@@ -203,7 +204,8 @@ def both_models(tmp_path_factory):
 
 def _contact_deflection(result):
     """The contact's share of the structure's deflection (tool - kinematic pose) at the end of the dwell (against
-    the last row before first contact), m, the contact force there, N, and the kinematic pose there, m."""
+    the last row before first contact), m, the contact force there, N, and the kinematic poses there and at that
+    row before the contact, m."""
     col = {c: k for k, c in enumerate(insertion.series_columns(4))}
     tool = result.series[:, [col[f"tool_{a}_m"] for a in "xyz"]]
     kinematic = result.series[:, [col[f"kinematic_{a}_m"] for a in "xyz"]]
@@ -211,7 +213,7 @@ def _contact_deflection(result):
     first = int(np.flatnonzero(force > 0.0)[0])
     last = int(np.flatnonzero(result.phases == result.phase_names.index("dwell"))[-1])
     d = tool - kinematic
-    return d[last] - d[first - 1], force[last], kinematic[last]
+    return d[last] - d[first - 1], force[last], kinematic[[last, first - 1]]
 
 
 @pytest.mark.parametrize("kind", ["electric", "hydraulic"])
@@ -222,29 +224,33 @@ def test_flexible_drive_insertion_agrees_with_the_rigid_model_at_the_paper_speed
     * peak contact force within 3% (measured +2.0% electric, +2.1% hydraulic): the clamp holds the contact at the
       30 N limit plus the loop's feed-forward error, which is 0.6 N larger on the elastic model (its weight against
       the rigid model's gravity feed-forward);
-    * the contact's share of the hidden tool deflection (tool - kinematic pose) within 4% of the rigid run's less the
-      drive's own series compliance (measured 2.5% electric, 1.2% hydraulic; the pose moves 0.6 mm between the two
-      rows compared, and the weight's deflection with it: 2.4%, tests/dynamics/test_insertion_flexible.py). The
-      drive's part, (C(drive) - C(rigid actuators)) F, from the condensed compliance of the two machines at the
-      pose (an independent, rigid-leg statics formulation): the rigid model's series compliance carries the drive's
-      axial compliance as hidden deflection, the flexible model's actuator joints carry the drive only. It is
-      0.14 um for the electric drive (the screw's stretch, which its motor encoder would not see: the flexible model
-      leaves it out) and 3.6 um for the hydraulic one (the oil column's compression, which its position transducer
-      does see: the rigid model counts it twice, once through the drive's pressures and once as hidden; without
-      the drive's part the shares differ by 28%)."""
+    * the contact's share of the hidden tool deflection (tool - kinematic pose: what the drives' position sensors do
+      not see) within 4% of the rigid run's (measured 1.5% electric, 0.48% hydraulic; the pose moves 0.6 mm between
+      the two rows compared). Both models put the same compliance between the sensors and the tool, each its own
+      way: the rigid model the condensed compliance from the sensors in series at the tool, the flexible model its
+      elastic legs plus the sensors' series stretch N c. The rigid run's share against an independent machine: for
+      the hydraulic drive the same file with the oil 1e6 times stiffer (for the electric drive its own file: the
+      screw's stretch is between the motor encoder and the tool), its full condensed compliance times the force plus
+      the change of the weight's sag between the two rows' poses (:func:`pressfit.dynamics.leg_weight.weight_sag_m`,
+      3% of the share), to 1e-3 (measured 1.7e-4 electric, 3.7e-5 hydraulic: the closed forms the rigid model
+      carries); for the hydraulic drive more than 15% off the full compliance with the oil column (measured 34%: the
+      piston sensor reads past the oil column, which the drive's pressures carry, so it is counted once; it was
+      counted twice before)."""
     rigid, flexible = both_models[kind, "rigid"], both_models[kind, "flexible"]
     peak_r, peak_f = (r.summary["peak_contact_force_n"] for r in (rigid, flexible))
     assert abs(peak_f / peak_r - 1.0) < 0.03, (peak_r, peak_f)
-    share_r, force_r, pose = _contact_deflection(rigid)
+    share_r, force_r, (pose, before) = _contact_deflection(rigid)
     share_f, _, _ = _contact_deflection(flexible)
-    rigid_actuators = {"actuator": {"axial_stiffness_n_per_m": 1e15}}
-    base = load_machine(ROOT / "models/pressfit_4upu.toml").with_overrides(rigid_actuators)
     machine = load_machine(ROOT / f"models/pressfit_4upu_{kind}.toml")
-    part = (condensed_plate_compliance(machine, pose[None])[0][:3, 1]
-            - condensed_plate_compliance(base, pose[None])[0][:3, 1]) * force_r
-    expected = share_r - part
-    assert np.linalg.norm(part) > (1e-6 if kind == "hydraulic" else 1e-8)
-    assert np.linalg.norm(share_f - expected) < 0.04 * np.linalg.norm(expected), (share_f, expected, part)
+    seen = (machine.with_overrides({"actuator": {"hydraulic": {"bulk_modulus_pa": 1.2e15}}}) if kind == "hydraulic"
+            else machine)
+    sag = weight_sag_m(seen, np.array([pose, before]))
+    expected = condensed_plate_compliance(seen, pose[None])[0][:3, 1] * force_r + sag[0] - sag[1]
+    full = condensed_plate_compliance(machine, pose[None])[0][:3, 1] * force_r
+    assert np.linalg.norm(share_r - expected) < 1e-3 * np.linalg.norm(expected), (share_r, expected)
+    if kind == "hydraulic":
+        assert np.linalg.norm(share_r - full) > 0.15 * np.linalg.norm(expected)
+    assert np.linalg.norm(share_f - share_r) < 0.04 * np.linalg.norm(share_r), (share_f, share_r)
     assert np.linalg.norm(expected) > 5e-6  # micrometres: not round-off
 
 

@@ -288,8 +288,8 @@ def test_the_drive_sides_bounce_keeps_its_energy_when_resolved_and_never_gains_i
 def test_positioning_verdict_with_the_plays_just_over_and_under_the_kinematic_closed_form(pairs):
     """``max_positioning_error_m`` on the run with the plays: the larger of the lateral error at the end of the
     dwell and the 3D error at the end of the run. Its true value here is the lateral one, built from the run
-    without the plays and the plays' closed form E^+ dx in x and z (156 um; the end-of-run error, 89 um, is well
-    below it: at the end pose two legs sit near zero tension, inside their gaps, where no closed form holds).
+    without the plays and the plays' closed form E^+ dx in x and z (149 um; the end-of-run error, 142 um, is below
+    it: at the end pose two legs sit near zero tension, inside their gaps, where no closed form holds).
     A limit 1% under it fails, 1% over passes (the closed form holds to 0.5 um: 0.3%)."""
     from pressfit.studies.limit_check import simulation_lines
 
@@ -300,7 +300,7 @@ def test_positioning_verdict_with_the_plays_just_over_and_under_the_kinematic_cl
     end = int(np.flatnonzero(free.phases == free.phase_names.index("dwell"))[-1])
     lateral = np.hypot(*(_xyz(free, "tool")[end, [0, 2]] - sim.contact.pin_position_m + moved[[0, 2]]))
     assert played.summary["tool_lateral_error_at_insertion_m"] == pytest.approx(lateral, abs=5e-7)
-    assert played.summary["tool_final_error_m"] < 0.9 * lateral
+    assert played.summary["tool_final_error_m"] < 0.98 * lateral
     verdicts = [simulation_lines({"max_positioning_error_m": lateral * f}, played.summary, sim.contact.pin_position_m,
                                  sim.contact.board_height_m)[0].passed for f in (0.99, 1.01)]
     assert verdicts == [False, True]

@@ -178,6 +178,7 @@ def _echo_sizing(s: dict) -> None:
                f"{e['pin_work_j']:.4g} + damping {e['damping_j']:.4g}"
                + (f" + plays' stored {e['play_energy_change_j']:.3g} + plays' dissipation {e['play_dissipation_j']:.4g}"
                   if e.get("play_energy_change_j") or e.get("play_dissipation_j") else "")
+               + (f" + series springs' loss {e['series_loss_j']:.3g}" if e.get("series_loss_j") else "")
                + f" + residual {e['residual_j']:.3g} J "
                f"({100 * e['relative_residual']:.2g}% of the drives' gross work {e['gross_drive_work_j']:.4g} J, "
                f"tolerance {100 * e['tolerance']:g}%); drive losses {e['drive_losses_j']:.4g} J")

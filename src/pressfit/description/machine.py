@@ -213,10 +213,15 @@ class DriveTable(StrictModel):
     :meth:`axial_stiffness_n_per_m` (its own axial stiffness in series with the leg), :meth:`reflected_mass_kg`
     (inertia along the leg carried as the prismatic joint's armature) and :meth:`check` (its constraints
     against the rest of the machine). ``inline``: its keys sit in ``[actuator]`` itself (the force kind), not
-    in a table ``[actuator.<kind>]``. A new kind is one subclass and one line of :data:`DRIVE_TABLES`."""
+    in a table ``[actuator.<kind>]``. ``sensed_past_stiffness``: its position sensor reads the drive's output
+    past its own axial stiffness, which is then inside the position loop and not between the sensor and the tool
+    (a hydraulic cylinder's piston sensor, past the oil column; a servo motor's encoder sits before its ball
+    screw, a linear motor's scale inside its mount). A new kind is one subclass and one line of
+    :data:`DRIVE_TABLES`."""
 
     inline: ClassVar[bool] = False
     force_limit_key: ClassVar[str] = ""
+    sensed_past_stiffness: ClassVar[bool] = False
 
     @property
     def force_limit_n(self) -> float:
@@ -362,6 +367,7 @@ class HydraulicDrive(DriveTable):
     translate with the stem (``mass.actuator_moving_mass_kg``)."""
 
     force_limit_key: ClassVar[str] = "A ([actuator.hydraulic] supply_pressure_pa - tank_pressure_pa)"
+    sensed_past_stiffness: ClassVar[bool] = True  # the piston's position sensor reads past the oil column
 
     piston_area_m2: Positive | None = None
     bore_diameter_m: Positive | None = None
@@ -836,6 +842,15 @@ class Machine(StrictModel):
         drive = 1.0 / self.drive_stiffness_n_per_m(leg_length_m)
         return (drive + lc / (e * self.cylinder_section.area_m2)
                 + (np.asarray(leg_length_m) - lc) / (e * self.stem_section.area_m2))
+
+    def sensed_axial_compliance_m_per_n(self, leg_length_m: np.ndarray | float) -> np.ndarray:
+        """The part of :meth:`axial_compliance_m_per_n` between the drive's position sensor and the leg's cardans,
+        m/N: all of it, less the drive's own where the sensor reads past it (``DriveTable.sensed_past_stiffness``:
+        the hydraulic cylinder's piston sensor, the oil column inside its position loop)."""
+        compliance = self.axial_compliance_m_per_n(leg_length_m)
+        if self.actuator.table.sensed_past_stiffness:
+            compliance = compliance - 1.0 / self.drive_stiffness_n_per_m(leg_length_m)
+        return compliance
 
     def drive_stiffness_n_per_m(self, leg_length_m: np.ndarray | float) -> np.ndarray:
         """The drive's own axial stiffness at leg length l (m), N/m: its table's

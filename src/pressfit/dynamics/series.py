@@ -28,10 +28,11 @@ from pressfit.errors import DriveStepError, PressfitError, format_violation
 # the machine's energies after the step and the Rayleigh damping's work over it (flexible model; 0 on the rigid one,
 # which has no elastic energy either), the cardan plays' stored energy after the step and their dissipation over it
 # (flexible model with clearance, :class:`PlayLedger`; 0 otherwise), the energy change of the step's stem
-# re-placement (flexible model, :meth:`FlexibleMachine.replacement_energy_j`; 0 on the rigid one), J: the energy
-# balance of :mod:`pressfit.dynamics.sizing`
+# re-placement (flexible model, :meth:`FlexibleMachine.replacement_energy_j`; 0 on the rigid one), the loss of the
+# drives' sensor-side series springs over the step (flexible model, :meth:`FlexibleScenario._sense`; 0 on the rigid
+# one), J: the energy balance of :mod:`pressfit.dynamics.sizing`
 ENERGY_COLUMNS = ("kinetic_energy_j", "potential_energy_j", "elastic_energy_j", "damping_work_j", "play_energy_j",
-                  "play_dissipation_j", "stem_replacement_j")
+                  "play_dissipation_j", "stem_replacement_j", "series_loss_j")
 
 
 def internal_columns(legs: int) -> tuple[str, ...]:

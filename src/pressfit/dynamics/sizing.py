@@ -23,7 +23,7 @@ hydraulic one the peak flow against the valve's no-load flow K_v sqrt((p_s - p_t
 
 Energy balance of a run (:func:`energy_balance`), between its first and last rows:
 
-    W_drives = dK + dV_g + dV_el + W_pin + D + dV_play + P_play - E_replacement + residual,
+    W_drives = dK + dV_g + dV_el + W_pin + D + dV_play + P_play - E_replacement + L_series + residual,
 
 W_drives = sum_i sum_k -N_i,k (l_i,k - l_i,k-1), the exact work of the tensions held over each step over the
 drives' lengths (the sensors'); W_pin = sum_k F_k-1 (y_k-1 - y_k), the work of the tool on the pin (the contact
@@ -33,7 +33,9 @@ and V_g from Pinocchio; V_el the flexible model's springs and D its Rayleigh dam
 (:class:`pressfit.dynamics.machine.flexible.FlexibleState`); V_play and P_play the cardan plays' stored energy and
 dissipation (flexible model with clearance: :class:`.flexible_scenario.PlayLedger`, what the drives do
 on their side of the plays minus what reaches the legs); E_replacement the stems' re-placement, a jump of the
-flexible machine's energy no force works on (:meth:`FlexibleMachine.replacement_energy_j`, step-independent). The
+flexible machine's energy no force works on (:meth:`FlexibleMachine.replacement_energy_j`, step-independent);
+L_series the loss of the drives' sensor-side series springs (flexible model: the tension held over a step stepping
+into a massless spring, :mod:`pressfit.dynamics.machine.flexible_scenario`). The
 drives' own losses (copper, valve throttling) are upstream of the joints, so they are reported beside the balance,
 not in it. The relative residual is |residual| / the drives' gross work sum_k |sum_i -N_i,k (l_i,k - l_i,k-1)|
 (the energy the drives move in and out of the machine; the preload's circulating power, which sums to zero over
@@ -241,6 +243,7 @@ class EnergyBalance:
     play_energy_change_j: float = 0.0
     play_dissipation_j: float = 0.0
     stem_replacement_j: float = 0.0
+    series_loss_j: float = 0.0
     model: str = "rigid"
     drive_kind: str = "force"
     step_convergent: bool = True
@@ -253,9 +256,10 @@ class EnergyBalance:
         plays = (f" + plays' stored {self.play_energy_change_j:.4g} + plays' dissipation {self.play_dissipation_j:.4g}"
                  if self.play_energy_change_j or self.play_dissipation_j else "")
         stems = f" - stem re-placement {self.stem_replacement_j:.4g}" if self.stem_replacement_j else ""
+        series = f" + series springs' loss {self.series_loss_j:.4g}" if self.series_loss_j else ""
         return (f"drive work {self.drive_work_j:.4g} J = kinetic {self.kinetic_change_j:.4g} + potential "
                 f"{self.potential_change_j:.4g} + elastic {self.elastic_change_j:.4g} + pin {self.pin_work_j:.4g} + "
-                f"damping {self.damping_j:.4g}{plays}{stems} + residual {self.residual_j:.4g} J")
+                f"damping {self.damping_j:.4g}{plays}{stems}{series} + residual {self.residual_j:.4g} J")
 
     def require_closed(self, where: str = "", table: str = "simulation") -> EnergyBalance:
         """Itself, or ResidualError when ``relative_residual`` exceeds ``tolerance`` (the energies are not trusted).
@@ -281,13 +285,15 @@ def energy_balance(lengths_m: np.ndarray, tensions_n: np.ndarray, contact_force_
                    contact_y_m: np.ndarray, kinetic_j: np.ndarray, potential_j: np.ndarray, elastic_j: np.ndarray,
                    damping_work_j: np.ndarray, drive_losses_j: float = 0.0, *, model: str, drive_kind: str,
                    play_energy_j: np.ndarray | None = None, play_dissipation_j: np.ndarray | None = None,
-                   stem_replacement_j: np.ndarray | None = None) -> EnergyBalance:
+                   stem_replacement_j: np.ndarray | None = None,
+                   series_loss_j: np.ndarray | None = None) -> EnergyBalance:
     """The balance between the first and the last of n rows (module docstring): the drives' lengths (n, legs) m,
     the tensions held over the step ending at each row (n, legs) N, the contact force at each row (n,) N (+y on the
     tool, held over the next step) and the y of the point it acts on (n,) m, the energies at each row (n,) J, the
     damping's work over the step ending at each row (n,) J and, with cardan plays, their stored energy at each row
     (n,) J and their dissipation over the step ending at it (n,) J, and the energy change of each step's stem
-    re-placement (n,) J (flexible model); held to the tolerance of ``model`` with drives of
+    re-placement (n,) J and the sensors' series springs' loss over the step ending at each row (n,) J (flexible
+    model); held to the tolerance of ``model`` with drives of
     ``drive_kind`` (:func:`energy_balance_tolerance`)."""
     lengths, n = np.asarray(lengths_m, float), np.asarray(tensions_n, float)
     force, y = np.asarray(contact_force_n, float), np.asarray(contact_y_m, float)
@@ -303,13 +309,14 @@ def energy_balance(lengths_m: np.ndarray, tensions_n: np.ndarray, contact_force_
                                                      - np.asarray(play_energy_j, float)[0])
     lost = 0.0 if play_dissipation_j is None else float(np.sum(np.asarray(play_dissipation_j, float)[1:]))
     replaced = 0.0 if stem_replacement_j is None else float(np.sum(np.asarray(stem_replacement_j, float)[1:]))
-    residual = drive - kin - pot - el - pin_work - damp - stored - lost + replaced
+    series = 0.0 if series_loss_j is None else float(np.sum(np.asarray(series_loss_j, float)[1:]))
+    residual = drive - kin - pot - el - pin_work - damp - stored - lost + replaced - series
     return EnergyBalance(drive_work_j=drive, kinetic_change_j=kin, potential_change_j=pot, elastic_change_j=el,
                          pin_work_j=pin_work, damping_j=damp, residual_j=residual,
                          gross_drive_work_j=gross, relative_residual=abs(residual) / gross if gross > 0 else 0.0,
                          tolerance=energy_balance_tolerance(model, drive_kind), drive_losses_j=float(drive_losses_j),
                          play_energy_change_j=stored, play_dissipation_j=lost, stem_replacement_j=replaced,
-                         model=model, drive_kind=drive_kind,
+                         series_loss_j=series, model=model, drive_kind=drive_kind,
                          step_convergent=converges_with_the_step(model, drive_kind))
 
 
@@ -362,7 +369,7 @@ def run_sizing(result: Any, drive: drive_kinds.Drive, dt_s: float, without_prelo
                              col("kinetic_energy_j"), col("potential_energy_j"), col("elastic_energy_j"),
                              col("damping_work_j"), drive_losses_j(sizing), model=model, drive_kind=drive.kind,
                              play_energy_j=col("play_energy_j"), play_dissipation_j=col("play_dissipation_j"),
-                             stem_replacement_j=col("stem_replacement_j"))
+                             stem_replacement_j=col("stem_replacement_j"), series_loss_j=col("series_loss_j"))
     return RunSizing(sizing, balance)
 
 

@@ -6,8 +6,9 @@ centre), each with its law f_i (:mod:`pressfit.mechanics.contact_laws`, force N 
 tool up (+y) with F_i; about the tool tip this is the wrench w = G F, G's column i = (0, 1, 0, -dz_i, 0, dx_i)
 (force, moment r_i x F_i e_y). The tool moves by [u; theta] = C w, C the plate's compliance about its centre
 (:func:`pressfit.mechanics.condensed.condensed_plate_compliance`, translation then rotation: m/N, rad/N,
-rad/(N m); the legs and the drives' axial compliance included). With the tool's true depth d (its tip below the
-board face, m), pin i is at the depth
+rad/(N m); the legs and the drives' axial compliance between the drives' position sensors and the plate: all of
+it but a hydraulic cylinder's oil column, which its piston sensor reads past and its position loop holds). With
+the tool's true depth d (its tip below the board face, m), pin i is at the depth
 
 .. math:: d_i = d - (\theta \times r_i)_y = d - (\theta_z dx_i - \theta_x dz_i) = d - (G_r^T \theta)_i,
           \qquad \theta = C_{r\cdot} G F,
@@ -306,7 +307,7 @@ def predict_curve(machine: Machine, case_or_contact: Case | Contact, *, pose_m: 
         raise PressCurveError(path, "samples", f"give 2 .. 1e6 samples, got {samples}")
     pins = PinField.from_contact(contact)
     pose = pin_pose_m(contact) if pose_m is None else np.asarray(pose_m, dtype=float)
-    compliance = condensed_plate_compliance(machine, pose)
+    compliance = condensed_plate_compliance(machine, pose, sensed=True)
     end = _stroke_end(pins, max_depth_m, fallback, path)
     seats = [law.seat_depth_m for law in pins.laws]
     shoulder = all(s is not None for s in seats)

@@ -6,7 +6,17 @@ The machine file's ``[damping]``; with ``clearance`` the cardan plays between th
 joints, stepped inside the flexible step's Newton at the mean rate of the step (implicit, so that an oil column is
 stable: ``FlexibleMachine.step``'s ``drive``; the ideal force drive, which ignores the travel, once per step), the
 contact force on the elastic tool point (the plate centre), evaluated at the end of each step and held over the
-next (as in the rigid model); no series compliance (it is in the model). Starts from the static equilibrium under
+next (as in the rigid model). The drives' position sensors read their own side of the leg's axial compliance the
+model does not carry (:meth:`pressfit.description.machine.Machine.sensed_axial_compliance_m_per_n`: the tubes, and
+the drive's own stiffness unless its sensor reads past it; the force drives act on the actuator joint, which carries
+no spring): quasi-statically, a sensor reads l - N c(l) (l the actuator joint's length, or its drive side of the
+plays; N the drive's tension, c that compliance), its rate differenced over the step, so the controller sees the
+press's deflection as on the machine (``sensed_depth_m``, the deflection compensation). The massless series spring's
+energy N^2 c / 2 is in the ``elastic_energy_j`` column; the tension held over a step (it steps at the step's start)
+stretches it by s_k - s_k-1 = N_k c_k - N_k-1 c_k-1 under N_k, which is more than its energy change by
+c (N_k - N_k-1)^2 / 2 (a force step into a massless spring: first order in the step where the tension is smooth, not
+where cardan plays make it chatter; plus N_k^2 dc / 2 as the stem's exposed length changes): the ``series_loss_j``
+column, so that the energy balance is held to the integrator's error alone. Starts from the static equilibrium under
 gravity with the drives holding the start pose's lengths. The step runs with BLAS on one thread
 (``one_blas_thread``): its matrices are small (nv + 24 = 146), and OpenBLAS's default threads (one per core) cost
 3.6 times the CPU time of the run on the shared 2-core machine (docs/benchmarks.md).
@@ -63,6 +73,10 @@ class FlexibleScenario:
         self.lengths, self.rates = lengths, rates = fm.leg_lengths_m(state), fm.leg_rates_m_per_s(state)  # measured
         force = ctrl.command(lengths, rates, plan.trajectory.at(0.0), 0.0, 0.0)
         self.tension = tension = -ctrl.pinv @ force + ctrl.null @ self.preload
+        self.series_compliance = machine.sensed_axial_compliance_m_per_n
+        self.stretch = tension * self.series_compliance(lengths)  # the series spring's, N c, m
+        self.sensed, self.sensed_rates = lengths - self.stretch, rates.copy()
+        self.series_j = 0.5 * float(tension @ self.stretch)  # the series springs' energy, J
         self.play = play = None if plays is None else LegPlay(machine, plays, start, tension, fm.drive_mass_kg)
         self.extension = np.zeros(len(machine.legs))
         self.side = DriveSide(length_m=lengths.copy(), rate_m_per_s=rates.copy(),
@@ -121,8 +135,8 @@ class FlexibleScenario:
     def step(self, k: int, t: float, reference: tuple[np.ndarray, np.ndarray], force_limit_n: float) -> None:
         fm, ctrl, guard, dt = self.fm, self.ctrl, self.guard, self.dt
         ctrl.force_limit_n = force_limit_n
-        force = ctrl.command(self.drives.measure_lengths_m(self.lengths), self.rates, reference, self.contact_force,
-                             dt)
+        force = ctrl.command(self.drives.measure_lengths_m(self.sensed), self.sensed_rates, reference,
+                             self.contact_force, dt)
         command = -ctrl.pinv @ force + ctrl.null @ self.preload
         self.wrench[1] = self.contact_force
         replaced = fm.replacement_energy_j(self.state)  # the step re-places the stems first
@@ -140,12 +154,22 @@ class FlexibleScenario:
         legs_m = self.lengths = fm.leg_lengths_m(state)
         self.rates = fm.leg_rates_m_per_s(state)
         plays_j = self._measure(through, legs_m)
+        series = self._sense()
         kernels.internal_forces(ctrl.null, self.tension, self.internal)
         self.series.add(k, (t, *reference[0] + [0.0, ctrl.lift_m, 0.0], *ctrl.estimate_m, *tool, *tool,
                             self.contact_force, self.depth, *command, *self.tension, ctrl.lift_m, drift,
-                            *self.no_axial, *self.internal), self.lengths, self.rates,
-                        (*_energies(fm.energy(state), state.damping_work_j, self._side_kinetic_j()), *plays_j,
-                         replaced))
+                            *self.no_axial, *self.internal), self.sensed, self.sensed_rates,
+                        (*_energies(fm.energy(state), state.damping_work_j, self._side_kinetic_j(), series[0]),
+                         *plays_j, replaced, series[1]))
+
+    def _sense(self) -> tuple[float, float]:
+        """What the drives' sensors read after the step (module docstring): l - N c(l) and its differenced rate;
+        returns the series springs' energy sum N^2 c / 2 and their loss over the step, N . ds - dE, J."""
+        previous, self.stretch = self.stretch, self.tension * self.series_compliance(self.lengths)
+        self.sensed = self.lengths - self.stretch
+        self.sensed_rates = self.rates - (self.stretch - previous) / self.dt
+        before, self.series_j = self.series_j, 0.5 * float(self.tension @ self.stretch)
+        return self.series_j, float(self.tension @ (self.stretch - previous)) - (self.series_j - before)
 
     def rows(self) -> tuple[np.ndarray, np.ndarray]:
         machine = self.machine
@@ -199,8 +223,9 @@ class PlayLedger:
         return float(stored_j), dissipation
 
 
-def _energies(energy: Energy, damping_work_j: float, drive_side_j: float = 0.0) -> tuple[float, float, float, float]:
+def _energies(energy: Energy, damping_work_j: float, drive_side_j: float = 0.0,
+              series_j: float = 0.0) -> tuple[float, float, float, float]:
     """Kinetic (plus ``drive_side_j``, the drives' reflected masses behind the plays), potential and elastic
-    energy and the damping work, J."""
+    (plus ``series_j``, the sensors' series springs) energy and the damping work, J."""
     kinetic = energy.kinetic_j + drive_side_j
-    return kinetic, energy.potential_j, energy.elastic_j, damping_work_j
+    return kinetic, energy.potential_j, energy.elastic_j + series_j, damping_work_j

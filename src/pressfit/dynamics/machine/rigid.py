@@ -174,7 +174,7 @@ class RigidScenario:
         row[self.drift_column] = drift = rigid.closure_error_m()
         guard.drift(drift, t)
         guard.pose(k, t, q[0:3])
-        row[self.energy] = (*rigid.energy_j(q, v), 0.0, 0.0, 0.0, 0.0, 0.0)
+        row[self.energy] = (*rigid.energy_j(q, v), 0.0, 0.0, 0.0, 0.0, 0.0, 0.0)
 
     def rows(self) -> tuple[np.ndarray, None]:
         return self.series.rows(), None
