@@ -61,3 +61,30 @@ def test_tangent_compliance_under_load_equals_the_reference_solvers_difference_q
     assert np.abs(tan - ref).max() < 1e-8 * np.abs(ref).max()
     assert np.abs((tan - lin) - (ref - lin)).max() < 5e-6 * np.abs(ref - lin).max()
     assert 1e-3 < np.abs(ref - lin).max() / np.abs(lin).max() < 3e-3  # the geometric term is resolved: 1.9e-3
+
+
+def test_stiffness_reports_the_compliance_the_sensors_see(machine):
+    """``pressfit stiffness``'s ``sensed_vertical_compliance_m_per_n``: for the hydraulic machine the Pinocchio VJM
+    C_yy of the same file with the oil 1e6 times stiffer (an independent model: the oil column is what the piston
+    sensor reads past), to 1e-5, 41% below its full C_yy; for the force-kind machine its full C_yy (the drive's
+    stiffness is between its sensor and the tool); the CLI prints the line only where the two differ."""
+    from click.testing import CliRunner
+
+    from pressfit.cli import main
+    from pressfit.description.machine import load_machine
+    from pressfit.mechanics.compliance import pose_stiffness_report
+    from pressfit.shipped import models_dir
+
+    pose = [0.0, 0.68, 0.15]
+    hydraulic = load_machine(models_dir() / "pressfit_4upu_hydraulic.toml")
+    stiff = hydraulic.with_overrides({"actuator": {"hydraulic": {"bulk_modulus_pa": 1.2e15}}})
+    report = pose_stiffness_report(hydraulic, pose)
+    sensed = report["sensed_vertical_compliance_m_per_n"]
+    assert sensed == pytest.approx(vjm_plate_compliance(stiff, np.array(pose))[1, 1], rel=1e-5)
+    assert sensed < 0.65 * report["compliance_6x6"][1][1]
+    plain = pose_stiffness_report(machine, pose)
+    assert plain["sensed_vertical_compliance_m_per_n"] == plain["compliance_6x6"][1][1]
+    lines = [CliRunner().invoke(main, ["stiffness", *map(str, pose), *extra]).output
+             for extra in (["--model", str(models_dir() / "pressfit_4upu_hydraulic.toml")], [])]
+    assert f"vertical compliance {sensed:.4e} m/N" in lines[0]
+    assert "position sensors" not in lines[1]

@@ -176,3 +176,43 @@ def test_the_simulated_monitor_curve_agrees_with_the_predicted_curve(compliant_p
     c_yy = vjm_plate_compliance(case.machine(), np.array([0.1, 0.6, -0.05]))[1, 1]
     assert s["machine_compliance_along_press_m_per_n"] == pytest.approx(c_yy, rel=1e-6)
     assert s["sensed_minus_true_depth_at_peak_m"] == pytest.approx(c_yy * s["peak_force_n"], rel=1e-3)
+
+
+def test_on_a_hydraulic_machine_the_press_sees_the_compliance_from_its_piston_sensors(tmp_path):
+    """A hydraulic cylinder's piston sensor reads past the oil column (its position loop holds it), so the predicted
+    curve, the simulated monitor curve's figures, ``curves check --compensate``'s number and the control design's
+    contact stiffness use the compliance from the sensors: against a second machine, the same file with the oil 1e6
+    times stiffer (its full compliance), at the off-centre pin field's pose (three pins 8 mm beside the tool axis, so
+    the tilt enters the field's stiffness), to 1e-5; the full compliance with the oil column is 30% and more off."""
+    import tomllib
+
+    import tomli_w
+
+    from pressfit.dynamics.linearise import contact_stiffness_n_per_m
+    from pressfit.dynamics.press_monitor import monitor_curve
+    from pressfit.mechanics.press_curve import pin_pose_m
+    from pressfit.shipped import models_dir
+    from pressfit.studies.curve_check import press_compliance_m_per_n
+
+    hydraulic = load_machine(models_dir() / "pressfit_4upu_hydraulic.toml")
+    stiff = hydraulic.with_overrides({"actuator": {"hydraulic": {"bulk_modulus_pa": 1.2e15}}})
+    data = tomllib.loads((cases_dir() / "paper" / "insertion_pin_field_off_centre.toml").read_text())
+    data["model"] = str(models_dir() / "pressfit_4upu_hydraulic.toml")
+    path = tmp_path / "hydraulic_field.toml"
+    path.write_text(tomli_w.dumps(data))
+    case = load_case(path)
+    contact = case.simulation.contact
+    pose = pin_pose_m(contact)
+    seen = vjm_plate_compliance(stiff, pose)[1, 1]
+    full = vjm_plate_compliance(hydraulic, pose)[1, 1]
+    assert full > 1.3 * seen
+    curve = predict_curve(hydraulic, contact)
+    assert curve.machine_compliance_along_press_m_per_n == pytest.approx(seen, rel=1e-5)
+    assert press_compliance_m_per_n(case) == pytest.approx(seen, rel=1e-5)
+    depth = np.linspace(0.0, 1e-3, 50)
+    force = predict_curve(stiff, contact, max_depth_m=1e-3, samples=50).force_n
+    monitor = monitor_curve(hydraulic, contact, np.linspace(0.0, 1.0, 50), depth, contact.board_height_m - depth,
+                            force, 49)
+    assert monitor.summary["machine_compliance_along_press_m_per_n"] == pytest.approx(seen, rel=1e-5)
+    k = [contact_stiffness_n_per_m(m, pose, contact, 4e-4) for m in (hydraulic, stiff)]
+    assert k[0] == pytest.approx(k[1], rel=1e-5)

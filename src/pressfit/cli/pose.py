@@ -156,6 +156,10 @@ def stiffness_cmd(x: float, y: float, z: float, as_json: bool, maps: bool, out_d
                f"{out['condensed_vs_pinocchio_max_difference_relative']:.1e} (relative to its largest entry); "
                f"tangent vertical stiffness under the press load (nonlinear) "
                f"{out['tangent_vertical_stiffness_under_press_load_n_per_m']:.4e} N/m")
+    if machine.actuator.table.sensed_past_stiffness:
+        click.echo(f"as the drives' position sensors see it (they read past the drives' own stiffness, which their "
+                   f"position loop holds): vertical compliance {out['sensed_vertical_compliance_m_per_n']:.4e} m/N "
+                   f"(the press monitor's deflection: simulate, curve, curves check --compensate)")
 
 
 @click.command("interference", context_settings={"ignore_unknown_options": True})  # negative coordinates
