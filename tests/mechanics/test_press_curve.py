@@ -180,15 +180,14 @@ def test_the_simulated_monitor_curve_agrees_with_the_predicted_curve(compliant_p
 
 def test_on_a_hydraulic_machine_the_press_sees_the_compliance_from_its_piston_sensors(tmp_path):
     """A hydraulic cylinder's piston sensor reads past the oil column (its position loop holds it), so the predicted
-    curve, the simulated monitor curve's figures, ``curves check --compensate``'s number and the control design's
-    contact stiffness use the compliance from the sensors: against a second machine, the same file with the oil 1e6
-    times stiffer (its full compliance), at the off-centre pin field's pose (three pins 8 mm beside the tool axis, so
-    the tilt enters the field's stiffness), to 1e-5; the full compliance with the oil column is 30% and more off."""
+    curve, the simulated monitor curve's figures and ``curves check --compensate``'s number use the compliance from
+    the sensors: against a second machine, the same file with the oil 1e6 times stiffer (its full compliance), at the
+    off-centre pin field's pose, to 1e-5; the full compliance with the oil column is 30% and more off. (The tool's
+    tilt does not depend on it: the legs are concurrent, so the plate's rotational compliance is the couples' alone.)"""
     import tomllib
 
     import tomli_w
 
-    from pressfit.dynamics.linearise import contact_stiffness_n_per_m
     from pressfit.dynamics.press_monitor import monitor_curve
     from pressfit.mechanics.press_curve import pin_pose_m
     from pressfit.shipped import models_dir
@@ -214,5 +213,3 @@ def test_on_a_hydraulic_machine_the_press_sees_the_compliance_from_its_piston_se
     monitor = monitor_curve(hydraulic, contact, np.linspace(0.0, 1.0, 50), depth, contact.board_height_m - depth,
                             force, 49)
     assert monitor.summary["machine_compliance_along_press_m_per_n"] == pytest.approx(seen, rel=1e-5)
-    k = [contact_stiffness_n_per_m(m, pose, contact, 4e-4) for m in (hydraulic, stiff)]
-    assert k[0] == pytest.approx(k[1], rel=1e-5)

@@ -204,8 +204,7 @@ def contact_stiffness_n_per_m(machine: Machine, pose_m: np.ndarray, contact: Con
             raise PressfitError(f"the contact law {contact.law!r} (a shoulder, a pin field or a nonlinear law) has "
                                 "no single stiffness: linearise it at an operating depth (contact_depth_m)")
         depth_m = 1.0
-    return field_stiffness(pins, condensed_plate_compliance(machine, np.asarray(pose_m, dtype=float), sensed=True),
-                           depth_m)[1]
+    return field_stiffness(pins, condensed_plate_compliance(machine, np.asarray(pose_m, dtype=float)), depth_m)[1]
 
 
 def linear_plant(machine: Machine, pose_m: np.ndarray, contact: Contact | None = None,
@@ -504,7 +503,7 @@ def control_design(case: Case, model: Model | None = None) -> ControlDesign:
     poses = [("pin", pin_pose, c), ("start", np.array(sim.start_m), None), ("approach", approach, None),
              ("end", np.array(sim.end_m), None)]
     preload = ActuatorPreload.from_case(case.preload).a4
-    depth = operating_depth_m(PinField.from_contact(c), condensed_plate_compliance(machine, pin_pose_m(c), sensed=True),
+    depth = operating_depth_m(PinField.from_contact(c), condensed_plate_compliance(machine, pin_pose_m(c)),
                               sim.interference_m, sim.controller.force_limit_n)
     designs = [design_at(machine, sim.controller, p, n, con, model, tensions_n=static_tensions_n(machine, p, preload),
                          contact_depth_m=depth if con is not None else None) for n, p, con in poses]
