@@ -25,3 +25,38 @@ def test_a_sensor_reads_its_side_of_the_series_spring_and_the_step_loses_the_clo
     assert energy == pytest.approx(0.5 * c * float(n1 @ n1), rel=1e-12)
     assert loss == pytest.approx(0.5 * c * float((n1 - n0) @ (n1 - n0)), rel=1e-9)
     assert loss > 0.0
+
+
+def test_the_elastic_column_carries_the_series_springs_and_the_length_columns_the_sensors():
+    """Five steps of the shipped insertion on the flexible model, its scenario stepped directly: each row's
+    ``elastic_energy_j`` is the machine's elastic energy plus the series springs' N^2 c / 2 (from the row's tensions
+    ``act_n`` and the machine's sensed compliance at the actuator joints' lengths), its ``length_m`` columns are those
+    lengths less N c and its ``rate_m_per_s`` columns their rates less the stretch's change over the step / dt (the
+    first step's from the start state's stretch)."""
+    from pressfit.description.cases import load_case
+    from pressfit.dynamics import drives
+    from pressfit.dynamics.insertion import plan_scenario
+    from pressfit.dynamics.series import Guard, series_columns
+    from pressfit.shipped import cases_dir
+
+    case = load_case(cases_dir() / "paper" / "insertion.toml")
+    case = case.model_copy(update={"simulation": case.simulation.model_copy(update={"model": "flexible"})})
+    machine, plan = case.machine(), plan_scenario(case)
+    scenario = FlexibleScenario(case, machine, plan, drives.of(machine), True, Guard(case, machine, plan))
+    columns = series_columns(len(machine.legs))
+    dt = plan.simulation.time_step_s
+    stretch = machine.sensed_axial_compliance_m_per_n(scenario.fm.leg_lengths_m(scenario.state)) * scenario.tension
+    for k in range(5):
+        scenario.step(k, (k + 1) * dt, plan.trajectory.at((k + 1) * dt), 30.0)
+        row = scenario.series.row(k)
+        legs = scenario.fm.leg_lengths_m(scenario.state)
+        tension = row[[columns.index(f"act_n{i}") for i in "1234"]]
+        c = machine.sensed_axial_compliance_m_per_n(legs)
+        assert row[columns.index("elastic_energy_j")] == pytest.approx(
+            scenario.fm.energy(scenario.state).elastic_j + 0.5 * float(tension @ (c * tension)), rel=1e-12)
+        np.testing.assert_allclose(row[[columns.index(f"length_m{i}") for i in "1234"]], legs - c * tension,
+                                   rtol=0, atol=1e-15)
+        previous, stretch = stretch, c * tension
+        np.testing.assert_allclose(row[[columns.index(f"rate_m_per_s{i}") for i in "1234"]],
+                                   scenario.fm.leg_rates_m_per_s(scenario.state) - (stretch - previous) / dt,
+                                   rtol=0, atol=1e-12)
