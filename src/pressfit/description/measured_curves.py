@@ -21,6 +21,9 @@ a file of ``MAX_CURVE_BYTES`` or more (before reading it), no header, a unit tha
 that is not a finite number (NaN, inf, empty), an empty or one-point curve, time running backwards, and a
 displacement that runs backwards (by more than ``REVERSAL_TOLERANCE_M``) before its maximum. What follows the
 maximum displacement is the return stroke: kept, and ignored by the judging (:attr:`MeasuredCurve.forward_end`).
+A press springing back as its force drops (by its compliance times the drop) or a force limiter backing the tool
+off records such a step back: the error says by how much and how the force changed, and a larger reversal tolerance
+takes it as one forward stroke.
 """
 
 from __future__ import annotations
@@ -208,6 +211,26 @@ def _header_row(path: Path, numbered: list[tuple[int, str]], columns: dict[str, 
                          "and a force column (e.g. 'Displacement [mm];Force [kN]')")
 
 
+def _forward_end(path: Path, x: np.ndarray, force: np.ndarray, line_no: np.ndarray, column: str,
+                 tolerance_m: float) -> int:
+    """The index of the forward stroke's end (the maximum displacement), or CurveFileError where the displacement
+    runs backwards before it by more than ``tolerance_m`` (m), naming the row, by how much and the force's change."""
+    end = int(np.argmax(x))
+    ahead = np.maximum.accumulate(x[:end + 1])
+    back = np.flatnonzero(x[:end + 1] < ahead - tolerance_m)
+    if back.size:
+        k = int(back[0])
+        top = int(np.flatnonzero(x[:k] == ahead[k])[0])
+        raise CurveFileError(path, int(line_no[k]), column,
+                             f"the displacement runs backwards by {ahead[k] - x[k]:.4g} m (row {int(line_no[top])} "
+                             f"to this one, the force {force[top]:.6g} N to {force[k]:.6g} N) before its maximum at "
+                             f"row {int(line_no[end])}, more than the reversal tolerance {tolerance_m:g} m: only a "
+                             "return stroke after the maximum is allowed (a press springing back as its force drops, "
+                             "or a limiter backing the tool off, records such a step: allow a larger reversal "
+                             "tolerance to take it as one forward stroke)")
+    return end
+
+
 def read_curve(path: Path | str, *, units: dict[str, str] | None = None, columns: dict[str, str] | None = None,
                reversal_tolerance_m: float = REVERSAL_TOLERANCE_M) -> MeasuredCurve:
     """Read and check one measured curve (module doc). ``units``: role -> unit for columns whose header names
@@ -268,14 +291,8 @@ def read_curve(path: Path | str, *, units: dict[str, str] | None = None, columns
             k = back[0] + 1
             raise CurveFileError(path, int(line_no[k]), name["time"], f"time runs backwards ({t[k - 1]:g} s to "
                                  f"{t[k]:g} s)")
-    end = int(np.argmax(x))
-    ahead = np.maximum.accumulate(x[:end + 1])
-    back = np.flatnonzero(x[:end + 1] < ahead - reversal_tolerance_m)
-    if back.size:
-        k = int(back[0])
-        raise CurveFileError(path, int(line_no[k]), name["displacement"],
-                             f"the displacement runs backwards ({ahead[k]:.9g} m to {x[k]:.9g} m) before its "
-                             f"maximum at row {int(line_no[end])}: only a return stroke after the maximum is allowed")
+    force = np.array(values["force"])
+    end = _forward_end(path, x, force, line_no, name["displacement"], reversal_tolerance_m)
     header = {}
     for _, line in before:
         key, _, value = line.partition(delim if delim in line else _delimiter(line))
@@ -283,6 +300,6 @@ def read_curve(path: Path | str, *, units: dict[str, str] | None = None, columns
     part = next((header[k] for k in header if _words(k)[:1] in (["part"], ["serial"], ["teil"], ["id"])
                  and header[k]), None)
     return MeasuredCurve(path=str(path), name=part or path.stem, layout="part_protocol" if before else "csv",
-                         displacement_m=x, force_n=np.array(values["force"]),
+                         displacement_m=x, force_n=force,
                          time_s=np.array(values["time"]) if "time" in values else None, lines=line_no,
                          forward_end=end, header=header, columns=name)

@@ -5,7 +5,13 @@ face, F(d) = k d + f_fit(d) + b d_dot (N, pushing the tool up, +y), F = 0 out of
 (no adhesion). ``elastic``: f_fit = 0 (paper section 4.2: a force proportional to the interference);
 ``press_fit``: f_fit(d) = k_fit d (linear) or F_fit tanh(d / d_fit) (saturating); every other law
 (:mod:`pressfit.mechanics.contact_laws`: solid and compliant pins, tables, the shoulder, a field of pins) as a
-table of the component's force against the depth (:func:`contact_parameters`), plus b d_dot.
+table of the component's force against the depth (:func:`contact_parameters`), plus b d_dot. A pin law is not a
+spring: friction and the board's yield set the joint, so where the tool backs off from the deepest depth d_max it
+reached (a snap past a compliant pin's peak pulled back by the loop, the retract) the joint unloads elastically,
+F(d_max) - k_u (d_max - d), k_u the table's steepest slope (:func:`steepest_slope_n_per_m`), to 0 within
+micrometres, and leaves the pin at d_max; the tool reloads it along the same line (``kernels.contact_law``; the
+state d_max lives in the parameter vector, moved on after each step by ``kernels.contact_advance``, fresh for
+every run and every board position). The elastic law is the paper's spring and follows itself back.
 
 The tool sees the machine's compliance: the rigid-leg multibody model (:mod:`pressfit.dynamics.multibody`)
 gives the rigid tool position r, the structure adds the deflection u(F) under the contact force and the moving
@@ -35,7 +41,7 @@ from pressfit.description.machine import Machine
 from pressfit.dynamics import kernels
 from pressfit.mechanics.contact_laws import build_law
 from pressfit.mechanics.contact_laws.elastic import ElasticLaw
-from pressfit.mechanics.press_curve import force_table
+from pressfit.mechanics.press_curve import ForceTable, PinField, force_table
 
 _FITS = {"none": kernels.ELASTIC, "linear": kernels.FIT_LINEAR, "saturating": kernels.FIT_TANH}
 
@@ -60,8 +66,17 @@ def contact_parameters(contact: Contact, machine: Machine | None = None) -> np.n
         return values
     table = force_table(machine, contact)
     values[kernels.LAW] = kernels.TABLE
-    head = np.array([table.force_n.max(), table.slope_n_per_m, table.depth_m.size], dtype=float)
+    sets = not all(law.reversible for law in PinField.from_contact(contact).laws)
+    head = np.array([table.force_n.max(), table.slope_n_per_m, table.depth_m.size,
+                     steepest_slope_n_per_m(table) if sets else 0.0, 0.0], dtype=float)
     return np.concatenate([values, head, table.depth_m, table.force_n])
+
+
+def steepest_slope_n_per_m(table: ForceTable) -> float:
+    """The steepest slope of a force table and past its end (N/m): the contact's stiffest for the step check, and
+    the stiffness with which a set joint unloads as the tool backs off (its shoulder's once seated; the unloading
+    line then stays below the table: the joint is at least as stiff elastically as it ever was while loading)."""
+    return float(max(np.max(np.diff(table.force_n) / np.diff(table.depth_m), initial=0.0), table.slope_n_per_m))
 
 
 def contact_stiffness_bound_n_per_m(contact: Contact) -> float:
@@ -76,9 +91,7 @@ def contact_stiffness_bound_n_per_m(contact: Contact) -> float:
     if len(pins) == 1 and pins[0].offset_m == (0.0, 0.0) and isinstance(law, ElasticLaw):
         fit = {"none": 0.0, "linear": law.fit_stiffness_n_per_m}.get(law.fit, law.fit_force_n / law.fit_depth_m)
         return float(law.stiffness_n_per_m + fit)
-    table = force_table(None, contact)
-    slopes = np.diff(table.force_n) / np.diff(table.depth_m)
-    return float(max(np.max(slopes, initial=0.0), table.slope_n_per_m))
+    return steepest_slope_n_per_m(force_table(None, contact))
 
 
 def contact_force_n(contact: Contact | np.ndarray, depth_m: float, depth_rate_m_per_s: float = 0.0) -> float:

@@ -212,13 +212,16 @@ def pin_contact(contact: Contact, pin: ResolvedPin) -> Contact:
 def segment_contacts(contact: Contact, machine: Machine, pins: tuple[ResolvedPin, ...],
                      segments: tuple[Segment, ...]) -> tuple[np.ndarray, ...]:
     """Per segment, the contact as the kernels take it (:func:`pressfit.dynamics.contact.contact_parameters`) at
-    the board position of the segment's pin, when the component has a pin field (``[[cycle.contact.pins]]``): its
-    total force against the tool depth carries the tilt by the machine's compliance at that position, so each
-    board position has its own table. Empty without a pin field (one pin on the tool axis: its law does not
-    depend on the pose)."""
-    if not contact.pins:
-        return ()
-    tables = [contact_parameters(pin_contact(contact, pin), machine) for pin in pins]
+    the board position of the segment's pin, one array per position that its segments share: a pin law's joint has
+    a state (the deepest depth it reached: it sets), fresh at every position (the scenario copies the array there).
+    With a pin field (``[[cycle.contact.pins]]``) each position has its own table: the component's total force
+    against the tool depth carries the tilt by the machine's compliance at that position; one pin on the tool axis
+    has its law's at every position (it does not depend on the pose)."""
+    if contact.pins:
+        tables = [contact_parameters(pin_contact(contact, pin), machine) for pin in pins]
+    else:
+        law = contact_parameters(pin_contact(contact, pins[0]), machine)
+        tables = [law.copy() for _ in pins]
     return tuple(tables[s.pin - 1] for s in segments)
 
 

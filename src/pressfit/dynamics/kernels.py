@@ -45,9 +45,10 @@ SINGULAR_DET = 1e-12  # legs 1-3 do not span space below this |det(e_1, e_2, e_3
 BISECTIONS = 60  # bisection steps of the contact solve (to 1e-9 of the bracket, module docstring of contact)
 # the contact's parameter vector (solve_contact's ``contact``)
 BOARD, STIFFNESS, DAMPING, LAW, FIT_STIFFNESS, FIT_FORCE, FIT_DEPTH = range(7)
-# a TABLE law appends: the table's largest force (N), the slope past its last depth (N/m), its row count n, then
-# n depths (m, increasing) and n forces (N)
-TABLE_MAX, TABLE_SLOPE, TABLE_COUNT, TABLE_START = 7, 8, 9, 10
+# a TABLE law appends: the table's largest force (N), the slope past its last depth (N/m), its row count n, the
+# unloading stiffness (N/m; 0: a reversible law, the force follows the table back), the deepest depth reached so far
+# (m: the joint's state, which contact_advance moves on), then n depths (m, increasing) and n forces (N)
+TABLE_MAX, TABLE_SLOPE, TABLE_COUNT, TABLE_UNLOAD, TABLE_DEEPEST, TABLE_START = 7, 8, 9, 10, 11, 12
 # rigid_post_step's ``layout``: the first column of each quantity it writes into the row
 ROW_PLATE, ROW_TOOL, ROW_FORCE, ROW_DEPTH, ROW_AXIAL, ROW_KINEMATIC, ROW_LENGTHS, ROW_RATES = range(8)
 # rigid_pre_step's ``layout``
@@ -231,18 +232,29 @@ def first_order(force, command, limit, decay, out):
 
 
 @compiled
+def _table_force(contact, depth):
+    """A TABLE law's loading force at ``depth`` (m): np.interp between the rows, the given slope past the last."""
+    n = int(contact[TABLE_COUNT])
+    depths, forces = contact[TABLE_START:TABLE_START + n], contact[TABLE_START + n:TABLE_START + 2 * n]
+    if depth > depths[n - 1]:
+        return forces[n - 1] + contact[TABLE_SLOPE] * (depth - depths[n - 1])
+    return np.interp(depth, depths, forces)
+
+
+@compiled
 def contact_law(contact, depth, rate):
     """F(d, d_dot) (N, >= 0) of :func:`pressfit.dynamics.contact.contact_force_n` (``contact`` as in
-    :func:`solve_contact`)."""
+    :func:`solve_contact`). A TABLE law that sets (``TABLE_UNLOAD`` > 0) below the deepest depth it reached, d_max:
+    the joint unloads elastically from there, F(d_max) - k_u (d_max - d), down to 0 where the tool leaves the
+    component (no adhesion), and reloads along the same line up to d_max, where the table resumes."""
     if depth <= 0.0:
         return 0.0
-    if contact[LAW] == TABLE:  # np.interp between the rows; the given slope past the last one
-        n = int(contact[TABLE_COUNT])
-        depths, forces = contact[TABLE_START:TABLE_START + n], contact[TABLE_START + n:TABLE_START + 2 * n]
-        if depth > depths[n - 1]:
-            force = forces[n - 1] + contact[TABLE_SLOPE] * (depth - depths[n - 1])
+    if contact[LAW] == TABLE:
+        deepest = contact[TABLE_DEEPEST]
+        if contact[TABLE_UNLOAD] > 0.0 and depth < deepest:
+            force = _table_force(contact, deepest) - contact[TABLE_UNLOAD] * (deepest - depth)
         else:
-            force = np.interp(depth, depths, forces)
+            force = _table_force(contact, depth)
         return max(force + contact[DAMPING] * rate, 0.0)
     force = contact[STIFFNESS] * depth + contact[DAMPING] * rate
     if contact[LAW] == FIT_LINEAR:
@@ -250,6 +262,14 @@ def contact_law(contact, depth, rate):
     elif contact[LAW] == FIT_TANH:
         force += contact[FIT_FORCE] * math.tanh(depth / contact[FIT_DEPTH])
     return max(force, 0.0)
+
+
+@compiled
+def contact_advance(contact, depth):
+    """The joint's state after a step that ended at ``depth`` (m): a TABLE law's deepest depth reached
+    (``TABLE_DEEPEST``), in place; nothing for the other laws, which have none."""
+    if contact[LAW] == TABLE and depth > contact[TABLE_DEEPEST]:
+        contact[TABLE_DEEPEST] = depth
 
 
 @compiled
@@ -370,6 +390,7 @@ def rigid_post_step(row, previous_q, q, v, closure_forces, actuator_q, actuator_
             return False, 0.0, 0.0, 0.0
     u = np.empty(3)
     force, depth = solve_contact(contact, contact[BOARD] - q[1], previous_depth, dt, column, sag, loads, disp, u)
+    contact_advance(contact, depth)
     for k in range(3):
         row[layout[ROW_PLATE] + k] = q[k]
         row[layout[ROW_TOOL] + k] = q[k] + u[k]

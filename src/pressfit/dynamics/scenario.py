@@ -238,7 +238,8 @@ def run_plan(case: Case, machine: Machine, plan: ScenarioPlan, drives: drive_kin
     """Run a validated plan on its model (``plan.simulation.model``, :func:`model_kind`): the series (one row per
     step, :func:`pressfit.dynamics.series.series_columns`), the segment index of each row and, on an elastic model,
     the section resultants. The step loop: per step k (ending at t = (k + 1) dt) the reference and the running
-    segment's force limit (and, with ``plan.contact_params``, its contact: the model's ``params``), one model step;
+    segment's force limit (and, with ``plan.contact_params``, its contact: the model's ``params``, a fresh copy at
+    each board position, whose segments share it: the joint's state, ``kernels.contact_advance``), one model step;
     the model's failures become the guard's one-line errors."""
     kind, trajectory, guard = model_kind(plan.simulation.model), plan.trajectory, Guard(case, machine, plan)
     times = plan.simulation.time_step_s * np.arange(1, plan.steps + 1)
@@ -251,8 +252,8 @@ def run_plan(case: Case, machine: Machine, plan: ScenarioPlan, drives: drive_kin
         model = kind(case, machine, plan, drives, limiter, guard)
         for k in tqdm(range(plan.steps), desc="simulate", unit="step", disable=not progress, mininterval=0.5):
             t = float(times[k])
-            if contacts and (k == 0 or running[k] != running[k - 1]):
-                model.params = contacts[running[k]]
+            if contacts and (k == 0 or contacts[running[k]] is not contacts[running[k - 1]]):
+                model.params = contacts[running[k]].copy()  # a board position's own joint, fresh: its state
             try:
                 model.step(k, t, (ref_position[k], ref_velocity[k]), float(limits[k]))
             except UnreachablePoseError as exc:  # the estimate (feed-forward, compliance) left the workspace

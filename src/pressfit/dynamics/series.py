@@ -92,8 +92,8 @@ class ScenarioPlan:
     force_limits_n: np.ndarray
     depth_limit_m: float = math.inf  # the run stops beyond this depth below the board face (MAX_DEPTH_FACTOR)
     table: str = "simulation"  # the case table whose keys the run's errors name: [simulation], a board's [cycle]
-    contact_params: tuple[np.ndarray, ...] = ()  # per segment, the contact as the kernels take it (a board's pin
-    # field at each board position: dynamics.cycle.segment_contacts); empty: the models' own of simulation.contact
+    contact_params: tuple[np.ndarray, ...] = ()  # per segment, the contact as the kernels take it (a board's joint
+    # at each board position: dynamics.cycle.segment_contacts); empty: the models' own of simulation.contact
 
 
 def preload_amplitudes_n(case: Case, machine: Machine) -> np.ndarray:
@@ -186,7 +186,7 @@ class ScenarioStep(Protocol):
     are modelled between the drives and the legs, a hydraulic oil column is stepped implicitly) and
     ``integrator_error`` (what the energy balance's residual is made of). ``params``: the contact as the kernels
     take it (:func:`pressfit.dynamics.contact.contact_parameters`), which the step loop replaces per segment when
-    the plan gives ``contact_params`` (a board's pin field at each board position)."""
+    the plan gives ``contact_params`` (a board's joint at each board position, with its own state)."""
 
     elastic: bool
     integrator_error: str

@@ -25,24 +25,24 @@ Energy balance of a run (:func:`energy_balance`), between its first and last row
 
     W_drives = dK + dV_g + dV_el + W_pin + D + dV_play + P_play - E_replacement + L_series + residual,
 
-W_drives = sum_i sum_k -N_i,k (l_i,k - l_i,k-1), the exact work of the tensions held over each step over the
-drives' lengths (the sensors'); W_pin = sum_k F_k-1 (y_k-1 - y_k), the work of the tool on the pin (the contact
-force F, +y on the tool, held over the step after it was computed; on the rigid model through the series
-compliance, whose quasi-static spring is the pin's side); K (armature and a drive side behind the plays included)
-and V_g from Pinocchio; V_el the flexible model's springs and D its Rayleigh damping's work per step
+W_drives = sum_i sum_k -N_i,k (l_i,k - l_i,k-1), the exact work of the tensions held over each step over the drives'
+lengths (the sensors'); W_pin = sum_k F_k-1 (y_k-1 - y_k), the work of the tool on the pin (the contact force F, +y
+on the tool, held over the step after it was computed; on the rigid model through the series compliance, whose
+quasi-static spring is the pin's side), or sum_k F_k (y_k-1 - y_k) on a model whose contact is implicit (the
+flexible one: the force at a step's end acts over it, ``contact_implicit``); K (armature and a drive side behind the
+plays included) and V_g from Pinocchio; V_el the flexible model's springs and D its Rayleigh damping's work per step
 (:class:`pressfit.dynamics.machine.flexible.FlexibleState`); V_play and P_play the cardan plays' stored energy and
-dissipation (flexible model with clearance: :class:`.flexible_scenario.PlayLedger`, what the drives do
-on their side of the plays minus what reaches the legs); E_replacement the stems' re-placement, a jump of the
-flexible machine's energy no force works on (:meth:`FlexibleMachine.replacement_energy_j`, step-independent);
-L_series the loss of the drives' sensor-side series springs (flexible model: the tension held over a step stepping
-into a massless spring, :mod:`pressfit.dynamics.machine.flexible_scenario`). The
-drives' own losses (copper, valve throttling) are upstream of the joints, so they are reported beside the balance,
-not in it. The relative residual is |residual| / the drives' gross work sum_k |sum_i -N_i,k (l_i,k - l_i,k-1)|
-(the energy the drives move in and out of the machine; the preload's circulating power, which sums to zero over
-the legs at every instant on a rigid machine, v_p . l_dot = 0, does not inflate it). What is left is the
-integrators' own energy error, first order in dt on both models (docs/sizing.md): semi-implicit Euler's
-sum 1/2 dv^T M dv per step (its velocity update is explicit) on the rigid model, generalised-alpha's with its
-rectangle-rule damping work and numerical damping (rho_inf) on the flexible one.
+dissipation (flexible model with clearance: :class:`.flexible_scenario.PlayLedger`, what the drives do on their side
+of the plays minus what reaches the legs); E_replacement the stems' re-placement, a jump of the flexible machine's
+energy no force works on (:meth:`FlexibleMachine.replacement_energy_j`, step-independent); L_series the loss of the
+drives' sensor-side series springs (flexible model: the tension held over a step stepping into a massless spring,
+:mod:`pressfit.dynamics.machine.flexible_scenario`). The drives' own losses (copper, valve throttling) are upstream
+of the joints, so they are reported beside the balance, not in it. The relative residual is |residual| / the drives'
+gross work sum_k |sum_i -N_i,k (l_i,k - l_i,k-1)| (the energy the drives move in and out of the machine; the
+preload's circulating power, which sums to zero over the legs at every instant on a rigid machine, v_p . l_dot = 0,
+does not inflate it). What is left is the integrators' own energy error, first order in dt on both models
+(docs/sizing.md): semi-implicit Euler's sum 1/2 dv^T M dv per step (its velocity update is explicit) on the rigid
+model, generalised-alpha's with its rectangle-rule damping work and numerical damping (rho_inf) on the flexible one.
 
 Tolerance per model and drive kind (``ENERGY_BALANCE``, about 3x the largest relative residual measured
 on the shipped insertions at 1 ms, with the limiter; ratio = residual(1 ms) / residual(0.5 ms)):
@@ -289,7 +289,7 @@ def energy_balance(lengths_m: np.ndarray, tensions_n: np.ndarray, contact_force_
                    series_loss_j: np.ndarray | None = None) -> EnergyBalance:
     """The balance between the first and the last of n rows (module docstring): the drives' lengths (n, legs) m,
     the tensions held over the step ending at each row (n, legs) N, the contact force at each row (n,) N (+y on the
-    tool, held over the next step) and the y of the point it acts on (n,) m, the energies at each row (n,) J, the
+    tool, held over the next step, or over its own on a model whose contact is implicit) and the y of the point it acts on (n,) m, the energies at each row (n,) J, the
     damping's work over the step ending at each row (n,) J and, with cardan plays, their stored energy at each row
     (n,) J and their dissipation over the step ending at it (n,) J, and the energy change of each step's stem
     re-placement (n,) J and the sensors' series springs' loss over the step ending at each row (n,) J (flexible
@@ -301,7 +301,8 @@ def energy_balance(lengths_m: np.ndarray, tensions_n: np.ndarray, contact_force_
         raise PressfitError(f"an energy balance needs at least two rows of lengths and tensions, got {lengths.shape}")
     step_work = np.sum(-n[1:] * np.diff(lengths, axis=0), axis=1)  # all drives, per step
     drive, gross = float(step_work.sum()), float(np.abs(step_work).sum())
-    pin_work = float(np.sum(force[:-1] * -np.diff(y)))
+    acting = force[1:] if model_kind(model).contact_implicit else force[:-1]  # the force over each step
+    pin_work = float(np.sum(acting * -np.diff(y)))
     kin, pot, el = (float(np.asarray(e, float)[-1] - np.asarray(e, float)[0]) for e in (kinetic_j, potential_j,
                                                                                          elastic_j))
     damp = float(np.sum(np.asarray(damping_work_j, float)[1:]))

@@ -231,6 +231,7 @@ class FlexibleMachine:
         self._fext: pin.StdVec_Force | None = None  # section_loads' external forces
         self._drive_k = np.zeros(len(self.act))  # implicit force drives' tangent -dN/dl in the iteration matrix, N/m
         self._drive_tangent: Callable[[], np.ndarray] | None = None
+        self._contact_k, self._contact_dir = 0.0, np.zeros(3)  # an implicit contact's tangent (N/m) and R^T e_y
         self._energy: tuple | None = None  # (the last state's key, its Energy)
 
     # --- model -----------------------------------------------------------------------------------
@@ -396,7 +397,8 @@ class FlexibleMachine:
     # --- the step ------------------------------------------------------------------------------------
     def step(self, state: FlexibleState, drive_input: DriveInput, plate_wrench: np.ndarray, dt_s: float,
              drive: Callable[[np.ndarray], np.ndarray] | None = None,
-             drive_stiffness_n_per_m: np.ndarray | Callable[[], np.ndarray] | None = None) -> FlexibleState:
+             drive_stiffness_n_per_m: np.ndarray | Callable[[], np.ndarray] | None = None,
+             contact: Callable[[float], tuple[float, float]] | None = None) -> FlexibleState:
         """One generalised-alpha step of ``dt_s`` (s) (module doc); the drive input and the plate wrench
         (6,) (N, N m, world, plate centre) are held over the step. With force drives, ``drive`` (optional) gives
         the delivered tensions (n,), N, as a function of the actuator lengths (n,), m, at the step's end (a drive
@@ -405,8 +407,9 @@ class FlexibleMachine:
         in the step"); ``drive_stiffness_n_per_m`` (n,) its tangent -dN/dl for the iteration matrix (default 0;
         an approximate tangent only slows the modified Newton), or a function giving it where ``drive``'s last
         call left it (asked again at each refactoring: a cardan play's tangent changes across its contact edge).
-        The state records the tensions of the last
-        iterate (``drive``'s last call: the caller's drive state is that call's).
+        ``contact`` (optional): the force on the tool along world +y (N) and its stiffness -dF/dy (N/m) at the plate
+        centre's world y (m), evaluated at every iteration like ``drive`` (implicit; added to the plate wrench at the
+        start's orientation). The state records the tensions of the last iterate (``drive``'s last call).
         Refuses (PressfitError) a step longer than MAX_STEP_FRACTION of the first mode's period or one whose
         Newton does not converge."""
         h = self._step_length(dt_s)
@@ -423,14 +426,15 @@ class FlexibleMachine:
         base_v = v_n + h * (1 - g) * a_n
         v_r = self._rigid_velocity(q_n, rates) if np.any(rates) else np.zeros(self.nv)
         key = (h, drive_input.kind, self._placed.tobytes())
-        fresh = False
         implicit = drive is not None and drive_input.kind == "force"
         self._set_drive_tangent(drive_stiffness_n_per_m if implicit else None)
-        if self._factor is None or self._factor_key[:2] != key[:2]:
-            self._refresh(q_n, k, drive_input, rest, h)
-            fresh = True
         tau_ext = self._external(q_n, wrench, drive_input)
         tension, held = drive_input.values, tau_ext[self.act_v] + drive_input.values  # without the drives
+        plate, k_contact = tau_ext[0:3].copy(), self._start_contact(contact, q_n)  # the wrench without the contact
+        fresh = self._factor is None or self._factor_key[:2] != key[:2]
+        if fresh:
+            self._contact_k = k_contact
+            self._refresh(q_n, k, drive_input, rest, h)
         acc, lam = acc_n.copy(), state.multipliers.copy()
         nv, sv, last, it, since = self.nv, self.sv, np.inf, 0, 0  # since: iterations since the last factoring
         scale, c_acc, c_old = 1.0 / (h * h * b * ca), (1 - af) / (1 - am), (af * acc_n - am * a_n) / (1 - am)
@@ -445,6 +449,9 @@ class FlexibleMachine:
             if implicit:
                 tension = drive(q[self.act_q])
                 tau_ext[self.act_v] = held - tension
+            if contact is not None:
+                force_c, k_contact = contact(float(q[1]))
+                tau_ext[0:3] = plate + self._contact_dir * force_c
             r = pin.rnea(self.model, self.data, q, v, acc + alpha * rel) + bj.T @ lam - tau_ext
             r[sv] += self._spring_residual(q, rest, k, drive_input, rel[sv], beta)
             rhs[:nv], rhs[nv:] = r, phi
@@ -453,23 +460,17 @@ class FlexibleMachine:
             acc -= scale * dx[:nv]
             lam -= dx[nv:]
             it += 1
-            if not math.isfinite(size):
-                raise ConvergenceError(f"flexible step at t = {state.time_s + h:.6g} s (Newton diverged)", size,
-                                       NEWTON_TOL, it)
             if size <= NEWTON_TOL:
                 break
-            if size > REFRESH_RATIO * last and (not fresh or self._drive_tangent_moved()):
+            if size > REFRESH_RATIO * last and (not fresh or self._tangents_moved(k_contact)):
                 if self._drive_tangent is not None:  # the drive's tangent where its last call left it
                     self._drive_k = np.asarray(self._drive_tangent(), dtype=float)
+                self._contact_k = k_contact
                 self._refresh(q, k, drive_input, rest, h)
                 fresh, last, since = True, np.inf, 0
                 continue
             since += 1
-            if since >= MAX_ITERATIONS and fresh:
-                raise ConvergenceError(f"flexible step at t = {state.time_s + h:.6g} s (Newton, position correction "
-                                       "in m or rad)", size, NEWTON_TOL, it)
-            if it >= 3 * MAX_ITERATIONS:
-                raise ConvergenceError(f"flexible step at t = {state.time_s + h:.6g} s", size, NEWTON_TOL, it)
+            _refuse_iteration(state.time_s + h, size, it, since, fresh)
             last = size
         # the drive at the last iterate: within drive_stiffness * NEWTON_TOL (~1e-5 N) of the end's
         held = DriveInput.forces(tension) if implicit else drive_input
@@ -516,6 +517,20 @@ class FlexibleMachine:
             f, kt = self._springs(q, rest, k, drive)
             return f + beta * kt * rel_springs
         return k * (q[self.sq] - rest + beta * rel_springs)  # linear springs (force drives: k is 0 on the actuators)
+
+    def _start_contact(self, contact: Callable[[float], tuple[float, float]] | None, q_n: np.ndarray) -> float:
+        """An implicit contact's direction R^T e_y at the step's start (a world +y force on the free flyer's local
+        translation) and its stiffness there (N/m; 0 without a contact; ``_contact_k`` stays the factored one)."""
+        if contact is None:
+            return 0.0
+        self._contact_dir = pin.Quaternion(q_n[3:7]).matrix()[1].copy()
+        return contact(float(q_n[1]))[1]
+
+    def _tangents_moved(self, contact_k: float) -> bool:
+        """Whether the contact's tangent ``contact_k`` (N/m) or a drive's moved by more than TANGENT_REFRESH of the
+        factored one."""
+        scale = max(abs(contact_k), abs(self._contact_k))
+        return abs(contact_k - self._contact_k) > TANGENT_REFRESH * scale or self._drive_tangent_moved()
 
     def _drive_tangent_moved(self) -> bool:
         """Whether a drive tangent given as a function moved by more than TANGENT_REFRESH of the factored one
@@ -579,6 +594,7 @@ class FlexibleMachine:
         s[:nv, :nv] = (1 / (b * ca * h * h) + g / (b * h) * self.damping.alpha_per_s) * self._mass(q)
         s[self.sv, self.sv] += (1 + g / (b * h) * self.damping.beta_s) * kt
         s[self.act_v, self.act_v] += self._drive_k  # an implicit force drive's tangent (step)
+        s[:3, :3] += self._contact_k * np.outer(self._contact_dir, self._contact_dir)  # an implicit contact's
         s[:nv, nv:], s[nv:, :nv] = bj.T, bj
         self._factor = lu_factor(s, check_finite=False, overwrite_a=True)
         self.refreshes += 1
@@ -694,6 +710,19 @@ class FlexibleMachine:
         """Leg section resultants at the three sections (module doc, :mod:`.base`)."""
         values, frames = leg_frame_loads(self.section_wrenches(state), self.machine.cardan_axes)
         return SectionLoads(values, frames)
+
+
+def _refuse_iteration(time_s: float, size: float, iterations: int, since: int, fresh: bool) -> None:
+    """ConvergenceError for the step ending at ``time_s`` (s) when its Newton diverged (a correction ``size`` that
+    is not finite), when a freshly factored Newton has not converged in MAX_ITERATIONS (``since`` the factoring) or
+    after 3 MAX_ITERATIONS in all."""
+    if not math.isfinite(size):
+        raise ConvergenceError(f"flexible step at t = {time_s:.6g} s (Newton diverged)", size, NEWTON_TOL, iterations)
+    if since >= MAX_ITERATIONS and fresh:
+        raise ConvergenceError(f"flexible step at t = {time_s:.6g} s (Newton, position correction in m or rad)", size,
+                               NEWTON_TOL, iterations)
+    if iterations >= 3 * MAX_ITERATIONS:
+        raise ConvergenceError(f"flexible step at t = {time_s:.6g} s", size, NEWTON_TOL, iterations)
 
 
 def generalized_alpha(rho_inf: float) -> tuple[float, float, float, float]:

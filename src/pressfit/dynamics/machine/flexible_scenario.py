@@ -5,21 +5,23 @@ The machine file's ``[damping]``; with ``clearance`` the cardan plays between th
 (:mod:`pressfit.dynamics.play`, the drives' sensors zeroed at the start): the machine's drives on the actuator
 joints, stepped inside the flexible step's Newton at the mean rate of the step (implicit, so that an oil column is
 stable: ``FlexibleMachine.step``'s ``drive``; the ideal force drive, which ignores the travel, once per step), the
-contact force on the elastic tool point (the plate centre), evaluated at the end of each step and held over the
-next (as in the rigid model). The drives' position sensors read their own side of the leg's axial compliance the
-model does not carry (:meth:`pressfit.description.machine.Machine.sensed_axial_compliance_m_per_n`: the tubes, and
-the drive's own stiffness unless its sensor reads past it; the force drives act on the actuator joint, which carries
-no spring): quasi-statically, a sensor reads l - N c(l) (l the actuator joint's length, or its drive side of the
-plays; N the drive's tension, c that compliance), its rate differenced over the step, so the controller sees the
-press's deflection as on the machine (``sensed_depth_m``, the deflection compensation). The massless series spring's
-energy N^2 c / 2 is in the ``elastic_energy_j`` column; the tension held over a step (it steps at the step's start)
-stretches it by s_k - s_k-1 = N_k c_k - N_k-1 c_k-1 under N_k, which is more than its energy change by
-c (N_k - N_k-1)^2 / 2 (a force step into a massless spring: first order in the step where the tension is smooth, not
-where cardan plays make it chatter; plus N_k^2 dc / 2 as the stem's exposed length changes): the ``series_loss_j``
-column, so that the energy balance is held to the integrator's error alone. Starts from the static equilibrium under
-gravity with the drives holding the start pose's lengths. The step runs with BLAS on one thread
-(``one_blas_thread``): its matrices are small (nv + 24 = 146), and OpenBLAS's default threads (one per core) cost
-3.6 times the CPU time of the run on the shared 2-core machine (docs/benchmarks.md).
+contact force on the elastic tool point (the plate centre) inside the step's Newton too, at the step's end with its
+stiffness in the iteration matrix (implicit: a pin law's stiff unloading line held over a step as an explicit
+coupling rattles; ``contact_implicit``, which the energy balance's pin work reads). The drives' position sensors
+read their own side of the leg's axial compliance the model does not carry
+(:meth:`pressfit.description.machine.Machine.sensed_axial_compliance_m_per_n`: the tubes, and the drive's own
+stiffness unless its sensor reads past it; the force drives act on the actuator joint, which carries no spring):
+quasi-statically, a sensor reads l - N c(l) (l the actuator joint's length, or its drive side of the plays; N the
+drive's tension, c that compliance), its rate differenced over the step, so the controller sees the press's
+deflection as on the machine (``sensed_depth_m``, the deflection compensation). The massless series spring's energy
+N^2 c / 2 is in the ``elastic_energy_j`` column; the tension held over a step (it steps at the step's start)
+stretches it by s_k - s_k-1 = N_k c_k - N_k-1 c_k-1 under N_k, which is more than its energy change by c (N_k -
+N_k-1)^2 / 2 (a force step into a massless spring: first order in the step where the tension is smooth, not where
+cardan plays make it chatter; plus N_k^2 dc / 2 as the stem's exposed length changes): the ``series_loss_j`` column,
+so that the energy balance is held to the integrator's error alone. Starts from the static equilibrium under gravity
+with the drives holding the start pose's lengths. The step runs with BLAS on one thread (``one_blas_thread``): its
+matrices are small (nv + 24 = 146), and OpenBLAS's default threads (one per core) cost 3.6 times the CPU time of the
+run on the shared 2-core machine (docs/benchmarks.md).
 """
 
 from __future__ import annotations
@@ -40,6 +42,8 @@ from pressfit.dynamics.series import Guard, ScenarioPlan, Series, leg_columns, p
 from pressfit.errors import ConvergenceError, PressfitError
 from pressfit.mechanics.clearance import clearance_from_case
 
+CONTACT_TANGENT_STEP_M = 1e-8  # the contact's stiffness in the step by central differences over this, m
+
 
 class FlexibleScenario:
     """The flexible machine in a scenario (module docstring; :class:`pressfit.dynamics.series.ScenarioStep`)."""
@@ -48,6 +52,7 @@ class FlexibleScenario:
     integrator_error = "generalised-alpha's energy error (the damping's rectangle rule, the numerical damping)"
     objective_couples = True  # the elastic legs' section resultants: torsion and bending limits are offered
     one_blas_thread = True
+    contact_implicit = True  # the contact force acts over a step at its end value (the series' row of the step)
 
     def __init__(self, case: Case, machine: Machine, plan: ScenarioPlan, drives: drive_kinds.Drive, limiter: bool,
                  guard: Guard) -> None:
@@ -104,14 +109,15 @@ class FlexibleScenario:
         fm, drives, dt, play = self.fm, self.drives, self.dt, self.play
         if not drives.follows_travel:  # its tension does not follow the travel: stepped once, held over the step
             self.drive, self.tension = drives.step(self.drive, command, self.lengths, self.rates, dt)
-            self.state = fm.step(self.state, DriveInput.forces(self.tension), self.wrench, dt)
+            self.state = fm.step(self.state, DriveInput.forces(self.tension), self.wrench, dt, contact=self._contact)
             return None
         stepped = DriveOverStep(drives, self.drive, command, self.lengths, dt)
         through, k_step = stepped, drives.step_stiffness_n_per_m(self.lengths)
         if play is not None:
             through = play.over_step(stepped, self.tool, self.tension, k_step, self.side, dt)
             k_step = through.tangent_n_per_m
-        self.state = fm.step(self.state, DriveInput.forces(self.tension), self.wrench, dt, through, k_step)
+        self.state = fm.step(self.state, DriveInput.forces(self.tension), self.wrench, dt, through, k_step,
+                             contact=self._contact)
         self.drive, self.tension = stepped.result
         if play is not None:
             self.side = through.side
@@ -138,7 +144,6 @@ class FlexibleScenario:
         force = ctrl.command(self.drives.measure_lengths_m(self.sensed), self.sensed_rates, reference,
                              self.contact_force, dt)
         command = -ctrl.pinv @ force + ctrl.null @ self.preload
-        self.wrench[1] = self.contact_force
         replaced = fm.replacement_energy_j(self.state)  # the step re-places the stems first
         through = self._advance(command)
         state = self.state
@@ -151,6 +156,7 @@ class FlexibleScenario:
         previous, self.depth = self.depth, self.board - tool[1]
         guard.depth(self.depth, t)
         self.contact_force = contact_force_n(self.params, self.depth, (self.depth - previous) / dt)
+        kernels.contact_advance(self.params, self.depth)
         legs_m = self.lengths = fm.leg_lengths_m(state)
         self.rates = fm.leg_rates_m_per_s(state)
         plays_j = self._measure(through, legs_m)
@@ -161,6 +167,15 @@ class FlexibleScenario:
                             *self.no_axial, *self.internal), self.sensed, self.sensed_rates,
                         (*_energies(fm.energy(state), state.damping_work_j, self._side_kinetic_j(), series[0]),
                          *plays_j, replaced, series[1]))
+
+    def _contact(self, plate_y_m: float) -> tuple[float, float]:
+        """The contact in the step (:meth:`FlexibleMachine.step`'s ``contact``): at the tool's end-of-step y (m, the
+        plate centre), the force on the tool (N, +y; its damping on the depth's rate over the step) and its stiffness
+        -dF/dy (N/m, central differences over ``CONTACT_TANGENT_STEP_M``)."""
+        depth, h, dt = self.board - plate_y_m, CONTACT_TANGENT_STEP_M, self.dt
+        force = contact_force_n(self.params, depth, (depth - self.depth) / dt)
+        return force, (contact_force_n(self.params, depth + h, (depth + h - self.depth) / dt)
+                       - contact_force_n(self.params, depth - h, (depth - h - self.depth) / dt)) / (2.0 * h)
 
     def _sense(self) -> tuple[float, float]:
         """What the drives' sensors read after the step (module docstring): l - N c(l) and its differenced rate;

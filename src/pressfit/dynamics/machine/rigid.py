@@ -121,6 +121,7 @@ class RigidScenario:
     # the legs' couples are statically indeterminate here (a minimum-norm split, not mirror-objective): no torsion or
     # bending limits ([simulation.limits], scenario.check_limits_offered)
     objective_couples = False
+    contact_implicit = False  # the contact force computed at a step's end acts over the next step
 
     def __init__(self, case: Case, machine: Machine, plan: ScenarioPlan, drives: drive_kinds.Drive, limiter: bool,
                  guard: Guard) -> None:

@@ -28,8 +28,11 @@ class ContactLawModel(Protocol):
     """A pin's contact law: ``force_n(depth_m)`` (N, >= 0, 0 at depth <= 0; vectorised over an array of depths in
     m, the interference of the pin's tip below the board face), ``depth_range_m`` (m: where the law's shape lies;
     the end is ``inf`` for a law without one, e.g. the elastic spring), ``plateau_force_n`` (N, the friction
-    plateau of a pin law, or None), ``seat_depth_m`` (m, the shoulder's depth, or None) and ``notes`` (what the
-    law says of itself: a capped pressure, ...)."""
+    plateau of a pin law, or None), ``seat_depth_m`` (m, the shoulder's depth, or None), ``reversible`` (a spring,
+    whose force follows the law back as the tool backs off: the elastic law; a pin law is set by its friction and
+    the board's yield, so a tool backing off unloads the joint elastically from the deepest point it reached and
+    leaves the pin there: :func:`pressfit.dynamics.contact.contact_parameters`) and ``notes`` (what the law says of
+    itself: a capped pressure, ...)."""
 
     @property
     def depth_range_m(self) -> tuple[float, float]: ...
@@ -39,6 +42,9 @@ class ContactLawModel(Protocol):
 
     @property
     def seat_depth_m(self) -> float | None: ...
+
+    @property
+    def reversible(self) -> bool: ...
 
     @property
     def notes(self) -> tuple[str, ...]: ...

@@ -43,6 +43,7 @@ class CompliantPinLaw:
     lead_in_length_m: float
     friction_coefficient: float
     notes: tuple[str, ...] = ()
+    reversible = False  # friction sets the joint: backing off unloads it elastically (contact_laws docstring)
 
     seat_depth_m = None
 

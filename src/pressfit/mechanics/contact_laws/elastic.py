@@ -28,6 +28,7 @@ class ElasticLaw:
     depth_range_m = (0.0, math.inf)
     plateau_force_n = None
     seat_depth_m = None
+    reversible = True  # a spring: backing off follows the law down (the paper's contact)
     notes: tuple[str, ...] = ()
 
     def force_n(self, depth_m: np.ndarray) -> np.ndarray:

@@ -32,6 +32,10 @@ class Seated:
     def notes(self) -> tuple[str, ...]:
         return self.law.notes
 
+    @property
+    def reversible(self) -> bool:
+        return self.law.reversible
+
     def __getattr__(self, name: str) -> Any:  # the law's own figures (retention, pressure, ...)
         if name == "law":
             raise AttributeError(name)

@@ -57,6 +57,7 @@ class SolidPinLaw:
     chamfer_length_m: float
     capped: bool
     notes: tuple[str, ...] = ()
+    reversible = False  # friction sets the joint: backing off unloads it elastically (contact_laws docstring)
 
     seat_depth_m = None
 

@@ -22,6 +22,7 @@ class TabulatedLaw:
     table_force_n: np.ndarray
     path: str
     notes: tuple[str, ...] = ()
+    reversible = False  # friction sets the joint: backing off unloads it elastically (contact_laws docstring)
 
     plateau_force_n = None
     seat_depth_m = None
