@@ -105,7 +105,8 @@ def test_a_limiter_backoff_is_one_stroke_only_within_the_reversal_tolerance(tmp_
     curve = tmp_path / "backoff.csv"
     curve.write_text("\n".join(rows) + "\n")
     r = _run(curve, "--windows", WINDOWS)
-    assert r.exit_code == 2 and "runs backwards" in r.output and "row 6, column 'x_mm'" in r.output, r.output
+    assert r.exit_code == 2 and "runs backwards by 2e-06 m" in r.output and "row 6, column 'x_mm'" in r.output, r.output
+    assert "(row 5 to this one, the force 120 N to 119 N)" in r.output and "reversal tolerance 1e-06 m" in r.output
     r = _run(curve, "--windows", WINDOWS, "--reversal-tolerance-m", "2.5e-6")
     assert r.exit_code in (0, 1) and "backoff.csv" in r.output and "runs backwards" not in r.output, r.output
     assert _run(curve, "--windows", WINDOWS, "--reversal-tolerance-m", "1.5e-6").exit_code == 2

@@ -258,3 +258,21 @@ def test_a_stiffness_in_series_with_the_actuators_softens_the_vertical_press_by_
     assert y[0] - y[1] == pytest.approx(force / (4 * ks * 0.8), rel=1e-3)
     with pytest.raises(PressfitError, match="actuator_series_n_per_m"):
         FlexibleMachine(machine, POSE_A, actuator_series_n_per_m=-1.0)
+
+
+def test_a_constant_contact_in_the_step_is_the_same_force_as_a_held_wrench(machine):
+    """The implicit contact (``step``'s ``contact``, a world +y force on the plate centre) against the held plate
+    wrench path (``_external``: R^T f on the free flyer): with a contact that does not depend on the plate's y
+    (100 N, stiffness 0) three steps from a tilted rest state (an off-centre pose, the plate turned by the weight)
+    give the same states to 1e-13 m and rad."""
+    pose = np.array([0.15, 0.62, -0.1])
+    fm = FlexibleMachine(machine, pose)
+    state = fm.rest_state()
+    assert np.abs(state.q[3:6]).max() > 1e-5  # the premise: the plate is turned, R differs from R^T
+    tensions = DriveInput.forces(np.full(len(machine.legs), 60.0))
+    held, implicit = state, state
+    for _ in range(3):
+        held = fm.step(held, tensions, np.array([0.0, 100.0, 0.0, 0.0, 0.0, 0.0]), 1e-3)
+        implicit = fm.step(implicit, tensions, np.zeros(6), 1e-3, contact=lambda y: (100.0, 0.0))
+        assert np.abs(fm.tool_point_m(held) - fm.tool_point_m(implicit)).max() < 1e-13
+        assert np.abs(pin.difference(fm.model, held.q, implicit.q)).max() < 1e-13

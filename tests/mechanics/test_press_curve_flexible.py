@@ -11,6 +11,8 @@ import pytest
 import tomli_w
 
 from pressfit.description.cases import load_case
+from pressfit.dynamics import kernels
+from pressfit.dynamics.contact import contact_parameters
 from pressfit.dynamics.insertion import simulate_insertion
 from pressfit.mechanics.compliance import vjm_plate_compliance
 from pressfit.output.curve import curve_columns
@@ -34,7 +36,8 @@ def test_the_flexible_models_sensed_minus_true_depth_is_its_compliance_times_the
     (docs/joint.md). The tool stays in contact from its first touch to the peak: the compliant pin's joint sets, and
     its stiff unloading line (the shoulders' 8e6 N/m), held over a step as the contact force was before the contact
     moved into the flexible step's Newton, made the tool rattle on it at this 0.5 ms step (the force 0 and 260 N
-    by turns, 70 um of travel; smooth at 0.1 ms, so numerical)."""
+    by turns, 70 um of travel; smooth at 0.1 ms, so numerical). On the way out the set joint lets go within F / k_u
+    of the deepest depth (k_u the table's steepest slope) and the force stays 0."""
     data = tomllib.loads((cases_dir() / "paper" / "insertion_compliant_pin.toml").read_text())
     del data["curve"]
     data["simulation"].update({"start_m": [0.10, 0.6006, -0.05], "end_m": [0.10, 0.6006, -0.05],
@@ -65,3 +68,7 @@ def test_the_flexible_models_sensed_minus_true_depth_is_its_compliance_times_the
     assert np.max(np.abs(fit - (sensed[rows] - depth[rows]))) < 5e-2 * (sensed[rows[-1]] - depth[rows[-1]])
     assert slope == pytest.approx(with_drives, rel=1e-2)
     assert abs(slope / without - 1.0) > 8e-2
+    deepest = int(np.argmax(depth))  # the retract: the set joint lets go within F / k_u of the deepest depth
+    k_u = contact_parameters(case.simulation.contact, machine)[kernels.TABLE_UNLOAD]
+    gone = np.flatnonzero(depth[deepest:] < depth[deepest] - force[deepest] / k_u - 1e-7)
+    assert gone.size and np.all(force[deepest:][gone[0]:] == 0.0)
