@@ -125,13 +125,14 @@ def stem_pieces(machine: Machine, springs_per_segment: int, stem_length_m: float
     n, rod = springs_per_segment, machine.stem.length_m
     ls = float(stem_length_m)
     mu = mass_scale * machine.mass.density_kg_per_m3 * machine.stem_section.area_m2  # kg/m
-    radius, z_axis = machine.stem.diameter_m / 2, np.array([0.0, 0.0, 1.0])
+    radius = machine.stem.diameter_m / 2
     # (z0, z1) of each piece in its body's frame: actuator, then springs 0 .. n-1
     spans = [(-rod, -ls + ls / (2 * n))] + [(0.0, ls / n if k < n - 1 else ls / (2 * n)) for k in range(n)]
     pieces = []
-    for z0, z1 in spans:
-        m = mu * (z1 - z0)
-        pieces.append(pin.Inertia(m, np.array([0.0, 0.0, (z0 + z1) / 2]), _tube(m, z1 - z0, radius, 0.0, z_axis)))
+    for z0, z1 in spans:  # a solid rod along z about its centre (the tube of _tube without a bore), moved there
+        piece = pin.Inertia.FromCylinder(mu * (z1 - z0), radius, z1 - z0)
+        piece.lever = np.array([0.0, 0.0, (z0 + z1) / 2])
+        pieces.append(piece)
     moving = mass_scale * machine.mass.actuator_moving_mass_kg
     if moving > 0.0:
         pieces[0] = pieces[0] + pin.Inertia(moving, np.array([0.0, 0.0, -rod]), np.zeros((3, 3)))

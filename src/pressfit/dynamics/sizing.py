@@ -287,13 +287,13 @@ def energy_balance(lengths_m: np.ndarray, tensions_n: np.ndarray, contact_force_
                    play_energy_j: np.ndarray | None = None, play_dissipation_j: np.ndarray | None = None,
                    stem_replacement_j: np.ndarray | None = None,
                    series_loss_j: np.ndarray | None = None) -> EnergyBalance:
-    """The balance between the first and the last of n rows (module docstring): the drives' lengths (n, legs) m,
-    the tensions held over the step ending at each row (n, legs) N, the contact force at each row (n,) N (+y on the
-    tool, held over the next step, or over its own on a model whose contact is implicit) and the y of the point it acts on (n,) m, the energies at each row (n,) J, the
-    damping's work over the step ending at each row (n,) J and, with cardan plays, their stored energy at each row
-    (n,) J and their dissipation over the step ending at it (n,) J, and the energy change of each step's stem
-    re-placement (n,) J and the sensors' series springs' loss over the step ending at each row (n,) J (flexible
-    model); held to the tolerance of ``model`` with drives of
+    """The balance between the first and the last of n rows (module docstring): the drives' lengths (n, legs) m, the
+    tensions held over the step ending at each row (n, legs) N, the contact force at each row (n,) N (+y on the
+    tool, held over the next step, or over its own on a model whose contact is implicit) and the y of the point it
+    acts on (n,) m, the energies at each row (n,) J, the damping's work over the step ending at each row (n,) J and,
+    with cardan plays, their stored energy at each row (n,) J and their dissipation over the step ending at it (n,)
+    J, and the energy change of each step's stem re-placement (n,) J and the sensors' series springs' loss over the
+    step ending at each row (n,) J (flexible model); held to the tolerance of ``model`` with drives of
     ``drive_kind`` (:func:`energy_balance_tolerance`)."""
     lengths, n = np.asarray(lengths_m, float), np.asarray(tensions_n, float)
     force, y = np.asarray(contact_force_n, float), np.asarray(contact_y_m, float)
