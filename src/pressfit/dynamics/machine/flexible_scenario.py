@@ -172,10 +172,12 @@ class FlexibleScenario:
         """The contact in the step (:meth:`FlexibleMachine.step`'s ``contact``): at the tool's end-of-step y (m, the
         plate centre), the force on the tool (N, +y; its damping on the depth's rate over the step) and its stiffness
         -dF/dy (N/m, central differences over ``CONTACT_TANGENT_STEP_M``)."""
-        depth, h, dt = self.board - plate_y_m, CONTACT_TANGENT_STEP_M, self.dt
-        force = contact_force_n(self.params, depth, (depth - self.depth) / dt)
-        return force, (contact_force_n(self.params, depth + h, (depth + h - self.depth) / dt)
-                       - contact_force_n(self.params, depth - h, (depth - h - self.depth) / dt)) / (2.0 * h)
+        depth, h, dt, law = self.board - plate_y_m, CONTACT_TANGENT_STEP_M, self.dt, kernels.contact_law
+        if depth <= -h:  # clear of the board: no force, no stiffness
+            return 0.0, 0.0
+        force = law(self.params, depth, (depth - self.depth) / dt)
+        return force, (law(self.params, depth + h, (depth + h - self.depth) / dt)
+                       - law(self.params, depth - h, (depth - h - self.depth) / dt)) / (2.0 * h)
 
     def _sense(self) -> tuple[float, float]:
         """What the drives' sensors read after the step (module docstring): l - N c(l) and its differenced rate;
