@@ -149,18 +149,19 @@ def test_the_sensors_see_the_tubes_and_the_drive_unless_they_read_past_it(machin
 
 
 def test_the_condensed_compliance_from_the_sensors_is_the_machine_with_a_rigid_oil_column(machine, hydraulic):
-    """``condensed_plate_compliance(..., sensed=True)`` of the hydraulic machine against a second machine: the same
+    """``condensed_plate_compliance`` of the hydraulic machine's ``sensed_view`` against a second machine: the same
     file with the oil's bulk modulus 1e6 times larger (the oil column 1e6 times stiffer), its full condensed
     compliance (to 1e-5); the sensed C_yy is 41% below the full one at the shipped end pose (the oil column's share);
     the force-kind machine's is its full compliance exactly."""
     poses = np.array([[0.0, 0.68, 0.15], [0.10, 0.60, -0.05], [-0.15, 0.65, 0.10]])
     stiff = hydraulic.with_overrides({"actuator": {"hydraulic": {"bulk_modulus_pa": 1.2e15}}})
-    sensed = condensed.condensed_plate_compliance(hydraulic, poses, sensed=True)
+    sensed = condensed.condensed_plate_compliance(hydraulic.sensed_view, poses)
     np.testing.assert_allclose(sensed, condensed.condensed_plate_compliance(stiff, poses), rtol=1e-5,
                                atol=1e-5 * np.abs(sensed).max())
     full = condensed.condensed_plate_compliance(hydraulic, poses)
     assert sensed[0, 1, 1] < 0.65 * full[0, 1, 1]
-    np.testing.assert_array_equal(condensed.condensed_plate_compliance(machine, poses, sensed=True),
+    assert machine.sensed_view is machine
+    np.testing.assert_array_equal(condensed.condensed_plate_compliance(machine.sensed_view, poses),
                                   condensed.condensed_plate_compliance(machine, poses))
 
 

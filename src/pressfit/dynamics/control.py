@@ -106,7 +106,7 @@ def static_deflection_columns(machine: Machine, rigid: RigidLegModel, pose_m: np
     compliance times the weight as a plate wrench, the legs' cardan forces and their clamped bending between the
     cardans included; within 0.2% of the elastic model's static sag, tests/dynamics/test_leg_weight.py); zero when
     the model ``rigid`` has no gravity."""
-    compliance = condensed_plate_compliance(machine, pose_m, sensed=True)
+    compliance = condensed_plate_compliance(machine.sensed_view, pose_m)
     sag = weight_sag_m(machine, pose_m, compliance) if _gravity_on(rigid) else np.zeros(3)
     return np.column_stack([compliance[:3, 1], sag])
 
@@ -116,7 +116,7 @@ def _linearised_columns(machine: Machine, pose_m: np.ndarray, gravity: bool) -> 
     (central differences, one batched call of the closed forms at seven poses)."""
     h = DEFLECTION_GRADIENT_STEP_M * np.eye(3)
     poses = np.vstack([pose_m, pose_m + h, pose_m - h])
-    compliance = condensed_plate_compliance(machine, poses, sensed=True)
+    compliance = condensed_plate_compliance(machine.sensed_view, poses)
     c0 = compliance[:, :3, 1]
     c1 = weight_sag_m(machine, poses, compliance) if gravity else np.zeros((7, 3))
     rows = np.stack([c0, c1], axis=1)  # (7, 2, 3)

@@ -99,7 +99,7 @@ def monitor_curve(machine: Machine, contact: Contact, time_s: np.ndarray, depth_
     its pin pose (``contact.pin_position_m``), from :func:`tare_row` on. ResidualError (naming ``where``) if the
     pin-field solve's residual exceeds ``RESIDUAL_LIMIT_N``."""
     pins = PinField.from_contact(contact)
-    compliance = condensed_plate_compliance(machine, pin_pose_m(contact), sensed=True)
+    compliance = condensed_plate_compliance(machine.sensed_view, pin_pose_m(contact))
     start = tare_row(force_n)
     time, depth, force = (np.asarray(a, dtype=float)[start:] for a in (time_s, depth_m, force_n))
     sensed = tared_sensed_depth(contact.board_height_m, np.asarray(kinematic_y_m, dtype=float)[start:], depth, force)

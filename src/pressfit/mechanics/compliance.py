@@ -50,13 +50,13 @@ def vjm_plate_compliance(machine: Machine, pose_m: np.ndarray, load: np.ndarray 
 def pose_stiffness_report(
     machine: Machine, pose_m: np.ndarray, press_load_n: float = PRESS_LOAD_N
 ) -> dict[str, object]:
-    """Everything ``pressfit stiffness`` reports at one reachable pose (m), JSON-ready and SI: the condensed
-    model's report (:func:`pressfit.mechanics.condensed.stiffness_report`), the same compliance from the
-    Pinocchio model with their largest difference relative to its largest entry (an independent
-    cross-check, ~1e-9), the tangent compliance of the nonlinear equilibrium under the press load (+y), and the
-    compliance along the press as the drives' position sensors see it (``sensed_vertical_compliance_m_per_n``,
-    :func:`pressfit.mechanics.condensed.condensed_plate_compliance` with ``sensed``: less a hydraulic cylinder's
-    oil column, which its piston sensor reads past; the number ``simulate``, ``curve`` and ``curves check
+    """Everything ``pressfit stiffness`` reports at one reachable pose (m), JSON-ready and SI: the condensed model's
+    report (:func:`pressfit.mechanics.condensed.stiffness_report`), the same compliance from the Pinocchio model
+    with their largest difference relative to its largest entry (an independent cross-check, ~1e-9), the tangent
+    compliance of the nonlinear equilibrium under the press load (+y), and the compliance along the press as the
+    drives' position sensors see it (``sensed_vertical_compliance_m_per_n``,
+    :func:`pressfit.mechanics.condensed.condensed_plate_compliance` of ``machine.sensed_view``: less a hydraulic
+    cylinder's oil column, which its piston sensor reads past; the number ``simulate``, ``curve`` and ``curves check
     --compensate`` use)."""
     h = kinematics.require_reachable(machine, pose_m)
     out = condensed.stiffness_report(machine, h, press_load_n)
@@ -68,4 +68,4 @@ def pose_stiffness_report(
                   "tangent_compliance_6x6_under_press_load": c_tan.tolist(),
                   "tangent_vertical_stiffness_under_press_load_n_per_m": float(1.0 / c_tan[1, 1]),
                   "sensed_vertical_compliance_m_per_n":
-                      float(condensed.condensed_plate_compliance(machine, h, sensed=True)[1, 1])}
+                      float(condensed.condensed_plate_compliance(machine.sensed_view, h)[1, 1])}

@@ -135,9 +135,8 @@ class _Core:
     cr: Sym  # K_r^-1, rad/(N m)
 
 
-def _core(machine: Machine, h: np.ndarray, sensed: bool = False) -> _Core:
-    """Condensed springs and the two 3x3 blocks for poses h of shape (m, 3); ``sensed``: the legs' axial
-    compliance from the drives' position sensors (:meth:`Machine.sensed_axial_compliance_m_per_n`)."""
+def _core(machine: Machine, h: np.ndarray) -> _Core:
+    """Condensed springs and the two 3x3 blocks for poses h of shape (m, 3)."""
     if not machine.legs_concurrent:
         raise CondensedModelError(machine.name, "concurrent legs", "the leg lines do not all meet at one point "
                                   "(joint position errors d_i != (r/p) B_i)")
@@ -153,7 +152,7 @@ def _core(machine: Machine, h: np.ndarray, sensed: bool = False) -> _Core:
     with np.errstate(divide="ignore", invalid="ignore"):  # a singular pose is refused just below, by name
         c = (e - s * a) / np.sqrt(cos2)
         c_t, c_m = rotational_compliances(machine, length)
-        k_a = 1.0 / (machine.sensed_axial_compliance_m_per_n if sensed else machine.axial_compliance_m_per_n)(length)
+        k_a = 1.0 / machine.axial_compliance_m_per_n(length)
         k_r = 1.0 / (cos2 * c_t + s * s * c_m)
         kt, kr = _sym_outer(k_a, e), _sym_outer(k_r, c)
         (ct, det_t), (cr, det_r) = _sym_inv(kt), _sym_inv(kr)
@@ -180,12 +179,11 @@ def _blocks(tl: np.ndarray, tr: np.ndarray, bl: np.ndarray, br: np.ndarray) -> n
     return np.concatenate([np.concatenate([tl, tr], -1), np.concatenate([bl, br], -1)], -2)
 
 
-def _six_by_six(machine: Machine, poses_m: np.ndarray, about: str, compliance: bool,
-                sensed: bool = False) -> np.ndarray:
+def _six_by_six(machine: Machine, poses_m: np.ndarray, about: str, compliance: bool) -> np.ndarray:
     if about not in ("centre", "concurrency"):
         raise PressfitError(f"about must be 'centre' or 'concurrency', got {about!r}")
     h = _poses(machine, poses_m)
-    core = _core(machine, h.reshape(-1, 3), sensed)
+    core = _core(machine, h.reshape(-1, 3))
     t, r = (core.ct, core.cr) if compliance else (core.kt, core.kr)
     t, r = _sym_full(t), _sym_full(r)
     if about == "concurrency":
@@ -210,14 +208,11 @@ def plate_stiffness(machine: Machine, poses_m: np.ndarray, about: str = "centre"
     return _six_by_six(machine, poses_m, about, compliance=False)
 
 
-def condensed_plate_compliance(machine: Machine, poses_m: np.ndarray, about: str = "centre",
-                               sensed: bool = False) -> np.ndarray:
-    """The inverse of :func:`plate_stiffness`, (..., 6, 6): m/N, rad/N, rad/(N m); closed form. ``sensed``: the
-    compliance between the drives' position sensors and the plate, the deflection a position loop closed on those
-    sensors leaves (the legs' :meth:`pressfit.description.machine.Machine.sensed_axial_compliance_m_per_n`: a
-    hydraulic cylinder's oil column, which its piston sensor reads past, left out; the same for the other
-    drives)."""
-    return _six_by_six(machine, poses_m, about, compliance=True, sensed=sensed)
+def condensed_plate_compliance(machine: Machine, poses_m: np.ndarray, about: str = "centre") -> np.ndarray:
+    """The inverse of :func:`plate_stiffness`, (..., 6, 6): m/N, rad/N, rad/(N m); closed form. Of
+    ``machine.sensed_view``: the compliance a position loop closed on the drives' sensors leaves (a hydraulic
+    cylinder's oil column, which its piston sensor reads past, rigid)."""
+    return _six_by_six(machine, poses_m, about, compliance=True)
 
 
 # --- the linear solve ----------------------------------------------------------------------------

@@ -307,7 +307,7 @@ def predict_curve(machine: Machine, case_or_contact: Case | Contact, *, pose_m: 
         raise PressCurveError(path, "samples", f"give 2 .. 1e6 samples, got {samples}")
     pins = PinField.from_contact(contact)
     pose = pin_pose_m(contact) if pose_m is None else np.asarray(pose_m, dtype=float)
-    compliance = condensed_plate_compliance(machine, pose, sensed=True)
+    compliance = condensed_plate_compliance(machine.sensed_view, pose)
     end = _stroke_end(pins, max_depth_m, fallback, path)
     seats = [law.seat_depth_m for law in pins.laws]
     shoulder = all(s is not None for s in seats)

@@ -91,13 +91,13 @@ def pin_pose_m(case: Case) -> np.ndarray:
 def press_compliance_m_per_n(case: Case) -> float:
     """The machine's compliance along the press direction (m/N) at the case's pin pose, as the drives' position
     sensors see it: C_yy of the condensed plate-centre compliance from the sensors
-    (:func:`pressfit.mechanics.condensed.condensed_plate_compliance` with ``sensed``; the number ``pressfit
+    (:func:`pressfit.mechanics.condensed.condensed_plate_compliance` of ``sensed_view``; the number ``pressfit
     stiffness`` prints as 1 / vertical stiffness, less a hydraulic cylinder's oil column, which its piston sensor
     reads past), the plate free to tilt. The one place the compensation's number comes from (the predicted curve's
     ``machine_compliance_along_press_m_per_n``)."""
     from pressfit.mechanics.condensed import condensed_plate_compliance
 
-    return float(condensed_plate_compliance(case.machine(), pin_pose_m(case), sensed=True)[1, 1])
+    return float(condensed_plate_compliance(case.machine().sensed_view, pin_pose_m(case))[1, 1])
 
 
 # --- geometry of the polyline ----------------------------------------------------------------------------------
