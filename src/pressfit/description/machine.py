@@ -54,6 +54,9 @@ Finite = Annotated[float, Field(allow_inf_nan=False)]
 Vector3 = Annotated[list[Finite], Field(min_length=3, max_length=3)]
 
 
+RIGID_BULK_MODULUS_PA = 1e300  # Pa: an oil column made rigid (HydraulicDrive.rigid_overrides)
+
+
 class StrictModel(BaseModel):
     """Base of every schema: unknown keys, type coercion and mutation are refused."""
 
@@ -237,6 +240,11 @@ class DriveTable(StrictModel):
     def check(self, machine: Machine) -> None:
         """Refuse (ValueError naming the key) a table that does not fit the machine; nothing by default."""
 
+    def rigid_overrides(self) -> dict[str, Any]:
+        """The machine-file overrides that make the drive's own stiffness rigid (:attr:`Machine.sensed_view`), for a
+        kind whose sensor reads past it (``sensed_past_stiffness``); none by default."""
+        return {}
+
 
 class ForceSource(DriveTable):
     """``kind = "force"``: an ideal first-order force source, its keys in ``[actuator]`` itself: axial stiffness
@@ -414,6 +422,11 @@ class HydraulicDrive(DriveTable):
         v_a, v_b = drive_stiffness.chamber_volumes_m3(self.area_m2, self.stroke_m, machine.piston_position_m(
             np.asarray(leg_length_m, dtype=float)), self.dead_volume_a_m3, self.dead_volume_b_m3)
         return drive_stiffness.oil_column_stiffness_n_per_m(self.bulk_modulus_pa, self.area_m2, v_a, v_b)
+
+    def rigid_overrides(self) -> dict[str, Any]:
+        """The oil column made rigid: a bulk modulus ``RIGID_BULK_MODULUS_PA`` (its compliance then vanishes against
+        the tubes' in floating point)."""
+        return {"actuator": {"hydraulic": {"bulk_modulus_pa": RIGID_BULK_MODULUS_PA}}}
 
     def check(self, machine: Machine) -> None:
         """The stroke must hold the leg travel l_max - l_min."""
@@ -845,12 +858,20 @@ class Machine(StrictModel):
 
     def sensed_axial_compliance_m_per_n(self, leg_length_m: np.ndarray | float) -> np.ndarray:
         """The part of :meth:`axial_compliance_m_per_n` between the drive's position sensor and the leg's cardans,
-        m/N: all of it, less the drive's own where the sensor reads past it (``DriveTable.sensed_past_stiffness``:
-        the hydraulic cylinder's piston sensor, the oil column inside its position loop)."""
-        compliance = self.axial_compliance_m_per_n(leg_length_m)
-        if self.actuator.table.sensed_past_stiffness:
-            compliance = compliance - 1.0 / self.drive_stiffness_n_per_m(leg_length_m)
-        return compliance
+        m/N: all of it, less the drive's own where the sensor reads past it (:attr:`sensed_view`'s)."""
+        return self.sensed_view.axial_compliance_m_per_n(leg_length_m)
+
+    @cached_property
+    def sensed_view(self) -> Machine:
+        """The machine as its drives' position sensors see it: itself, or, where a sensor reads past the drive's own
+        stiffness (``DriveTable.sensed_past_stiffness``: the hydraulic cylinder's piston sensor, the oil column
+        inside its position loop), a copy with that stiffness rigid (``DriveTable.rigid_overrides``). What a
+        position loop closed on the sensors leaves of the machine's compliance: the controller's deflection
+        compensation, the rigid model's hidden deflection and clearance, the press monitor's deflection."""
+        table = self.actuator.table
+        if not table.sensed_past_stiffness:
+            return self
+        return self.with_overrides(table.rigid_overrides(), f"{self.source} (as its position sensors see it)")
 
     def drive_stiffness_n_per_m(self, leg_length_m: np.ndarray | float) -> np.ndarray:
         """The drive's own axial stiffness at leg length l (m), N/m: its table's

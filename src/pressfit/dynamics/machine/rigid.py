@@ -94,7 +94,8 @@ def _deflection(machine: Machine, case: Case, sim: Simulation, pin_pose: np.ndar
     :func:`pressfit.dynamics.kernels.solve_contact` takes it: u = column F + sag under the contact force F (N, +y)
     and the moving parts' weight (column m/N and sag m, (3,) each:
     :func:`pressfit.dynamics.control.static_deflection_columns`), or, with ``clearance``, sag + the clearance
-    model's load-deflection table at the pin (loads (n,), N; displacements (n, 3), m) for the contact force.
+    model's load-deflection table at the pin (loads (n,), N; displacements (n, 3), m) for the contact force, of the
+    machine as its sensors see it (``Machine.sensed_view``: a hydraulic oil column rigid).
     ``columns``: the controller's cache of the columns (``ForceLimitedController.deflection``, rows c0, c1,
     extrapolated to first order from the pose where they were last computed, within ``DEFLECTION_UPDATE_M``),
     shared: the estimate and the rigid pose differ by the closure drift, so one update serves both."""
@@ -104,7 +105,7 @@ def _deflection(machine: Machine, case: Case, sim: Simulation, pin_pose: np.ndar
     law_force = (contact_force_n(params, sim.interference_m) if params[kernels.LAW] == kernels.TABLE
                  else sim.contact.stiffness_n_per_m * sim.interference_m)
     limit = max(4.0 * sim.controller.force_limit_n, law_force)
-    curve = load_deflection(machine, pin_pose, [0.0, 1.0, 0.0], np.linspace(0.0, limit, CURVE_POINTS),
+    curve = load_deflection(machine.sensed_view, pin_pose, [0.0, 1.0, 0.0], np.linspace(0.0, limit, CURVE_POINTS),
                             clearance_from_case(case, machine), ActuatorPreload.from_case(case.preload).a4,
                             unload=False)
     table = (np.ascontiguousarray(curve.loads_n, dtype=float),
