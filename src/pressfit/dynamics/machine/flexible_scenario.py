@@ -95,7 +95,7 @@ class FlexibleScenario:
         self.series = Series(machine, steps, sim.start_m)
         placement, subtree = fm.section_state(state)  # per step; the section loads from them after the run (batched)
         self.placements, self.wrenches = np.empty((steps, *placement.shape)), np.empty((steps, *subtree.shape))
-        self.wrench, self.no_axial = np.zeros(6), (0.0,) * len(machine.legs)
+        self.no_wrench, self.no_axial = np.zeros(6), (0.0,) * len(machine.legs)  # the contact is the step's
         self.internal = np.empty(machine.redundancy)
 
     def _side_kinetic_j(self) -> float:
@@ -109,14 +109,14 @@ class FlexibleScenario:
         fm, drives, dt, play = self.fm, self.drives, self.dt, self.play
         if not drives.follows_travel:  # its tension does not follow the travel: stepped once, held over the step
             self.drive, self.tension = drives.step(self.drive, command, self.lengths, self.rates, dt)
-            self.state = fm.step(self.state, DriveInput.forces(self.tension), self.wrench, dt, contact=self._contact)
+            self.state = fm.step(self.state, DriveInput.forces(self.tension), self.no_wrench, dt, contact=self._contact)
             return None
         stepped = DriveOverStep(drives, self.drive, command, self.lengths, dt)
         through, k_step = stepped, drives.step_stiffness_n_per_m(self.lengths)
         if play is not None:
             through = play.over_step(stepped, self.tool, self.tension, k_step, self.side, dt)
             k_step = through.tangent_n_per_m
-        self.state = fm.step(self.state, DriveInput.forces(self.tension), self.wrench, dt, through, k_step,
+        self.state = fm.step(self.state, DriveInput.forces(self.tension), self.no_wrench, dt, through, k_step,
                              contact=self._contact)
         self.drive, self.tension = stepped.result
         if play is not None:
