@@ -42,6 +42,8 @@ def test_the_readme_curve_is_what_pressfit_curve_prints_and_its_deflection_the_c
     printed = float(re.search(r"at the peak ([\d.]+) um", lines[1]).group(1))
     assert printed == pytest.approx(1e6 * c_yy * peak, rel=3e-3)  # the pins' moments tilt the tool: 0.1% here
     assert "sensed minus true depth at the peak 18.09 um" in README
+    final = float(re.search(r"final ([\d.]+) N", lines[0]).group(1))  # the press stops at the case's force limit
+    assert final == pytest.approx(case.simulation.controller.force_limit_n, abs=5e-3)
 
 
 def test_the_readme_judged_curves_are_what_curves_check_prints():

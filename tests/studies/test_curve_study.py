@@ -53,7 +53,7 @@ def test_a_law_deviation_is_the_hand_built_contacts_curve(case, sample):
     contact = case.simulation.contact
     by_hand = type(contact).model_validate({**contact.model_dump(exclude_unset=True), "hole_diameter_m": 1.02e-3,
                                             "friction_coefficient": 0.13})
-    ref = predict_curve(case.machine(), by_hand, samples=POINTS)
+    ref = predict_curve(case.machine(), by_hand, samples=POINTS, stop_force_n=case.simulation.controller.force_limit_n)
     x, f = sample({"hole_diameter_m": 2.0e-5, "friction_coefficient": -0.02})
     np.testing.assert_allclose(f, ref.force_n, rtol=0, atol=1e-9)  # achieved 0 (1.02e-3 = 1e-3 + 2e-5 to 1 ulp)
     np.testing.assert_allclose(x, ref.sensed_depth_m, rtol=0, atol=1e-15)
@@ -64,7 +64,8 @@ def test_pin_position_moves_the_pose(case, sample):
     there): identical; and 50 mm further out the sensed depth at the end differs by 18 um (another compliance)."""
     contact = case.simulation.contact
     pose = pin_pose_m(contact) + np.array([0.004, 0.0, -0.003])
-    ref = predict_curve(case.machine(), contact, pose_m=pose, samples=POINTS)
+    ref = predict_curve(case.machine(), contact, pose_m=pose, samples=POINTS,
+                        stop_force_n=case.simulation.controller.force_limit_n)
     x, f = sample({"pin_x_m": 0.004, "pin_z_m": -0.003})
     np.testing.assert_array_equal(x, ref.sensed_depth_m)
     np.testing.assert_array_equal(f, ref.force_n)

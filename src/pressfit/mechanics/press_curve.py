@@ -289,20 +289,24 @@ def _stroke_end(pins: PinField, max_depth_m: float | None, fallback_m: float | N
 
 
 def predict_curve(machine: Machine, case_or_contact: Case | Contact, *, pose_m: Sequence[float] | None = None,
-                  samples: int = DEFAULT_SAMPLES, max_depth_m: float | None = None) -> PressCurve:
+                  samples: int = DEFAULT_SAMPLES, max_depth_m: float | None = None,
+                  stop_force_n: float | None = None) -> PressCurve:
     """The quasi-static press curve (module docstring) of a case's ``[simulation.contact]`` (or of a
     :class:`Contact`) at ``pose_m`` (m; default: the pin pose, :func:`pin_pose_m`), ``samples`` true tool depths
     from 0 to ``max_depth_m`` (m; default: the laws' depth range, which ends at the shoulder + 20 um with one, else
     the case's ``[simulation] interference_m``; with a shoulder the stroke is lengthened until every pin seats,
-    at most twice)."""
+    at most twice, and then until the force reaches ``stop_force_n`` (N; a case's default: its
+    ``[simulation.controller] force_limit_n``): the press seats a component up to its force limit and stops there,
+    as the simulation does)."""
     if isinstance(case_or_contact, Case):
         if case_or_contact.simulation is None:
             raise PressCurveError(case_or_contact.path, "[simulation]", "the case has no [simulation] table (its "
                                   "contact is the joint)")
         contact, path = case_or_contact.simulation.contact, case_or_contact.path
         fallback = case_or_contact.simulation.interference_m
+        stop = case_or_contact.simulation.controller.force_limit_n if stop_force_n is None else stop_force_n
     else:
-        contact, path, fallback = case_or_contact, "", None
+        contact, path, fallback, stop = case_or_contact, "", None, stop_force_n
     if not 2 <= samples <= 10**6:
         raise PressCurveError(path, "samples", f"give 2 .. 1e6 samples, got {samples}")
     pins = PinField.from_contact(contact)
@@ -319,6 +323,13 @@ def predict_curve(machine: Machine, case_or_contact: Case | Contact, *, pose_m: 
             break
         spread = float(np.max(np.ptp(sol.pin_depths_m, axis=1)))
         end += max(spread, 1e-6)
+    for _ in range(SEATING_ITERATIONS if max_depth_m is None and shoulder and stop is not None else 0):
+        force = sol.pin_forces_n.sum(axis=1)  # the seated rise is linear: a secant step lands on the limit
+        if force[-1] >= stop * (1.0 - 1e-9):
+            break
+        end += (stop - force[-1]) / ((force[-1] - force[-2]) / (depth[-1] - depth[-2]))
+        depth = np.linspace(0.0, end, samples)
+        sol = solve_field(pins, compliance, depth)
     force = sol.pin_forces_n.sum(axis=1)
     sensed = depth + sol.displacement[:, 1]
     tilt = sol.displacement[:, 3:]
@@ -352,6 +363,7 @@ class ForceTable:
     error_n: float
 
 
+SEATING_ITERATIONS = 4  # secant steps of the seated stroke's end onto the case's force limit
 TABLE_SAMPLES = 4001  # rows of the insertion's force table
 TABLE_EXTENSION = 1.25  # the table runs past the laws' range by this factor (the seating's rise included)
 TABLE_DEPTH_M = 0.01  # m: the table's range for laws without one of their own (elastic pins, extrapolated past it)

@@ -64,11 +64,13 @@ class CurveSample:
     contact: Contact
     points: int = DEFAULT_POINTS
     max_depth_m: float | None = None
+    stop_force_n: float | None = None  # the press stops a seated component at its force limit (predict_curve)
 
     @classmethod
     def from_case(cls, case: Case, machine: Machine, points: int | None = None) -> CurveSample:
         """The case's sample: its ``[curve] points`` (or ``points``); the stroke the laws' own, or the case's
-        ``[simulation] interference_m`` for a law without a depth range (an elastic spring without a shoulder)."""
+        ``[simulation] interference_m`` for a law without a depth range (an elastic spring without a shoulder); a
+        seated component pressed on to the case's force limit."""
         if case.simulation is None:
             raise PressCurveError(case.path, "[simulation]", "the case has no [simulation] table (its contact is "
                                   "the joint)")
@@ -76,11 +78,12 @@ class CurveSample:
         finite = all(np.isfinite(law.depth_range_m[1]) for law in PinField.from_contact(contact).laws)
         n = points if points is not None else case.curve.points if case.curve is not None else DEFAULT_POINTS
         return cls(machine=machine, contact=contact, points=n,
-                   max_depth_m=None if finite else case.simulation.interference_m)
+                   max_depth_m=None if finite else case.simulation.interference_m,
+                   stop_force_n=case.simulation.controller.force_limit_n)
 
     def __call__(self, values: Mapping[str, float] | None = None) -> tuple[np.ndarray, np.ndarray]:
         curve = predict_curve(self.machine, perturbed_contact(self.contact, values or {}), samples=self.points,
-                              max_depth_m=self.max_depth_m)
+                              max_depth_m=self.max_depth_m, stop_force_n=self.stop_force_n)
         if not curve.series_residual_n <= RESIDUAL_LIMIT_N:
             raise ResidualError("the press curve's series equation", "max |F - f(d)| (N)", curve.series_residual_n,
                                 RESIDUAL_LIMIT_N, where=f"curve sample {dict(values or {})}")
