@@ -236,3 +236,20 @@ def test_the_retract_unloads_the_set_joint_within_its_elastic_springback(complia
     after = slice(end, None)
     gone = np.flatnonzero(depth[after] < depth[:end + 1].max() - force[end] / k_u - 1e-7)
     assert gone.size and np.all(force[after][gone[0]:] == 0.0)
+
+
+def test_the_press_stops_where_the_force_first_reaches_its_limit(machine):
+    """A case's curve ends where its force-limited press stops: the paper's insertion (an elastic pin, k = 5e4 N/m,
+    30 N limit, 2 mm commanded) at F / k = 0.6 mm, closed form; the compliant pin with a 200 N limit (below its
+    261 N peak) where the lead-in first reaches 200 N, before the peak; with its own 400 N limit (above the seated
+    300 N) pressed on past the seat to 400 N. Each ends at its limit to 1e-6 of it."""
+    paper = load_case(cases_dir() / "paper" / "insertion.toml")
+    curve = predict_curve(paper.machine(), paper)
+    assert curve.final_force_n == pytest.approx(30.0, rel=1e-6)
+    assert curve.depth_m[-1] == pytest.approx(30.0 / 5e4, rel=1e-6)
+    pin = load_case(cases_dir() / "paper" / "insertion_compliant_pin.toml")
+    low = predict_curve(pin.machine(), pin, stop_force_n=200.0)
+    own = predict_curve(pin.machine(), pin)
+    assert low.final_force_n == pytest.approx(200.0, rel=1e-6) and not low.seated
+    assert low.depth_m[-1] < own.depth_m[int(np.argmax(own.force_n[own.depth_m < 1e-3]))]  # before the peak
+    assert own.final_force_n == pytest.approx(pin.simulation.controller.force_limit_n, rel=1e-6) and own.seated

@@ -297,7 +297,7 @@ def predict_curve(machine: Machine, case_or_contact: Case | Contact, *, pose_m: 
     the case's ``[simulation] interference_m``; with a shoulder the stroke is lengthened until every pin seats,
     at most twice, and then until the force reaches ``stop_force_n`` (N; a case's default: its
     ``[simulation.controller] force_limit_n``): the press seats a component up to its force limit and stops there,
-    as the simulation does)."""
+    as the simulation does; a stroke whose force reaches ``stop_force_n`` earlier ends where it first does)."""
     if isinstance(case_or_contact, Case):
         if case_or_contact.simulation is None:
             raise PressCurveError(case_or_contact.path, "[simulation]", "the case has no [simulation] table (its "
@@ -331,6 +331,12 @@ def predict_curve(machine: Machine, case_or_contact: Case | Contact, *, pose_m: 
         depth = np.linspace(0.0, end, samples)
         sol = solve_field(pins, compliance, depth)
     force = sol.pin_forces_n.sum(axis=1)
+    hit = np.flatnonzero(force >= stop)[:1] if stop is not None else ()
+    if len(hit) and hit[0] > 0 and force[-1] > stop * (1.0 + 1e-9):  # the press stops where it first reaches it
+        k = int(hit[0])
+        depth = np.linspace(0.0, float(np.interp(stop, force[k - 1:k + 1], depth[k - 1:k + 1])), samples)
+        sol = solve_field(pins, compliance, depth)
+        force = sol.pin_forces_n.sum(axis=1)
     sensed = depth + sol.displacement[:, 1]
     tilt = sol.displacement[:, 3:]
     fig = stroke_figures(pins, depth, force, sol.pin_forces_n, sol.pin_depths_m, sensed)

@@ -4,8 +4,9 @@ predicted curves (each pin's pose sees another machine compliance, so each sense
 
 All quasi-static (:func:`pressfit.mechanics.press_curve.predict_curve`: the joint's law in series with the machine's
 6x6 compliance at the pose), each curve's series residual enforced. A board pin is its ``[cycle.contact]`` law on the
-tool axis at the pose (x, board face, z), pressed from the face until the law reaches the pin's force limit (where
-the force-limited press stops) or to its commanded ``interference_m``, whichever comes first. SI units.
+tool axis at the pose (x, board face, z), pressed from the face until the force first reaches the pin's force limit
+(where the force-limited press stops: ``predict_curve``'s ``stop_force_n``, the tilt included) or to its commanded
+``interference_m``, whichever comes first. SI units.
 """
 
 from __future__ import annotations
@@ -13,19 +14,16 @@ from __future__ import annotations
 from dataclasses import dataclass
 from typing import Any
 
-import numpy as np
-
 from pressfit.description.cases import Case, Contact
 from pressfit.description.machine import Machine
 from pressfit.description.monitor_windows import Windows
 from pressfit.errors import PressCurveError, ResidualError
-from pressfit.mechanics.press_curve import RESIDUAL_LIMIT_N, PinField, PressCurve, predict_curve
+from pressfit.mechanics.press_curve import RESIDUAL_LIMIT_N, PressCurve, predict_curve
 from pressfit.studies.curve_band import CurveBandStudy, curve_band_study, windows_from_band
 from pressfit.studies.curve_study import CurveSample
 
 REPORT_BAND_SAMPLES = 300  # the report's Monte Carlo: a few hundred serial samples (a preview, not a design band)
 BOARD_CURVE_POINTS = 201  # depth samples of a board pin's curve
-STOP_GRID_POINTS = 4001  # the grid on which a pin's stop depth (its law at the force limit) is interpolated
 
 
 @dataclass(frozen=True, kw_only=True)
@@ -67,23 +65,10 @@ def _checked(curve: PressCurve, where: str) -> PressCurve:
     return curve
 
 
-def stop_depth_m(contact: Contact, force_limit_n: float, interference_m: float) -> float:
-    """The tool depth (m) where the contact's pins, untilted, first carry ``force_limit_n`` (N) in total (linear
-    interpolation on ``STOP_GRID_POINTS`` depths: exact for a linear law), else ``interference_m`` (m)."""
-    depth = np.linspace(0.0, interference_m, STOP_GRID_POINTS)
-    pins = PinField.from_contact(contact)
-    force = pins.forces_n(np.repeat(depth[:, None], len(pins.laws), axis=1)).sum(axis=1)
-    hit = np.flatnonzero(force >= force_limit_n)
-    if not hit.size:
-        return float(interference_m)
-    k = max(int(hit[0]), 1)
-    return float(np.interp(force_limit_n, force[k - 1:k + 1], depth[k - 1:k + 1]))
-
-
 def board_pin_curves(case: Case, machine: Machine | None = None,
                      points: int = BOARD_CURVE_POINTS) -> list[BoardPinCurve]:
     """Each pin of the case's ``[cycle]`` (module docstring), on ``machine`` (default the case's), ``points`` depths
-    from the board face to the pin's stop depth."""
+    from the board face to where the press stops (module docstring)."""
     if case.cycle is None:
         raise PressCurveError(case.path, "[cycle]", "the case has no [cycle] table (a board of pins)")
     machine = case.machine() if machine is None else machine
@@ -92,8 +77,8 @@ def board_pin_curves(case: Case, machine: Machine | None = None,
     for pin in case.cycle.resolved_pins():
         contact = Contact.model_validate({**law, "board_height_m": case.cycle.board_height_m,
                                           "pin_position_m": [pin.x_m, pin.z_m]})
-        end = stop_depth_m(contact, pin.force_limit_n, pin.interference_m)
-        curve = predict_curve(machine, contact, samples=points, max_depth_m=end)
+        curve = predict_curve(machine, contact, samples=points, max_depth_m=pin.interference_m,
+                              stop_force_n=pin.force_limit_n)
         out.append(BoardPinCurve(index=pin.index, x_m=pin.x_m, z_m=pin.z_m, force_limit_n=pin.force_limit_n,
                                  curve=_checked(curve, f"{case.path} pin {pin.index}")))
     return out
