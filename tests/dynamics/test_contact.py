@@ -81,3 +81,18 @@ def test_every_board_position_has_its_own_fresh_joint():
     for a, sa in zip(contacts, segments):
         for b, sb in zip(contacts, segments):
             assert (a is b) == (sa.pin == sb.pin)
+
+
+def test_past_its_table_the_law_runs_on_at_its_last_slope():
+    """Beyond the force table's last depth (1.25 times the law's range) the kernels extrapolate with the table's
+    slope there: against the solid pin's own law with its shoulder (linear past the seat), evaluated directly, at
+    0.1 and 0.5 mm beyond the end, to 1e-6 (a fresh joint: the loading curve)."""
+    from pressfit.mechanics.contact_laws import build_law
+
+    keys = {k: v for k, v in SOLID.items() if k != "law"}
+    law = build_law("solid_pin", keys)
+    params = contact_parameters(_contact(**SOLID))
+    end = float(force_table(None, _contact(**SOLID)).depth_m[-1])
+    for beyond in (1e-4, 5e-4):
+        expected = float(law.force_n(np.array([end + beyond]))[0])
+        assert contact_force_n(params, end + beyond) == pytest.approx(expected, rel=1e-6)
