@@ -394,6 +394,26 @@ def test_hydraulic_pressure_limit_saturates(hydraulic):
     np.testing.assert_allclose(force, [bound, -bound], rtol=1e-3)
 
 
+def test_a_hydraulic_command_beyond_the_force_limit_is_the_limit(hydraulic):
+    """The pressure loop takes a command beyond A (p_s - p_t) as A (p_s - p_t) (the controller cannot ask for more
+    than the drive has): 3 times the limit and the limit itself, each held 5 ms on a blocked and on a moving leg,
+    give the same drive states and tensions, bit for bit; a command under the limit does not."""
+    drive = drives.of(hydraulic)
+    limit = drive.force_limit_n
+    lengths, rates = np.full(4, 0.75), np.array([0.0, 0.01, -0.01, 0.0])
+
+    def run(command):
+        state = drive.initial_state(np.zeros(4), lengths)
+        for _ in range(5):
+            state, force = drive.step(state, np.full(4, command), lengths, rates, 1e-3)
+        return state.pressure_a_pa, state.pressure_b_pa, state.spool, force
+
+    at, over, under = run(limit), run(3.0 * limit), run(0.9 * limit)
+    for a, b in zip(at, over, strict=True):
+        np.testing.assert_array_equal(a, b)
+    assert not np.array_equal(at[3], under[3])
+
+
 def test_hydraulic_refuses_leaving_the_stroke(hydraulic):
     drive = drives.of(hydraulic)
     state = drive.initial_state(np.zeros(4), np.full(4, 0.75))
