@@ -224,7 +224,6 @@ class DriveTable(StrictModel):
 
     inline: ClassVar[bool] = False
     force_limit_key: ClassVar[str] = ""
-    sensed_past_stiffness: ClassVar[bool] = False
 
     @property
     def force_limit_n(self) -> float:
@@ -242,8 +241,13 @@ class DriveTable(StrictModel):
 
     def rigid_overrides(self) -> dict[str, Any]:
         """The machine-file overrides that make the drive's own stiffness rigid (:attr:`Machine.sensed_view`), for a
-        kind whose sensor reads past it (``sensed_past_stiffness``); none by default."""
+        kind whose sensor reads past it; none by default."""
         return {}
+
+    @property
+    def sensed_past_stiffness(self) -> bool:
+        """Whether the kind's position sensor reads past its own stiffness: it gives :meth:`rigid_overrides`."""
+        return bool(self.rigid_overrides())
 
 
 class ForceSource(DriveTable):
@@ -375,7 +379,6 @@ class HydraulicDrive(DriveTable):
     translate with the stem (``mass.actuator_moving_mass_kg``)."""
 
     force_limit_key: ClassVar[str] = "A ([actuator.hydraulic] supply_pressure_pa - tank_pressure_pa)"
-    sensed_past_stiffness: ClassVar[bool] = True  # the piston's position sensor reads past the oil column
 
     piston_area_m2: Positive | None = None
     bore_diameter_m: Positive | None = None
