@@ -429,3 +429,36 @@ def test_the_length_check_catches_a_long_function(tmp_path):
     body = "    x = 1\n" * (MAX_FUNCTION_LINES - 1)
     (tmp_path / "m.py").write_text(f"def fits():\n{body}\n\ndef over():\n{body}    x = 2\n")
     assert long_functions([tmp_path / "m.py"], tmp_path) == ["m.py:83 over (81 lines)"]
+
+
+def model_name_reads(paths: list[Path], names: tuple[str, ...], root: Path = SRC) -> list[str]:
+    """Where ``paths`` read a dynamics model's name: a comparison with one of ``names`` (``==``, ``!=``, ``in``) or a
+    literal list, tuple or set of them (a hand-kept list of the models, as ``click.Choice([...])`` was), as
+    ``path:line``. The registry (:mod:`pressfit.dynamics.machine.registry`) is the one reader."""
+    out = []
+    for path in paths:
+        for node in ast.walk(ast.parse(path.read_text())):
+            if isinstance(node, ast.Compare):
+                operands = [node.left, *node.comparators]
+            elif isinstance(node, ast.List | ast.Tuple | ast.Set):
+                operands = list(node.elts)
+            else:
+                continue
+            if any(isinstance(o, ast.Constant) and o.value in names for o in operands):
+                out.append(f"{path.relative_to(root)}:{node.lineno}")
+    return out
+
+
+def test_only_the_registry_reads_a_model_name():
+    """A new dynamics model is one module and one registry line: no other module branches on a model's name or
+    keeps its own list of the names (defaults, docs and messages may spell one)."""
+    from pressfit.dynamics.machine.registry import model_names
+
+    registry = SRC / "dynamics" / "machine" / "registry.py"
+    assert model_name_reads(sorted(p for p in SRC.rglob("*.py") if p != registry), model_names()) == []
+
+
+def test_the_model_name_check_catches_a_branch_and_a_list(tmp_path):
+    (tmp_path / "m.py").write_text('def f(m):\n    if m == "rigid":\n        return ["flexible", "rigid"]\n'
+                                   '    return m\n\n\nDEFAULT = "rigid"\n')
+    assert model_name_reads([tmp_path / "m.py"], ("flexible", "rigid"), tmp_path) == ["m.py:2", "m.py:3"]

@@ -129,8 +129,8 @@ def test_the_flexible_run_keeps_blas_on_one_thread(monkeypatch):
 
     from pressfit.description.cases import load_case
     from pressfit.dynamics.insertion import plan_scenario
+    from pressfit.dynamics.machine import flexible_scenario
     from pressfit.dynamics.machine.flexible_scenario import FlexibleScenario
-    from pressfit.dynamics.machine.registry import MODELS
     from pressfit.dynamics.scenario import run_plan
     from pressfit.shipped import cases_dir
 
@@ -151,7 +151,7 @@ def test_the_flexible_run_keeps_blas_on_one_thread(monkeypatch):
     case = load_case(cases_dir() / "paper" / "insertion.toml")
     plan = dataclasses.replace(plan_scenario(case), steps=0,
                                simulation=case.simulation.model_copy(update={"model": "flexible"}))
-    monkeypatch.setitem(MODELS, "flexible", Probe)
+    monkeypatch.setattr(flexible_scenario, "FlexibleScenario", Probe)  # what the registry's "flexible" names
     with threadpool_limits(limits=2, user_api="blas"):
         assert blas_threads() and set(blas_threads()) == {2}
         run_plan(case, None, plan, None, True, False)

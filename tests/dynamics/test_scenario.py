@@ -4,21 +4,24 @@ dynamics-model interface, and a pin's figures (computed once for an insertion an
 
 from __future__ import annotations
 
-import typing
+import re
 
 import click
 import numpy as np
 import pytest
 
 from pressfit.cli.dynamics import control_cmd, cycle_cmd
-from pressfit.description.cases import Cycle, Simulation
+from pressfit.cli.study import study_cycle_cmd
+from pressfit.description.cases import Cycle, Simulation, load_case
 from pressfit.description.machine import load_machine
 from pressfit.dynamics.machine.base import DriveInput, DynamicsModel, MachineState
-from pressfit.dynamics.machine.registry import MODELS, model_kind
+from pressfit.dynamics.cycle import plan_cycle
+from pressfit.dynamics.insertion import plan_scenario
+from pressfit.dynamics.machine.registry import MODELS, model_kind, model_names
 from pressfit.dynamics.machine.rigid import RigidMachine
 from pressfit.dynamics.multibody import rigid_leg_model
 from pressfit.dynamics.scenario import COMPLETION_FRACTION, pin_figures
-from pressfit.errors import PressfitError
+from pressfit.errors import ModelFileError, PressfitError
 
 
 def _choices(command: click.Command) -> set[str]:
@@ -26,15 +29,44 @@ def _choices(command: click.Command) -> set[str]:
 
 
 def test_the_registry_names_every_model_the_schema_and_the_cli_accept():
-    """A model is one registry line: the case schema's ``model`` keys and the CLI's ``--model`` offer exactly the
-    registry's names; each class states its capabilities; an unknown name is refused naming the known ones."""
-    assert set(typing.get_args(Simulation.model_fields["model"].annotation)) == set(MODELS)
-    assert set(typing.get_args(Cycle.model_fields["model"].annotation)) == set(MODELS)
-    assert _choices(cycle_cmd) == _choices(control_cmd) == set(MODELS)
+    """A model is one registry line: the CLI's ``--model`` offers exactly the registry's names (read from it, not
+    spelled again), the schema's defaults are registered names; each class states its capabilities; an unknown name
+    is refused naming the known ones."""
+    assert model_names() == tuple(MODELS) == ("flexible", "rigid")
+    assert _choices(cycle_cmd) == _choices(control_cmd) == _choices(study_cycle_cmd) == set(MODELS)
+    assert {Simulation.model_fields["model"].default, Cycle.model_fields["model"].default} <= set(MODELS)
     assert {name: model_kind(name).elastic for name in MODELS} == {"flexible": True, "rigid": False}
     assert all(model_kind(name).integrator_error for name in MODELS)
     with pytest.raises(PressfitError, match="model must be 'flexible' or 'rigid', got 'stiff'"):
         model_kind("stiff")
+
+
+@pytest.mark.parametrize("table", ["simulation", "cycle"])
+def test_an_unregistered_model_in_a_case_is_refused_before_anything_is_computed(tmp_path, table):
+    """``model = "stiff"`` in ``[simulation]`` or ``[cycle]``: the plan (and ``pressfit simulate`` / ``cycle`` /
+    ``control``) refuse it with exit 2 and one line naming the file, the key and the registered names, before any
+    physics runs (the schema takes any name: the registry is the one list)."""
+    from click.testing import CliRunner
+
+    from pressfit.cli import main
+    from pressfit.shipped import cases_dir
+
+    source = cases_dir() / "paper" / ("insertion.toml" if table == "simulation" else "board.toml")
+    text, count = re.subn(r'^model = "\w+"', 'model = "stiff"', source.read_text(), flags=re.MULTILINE)
+    assert count == 1
+    path = tmp_path / "stiff.toml"
+    path.write_text(text)
+    expected = f"{path}: key '[{table}] model': a dynamics model, 'flexible' or 'rigid', got 'stiff'"
+    case = load_case(path)
+    with pytest.raises(ModelFileError) as refused:
+        plan_scenario(case) if table == "simulation" else plan_cycle(case)
+    assert str(refused.value) == expected
+    commands = [["simulate" if table == "simulation" else "cycle"]] + ([["control"]] if table == "simulation" else [])
+    for command in commands:
+        result = CliRunner().invoke(main, [*command, str(path), "--out", str(tmp_path / "out")])
+        assert result.exit_code == 2, (command, result.output)
+        assert result.output.strip() == f"error: {expected}", (command, result.output)
+        assert not (tmp_path / "out").exists()
 
 
 def test_the_rigid_model_implements_the_dynamics_interface():

@@ -18,6 +18,7 @@ from pressfit.cli.common import (
     user_errors,
 )
 from pressfit.description.machine import load_machine
+from pressfit.dynamics.machine.registry import model_names
 from pressfit.dynamics.response import MAX_SAMPLES as MAX_RESPONSE_SAMPLES
 from pressfit.dynamics.response import SAMPLES_PER_PERIOD
 from pressfit.output.files import to_json
@@ -254,7 +255,7 @@ def response_cmd(x: float, y: float, z: float, force_n: tuple[float, float, floa
 
 @click.command("control")
 @click.argument("case_path", type=click.Path(path_type=Path))
-@click.option("--model", "plant_model", type=click.Choice(["flexible", "rigid"]), default=None,
+@click.option("--model", "plant_model", type=click.Choice(model_names()), default=None,
               help="The machine linearised: elastic VJM legs or rigid legs (fast); default: the case's "
                    "[simulation] model.")
 @click.option("--out", "out_dir", type=click.Path(path_type=Path), default=None,
@@ -301,7 +302,7 @@ def _echo_components(s: dict) -> None:
 
 @click.command("cycle")
 @click.argument("case_path", type=click.Path(path_type=Path))
-@click.option("--model", "plant_model", type=click.Choice(["flexible", "rigid"]), default=None,
+@click.option("--model", "plant_model", type=click.Choice(model_names()), default=None,
               help="The machine simulated (default: the case's [cycle] model).")
 @click.option("--out", "out_dir", type=click.Path(path_type=Path), default=None,
               help="Directory for cycle.csv, cycle.json, cycle_path.png, cycle_force.png, cycle_drives.png and "

@@ -20,6 +20,7 @@ from pressfit.cli.common import (
 )
 from pressfit.description.cases import MAX_CHUNK_SIZE, MAX_CURVE_SAMPLES, MAX_FORCE_N, MAX_SAMPLES
 from pressfit.description.machine import load_machine
+from pressfit.dynamics.machine.registry import model_names
 from pressfit.errors import PressfitError
 from pressfit.output.files import check_directory, to_json, write_directory
 
@@ -189,7 +190,7 @@ def study_design_cmd(case_file: Path, trials: int | None, workers: int | None, s
 
 @study_group.command("cycle")
 @click.argument("case_file", type=click.Path(path_type=Path))
-@click.option("--model", "plant_model", type=click.Choice(["flexible", "rigid"]), default=None,
+@click.option("--model", "plant_model", type=click.Choice(model_names()), default=None,
               help="The machine simulated (default: the case's [cycle] model).")
 @cluster_options
 @click.option("--out", "out_dir", type=click.Path(path_type=Path), default=Path("out/study_cycle"), show_default=True,

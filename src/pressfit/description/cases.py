@@ -702,7 +702,8 @@ class Simulation(StrictModel):
     what ``pressfit check`` asserts on the run (:class:`SimulationLimits`). ``model``: ``"flexible"`` (the
     default: the elastic legs in the equations of motion, :mod:`pressfit.dynamics.machine.flexible`, the contact
     on the elastic tool point, no series compliance added) or ``"rigid"`` (the fast rigid-leg model with the
-    structure's compliance in series at the tool, quasi-statically)."""
+    structure's compliance in series at the tool, quasi-statically): a name of the dynamics models' registry
+    (:mod:`pressfit.dynamics.machine.registry`), checked when the scenario is planned."""
 
     start_m: Vector3
     end_m: Vector3
@@ -718,7 +719,7 @@ class Simulation(StrictModel):
     contact: Contact
     controller: Controller = Controller()
     limits: SimulationLimits = SimulationLimits()
-    model: Literal["flexible", "rigid"] = "flexible"
+    model: str = "flexible"  # a name of pressfit.dynamics.machine.registry.MODELS, checked by the plan
 
 
 
@@ -890,7 +891,7 @@ class Cycle(StrictModel):
     descent: MotionLimits | None = None
     time_step_s: TimeStep = 5e-4
     baumgarte_rad_per_s: BaumgarteRate = 200.0
-    model: Literal["flexible", "rigid"] = "flexible"
+    model: str = "flexible"  # a name of pressfit.dynamics.machine.registry.MODELS, checked by the plan
     contact: PinFieldLaw = PinFieldLaw()
     controller: Controller = Controller()
     limits: CycleLimits = CycleLimits()

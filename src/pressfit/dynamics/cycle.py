@@ -48,6 +48,7 @@ from pressfit.dynamics import drives as drive_kinds
 from pressfit.dynamics.actuators import distribution
 from pressfit.dynamics.contact import contact_force_n, contact_parameters
 from pressfit.dynamics.control import Trajectory, gravity_feedforward_n
+from pressfit.dynamics.machine.registry import require_model
 from pressfit.dynamics.multibody import rigid_leg_model
 from pressfit.dynamics.press_monitor import SUMMARY_KEYS, MonitorCurve, monitor_curve
 from pressfit.dynamics.scenario import (
@@ -253,6 +254,7 @@ def plan_cycle(case: Case, machine: Machine | None = None, model: str | None = N
     cycle = case.cycle
     if cycle is None:
         raise PressfitError(f"{case.path}: the case has no [cycle] table")
+    require_model(case.path, "--model" if model else "[cycle] model", model or cycle.model)
     require_force_preload(case)
     machine = machine or case.machine()
     drives = drive_kinds.of(machine)

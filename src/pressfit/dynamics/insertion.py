@@ -40,7 +40,7 @@ from pressfit.dynamics import drives as drive_kinds
 from pressfit.dynamics.contact import contact_force_n
 from pressfit.dynamics.control import Trajectory
 from pressfit.dynamics.machine.base import SECTIONS
-from pressfit.dynamics.machine.registry import model_kind
+from pressfit.dynamics.machine.registry import model_kind, require_model
 from pressfit.dynamics.multibody import rigid_leg_model
 from pressfit.dynamics.press_monitor import SUMMARY_KEYS, MonitorCurve, monitor_curve, stroke_rows
 from pressfit.dynamics.scenario import (
@@ -112,6 +112,7 @@ def plan_scenario(case: Case, machine: Machine | None = None, preload_key: str =
     sim = case.simulation
     if sim is None:
         raise PressfitError(f"{case.path}: the case has no [simulation] table")
+    require_model(case.path, "[simulation] model", sim.model)
     require_force_preload(case)
     check_limits_offered(case, sim)
     machine = machine or case.machine()

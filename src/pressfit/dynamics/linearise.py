@@ -53,7 +53,7 @@ from __future__ import annotations
 import dataclasses
 import math
 from dataclasses import dataclass
-from typing import Any, Literal
+from typing import Any
 
 import control as ct
 import numpy as np
@@ -66,7 +66,7 @@ from pressfit.dynamics.actuators import distribution
 from pressfit.dynamics.control import gravity_feedforward_n
 from pressfit.dynamics.drives.base import DrivePort
 from pressfit.dynamics.machine.flexible import FlexibleMachine
-from pressfit.dynamics.machine.registry import model_kind
+from pressfit.dynamics.machine.registry import model_kind, require_model
 from pressfit.dynamics.modes import closure_jacobian, elastic_stiffness, mass_matrix, natural_modes, reduced_system
 from pressfit.dynamics.multibody import inverse_apparent_mass, rigid_leg_model
 from pressfit.errors import PressfitError
@@ -80,7 +80,7 @@ DRIVE_SHARE_THRESHOLD = 0.1  # ... when the drives hold at least this share of t
 MOVED_RELATIVE = 1e-3  # a closed-loop pole farther than this (relative) from every open-loop pole is a loop pole
 MODE_COUNT = 6
 FREQUENCY_POINTS = 300  # log-spaced over 0.01-1000 Hz: Bode data and margins (~30 ms a point at 200 states)
-Model = Literal["flexible", "rigid"]
+Model = str  # a name of pressfit.dynamics.machine.registry.MODELS
 AXES = ("x", "y", "z")
 
 
@@ -494,6 +494,7 @@ def control_design(case: Case, model: Model | None = None) -> ControlDesign:
     sim = case.simulation
     if sim is None:
         raise PressfitError(f"{case.path}: no [simulation] table: pressfit control needs the insertion scenario")
+    require_model(case.path, "--model" if model else "[simulation] model", model or sim.model)
     model = model or sim.model
     machine = case.machine()
     machine.mass.require_dynamics_inertia(machine.source)

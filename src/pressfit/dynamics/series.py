@@ -178,9 +178,10 @@ class Guard:
 
 
 class ScenarioStep(Protocol):
-    """A dynamics model driven through a scenario (one class per model, :data:`pressfit.dynamics.machine.MODELS`):
-    built from the run's case, machine, plan, drives, limiter flag and guard at the start state, stepped once per
-    time step by the step loop (:func:`pressfit.dynamics.scenario.run_plan`), its rows read at the end.
+    """A dynamics model driven through a scenario (one class per model,
+    :data:`pressfit.dynamics.machine.registry.MODELS`): built from the run's case, machine, plan, drives, limiter
+    flag and guard at the start state, stepped once per time step by the step loop
+    (:func:`pressfit.dynamics.scenario.run_plan`), its rows read at the end.
     Capabilities the planning and the summaries ask of the class: ``elastic`` (the structure's modes in the
     equations of motion: the step is bounded by the first mode, the leg sections are objective, the cardan plays
     are modelled between the drives and the legs, a hydraulic oil column is stepped implicitly) and
