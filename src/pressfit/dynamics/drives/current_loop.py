@@ -68,7 +68,7 @@ class CurrentLoopDrive:
             kp, ki, r = t.current_loop_kp_v_per_a, t.current_loop_ki_v_per_a_s, t.winding_resistance_ohm
             self._a = np.array([[-(kp + r) * inv_l, ki * inv_l], [-1.0, 0.0]])
             self._b = np.array([[kp * inv_l, -inv_l], [1.0, 0.0]])
-        self._zoh: dict[float, tuple[np.ndarray, np.ndarray]] = {}
+        self._zoh: dict[float, tuple[np.ndarray, np.ndarray, tuple[float, ...]]] = {}
 
     @classmethod
     def of(cls, machine: Machine) -> CurrentLoopDrive:
@@ -123,8 +123,14 @@ class CurrentLoopDrive:
             aug = np.zeros((4, 4))
             aug[:2, :2], aug[:2, 2:] = self._a * dt_s, self._b * dt_s
             e = expm(aug)
-            self._zoh[dt_s] = (e[:2, :2], e[:2, 2:])
-        return self._zoh[dt_s]
+            self._zoh[dt_s] = (e[:2, :2], e[:2, 2:], tuple(e[:2, :].ravel().tolist()))
+        return self._zoh[dt_s][:2]
+
+    def _discrete_entries(self, dt_s: float) -> tuple[float, ...]:
+        """:meth:`discrete`'s entries as floats, row by row: (Phi_00, Phi_01, Gamma_00, Gamma_01, Phi_10, Phi_11,
+        Gamma_10, Gamma_11) (the step's per-leg arithmetic, without indexing arrays per call)."""
+        self.discrete(dt_s)
+        return self._zoh[dt_s][2]
 
     def current_for_force_a(self, force_n: np.ndarray, lengths_m: np.ndarray) -> np.ndarray:
         """The current delivering ``force_n`` at ``lengths_m`` (N / k_f; inverts :meth:`force_n`), A."""
@@ -150,22 +156,26 @@ class CurrentLoopDrive:
     def current_reference_a(self, command_n: np.ndarray, rates_m_per_s: np.ndarray,
                             lengths_m: np.ndarray | None = None) -> np.ndarray:
         """sat(N_cmd / k_f) (:meth:`commanded_current_a`) with the speed limit applied (module docstring), A."""
-        t = self.table
-        i_ref = np.clip(self.commanded_current_a(command_n, lengths_m), -t.current_limit_a, t.current_limit_a)
-        omega = self.motor_speed(rates_m_per_s)
-        i_ref = np.where(omega > self.speed_limit, np.minimum(i_ref, 0.0), i_ref)
-        return np.where(omega < -self.speed_limit, np.maximum(i_ref, 0.0), i_ref)
+        return self._reference(command_n, self.motor_speed(rates_m_per_s), lengths_m)
+
+    def _reference(self, command_n: np.ndarray, omega: np.ndarray, lengths_m: np.ndarray | None) -> np.ndarray:
+        """:meth:`current_reference_a` at the motor speeds ``omega`` (the subclass's unit)."""
+        limit, speed = self.table.current_limit_a, self.speed_limit
+        i_ref = np.minimum(np.maximum(self.commanded_current_a(command_n, lengths_m), -limit), limit)
+        i_ref = np.where(omega > speed, np.minimum(i_ref, 0.0), i_ref)
+        return np.where(omega < -speed, np.maximum(i_ref, 0.0), i_ref)
 
     def step(self, state: CurrentLoopState, command_n: np.ndarray, lengths_m: np.ndarray, rates_m_per_s: np.ndarray,
              dt_s: float) -> tuple[CurrentLoopState, np.ndarray]:
-        phi, gamma = self.discrete(require_step(dt_s))
-        i_ref = self.current_reference_a(command_n, rates_m_per_s, lengths_m)
-        emf = self.emf_constant * self.motor_speed(rates_m_per_s)
+        p00, p01, g00, g01, p10, p11, g10, g11 = self._discrete_entries(require_step(dt_s))
+        omega = self.motor_speed(rates_m_per_s)
+        i_ref = self._reference(command_n, omega, lengths_m)
+        emf = self.emf_constant * omega
         i, z = state.current_a, state.integral_a_s
-        i_new = phi[0, 0] * i + phi[0, 1] * z + gamma[0, 0] * i_ref + gamma[0, 1] * emf
-        z_new = phi[1, 0] * i + phi[1, 1] * z + gamma[1, 0] * i_ref + gamma[1, 1] * emf
+        i_new = p00 * i + p01 * z + g00 * i_ref + g01 * emf
+        z_new = p10 * i + p11 * z + g10 * i_ref + g11 * emf
         limit = self.table.current_limit_a
-        i_new = np.clip(i_new, -limit, limit)
+        i_new = np.minimum(np.maximum(i_new, -limit), limit)
         end = np.asarray(lengths_m, dtype=float) + np.asarray(rates_m_per_s, dtype=float) * dt_s
         return CurrentLoopState(i_new, z_new), self.force_n(i_new, end)
 
