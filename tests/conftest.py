@@ -55,6 +55,18 @@ EXPENSIVE = {"quick_report", "pairs", "both_models", "runs", "slow_and_fast", "m
 
 
 @pytest.fixture(scope="session")
+def cluster():
+    """One LocalCluster of 2 single-threaded worker processes on loopback, shared by the Dask tests that run a study
+    by its address (starting one, with pressfit imported on its workers, costs seconds); tests of the local cluster a
+    command starts itself (``--workers``) start their own."""
+    from distributed import LocalCluster
+
+    with LocalCluster(n_workers=2, threads_per_worker=1, processes=True, host="127.0.0.1", dashboard_address=None,
+                      silence_logs=50) as c:
+        yield c
+
+
+@pytest.fixture(scope="session")
 def quick_report(tmp_path_factory):
     """``pressfit report --quick`` as a user runs it, with a cycle study's front (tests/output/test_html_report.py
     reads its report.md and report.html): built once per test run."""

@@ -151,8 +151,11 @@ def test_torsion_and_bending_limits_only_with_the_flexible_model(tmp_path):
 
 
 def test_model_key_is_strict_and_defaults_to_flexible(tmp_path):
-    with pytest.raises(ModelFileError, match="model"):
-        load_case(write_case(tmp_path, simulation={"model": "elastic"}))
+    """An unregistered model is refused when the scenario is planned, before anything is computed (the schema takes
+    any name: the registry is the one list, tests/dynamics/test_scenario.py)."""
+    with pytest.raises(ModelFileError, match=r"key '\[simulation\] model': a dynamics model, 'flexible' or 'rigid', "
+                                             "got 'elastic'"):
+        plan_scenario(load_case(write_case(tmp_path, simulation={"model": "elastic"})))
     assert load_case(write_case(tmp_path, simulation={})).simulation.model == "rigid"  # insertion.toml pins it
     path = write_case(tmp_path, "default.toml")
     path.write_text(path.read_text().replace('model = "rigid"', ""))

@@ -14,9 +14,9 @@ from pressfit.cli.dynamics import control_cmd, cycle_cmd
 from pressfit.cli.study import study_cycle_cmd
 from pressfit.description.cases import Cycle, Simulation, load_case
 from pressfit.description.machine import load_machine
-from pressfit.dynamics.machine.base import DriveInput, DynamicsModel, MachineState
 from pressfit.dynamics.cycle import plan_cycle
 from pressfit.dynamics.insertion import plan_scenario
+from pressfit.dynamics.machine.base import DriveInput, DynamicsModel, MachineState
 from pressfit.dynamics.machine.registry import MODELS, model_kind, model_names
 from pressfit.dynamics.machine.rigid import RigidMachine
 from pressfit.dynamics.multibody import rigid_leg_model

@@ -94,16 +94,6 @@ def test_a_part_that_never_seats_fails_the_seated_threshold(derived):
     assert failed == ["seated"]
 
 
-@pytest.fixture(scope="module")
-def cluster():
-    """A LocalCluster of 2 single-threaded worker processes."""
-    from distributed import LocalCluster
-
-    with LocalCluster(n_workers=2, threads_per_worker=1, processes=True, host="127.0.0.1", dashboard_address=None,
-                      silence_logs=50) as c:
-        yield c
-
-
 def test_two_dask_workers_agree_with_a_serial_run(cluster):
     serial = curve_band_study(AnalyticPin(), TOLERANCES, 300, seed=5, chunk_size=40, serial=True)
     dask = curve_band_study(AnalyticPin(), TOLERANCES, 300, seed=5, chunk_size=40, scheduler=cluster.scheduler_address)

@@ -123,16 +123,6 @@ def test_an_unknown_tolerance_key_is_refused_naming_it_and_the_file(tmp_path):
         load_case(bad)
 
 
-@pytest.fixture(scope="module")
-def cluster():
-    """A LocalCluster of 2 single-threaded worker processes."""
-    from distributed import LocalCluster
-
-    with LocalCluster(n_workers=2, threads_per_worker=1, processes=True, host="127.0.0.1", dashboard_address=None,
-                      silence_logs=50) as c:
-        yield c
-
-
 def test_two_dask_workers_agree_with_a_serial_run(case, sample, cluster):
     serial = curve_band_study(sample, case.curve.tolerances, 40, seed=7, chunk_size=10, serial=True)
     dask = curve_band_study(sample, case.curve.tolerances, 40, seed=7, chunk_size=10,

@@ -30,16 +30,6 @@ def case(tmp_path_factory):
     return load_case(synthetic_case(tmp_path_factory.mktemp("case"), samples=24, extra=TILT))
 
 
-@pytest.fixture(scope="module")
-def cluster():
-    """One LocalCluster of 2 single-threaded worker processes shared by the tests (startup costs seconds)."""
-    from distributed import LocalCluster
-
-    with LocalCluster(n_workers=2, threads_per_worker=1, processes=True, host="127.0.0.1", dashboard_address=None,
-                      silence_logs=50) as c:
-        yield c
-
-
 def _columns(out: Path) -> dict[str, np.ndarray]:
     return mcf.read_samples(out)
 
@@ -97,6 +87,7 @@ def test_a_killed_worker_leaves_every_sample_exactly_once(case, cluster):
         distributed.run_chunks(montecarlo.evaluate_chunk, [(plan, k, seeds[k]) for k in range(plan.n_chunks)],
                                [2] * plan.n_chunks, sink, scheduler=cluster.scheduler_address, progress=False)
         assert pids[0] not in client.run(os.getpid).values()  # the kill really happened
+        client.wait_for_workers(2, timeout=60)  # the shared cluster whole again for the next test
     samples = np.sort(np.concatenate([c["sample"] for c in got.values()]))
     np.testing.assert_array_equal(samples, np.arange(32))
     single = montecarlo.evaluate_chunk(plan, 5, seeds[5])

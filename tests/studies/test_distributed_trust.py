@@ -30,15 +30,6 @@ def case(tmp_path_factory):
 
 
 @pytest.fixture(scope="module")
-def cluster():
-    from distributed import LocalCluster
-
-    with LocalCluster(n_workers=1, threads_per_worker=1, processes=True, host="127.0.0.1", dashboard_address=None,
-                      silence_logs=50) as c:
-        yield c
-
-
-@pytest.fixture(scope="module")
 def clean(case, cluster, tmp_path_factory):
     """A finished 6-sample study in 2 chunks of 3, and its columns."""
     out = tmp_path_factory.mktemp("clean") / "mc"
@@ -151,7 +142,7 @@ def _square(x):
 
 
 def test_chunks_go_out_in_bounded_waves(cluster):
-    """200 chunks on one worker: never more than in_flight_limit futures submitted and not yet handed to the
+    """200 chunks on the shared cluster: never more than in_flight_limit futures submitted and not yet handed to the
     sink (old code: all 200 at once); every result exactly once, in any order."""
     from distributed import Client
 
