@@ -87,13 +87,16 @@ def test_pareto_mask_keeps_the_non_dominated_feasible_rows():
 
 
 @pytest.fixture(scope="module")
-def small_study(tmp_path_factory):
+def small_study(tmp_path_factory, cluster):
+    """The small study on a local cluster of one worker (``workers=1``, the command's default path) and on the shared
+    two-worker cluster by its address."""
     case = load_case(cases_dir() / "studies" / "design_sections.toml")
     case = case.model_copy(update={"design": case.design.model_copy(update={  # only the height range constrains
         "population": 4, "grid_xz": 5, "constraints": DesignConstraints()})})
     out = tmp_path_factory.mktemp("design")
     one = design_study.run_design_study(case, out / "one", trials=8, workers=1, progress=False)
-    two = design_study.run_design_study(case, out / "two", trials=8, workers=2, progress=False)
+    two = design_study.run_design_study(case, out / "two", trials=8, scheduler=cluster.scheduler_address,
+                                        progress=False)
     return out, one, two
 
 

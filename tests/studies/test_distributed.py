@@ -1,11 +1,9 @@
 """The Dask runner: identical results with 1 and 2 workers and after an interrupted run is resumed, a killed
-worker, and a scheduler and worker started as separate processes (small clusters, 1 thread per worker)."""
+worker (small clusters, 1 thread per worker); a scheduler and a worker started as separate processes, by the
+``dask scheduler`` and ``dask worker`` commands: tests/studies/test_distributed_trust.py, over TLS."""
 
 import os
 import signal
-import subprocess
-import sys
-import time
 from pathlib import Path
 
 import numpy as np
@@ -93,39 +91,6 @@ def test_a_killed_worker_leaves_every_sample_exactly_once(case, cluster):
     single = montecarlo.evaluate_chunk(plan, 5, seeds[5])
     for key in single:
         np.testing.assert_array_equal(got[5][key], single[key])
-
-
-@pytest.mark.slow
-def test_scheduler_and_worker_as_separate_processes(case, tmp_path):
-    dask = [sys.executable, "-m", "distributed.cli.dask_scheduler"]
-    file = tmp_path / "scheduler.json"
-    env = os.environ | {"OMP_NUM_THREADS": "1", "OPENBLAS_NUM_THREADS": "1"}
-    procs = [subprocess.Popen([*dask, "--host", "127.0.0.1", "--port", "0", "--no-dashboard", "--scheduler-file",
-                               str(file)], env=env, stderr=subprocess.DEVNULL)]
-    try:
-        deadline = time.monotonic() + 30
-        while not file.exists() and time.monotonic() < deadline:
-            time.sleep(0.1)
-        import json
-
-        address = json.loads(file.read_text())["address"]
-        assert address.startswith("tcp://127.0.0.1:")
-        procs.append(subprocess.Popen([sys.executable, "-m", "distributed.cli.dask_worker", address, "--nthreads",
-                                       "1", "--no-dashboard"], env=env, stderr=subprocess.DEVNULL))
-        run = run_montecarlo(case, tmp_path / "remote", samples=8, chunk_size=4, scheduler=address,
-                                 progress=False)
-        assert run.chunks_run == 2
-        plan = montecarlo.plan_from_case(case, samples=8, chunk_size=4)
-        seeds = montecarlo.chunk_seeds(plan)
-        here = [montecarlo.evaluate_chunk(plan, k, seeds[k]) for k in range(2)]  # in this process
-        remote = _columns(tmp_path / "remote")
-        for key in remote:
-            np.testing.assert_array_equal(remote[key], np.concatenate([c[key] for c in here]), err_msg=key)
-    finally:
-        for p in procs:
-            p.terminate()
-        for p in procs:
-            p.wait(timeout=30)
 
 
 def test_a_cluster_error_carries_what_was_asked_for():

@@ -234,7 +234,9 @@ def _self_signed(tmp_path: Path) -> tuple[Path, Path]:
 
 @pytest.mark.slow
 def test_a_tls_scheduler_with_certificates_from_the_dask_configuration(case, tmp_path):
-    """A scheduler and a worker on tls://127.0.0.1 with a self-signed certificate; the client takes its
+    """A scheduler and a worker started as separate processes by Dask's own commands (a user's remote cluster; plain
+    tcp:// by address is the shared LocalCluster's, tests/conftest.py), here on tls://127.0.0.1 with a self-signed
+    certificate; the client takes its
     certificates from the Dask configuration (distributed.comm.tls.*, as documented): the study runs and
     equals the in-process computation bit for bit; without the configuration the client cannot connect."""
     import dask
