@@ -80,9 +80,11 @@ def _client(workers: int | None, scheduler: str | None, dashboard: bool) -> Clie
         raise ClusterError(f"--workers {n}: this machine gives the study {cores} core(s); a local cluster of more than "
                            f"{WORKERS_PER_CORE * cores} worker processes is refused (they would only share the cores); "
                            "use --scheduler for a bigger cluster", workers=n)
-    # scheduler and (only when asked) dashboard on loopback: a local study opens nothing to the network
+    # scheduler and (only when asked) dashboard on loopback: a local study opens nothing to the network. The
+    # scheduler's HTTP server (health and metrics routes) starts whatever the dashboard: on a free loopback port (with
+    # no address Dask takes 8787 and warns when another cluster holds it)
     cluster = LocalCluster(n_workers=n, threads_per_worker=1, processes=True, host="127.0.0.1",
-                           dashboard_address="127.0.0.1:0" if dashboard else None, silence_logs=40,
+                           dashboard_address="127.0.0.1:0", scheduler_kwargs={"dashboard": dashboard}, silence_logs=40,
                            env={"OMP_NUM_THREADS": "1", "OPENBLAS_NUM_THREADS": "1"})
     client = Client(cluster)
     if dashboard:
