@@ -308,7 +308,8 @@ def test_electric_current_limit_saturates(electric):
 
 
 def test_electric_speed_limit_stops_accelerating_torque(electric):
-    """Beyond the speed limit a current that drives the motor faster is cut; one that brakes it is kept."""
+    """Beyond the speed limit, either way, a current that drives the motor faster is cut; one that brakes it is
+    kept."""
     el = electric.actuator.electric
     drive = drives.of(electric)
     v_limit = el.speed_limit_rad_per_s * el.lead_m / (2 * math.pi)  # m/s along the leg (1.0)
@@ -317,6 +318,10 @@ def test_electric_speed_limit_stops_accelerating_torque(electric):
     assert i_ref[0] == 0.0 and i_ref[1] == pytest.approx(-500.0 / drive.force_per_current_n_per_a)
     i_ref = drive.current_reference_a(np.array([500.0, -500.0]), np.full(2, -0.99 * v_limit))
     assert i_ref[0] > 0.0
+    # the mirror image: lengthening beyond the limit (omega < -limit), a negative current (compression) is cut
+    i_ref = drive.current_reference_a(np.array([500.0, -500.0]), -shortening)
+    assert i_ref[1] == 0.0 and i_ref[0] == pytest.approx(500.0 / drive.force_per_current_n_per_a)
+    assert drive.current_reference_a(np.array([-500.0]), np.array([0.99 * v_limit]))[0] < 0.0
 
 
 # --- hydraulic --------------------------------------------------------------------------------------------------

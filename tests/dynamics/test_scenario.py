@@ -16,6 +16,7 @@ from pressfit.description.cases import Cycle, Simulation, load_case
 from pressfit.description.machine import load_machine
 from pressfit.dynamics.cycle import plan_cycle
 from pressfit.dynamics.insertion import plan_scenario
+from pressfit.dynamics.linearise import control_design
 from pressfit.dynamics.machine.base import DriveInput, DynamicsModel, MachineState
 from pressfit.dynamics.machine.registry import MODELS, model_kind, model_names
 from pressfit.dynamics.machine.rigid import RigidMachine
@@ -67,6 +68,14 @@ def test_an_unregistered_model_in_a_case_is_refused_before_anything_is_computed(
         assert result.exit_code == 2, (command, result.output)
         assert result.output.strip() == f"error: {expected}", (command, result.output)
         assert not (tmp_path / "out").exists()
+    plan = plan_scenario if table == "simulation" else plan_cycle
+    plan(load_case(source))  # the shipped case's own model plans
+    if table == "cycle":  # a --model override is named as such
+        with pytest.raises(ModelFileError, match=r"key '--model': a dynamics model, 'flexible' or 'rigid', got 'stiff'"):
+            plan_cycle(load_case(source), model="stiff")
+    else:
+        with pytest.raises(ModelFileError, match=r"key '--model': a dynamics model, 'flexible' or 'rigid', got 'stiff'"):
+            control_design(load_case(source), "stiff")
 
 
 def test_the_rigid_model_implements_the_dynamics_interface():

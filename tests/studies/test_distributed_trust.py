@@ -202,11 +202,25 @@ def _listening(pids):
 @pytest.mark.parametrize("dashboard", [False, True])
 def test_the_local_cluster_listens_on_loopback_only(dashboard, capsys):
     """Scheduler, workers and (only with --dashboard) the dashboard listen on 127.0.0.1 (old code: the
-    dashboard on 0.0.0.0); with the dashboard its address is printed."""
+    dashboard on 0.0.0.0); with the dashboard its address is printed. The scheduler's HTTP server (its health route)
+    is on a free port, not Dask's default 8787 (taken by any other cluster: a warning), and serves the dashboard's
+    page only when asked (old code: always)."""
+    import urllib.error
+    import urllib.request
+
+    def status(url):
+        try:
+            return urllib.request.urlopen(url, timeout=10).status
+        except urllib.error.HTTPError as exc:
+            return exc.code
+
     with distributed.connect(workers=1, dashboard=dashboard) as client:
         sockets = _listening([os.getpid(), *client.run(os.getpid).values()])
         link = client.dashboard_link if dashboard else None
+        port = client.scheduler_info()["services"]["dashboard"]
+        pages = [status(f"http://127.0.0.1:{port}/{page}") for page in ("health", "status")]
     assert sockets and {ip for ip, _ in sockets} == {"127.0.0.1"}, sockets
+    assert port != 8787 and pages == [200, 200 if dashboard else 404]
     err = capsys.readouterr().err
     assert (f"Dask dashboard: {link}" in err) if dashboard else ("dashboard" not in err)
 
