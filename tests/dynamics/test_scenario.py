@@ -70,12 +70,9 @@ def test_an_unregistered_model_in_a_case_is_refused_before_anything_is_computed(
         assert not (tmp_path / "out").exists()
     plan = plan_scenario if table == "simulation" else plan_cycle
     plan(load_case(source))  # the shipped case's own model plans
-    if table == "cycle":  # a --model override is named as such
-        with pytest.raises(ModelFileError, match=r"key '--model': a dynamics model, 'flexible' or 'rigid', got 'stiff'"):
-            plan_cycle(load_case(source), model="stiff")
-    else:
-        with pytest.raises(ModelFileError, match=r"key '--model': a dynamics model, 'flexible' or 'rigid', got 'stiff'"):
-            control_design(load_case(source), "stiff")
+    override = r"key '--model': a dynamics model, 'flexible' or 'rigid', got 'stiff'"  # named as such
+    with pytest.raises(ModelFileError, match=override):
+        plan_cycle(load_case(source), model="stiff") if table == "cycle" else control_design(load_case(source), "stiff")
 
 
 def test_the_rigid_model_implements_the_dynamics_interface():
