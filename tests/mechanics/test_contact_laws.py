@@ -4,6 +4,7 @@ kernels' TABLE law against the law it tabulates, and the schema's refusals namin
 from __future__ import annotations
 
 import math
+import typing
 
 import numpy as np
 import pytest
@@ -134,8 +135,10 @@ def test_tabulated_law_reads_its_csv_relative_to_the_case(tmp_path):
 
 
 def test_every_law_of_the_schema_is_in_the_registry_and_keeps_the_interface():
-    """The registry maps every law name the schema takes to a module whose law is a ContactLawModel."""
+    """The registry maps every law name the schema takes to a module whose law is a ContactLawModel; the schema's
+    ``law`` takes the names its keys table declares (one list, not spelled again)."""
     assert set(LAWS) == set(CONTACT_LAW_KEYS)
+    assert typing.get_args(Contact.model_fields["law"].annotation) == tuple(CONTACT_LAW_KEYS)
     for law, keys in (("elastic", {"stiffness_n_per_m": 1e4}), ("solid_pin", SOLID), ("compliant_pin", COMPLIANT)):
         assert isinstance(build_law(law, keys), ContactLawModel)
 

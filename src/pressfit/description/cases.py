@@ -540,7 +540,7 @@ class ContactLaw(LawKeys):
 
     stiffness_n_per_m: Positive = 5.0e4
     damping_n_s_per_m: NonNegative = 0.0
-    law: Literal["elastic", "press_fit", "solid_pin", "compliant_pin", "tabulated"] = "elastic"
+    law: Literal[tuple(CONTACT_LAW_KEYS)] = "elastic"  # type: ignore[valid-type]  (the laws' keys declare them)
     fit: Literal["linear", "saturating"] = "linear"
     fit_stiffness_n_per_m: NonNegative = 0.0
     fit_force_n: NonNegative = 0.0
