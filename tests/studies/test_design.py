@@ -184,15 +184,15 @@ def test_a_grid_beyond_the_cap_is_refused_before_it_is_built(tmp_path):
 
 
 @pytest.mark.slow
-def test_overwrite_never_replaces_the_case_file_with_a_design(tmp_path, monkeypatch):
+def test_overwrite_never_replaces_the_case_file_with_a_design(tmp_path, monkeypatch, cluster):
     """A case file that sits where the study writes a design (``designs/design-NNNNNN.toml``) is an input: a rerun
     with --overwrite is refused before the study is computed (its names come from its results), naming both, and
     the case file is unchanged; a case beside the directory runs."""
     from pressfit.errors import OutputConflictError
     from pressfit.studies import design
 
-    out = tmp_path / "out"
-    first = design_study.run_design_study(load_case(one_parameter_case(tmp_path)), out, workers=1, progress=False)
+    out, on = tmp_path / "out", {"scheduler": cluster.scheduler_address}  # the shared cluster (tests/conftest.py)
+    first = design_study.run_design_study(load_case(one_parameter_case(tmp_path)), out, **on, progress=False)
     target = next(p for p in first.written if p.parent.name == "designs")
     target.write_text(one_parameter_case(tmp_path).read_text())
     before = target.read_text()
@@ -202,9 +202,9 @@ def test_overwrite_never_replaces_the_case_file_with_a_design(tmp_path, monkeypa
 
     monkeypatch.setattr(design, "run_design", computed)
     with pytest.raises(OutputConflictError, match=r"holds the input file .*design-\d{6}\.toml") as refused:
-        design_study.run_design_study(load_case(target), out, workers=1, overwrite=True, progress=False)
+        design_study.run_design_study(load_case(target), out, **on, overwrite=True, progress=False)
     assert refused.value.option == "--out" and refused.value.other == str(target)
     assert target.read_text() == before
     with pytest.raises(AssertionError, match="computed before"):  # outside the directory: it goes on to compute
-        design_study.run_design_study(load_case(one_parameter_case(tmp_path)), out, workers=1, overwrite=True,
+        design_study.run_design_study(load_case(one_parameter_case(tmp_path)), out, **on, overwrite=True,
                                       progress=False)

@@ -306,7 +306,7 @@ def test_one_or_two_samples_work_and_say_the_sensitivity_is_undefined(case, clus
 
 
 @pytest.mark.slow
-def test_a_study_where_every_sample_fails_exits_2_with_the_reasons_counted(tmp_path):
+def test_a_study_where_every_sample_fails_exits_2_with_the_reasons_counted(tmp_path, cluster):
     """120 kN down at pose A buckles the machine (factor 0.83): every sample is unstable; the command exits 2
     with one line counting the reasons (old code: a traceback from the plots), the chunks kept."""
     from click.testing import CliRunner
@@ -315,8 +315,8 @@ def test_a_study_where_every_sample_fails_exits_2_with_the_reasons_counted(tmp_p
     from tests.studies.test_montecarlo_trust import pose_a_case
 
     path = pose_a_case(tmp_path, -120e3, samples=4, limit=0.5)
-    result = CliRunner().invoke(main, ["study", "montecarlo", str(path), "--workers", "1", "--no-progress",
-                                       "--out", str(tmp_path / "mc")])
+    result = CliRunner().invoke(main, ["study", "montecarlo", str(path), "--scheduler", cluster.scheduler_address,
+                                       "--no-progress", "--out", str(tmp_path / "mc")])
     assert result.exit_code == 2, result.output
     assert "every sample failed (4 x UnstableEquilibriumError)" in result.output
     assert result.output.strip().count("\n") == 0
