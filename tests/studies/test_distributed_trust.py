@@ -283,10 +283,9 @@ def test_a_tls_scheduler_with_certificates_from_the_dask_configuration(case, tmp
         with pytest.raises(ClusterError, match="tls:// needs the client's certificates") as refused:
             distributed._client(None, address, False)
         assert refused.value.scheduler == address and refused.value.cause.startswith("tls:// needs")
-    finally:
-        for p in procs:
+    finally:  # the worker first: signalled together, the worker waits out its reconnection to the scheduler (8 s)
+        for p in reversed(procs):
             p.terminate()
-        for p in procs:
             p.wait(timeout=30)
 
 
