@@ -54,11 +54,12 @@ EXPENSIVE = {"quick_report", "pairs", "both_models", "runs", "slow_and_fast", "m
              "shipped_play_runs", "board_run"}
 
 
-@pytest.fixture(scope="session")
+@pytest.fixture(scope="module")
 def cluster():
-    """One LocalCluster of 2 single-threaded worker processes on loopback, shared by the Dask tests that run a study
-    by its address (starting one, with pressfit imported on its workers, costs seconds); tests of the local cluster a
-    command starts itself (``--workers``) start their own."""
+    """A LocalCluster of 2 single-threaded worker processes on loopback, shared by a module's Dask tests that run a
+    study by its address (starting one, with pressfit imported on its workers, costs seconds); tests of the local
+    cluster a command starts itself (``--workers``) start their own. Per module, not per session: an idle cluster
+    costs about 8% of a core (its event loops and heartbeats), more than a start when modules lie minutes apart."""
     from distributed import LocalCluster
 
     with LocalCluster(n_workers=2, threads_per_worker=1, processes=True, host="127.0.0.1",
