@@ -268,7 +268,7 @@ def control_cmd(case_path: Path, plant_model: str | None, out_dir: Path | None, 
     closed-loop poles, -3 dB bandwidth, structural modes and the drives' share of each."""
     from pressfit.workflows.control_design import run_control
 
-    design, paths = run_control(case_path, plant_model, out_dir, overwrite)  # type: ignore[arg-type]
+    design, paths = run_control(case_path, plant_model, out_dir, overwrite)
     if as_json:
         click.echo(to_json(design.to_dict()))
         return

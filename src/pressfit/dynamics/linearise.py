@@ -80,7 +80,6 @@ DRIVE_SHARE_THRESHOLD = 0.1  # ... when the drives hold at least this share of t
 MOVED_RELATIVE = 1e-3  # a closed-loop pole farther than this (relative) from every open-loop pole is a loop pole
 MODE_COUNT = 6
 FREQUENCY_POINTS = 300  # log-spaced over 0.01-1000 Hz: Bode data and margins (~30 ms a point at 200 states)
-Model = str  # a name of pressfit.dynamics.machine.registry.MODELS
 AXES = ("x", "y", "z")
 
 
@@ -208,7 +207,7 @@ def contact_stiffness_n_per_m(machine: Machine, pose_m: np.ndarray, contact: Con
 
 
 def linear_plant(machine: Machine, pose_m: np.ndarray, contact: Contact | None = None,
-                 model: Model = "flexible", tensions_n: np.ndarray | None = None,
+                 model: str = "flexible", tensions_n: np.ndarray | None = None,
                  contact_depth_m: float | None = None) -> Plant:
     """:class:`Plant` at the reachable pose ``pose_m`` (m); ``contact``: the contact spring engaged at the tool,
     its stiffness the law's local slope at the tool depth ``contact_depth_m`` (m; :func:`contact_stiffness_n_per_m`);
@@ -439,7 +438,7 @@ def proximity_warnings(poles: np.ndarray, loop_poles: np.ndarray, modes: tuple[S
 
 
 def design_at(machine: Machine, gains: Controller, pose_m: np.ndarray, name: str, contact: Contact | None,
-              model: Model = "flexible", frequencies_hz: np.ndarray | None = None,
+              model: str = "flexible", frequencies_hz: np.ndarray | None = None,
               tensions_n: np.ndarray | None = None, contact_depth_m: float | None = None) -> PoseDesign:
     """The loop at one pose (module doc); ``tensions_n``: the drives' operating point, ``contact_depth_m`` the
     contact's (:func:`linear_plant`)."""
@@ -485,7 +484,7 @@ class ControlDesign:
                 "poses": [p.to_dict() for p in self.poses]}
 
 
-def control_design(case: Case, model: Model | None = None) -> ControlDesign:
+def control_design(case: Case, model: str | None = None) -> ControlDesign:
     """The case's loop (``[simulation]``, ``[simulation.controller]``) linearised at the pin (contact engaged)
     and at the waypoints start, approach (above the pin) and end, on ``model`` (default: ``[simulation] model``).
     The contact is linearised where the insertion holds the tool

@@ -6,12 +6,12 @@ from __future__ import annotations
 from pathlib import Path
 
 from pressfit.description.cases import load_case
-from pressfit.dynamics.linearise import ControlDesign, Model, control_design
+from pressfit.dynamics.linearise import ControlDesign, control_design
 from pressfit.output import files as io
 from pressfit.output.control import write_control
 
 
-def run_control(case_path: Path | str, model: Model | None, out_dir: Path | None,
+def run_control(case_path: Path | str, model: str | None, out_dir: Path | None,
                 overwrite: bool = False) -> tuple[ControlDesign, list[Path]]:
     """:func:`pressfit.dynamics.linearise.control_design` of a case file and, with ``out_dir``, its files
     (checked before computing, written atomically)."""

@@ -68,7 +68,7 @@ class CurrentLoopDrive:
             kp, ki, r = t.current_loop_kp_v_per_a, t.current_loop_ki_v_per_a_s, t.winding_resistance_ohm
             self._a = np.array([[-(kp + r) * inv_l, ki * inv_l], [-1.0, 0.0]])
             self._b = np.array([[kp * inv_l, -inv_l], [1.0, 0.0]])
-        self._zoh: dict[float, tuple[np.ndarray, np.ndarray, tuple[float, ...]]] = {}
+        self._zoh: dict[float, tuple[float, ...]] = {}
 
     @classmethod
     def of(cls, machine: Machine) -> CurrentLoopDrive:
@@ -117,20 +117,15 @@ class CurrentLoopDrive:
         """The -3 dB frequency of :meth:`closed_loop` (its last crossing of 1/sqrt 2), Hz."""
         return minus_3db_hz(self.closed_loop)
 
-    def discrete(self, dt_s: float) -> tuple[np.ndarray, np.ndarray]:
-        """The loop's zero-order-hold matrices (Phi (2, 2), Gamma (2, 2) on the inputs (i_ref, back-EMF)) at dt."""
+    def discrete(self, dt_s: float) -> tuple[float, ...]:
+        """The loop's zero-order-hold matrices at dt, Phi (2, 2) and Gamma (2, 2) on the inputs (i_ref, back-EMF), as
+        floats row by row: (Phi_00, Phi_01, Gamma_00, Gamma_01, Phi_10, Phi_11, Gamma_10, Gamma_11) (the step's
+        per-leg arithmetic reads them without indexing arrays per call)."""
         if dt_s not in self._zoh:
             aug = np.zeros((4, 4))
             aug[:2, :2], aug[:2, 2:] = self._a * dt_s, self._b * dt_s
-            e = expm(aug)
-            self._zoh[dt_s] = (e[:2, :2], e[:2, 2:], tuple(e[:2, :].ravel().tolist()))
-        return self._zoh[dt_s][:2]
-
-    def _discrete_entries(self, dt_s: float) -> tuple[float, ...]:
-        """:meth:`discrete`'s entries as floats, row by row: (Phi_00, Phi_01, Gamma_00, Gamma_01, Phi_10, Phi_11,
-        Gamma_10, Gamma_11) (the step's per-leg arithmetic, without indexing arrays per call)."""
-        self.discrete(dt_s)
-        return self._zoh[dt_s][2]
+            self._zoh[dt_s] = tuple(expm(aug)[:2, :].ravel().tolist())
+        return self._zoh[dt_s]
 
     def current_for_force_a(self, force_n: np.ndarray, lengths_m: np.ndarray) -> np.ndarray:
         """The current delivering ``force_n`` at ``lengths_m`` (N / k_f; inverts :meth:`force_n`), A."""
@@ -167,7 +162,7 @@ class CurrentLoopDrive:
 
     def step(self, state: CurrentLoopState, command_n: np.ndarray, lengths_m: np.ndarray, rates_m_per_s: np.ndarray,
              dt_s: float) -> tuple[CurrentLoopState, np.ndarray]:
-        p00, p01, g00, g01, p10, p11, g10, g11 = self._discrete_entries(require_step(dt_s))
+        p00, p01, g00, g01, p10, p11, g10, g11 = self.discrete(require_step(dt_s))
         omega = self.motor_speed(rates_m_per_s)
         i_ref = self._reference(command_n, omega, lengths_m)
         emf = self.emf_constant * omega
