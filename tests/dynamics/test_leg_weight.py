@@ -7,24 +7,19 @@ import pinocchio as pin
 import pytest
 from scipy.integrate import quad
 
-from pressfit.description.machine import load_machine
 from pressfit.dynamics.control import gravity_feedforward_n, static_deflection_columns
 from pressfit.dynamics.inertia import GRAVITY_M_PER_S2, inertial_model, joint_placements, total_mass_kg
-from pressfit.dynamics.leg_weight import leg_weight_loads, weight_sag_m, weight_wrench_n
+from pressfit.dynamics.leg_weight import leg_weight_loads, weight_force_n, weight_sag_m, weight_wrench_n
 from pressfit.dynamics.machine.flexible import FlexibleMachine
 from pressfit.dynamics.multibody import rigid_leg_model
 from pressfit.errors import UnreachablePoseError
+from pressfit.kinematics import is_reachable
 from pressfit.mechanics.condensed import condensed_plate_compliance, rotational_compliances
 from pressfit.mechanics.model import build_model
 
 POSES = np.array([[0.0, 0.6, 0.0], [0.10, 0.60, -0.05], [0.0, 0.68, 0.15], [-0.15, 0.65, 0.10],
                   [0.20, 0.55, 0.20], [-0.2, 0.72, -0.1]])
 G = np.array([0.0, -GRAVITY_M_PER_S2, 0.0])
-
-
-@pytest.fixture(scope="module")
-def machine():
-    return load_machine()
 
 
 def _reciprocal_sag(machine, pose):
@@ -120,16 +115,48 @@ def test_the_rigid_and_the_elastic_model_give_one_sag_at_rest(machine):
             assert np.linalg.norm(force_only - elastic) > 0.02 * scale  # the fixed-end moments matter
 
 
-def test_the_weight_wrench_force_is_pinocchios_generalised_gravity(machine):
-    """The force part of the closed-form weight wrench against the rigid-leg model's generalised gravity projected
-    on the plate translations (Pinocchio, the inertias of :mod:`pressfit.dynamics.inertia`): equal to 1e-10 of it
-    (measured 3e-16); and the rigid model's G is the same wherever the model was built (the rod is one body)."""
-    for pose in POSES:
-        held = gravity_feedforward_n(rigid_leg_model(machine, pose), pose)
-        elsewhere = gravity_feedforward_n(rigid_leg_model(machine, POSES[0]), pose)
-        wrench = weight_wrench_n(machine, pose)
-        np.testing.assert_allclose(wrench[:3], -held, atol=1e-10 * np.linalg.norm(held))
+def _pinocchio_gravity_n(rigid, pose):
+    """V^T g(q): Pinocchio's generalised gravity of the rigid-leg model at the closed configuration of ``pose``,
+    projected on the plate translations by the closed-loop velocities V per unit plate velocity (least squares on
+    the closure Jacobian): the virtual-work definition of the feed-forward, independent of the closed form."""
+    q = rigid.configuration_at(pose)
+    jac = rigid.closure_jacobian(q)
+    basis = np.zeros((rigid.model.nv, 3))
+    basis[:3] = np.eye(3)  # the plate is unrotated at configuration_at: local = world axes
+    basis[6:] = -np.linalg.lstsq(jac[:, 6:], jac[:, :3], rcond=None)[0]
+    return basis.T @ pin.computeGeneralizedGravity(rigid.model, rigid.data, q)
+
+
+@pytest.mark.parametrize("legs", ["machine", "tsai", "five"])
+def test_the_weight_wrench_force_is_pinocchios_generalised_gravity(legs, request):
+    """The force part of the closed-form weight wrench, and the controller's feed-forward G computed from it
+    (:func:`gravity_feedforward_n`), against the rigid-leg model's generalised gravity projected on the plate
+    translations (Pinocchio, the inertias of :mod:`pressfit.dynamics.inertia`, :func:`_pinocchio_gravity_n`): equal
+    to 1e-10 of it (measured 3e-16), on 4, 3 and 5 legs, with the model built at the pose and elsewhere (the rod
+    is one body); under another gravity vector G scales with it (and a weightless model has none)."""
+    machine = request.getfixturevalue(legs)
+    poses = [p for p in POSES if is_reachable(machine, p)]
+    assert len(poses) >= 3
+    for pose in poses:
+        rigid = rigid_leg_model(machine, pose)
+        held = _pinocchio_gravity_n(rigid, pose)
+        elsewhere = _pinocchio_gravity_n(rigid_leg_model(machine, poses[0]), pose)
+        np.testing.assert_allclose(weight_wrench_n(machine, pose)[:3], -held, atol=1e-10 * np.linalg.norm(held))
+        np.testing.assert_allclose(weight_force_n(machine, pose), -held, atol=1e-10 * np.linalg.norm(held))
+        np.testing.assert_allclose(gravity_feedforward_n(rigid, pose), held, atol=1e-10 * np.linalg.norm(held))
         np.testing.assert_allclose(elsewhere, held, atol=1e-10 * np.linalg.norm(held))
+    rigid.model.gravity = pin.Motion(np.array([1.0, -2.0, 0.5, 0.0, 0.0, 0.0]))
+    held = _pinocchio_gravity_n(rigid, pose)
+    np.testing.assert_allclose(gravity_feedforward_n(rigid, pose), held, atol=1e-10 * np.linalg.norm(held))
+    rigid.model.gravity = pin.Motion.Zero()
+    assert np.all(gravity_feedforward_n(rigid, pose) == 0.0)
+
+
+def test_the_feed_forward_at_an_unreachable_pose_is_refused_naming_the_leg(machine):
+    """The controller's G at a pose beyond the joint limits is refused (UnreachablePoseError), not extrapolated."""
+    rigid = rigid_leg_model(machine, POSES[0])
+    with pytest.raises(UnreachablePoseError, match="leg"):
+        gravity_feedforward_n(rigid, np.array([0.0, 0.25, 0.0]))
 
 
 def test_the_stem_is_one_rod_of_constant_mass_whose_centre_moves_with_the_extension(machine):

@@ -9,8 +9,9 @@ estimate is J^+ l_dot from the measured length rates.
 Position loop: W = Kp e + Kd e_dot + Ki int(e) + G, e = h_ref - h_est (m), W the Cartesian force (N) that
 the actuators are to exert on the plate (:func:`pressfit.dynamics.actuators.distribute`), G the gravity
 feed-forward (the Cartesian force that holds the moving parts, legs included, at the estimated pose:
-G = V^T g(q), g Pinocchio's generalised gravity of the rigid-leg model, V its closed-loop velocities per
-unit plate velocity; by virtual work, since A tau_a = V^T g in static equilibrium). G is recomputed only when
+G = V^T g(q), g the generalised gravity of the rigid-leg model, V its closed-loop velocities per unit plate
+velocity; by virtual work, since A tau_a = V^T g in static equilibrium; computed as minus the machine's weight as a
+plate force in closed form, :func:`pressfit.dynamics.leg_weight.weight_force_n`). G is recomputed only when
 the estimate has moved more than ``GRAVITY_UPDATE_M`` (1 mm) from the pose it was last computed at
 (:class:`PoseCache`): |dG/dh| is at most 17 N/m per axis over the workspace (finite differences at 30 random
 poses, measured 16.4 N/m with the stem as a rod of fixed length; 55 N/m with the old exposed-length stems), so the
@@ -36,14 +37,13 @@ from dataclasses import dataclass, field
 from typing import Protocol
 
 import numpy as np
-import pinocchio as pin
 
 from pressfit import kinematics
 from pressfit.description.cases import Controller, Simulation
 from pressfit.description.machine import Machine
 from pressfit.dynamics import kernels
 from pressfit.dynamics.actuators import singular_error
-from pressfit.dynamics.leg_weight import weight_sag_m
+from pressfit.dynamics.leg_weight import weight_force_n, weight_sag_m
 from pressfit.dynamics.multibody import PoseCache, RigidLegModel
 from pressfit.errors import PreloadError
 from pressfit.kinematics.profiles import quintic as _quintic
@@ -76,13 +76,13 @@ def _offsets(machine: Machine) -> np.ndarray:
 
 
 def gravity_feedforward_n(rigid: RigidLegModel, pose_m: np.ndarray) -> np.ndarray:
-    """G (3,), N: the Cartesian force the actuators must exert to hold the moving parts at ``pose_m`` (m)."""
-    q = rigid.configuration_at(pose_m)
-    jac = rigid.closure_jacobian(q)
-    basis = np.zeros((rigid.model.nv, 3))
-    basis[:3] = np.eye(3)  # the plate is unrotated at configuration_at: local = world axes
-    basis[6:] = -np.linalg.lstsq(jac[:, 6:], jac[:, :3], rcond=None)[0]
-    return basis.T @ pin.computeGeneralizedGravity(rigid.model, rigid.data, q)
+    """G (3,), N: the Cartesian force the actuators must exert to hold the moving parts at a reachable ``pose_m``
+    (m) under the rigid-leg model's gravity: minus the machine's weight as a plate force in closed form
+    (:func:`pressfit.dynamics.leg_weight.weight_force_n`), which by virtual work is V^T g(q) of the model (module
+    doc; equal to Pinocchio's generalised gravity projected on the plate translations to 1e-15 relative,
+    tests/dynamics/test_leg_weight.py)."""
+    h = kinematics.require_reachable(rigid.machine, pose_m)
+    return -weight_force_n(rigid.machine, h, np.asarray(rigid.model.gravity.linear))
 
 
 GRAVITY_UPDATE_M = 1e-3  # the gravity feed-forward is recomputed when the estimate moved more than this, m

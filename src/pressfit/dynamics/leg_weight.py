@@ -52,6 +52,14 @@ from pressfit.kinematics import is_reachable, leg_vectors, require_reachable
 from pressfit.mechanics.condensed import condensed_plate_compliance, rotational_compliances
 
 _GAUSS = np.polynomial.legendre.leggauss(3)  # exact for m(s), piecewise quadratic in s
+_IN_CYLINDER = np.array([True, True, False, False])  # leg_weight_loads' four pieces: the first two in the cylinder
+
+
+def _cross(a: np.ndarray, b: np.ndarray) -> np.ndarray:
+    """a x b over the last axis (3) (``np.cross``'s products without its axis handling: the deflection's refresh
+    calls this per controller update)."""
+    a0, a1, a2, b0, b1, b2 = a[..., 0], a[..., 1], a[..., 2], b[..., 0], b[..., 1], b[..., 2]
+    return np.stack([a1 * b2 - a2 * b1, a2 * b0 - a0 * b2, a0 * b1 - a1 * b0], -1)
 
 
 def _first_moment(pieces: list, points: list, s: np.ndarray, lower: np.ndarray) -> np.ndarray:
@@ -74,37 +82,70 @@ def leg_weight_loads(machine: Machine, pose_m: np.ndarray) -> tuple[np.ndarray, 
     moving parts at l - L_r and the spiders at 0 and l; the integral of m(s) / EI(s) is 3-point Gauss on each
     piece between the breaks 0, L_c, l and l - L_r (a piece of zero length adds nothing)."""
     h = _reachable(machine, pose_m)
-    u = leg_vectors(machine, h)
-    lengths = np.linalg.norm(u, axis=-1)[..., None]  # (..., n, 1)
-    e = u / lengths
     g = np.array([0.0, -GRAVITY_M_PER_S2, 0.0])
+    forces, lengths, e, q0 = _cardan_forces(machine, h, g)
     mass, lc, rod = machine.mass, machine.cylinder.length_m, machine.stem.length_m
     e_mod, spider = machine.material.youngs_modulus_pa, mass.cardan_spider_mass_kg
     mu_cyl = (machine.cylinder_tube_mass_kg + mass.actuator_housing_mass_kg) / lc
     mu_rod = mass.density_kg_per_m3 * machine.stem_section.area_m2
     inner = lengths - rod  # the rod's inner end and the moving parts, s
-    cylinder, rod_piece = (mu_cyl, 0.0, lc), (mu_rod, inner, lengths)
-    points = [(mass.actuator_moving_mass_kg, inner), (spider, lengths)]
-    q0 = mu_cyl * lc * lc / 2 + mu_rod * (lengths**2 - inner**2) / 2 + points[0][0] * inner + spider * lengths
-    ge = (e @ g)[..., None]
-    forces = (machine.stem_mass_kg + mass.actuator_moving_mass_kg + spider) * ge * e + q0 / lengths * (g - ge * e)
+    cylinder = (mu_cyl, 0.0, lc)
+    # the four pieces between the breaks 0, L_c, l and l - L_r on axis -1: cylinder (0, split), (split, L_c) and stem
+    # (L_c, split'), (split', l); s (..., n, 4, 3) the Gauss nodes on each
+    ends = lengths[..., 0]
+    split_c, split_s = np.clip(ends - rod, 0.0, lc), np.clip(ends - rod, lc, ends)
+    a = np.stack([np.zeros_like(ends), split_c, np.full_like(ends, lc), split_s], -1)
+    b = np.stack([split_c, np.full_like(ends, lc), split_s, ends], -1)
     nodes, weights = _GAUSS
-    integral = np.zeros_like(lengths)
-    for s0, s1, stiffness, in_cylinder in ((0.0, lc, e_mod * machine.cylinder_section.second_moment_m4, True),
-                                           (lc, lengths, e_mod * machine.stem_section.second_moment_m4, False)):
-        split = np.clip(inner, s0, s1)
-        for a, b in ((s0, split), (split, s1)):
-            s = (a + b) / 2 + (b - a) / 2 * nodes
-            # a cylinder section carries the whole rod (it rides on the actuator) and the cylinder beyond s
-            lower = np.full_like(s, -np.inf) if in_cylinder else s
-            q = _first_moment([cylinder], [], s, s) + _first_moment([rod_piece], points, s, lower)
-            integral += (b - a) / 2 * ((q - (lengths - s) * q0 / lengths) @ weights)[..., None] / stiffness
+    s = ((a + b) / 2)[..., None] + ((b - a) / 2)[..., None] * nodes
+    # a cylinder section carries the whole rod (it rides on the actuator) and the cylinder beyond s
+    lower = np.where(_IN_CYLINDER[:, None], -np.inf, s)
+    at = (lengths[..., None], inner[..., None], q0[..., None])  # (..., n, 1, 1): broadcast over pieces and nodes
+    q = (_first_moment([cylinder], [], s, s)
+         + _first_moment([(mu_rod, at[1], at[0])], [(mass.actuator_moving_mass_kg, at[1]), (spider, at[0])], s, lower))
+    stiffness = e_mod * np.array([machine.cylinder_section.second_moment_m4] * 2
+                                 + [machine.stem_section.second_moment_m4] * 2)
+    integral = ((b - a) / 2 * ((q - (at[0] - s) * at[2] / at[0]) @ weights) / stiffness).sum(-1)[..., None]
     sin_beta = (e * machine.cardan_axes).sum(-1, keepdims=True)
     c = (e - sin_beta * machine.cardan_axes) / np.sqrt(1.0 - sin_beta**2)
     c_t, c_m = rotational_compliances(machine, lengths)
     k_r = 1.0 / ((1.0 - sin_beta**2) * c_t + sin_beta**2 * c_m)
-    moments = k_r * (c * np.cross(e, g)).sum(-1, keepdims=True) * integral * c
+    moments = k_r * (c * _cross(e, g)).sum(-1, keepdims=True) * integral * c
     return forces, moments
+
+
+def _cardan_forces(machine: Machine, pose_m: np.ndarray, gravity_m_per_s2: np.ndarray
+                   ) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray]:
+    """The force (..., n, 3), N, each leg's weight puts on the plate at its plate cardan under the gravity vector
+    (3,), m/s^2 (module doc: the rod body's axial share m_r (g . e) e, the simply supported transverse share
+    Q (g - (g . e) e) / l), with the legs' lengths l and first moments Q (..., n, 1), m and kg m, and axes e (..., n,
+    3), at poses (..., 3), m (not checked for reach)."""
+    mass, lc, rod = machine.mass, machine.cylinder.length_m, machine.stem.length_m
+    u = leg_vectors(machine, pose_m)
+    lengths = np.sqrt((u * u).sum(-1))[..., None]  # (..., n, 1)
+    e = u / lengths
+    inner = lengths - rod  # the rod's inner end and the moving parts, s
+    mu_rod = mass.density_kg_per_m3 * machine.stem_section.area_m2
+    mu_cyl = (machine.cylinder_tube_mass_kg + mass.actuator_housing_mass_kg) / lc
+    q0 = (mu_cyl * lc * lc / 2
+          + mu_rod * (lengths**2 - inner**2) / 2 + mass.actuator_moving_mass_kg * inner
+          + mass.cardan_spider_mass_kg * lengths)
+    ge = e @ gravity_m_per_s2
+    ge = ge[..., None]
+    axial = machine.stem_mass_kg + mass.actuator_moving_mass_kg + mass.cardan_spider_mass_kg
+    return axial * ge * e + q0 / lengths * (gravity_m_per_s2 - ge * e), lengths, e, q0
+
+
+def weight_force_n(machine: Machine, pose_m: np.ndarray, gravity_m_per_s2: np.ndarray | None = None) -> np.ndarray:
+    """The force part (..., 3), N, of :func:`weight_wrench_n` at poses (..., 3), m (plate, tool and the legs' cardan
+    forces; the legs' clamped bending puts only couples on the plate) under the gravity vector (3,), m/s^2 (default
+    g = 9.81 along -y): closed form, the poses not checked for reach. By virtual work it is minus the
+    rigid-leg model's generalised gravity projected on the plate translations (the controller's feed-forward
+    :func:`pressfit.dynamics.control.gravity_feedforward_n`; tests/dynamics/test_leg_weight.py checks it against
+    Pinocchio's)."""
+    g = np.array([0.0, -GRAVITY_M_PER_S2, 0.0]) if gravity_m_per_s2 is None else np.asarray(gravity_m_per_s2, float)
+    forces = _cardan_forces(machine, np.asarray(pose_m, dtype=float), g)[0]
+    return (machine.mass.plate_mass_kg + machine.mass.tool_mass_kg) * g + forces.sum(-2)
 
 
 def _reachable(machine: Machine, pose_m: np.ndarray) -> np.ndarray:
@@ -126,7 +167,7 @@ def weight_wrench_n(machine: Machine, pose_m: np.ndarray) -> np.ndarray:
     forces, moments = leg_weight_loads(machine, pose_m)
     plate = (machine.mass.plate_mass_kg + machine.mass.tool_mass_kg) * np.array([0.0, -GRAVITY_M_PER_S2, 0.0])
     return np.concatenate([plate + forces.sum(-2),
-                           np.cross(machine.plate_offsets_m, forces).sum(-2) + moments.sum(-2)], axis=-1)
+                           _cross(machine.plate_offsets_m, forces).sum(-2) + moments.sum(-2)], axis=-1)
 
 
 def weight_sag_m(machine: Machine, poses_m: np.ndarray, compliance: np.ndarray | None = None) -> np.ndarray:
