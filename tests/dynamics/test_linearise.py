@@ -13,7 +13,13 @@ from click.testing import CliRunner
 from pressfit.cli import main
 from pressfit.description.cases import load_case
 from pressfit.dynamics.actuators import ForceActuators
-from pressfit.dynamics.linearise import _apparent_vertical_mass, close_loop, linear_plant, structural_modes
+from pressfit.dynamics.linearise import (
+    _apparent_vertical_mass,
+    _bandwidth_hz,
+    close_loop,
+    linear_plant,
+    structural_modes,
+)
 from pressfit.dynamics.modes import elastic_stiffness, natural_modes, reduced_system
 
 SHIPPED = Path(__file__).resolve().parents[2] / "cases" / "paper" / "insertion.toml"
@@ -205,3 +211,22 @@ def test_control_defaults_to_the_cases_model(monkeypatch, name, expected):
     assert case.simulation.model == expected and design.model == expected and seen == [expected] * 4
     assert linearise.control_design(case, "rigid").model == "rigid" and seen[-1] == "rigid"
     assert "default: the case's [simulation] model" in CliRunner().invoke(main, ["control", "--help"]).output
+
+
+def test_the_bandwidth_is_the_first_3_db_drop_below_the_dc_gain():
+    """``_bandwidth_hz`` (python-control's grid, Brent's refinement): a first-order lag 1 / (1 + s / w0) drops 3 dB at
+    w0 sqrt(10^0.3 - 1) (closed form), to 1e-10; a lightly damped second-order system with a resonant peak (its
+    first crossing beyond the peak) agrees with python-control's own ``bandwidth`` (bisection) to 1e-9; an all-pass
+    (s - a) / (s + a) never drops: inf; a negative DC gain: the drop of its magnitude."""
+    import math
+
+    import control as ct
+
+    w0 = 2 * math.pi * 3.0
+    lag = ct.ss(ct.tf([1.0], [1.0 / w0, 1.0]))
+    assert _bandwidth_hz(lag) == pytest.approx(w0 * math.sqrt(10**0.3 - 1) / (2 * math.pi), rel=1e-10)
+    resonant = ct.ss(ct.tf([w0**2], [1.0, 0.1 * w0, w0**2]))
+    assert _bandwidth_hz(resonant) == pytest.approx(ct.bandwidth(resonant) / (2 * math.pi), rel=1e-9)
+    assert _bandwidth_hz(resonant) > w0 / (2 * math.pi)  # past the peak, not at the first frequency below it
+    assert _bandwidth_hz(ct.ss(ct.tf([1.0, -5.0], [1.0, 5.0]))) == math.inf
+    assert _bandwidth_hz(ct.ss(ct.tf([-1.0], [1.0 / w0, 1.0]))) == pytest.approx(_bandwidth_hz(lag), rel=1e-10)
