@@ -29,6 +29,7 @@ from scipy.linalg import eigh, null_space
 from pressfit.description.machine import Machine
 from pressfit.dynamics.inertia import GRAVITY_M_PER_S2, inertial_model, total_mass_kg
 from pressfit.errors import PressfitError
+from pressfit.mechanics import data_pool
 from pressfit.mechanics.model import MachineModel, build_model
 from pressfit.mechanics.statics import solve_equilibrium
 
@@ -114,7 +115,7 @@ def reduced_system(machine: Machine, pose_m: np.ndarray, plate_wrench: np.ndarra
         plate_wrench = np.array([0.0, -weight, 0.0, 0.0, 0.0, 0.0])
     eq = solve_equilibrium(mm, mm.pose_m, plate_wrench)
     model = inertial_model(mm, mass_scale)
-    data = model.createData()
+    data = data_pool.lend(model)
     q = eq.q
     basis = null_space(closure_jacobian(mm, model, data, q))
     rot = pin.Quaternion(q[3:7]).matrix()  # free-flyer velocity is in the plate frame

@@ -47,6 +47,7 @@ import pinocchio as pin
 from pressfit import kinematics
 from pressfit.description.machine import Machine
 from pressfit.errors import ConvergenceError
+from pressfit.mechanics import data_pool
 from pressfit.spatial import cross
 
 UP = np.array([0.0, 1.0, 0.0])
@@ -211,7 +212,9 @@ class MachineModel:
 
     def closure_error(self, q: np.ndarray, data: pin.Data | None = None) -> tuple[float, float]:
         """Largest loop-closure error over the legs (m, rad), from Pinocchio's constraint placements."""
-        data = data or self.model.createData()
+        if data is None:
+            with data_pool.borrowed(self.model) as lent:
+                return self.closure_error(q, lent)
         pin.forwardKinematics(self.model, data, q)
         em, er = 0.0, 0.0
         for cm, cd in zip(self.constraint_models, self.constraint_datas()):
@@ -238,7 +241,13 @@ class MachineModel:
         q[0:3] = h
         r = self._rigid_idx
         free = np.concatenate([[3, 4, 5]] + [r[k] - 1 for k in _RIGID])
-        data, cds = self.model.createData(), self.constraint_datas()
+        with data_pool.borrowed(self.model) as data:
+            return self._assembled(q, free, tol, max_iter, least_squares, data)
+
+    def _assembled(self, q: np.ndarray, free: np.ndarray, tol: float, max_iter: int, least_squares: bool,
+                   data: pin.Data) -> np.ndarray:
+        """:meth:`assemble`'s Gauss-Newton from q over the coordinates ``free``, in ``data``."""
+        cds = self.constraint_datas()
         for _ in range(max_iter):
             pin.computeJointJacobians(self.model, data, q)
             err = []

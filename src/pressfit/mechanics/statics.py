@@ -74,6 +74,7 @@ from pressfit.errors import (
     SingularPoseError,
     UnstableEquilibriumError,
 )
+from pressfit.mechanics import data_pool
 from pressfit.mechanics.model import CardanComplianceSpec, MachineModel, ModelPose, SpringLaw, build_model
 from pressfit.mechanics.preload import ActuatorPreload, Amplitudes, rest_length_offsets
 from pressfit.mechanics.stability import Stability, reduced_stability
@@ -508,7 +509,7 @@ class EquilibriumSolver:
         w = getattr(self._local, "worker", None)
         if w is None:
             model = self.model.model.copy()
-            w = self._local.worker = _Worker(model=model, data=model.createData(), sc=_static(self.model))
+            w = self._local.worker = _Worker(model=model, data=data_pool.lend(model), sc=_static(self.model))
         return w
 
     def solve(self, pose_m: np.ndarray, plate_wrench: np.ndarray, *,

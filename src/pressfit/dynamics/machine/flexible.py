@@ -106,6 +106,7 @@ from pressfit.description.machine import Damping, Machine
 from pressfit.dynamics.inertia import inertial_model, set_stem_inertias
 from pressfit.dynamics.machine.base import SECTIONS, DriveInput, Energy, MachineState, SectionLoads
 from pressfit.errors import ConvergenceError, PressfitError
+from pressfit.mechanics import data_pool
 from pressfit.mechanics.model import CardanComplianceSpec, LinearSpring, build_model
 
 NEWTON_TOL = 1e-12  # m or rad: largest position correction of the last Newton iteration
@@ -176,7 +177,7 @@ class FlexibleMachine:
         self.model = inertial_model(mm)
         if not gravity:
             self.model.gravity = pin.Motion.Zero()
-        self.data = self.model.createData()
+        self.data = data_pool.lend(self.model)
         self.cms = mm.constraint_models
         self.cds = mm.constraint_datas()
         self.nv = self.model.nv

@@ -1,0 +1,76 @@
+"""Pinocchio ``Data`` lent to the models' users and taken back, instead of created for each of them.
+
+A ``pin.Data`` carries, besides a model's kinematic and dynamic quantities, Pinocchio's second-order derivative
+tensors (nv^3 doubles each): for the 122-velocity elastic VJM model of :mod:`pressfit.mechanics.model` it is
+67 MB, and creating one costs 15-60 ms (zeroing it and faulting its fresh pages in), several times a static
+solve (about 9 ms). A solver, a flexible machine or a reduced system built per call (``solve_equilibrium`` on a
+machine, a study's pose) paid that every time: a third of the test suite's CPU.
+
+:func:`lend` hands a Data to a model object for its lifetime and takes it back when that object is garbage
+collected (``weakref.finalize``), so no two holders use one Data at once; :func:`borrowed` lends one for a
+``with`` block. A Data is only lent for a model of the same structure as the one it was made for (the joints'
+types and parents, nq, nv and the frames: all a Data's layout depends on), and every algorithm writes what it
+computes before it is read, so a lent Data gives the same results, bit for bit, as a fresh one
+(tests/mechanics/test_data_pool.py). Idle Data are kept per thread, at most ``KEEP`` of them (about 270 MB for
+the elastic model); a model with fewer than ``POOLED_NV`` velocities creates its own (microseconds).
+"""
+
+from __future__ import annotations
+
+import threading
+import weakref
+from collections.abc import Iterator
+from contextlib import contextmanager
+
+import pinocchio as pin
+
+KEEP = 4  # idle Data kept per thread
+POOLED_NV = 40  # models with fewer velocities (the rigid-leg model: 26) create their own Data
+
+
+class _Idle(threading.local):
+    def __init__(self) -> None:
+        self.data: list[tuple[tuple, pin.Data]] = []  # (structure, Data), the most recently returned last
+
+
+_IDLE = _Idle()
+
+
+def structure(model: pin.Model) -> tuple:
+    """What a Data's layout depends on: nq, nv, the frames' count and the joints' types and parents."""
+    return (model.nq, model.nv, model.nframes, tuple(j.shortname() for j in model.joints), tuple(model.parents))
+
+
+def _take(model: pin.Model) -> tuple[tuple | None, pin.Data]:
+    if model.nv < POOLED_NV:
+        return None, model.createData()
+    key, idle = structure(model), _IDLE.data
+    for i in range(len(idle) - 1, -1, -1):
+        if idle[i][0] == key:
+            return key, idle.pop(i)[1]
+    return key, model.createData()
+
+
+def _give_back(key: tuple | None, data: pin.Data) -> None:
+    if key is not None:
+        idle = _IDLE.data
+        idle.append((key, data))
+        del idle[:-KEEP]
+
+
+def lend(model: pin.Model) -> pin.Data:
+    """A Data for ``model``, this model object's alone until it is garbage collected (then idle again): the
+    pairing every holder of a model and its Data has (a solver's model copy, a flexible machine's model)."""
+    key, data = _take(model)
+    weakref.finalize(model, _give_back, key, data).atexit = False
+    return data
+
+
+@contextmanager
+def borrowed(model: pin.Model) -> Iterator[pin.Data]:
+    """A Data for ``model`` for the ``with`` block (idle again after it: keep nothing that views it)."""
+    key, data = _take(model)
+    try:
+        yield data
+    finally:
+        _give_back(key, data)

@@ -1,0 +1,101 @@
+"""Pinocchio Data lent and taken back (:mod:`pressfit.mechanics.data_pool`): never shared by two live holders,
+only between models of one structure, and a lent Data gives the results of a fresh one bit for bit."""
+
+import gc
+
+import numpy as np
+import pytest
+
+from pressfit.dynamics.modes import natural_modes
+from pressfit.mechanics import data_pool
+from pressfit.mechanics.model import build_model
+from pressfit.mechanics.statics import EquilibriumSolver, solve_equilibrium
+
+POSE_A, POSE_B = np.array([0.0, 0.72, 0.0]), np.array([0.12, 0.6, -0.08])
+LOAD = np.array([40.0, -700.0, 25.0, 3.0, -2.0, 1.0])
+
+
+@pytest.fixture
+def empty_pool():
+    """The calling thread's idle Data cleared before and after the test."""
+    gc.collect()
+    data_pool._IDLE.data.clear()
+    yield data_pool._IDLE.data
+    gc.collect()
+    data_pool._IDLE.data.clear()
+
+
+def test_a_holder_keeps_its_data_until_it_is_collected_and_the_next_one_gets_it(machine, empty_pool):
+    """Two live models of one structure hold two Data; when one is collected its Data is idle, and the next model
+    of that structure is lent that very object; a model of another structure (Tsai's 3-UPU) is not."""
+    first, second = build_model(machine, POSE_A).model, build_model(machine, POSE_B).model
+    a, b = data_pool.lend(first), data_pool.lend(second)
+    assert a is not b and not empty_pool
+    del first
+    gc.collect()
+    assert [d for _, d in empty_pool] == [a]
+    assert data_pool.lend(build_model(machine, POSE_B).model) is a
+
+
+def test_another_structure_never_gets_the_data(machine, tsai, empty_pool):
+    """An idle Data of the 4-UPU's model is not lent to Tsai's (other joints, other nv), nor to the 4-UPU's with
+    another number of springs per segment."""
+    model = build_model(machine, POSE_A).model
+    lent = data_pool.lend(model)
+    del model
+    gc.collect()
+    others = build_model(tsai, POSE_A).model, build_model(machine, POSE_A, springs_per_segment=3).model
+    assert all(data_pool.lend(m) is not lent for m in others)
+    assert [d for _, d in empty_pool] == [lent]  # still idle
+
+
+def test_a_borrowed_data_is_idle_again_after_the_block_even_on_an_error(machine, empty_pool):
+    model = build_model(machine, POSE_A).model
+    with pytest.raises(RuntimeError), data_pool.borrowed(model) as data:
+        raise RuntimeError("inside")
+    assert [d for _, d in empty_pool] == [data]
+    with data_pool.borrowed(model) as again:
+        assert again is data and not empty_pool
+
+
+def test_at_most_keep_idle_data_per_thread(machine, empty_pool):
+    models = [build_model(machine, POSE_A).model for _ in range(data_pool.KEEP + 2)]
+    lent = [data_pool.lend(m) for m in models]
+    del models
+    gc.collect()
+    assert len(empty_pool) == data_pool.KEEP
+    assert {id(d) for _, d in empty_pool} <= {id(d) for d in lent}
+
+
+def test_a_lent_data_gives_a_fresh_ones_results_bit_for_bit(machine, empty_pool, monkeypatch):
+    """A solve and the natural modes at pose A on Data that served a solve at pose B (another stem placement, another
+    load) equal those on fresh Data (the pool bypassed: every model below its threshold), bit for bit."""
+    solve_equilibrium(machine, POSE_B, -LOAD)
+    natural_modes(machine, POSE_B)
+    gc.collect()
+    assert empty_pool  # the next solve and modes are lent what those used
+    lent = solve_equilibrium(machine, POSE_A, LOAD), natural_modes(machine, POSE_A)
+    monkeypatch.setattr(data_pool, "POOLED_NV", 10**9)
+    fresh = solve_equilibrium(machine, POSE_A, LOAD), natural_modes(machine, POSE_A)
+    assert np.array_equal(lent[0].q, fresh[0].q)
+    assert np.array_equal(lent[0].actuator_forces_n, fresh[0].actuator_forces_n)
+    assert np.array_equal(lent[1].frequencies_hz, fresh[1].frequencies_hz)
+    assert np.array_equal(lent[1].shapes, fresh[1].shapes)
+
+
+def test_a_solver_per_call_no_longer_creates_a_data_per_call(machine, empty_pool, monkeypatch):
+    """Ten solves, each on a new solver (as ``solve_equilibrium`` on a machine does): one Data created (each
+    solver's is idle again when the solver goes), not ten."""
+    created = []
+    real = data_pool._take
+
+    def counting(model):
+        key, data = real(model)
+        if not any(data is d for d in created):
+            created.append(data)
+        return key, data
+
+    monkeypatch.setattr(data_pool, "_take", counting)
+    for k in range(10):
+        EquilibriumSolver(build_model(machine, POSE_A)).solve(POSE_A, LOAD * (1 + k / 10))
+    assert len(created) == 1
