@@ -34,7 +34,8 @@ def _characteristic(p: np.ndarray, ei_1_nm2: float, length_1_m: float, ei_2_nm2:
                     length_2_m: np.ndarray) -> np.ndarray:
     """The module doc's k_2 sin(k_1 a) cos(k_2 b) + k_1 sin(k_2 b) cos(k_1 a) at loads p (N), elementwise."""
     k1, k2 = np.sqrt(p / ei_1_nm2), np.sqrt(p / ei_2_nm2)
-    return k2 * np.sin(k1 * length_1_m) * np.cos(k2 * length_2_m) + k1 * np.sin(k2 * length_2_m) * np.cos(k1 * length_1_m)
+    return (k2 * np.sin(k1 * length_1_m) * np.cos(k2 * length_2_m)
+            + k1 * np.sin(k2 * length_2_m) * np.cos(k1 * length_1_m))
 
 
 def _bounds(ei_1_nm2: float, length_1_m: float, ei_2_nm2: float, length_2_m: np.ndarray) -> np.ndarray:
