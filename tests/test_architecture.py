@@ -21,6 +21,7 @@
 from __future__ import annotations
 
 import ast
+import functools
 import re
 from pathlib import Path
 
@@ -47,9 +48,19 @@ def _modules() -> list[tuple[str, Path]]:
     return out
 
 
+def _tree(path: Path) -> ast.Module:
+    """The parsed source of ``path`` (each text parsed once per test run: every check walks the same files)."""
+    return _parsed(path.read_text())
+
+
+@functools.cache
+def _parsed(text: str) -> ast.Module:
+    return ast.parse(text)
+
+
 def _imports(path: Path) -> list[str]:
     names = []
-    for node in ast.walk(ast.parse(path.read_text())):
+    for node in ast.walk(_tree(path)):
         if isinstance(node, ast.Import):
             names += [a.name for a in node.names]
         elif isinstance(node, ast.ImportFrom):
@@ -105,7 +116,7 @@ OUTPUT_RUNTIME_NAMES = {
 def _runtime_imports(path: Path) -> list[tuple[int, str, list[str]]]:
     """(line, module, imported names) of every import of ``path`` outside an ``if TYPE_CHECKING:`` block
     (``import a.b`` gives the names ``[]``)."""
-    tree = ast.parse(path.read_text())
+    tree = _tree(path)
     hidden = {id(n) for node in ast.walk(tree) if isinstance(node, ast.If) and ast.unparse(node.test) in
               ("TYPE_CHECKING", "typing.TYPE_CHECKING") for stmt in node.body for n in ast.walk(stmt)}
     out = []
@@ -147,7 +158,7 @@ def test_the_output_allow_list_is_still_needed():
 def test_physics_neither_plots_nor_writes(layer, path):
     for name in _imports(path):
         assert not name.startswith(("matplotlib", "pressfit.output", "plotly")), f"{path} imports {name}"
-    tree = ast.parse(path.read_text())
+    tree = _tree(path)
     for node in ast.walk(tree):
         if isinstance(node, ast.Call) and isinstance(node.func, ast.Attribute):
             assert node.func.attr not in ("write_text", "write_bytes", "savefig", "mkdir", "to_csv"), \
@@ -162,7 +173,7 @@ def test_physics_neither_plots_nor_writes(layer, path):
 @pytest.mark.slow
 @pytest.mark.parametrize(("layer", "path"), MODULES, ids=[str(p.relative_to(SRC)) for _, p in MODULES])
 def test_no_global_mutable_state(layer, path):
-    tree = ast.parse(path.read_text())
+    tree = _tree(path)
     for node in ast.walk(tree):
         assert not isinstance(node, ast.Global), f"{path}:{node.lineno}: global statement"
     mutable = set()
@@ -213,7 +224,7 @@ def test_results_are_built_by_keyword(layer, path):
     rel = str(path.relative_to(SRC)) if path.is_relative_to(SRC) else path.name
     if rel in KW_ONLY_EXEMPT:
         return
-    for node in ast.walk(ast.parse(path.read_text())):
+    for node in ast.walk(_tree(path)):
         if not isinstance(node, ast.ClassDef) or node.name.startswith("_") or f"{rel}:{node.name}" in KW_ONLY_EXEMPT:
             continue
         deco = _is_dataclass(node)
@@ -230,7 +241,7 @@ def test_exceptions_live_in_errors_py(layer, path):
     """Every exception is defined in errors.py (one place to read what a failure carries)."""
     if layer == "errors":
         return
-    bad = [n.name for n in ast.walk(ast.parse(path.read_text())) if isinstance(n, ast.ClassDef)
+    bad = [n.name for n in ast.walk(_tree(path)) if isinstance(n, ast.ClassDef)
            and any(re.search(r"(Error|Exception)$", ast.unparse(b)) for b in n.bases)]
     assert not bad, f"{path}: exception {', '.join(bad)} is defined outside errors.py: move it there"
 
@@ -240,7 +251,7 @@ def test_the_exempt_modules_still_need_their_exemption():
     converted module leaves the list."""
     for entry in KW_ONLY_EXEMPT:
         rel, _, cls = entry.partition(":")
-        tree = ast.parse((SRC / rel).read_text())
+        tree = _tree(SRC / rel)
         late = [n for n in ast.walk(tree) if isinstance(n, ast.ClassDef) and not n.name.startswith("_")
                 and (not cls or n.name == cls) and (d := _is_dataclass(n)) is not None and len(_init_fields(n)) >= 3
                 and not any(k.arg == "kw_only" for k in getattr(d, "keywords", []))]
@@ -298,7 +309,7 @@ MD_REF = re.compile(r"(?<![\w./-])((?:[\w.-]+/)*[\w.-]+\.md)\b")
 def _written_markdown_names() -> set[str]:
     """The Markdown files the package writes (string constants in src that are a bare Markdown file name):
     outputs, not documents."""
-    return {node.value for path in SRC.rglob("*.py") for node in ast.walk(ast.parse(path.read_text()))
+    return {node.value for path in SRC.rglob("*.py") for node in ast.walk(_tree(path))
             if isinstance(node, ast.Constant) and isinstance(node.value, str) and MD_REF.fullmatch(node.value)}
 
 
@@ -411,7 +422,7 @@ def long_functions(paths: list[Path], root: Path = SRC) -> list[str]:
     docstring included, as ``path:line name (n lines)`` (path relative to ``root``)."""
     out = []
     for path in paths:
-        for node in ast.walk(ast.parse(path.read_text())):
+        for node in ast.walk(_tree(path)):
             if isinstance(node, ast.FunctionDef | ast.AsyncFunctionDef):
                 lines = node.end_lineno - min([node.lineno, *(d.lineno for d in node.decorator_list)]) + 1
                 if lines > MAX_FUNCTION_LINES:
@@ -437,7 +448,7 @@ def model_name_reads(paths: list[Path], names: tuple[str, ...], root: Path = SRC
     ``path:line``. The registry (:mod:`pressfit.dynamics.machine.registry`) is the one reader."""
     out = []
     for path in paths:
-        for node in ast.walk(ast.parse(path.read_text())):
+        for node in ast.walk(_tree(path)):
             if isinstance(node, ast.Compare):
                 operands = [node.left, *node.comparators]
             elif isinstance(node, ast.List | ast.Tuple | ast.Set):
