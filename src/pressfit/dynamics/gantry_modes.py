@@ -33,6 +33,7 @@ from pressfit.description.machine import require_inertia
 from pressfit.dynamics.inertia import _add, joint_placements, total_mass_kg
 from pressfit.dynamics.modes import mass_matrix
 from pressfit.errors import PressfitError, ResidualError
+from pressfit.mechanics import data_pool
 from pressfit.mechanics.gantry import GantryModel, build_gantry_model
 
 EIGEN_TOL = 1e-8  # relative residual |K_r x - omega^2 M_r x| / |K_r x| a mode is held to
@@ -118,7 +119,8 @@ def model_modes(gm: GantryModel, count: int = 6) -> GantryModes:
     flex = gm.compliance > 0
     if not (isinstance(count, int) and 1 <= count <= int(flex.sum())):
         raise PressfitError(f"count of modes must be an integer in [1, {int(flex.sum())}], got {count!r}")
-    full = mass_matrix(model, model.createData(), pin.neutral(model))
+    with data_pool.borrowed(model) as data:
+        full = mass_matrix(model, data, pin.neutral(model))
     basis = null_space(gm.closure_jacobian[:, flex])
     k_r = basis.T @ (basis / gm.compliance[flex][:, None])
     m_r = basis.T @ full[np.ix_(flex, flex)] @ basis

@@ -11,8 +11,9 @@ collected (``weakref.finalize``), so no two holders use one Data at once; :func:
 ``with`` block. A Data is only lent for a model of the same structure as the one it was made for (the joints'
 types and parents, nq, nv and the frames: all a Data's layout depends on), and every algorithm writes what it
 computes before it is read, so a lent Data gives the same results, bit for bit, as a fresh one
-(tests/mechanics/test_data_pool.py). Idle Data are kept per thread, at most ``KEEP`` of them (about 270 MB for
-the elastic model); a model with fewer than ``POOLED_NV`` velocities creates its own (microseconds).
+(tests/mechanics/test_data_pool.py). Idle Data are kept per thread, the most recently returned first, up to
+``IDLE_BYTES`` in all (four of the elastic model's); a model with fewer than ``POOLED_NV`` velocities creates its
+own (microseconds).
 """
 
 from __future__ import annotations
@@ -24,7 +25,7 @@ from contextlib import contextmanager
 
 import pinocchio as pin
 
-KEEP = 4  # idle Data kept per thread
+IDLE_BYTES = 300e6  # idle Data kept per thread, at most this much in all (estimated by data_bytes)
 POOLED_NV = 40  # models with fewer velocities (the rigid-leg model: 26) create their own Data
 
 
@@ -51,11 +52,22 @@ def _take(model: pin.Model) -> tuple[tuple | None, pin.Data]:
     return key, model.createData()
 
 
+def data_bytes(nv: int) -> float:
+    """A Data's size (bytes) for nv velocities: four nv^3 tensors of doubles and the rest (measured 66.6 MB at
+    nv = 122, 36 nv^3)."""
+    return 36.0 * nv**3
+
+
 def _give_back(key: tuple | None, data: pin.Data) -> None:
     if key is not None:
         idle = _IDLE.data
         idle.append((key, data))
-        del idle[:-KEEP]
+        total = 0.0
+        for k in range(len(idle) - 1, -1, -1):  # the most recently returned first
+            total += data_bytes(idle[k][0][1])
+            if total > IDLE_BYTES:
+                del idle[: k + 1]
+                break
 
 
 def lend(model: pin.Model) -> pin.Data:

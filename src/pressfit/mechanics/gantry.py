@@ -61,6 +61,7 @@ import pinocchio as pin
 
 from pressfit.description.gantry import GANTRY_AXES, BeamSection, Gantry
 from pressfit.errors import PressfitError, ResidualError, UnstableEquilibriumError
+from pressfit.mechanics import data_pool
 from pressfit.mechanics.model import _JOINT_MODELS
 from pressfit.mechanics.statics import RESIDUAL_TOL, SectionWrench
 from pressfit.spatial import cross
@@ -418,11 +419,10 @@ def build_gantry_model(gantry: Gantry, pose_m: np.ndarray, *, springs_per_segmen
     b_end = b.member(b_end, "x_beam_right", "x_beam", np.array([s2, top, 0.0]), _frame(_UP, -_X), s2 - x)
     closure = (b.frame(a_end, carriage, "x_carriage.a"), b.frame(b_end, carriage, "x_carriage.b"))
     model = b.model
-    data = model.createData()
-    q = pin.neutral(model)
-    pin.computeJointJacobians(model, data, q)
-    pin.updateFramePlacements(model, data)
-    jac = [np.array(pin.getFrameJacobian(model, data, fid, pin.LOCAL_WORLD_ALIGNED)) for fid in (tool, *closure)]
+    with data_pool.borrowed(model) as data:
+        pin.computeJointJacobians(model, data, pin.neutral(model))
+        pin.updateFramePlacements(model, data)
+        jac = [np.array(pin.getFrameJacobian(model, data, fid, pin.LOCAL_WORLD_ALIGNED)) for fid in (tool, *closure)]
     return GantryModel(gantry=gantry, pose_m=np.array([x, y, z]), model=model, springs_per_segment=n,
                        transverse=transverse, compliance=np.array(b.compliance),
                        coordinate_names=tuple(b.names), members=tuple(b.members), axis_v=axis_v,
