@@ -230,3 +230,18 @@ def test_the_bandwidth_is_the_first_3_db_drop_below_the_dc_gain():
     assert _bandwidth_hz(resonant) > w0 / (2 * math.pi)  # past the peak, not at the first frequency below it
     assert _bandwidth_hz(ct.ss(ct.tf([1.0, -5.0], [1.0, 5.0]))) == math.inf
     assert _bandwidth_hz(ct.ss(ct.tf([-1.0], [1.0 / w0, 1.0]))) == pytest.approx(_bandwidth_hz(lag), rel=1e-10)
+
+
+def test_a_bandwidth_below_the_grids_first_frequency_is_bracketed_from_zero(monkeypatch):
+    """A grid starting above the crossing (python-control's frequency range made to start at 10 w0): the drop is
+    bracketed by w = 0, where the gain is the DC gain (ct.bandwidth would index the grid at -1), and found at the
+    first-order lag's closed form w0 sqrt(10^0.3 - 1)."""
+    import math
+
+    import control as ct
+    import control.freqplot
+
+    w0 = 2 * math.pi * 3.0
+    monkeypatch.setattr(control.freqplot, "_default_frequency_range", lambda sys: np.logspace(1, 3, 50) * w0)
+    lag = ct.ss(ct.tf([1.0], [1.0 / w0, 1.0]))
+    assert _bandwidth_hz(lag) == pytest.approx(w0 * math.sqrt(10**0.3 - 1) / (2 * math.pi), rel=1e-10)

@@ -95,3 +95,21 @@ def test_a_solver_per_call_no_longer_creates_a_data_per_call(machine, empty_pool
     for k in range(10):
         EquilibriumSolver(build_model(machine, POSE_A)).solve(POSE_A, LOAD * (1 + k / 10))
     assert len(created) == 1
+
+
+def test_the_structure_tells_apart_parents_and_frames():
+    """Two models with the same joints but another topology (a chain against two branches), or another frame
+    count, have another structure: a Data is never lent across them."""
+    import pinocchio as pin
+
+    def model(chain: bool, frames: int = 0):
+        m = pin.Model()
+        a = m.addJoint(0, pin.JointModelRX(), pin.SE3.Identity(), "a")
+        m.addJoint(a if chain else 0, pin.JointModelRY(), pin.SE3.Identity(), "b")
+        for k in range(frames):
+            m.addFrame(pin.Frame(f"f{k}", a, 0, pin.SE3.Identity(), pin.FrameType.OP_FRAME))
+        return m
+
+    assert data_pool.structure(model(True)) == data_pool.structure(model(True))
+    assert data_pool.structure(model(True)) != data_pool.structure(model(False))
+    assert data_pool.structure(model(True)) != data_pool.structure(model(True, frames=1))
