@@ -217,7 +217,8 @@ def test_the_bandwidth_is_the_first_3_db_drop_below_the_dc_gain():
     """``_bandwidth_hz`` (python-control's grid, Brent's refinement): a first-order lag 1 / (1 + s / w0) drops 3 dB at
     w0 sqrt(10^0.3 - 1) (closed form), to 1e-10; a lightly damped second-order system with a resonant peak (its
     first crossing beyond the peak) agrees with python-control's own ``bandwidth`` (bisection) to 1e-9; an all-pass
-    (s - a) / (s + a) never drops: inf; a negative DC gain: the drop of its magnitude."""
+    (s - a) / (s + a) never drops: inf, nor does an integrator's infinite DC gain; a negative DC gain: the drop of its
+    magnitude."""
     import math
 
     import control as ct
@@ -229,6 +230,7 @@ def test_the_bandwidth_is_the_first_3_db_drop_below_the_dc_gain():
     assert _bandwidth_hz(resonant) == pytest.approx(ct.bandwidth(resonant) / (2 * math.pi), rel=1e-9)
     assert _bandwidth_hz(resonant) > w0 / (2 * math.pi)  # past the peak, not at the first frequency below it
     assert _bandwidth_hz(ct.ss(ct.tf([1.0, -5.0], [1.0, 5.0]))) == math.inf
+    assert _bandwidth_hz(ct.ss(ct.tf([1.0], [1.0, 0.0]))) == math.inf  # an integrator: infinite DC gain
     assert _bandwidth_hz(ct.ss(ct.tf([-1.0], [1.0 / w0, 1.0]))) == pytest.approx(_bandwidth_hz(lag), rel=1e-10)
 
 
