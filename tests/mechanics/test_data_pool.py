@@ -113,3 +113,21 @@ def test_the_structure_tells_apart_parents_and_frames():
     assert data_pool.structure(model(True)) == data_pool.structure(model(True))
     assert data_pool.structure(model(True)) != data_pool.structure(model(False))
     assert data_pool.structure(model(True)) != data_pool.structure(model(True, frames=1))
+
+
+def test_a_holder_of_a_shared_model_is_the_owner(machine, empty_pool):
+    """Two evaluators of one shared model (an interference model's rig) each hold their own Data, given back when
+    that evaluator goes, not when the shared model does."""
+
+    class Holder:
+        pass
+
+    model = build_model(machine, POSE_A).model
+    first, second = Holder(), Holder()
+    a, b = data_pool.lend(model, first), data_pool.lend(model, second)
+    assert a is not b
+    del first
+    assert [d for _, d in empty_pool] == [a]
+    del second
+    assert [d for _, d in empty_pool] == [a, b]
+    assert model.nv == 122  # the shared model still alive

@@ -57,6 +57,7 @@ from pressfit.description.machine import ExtraBody, Machine
 from pressfit.errors import InterferenceError
 from pressfit.kinematics import reference_pose_m
 from pressfit.kinematics.workspace import square_height_range, workspace_box, workspace_square
+from pressfit.mechanics import data_pool
 from pressfit.spatial import cross
 
 PART_NAMES = ("cylinder", "stem")
@@ -334,19 +335,19 @@ def build_interference(machine: Machine, rig: str | Rig = "auto", include: list[
     pairs = [p for p in dict.fromkeys(pairs + add) if p not in drop]
 
     # attach: joint-relative placement = oMi(ref)^-1 * oMg(ref), so any rig convention works
-    model = rig_obj.model
-    data = model.createData()
     h_ref = reference_pose_m(machine)
-    pin.forwardKinematics(model, data, rig_obj.configuration_at(h_ref))
     world = carrier_placements(machine, h_ref)
     joint = {("world", -1): 0, ("plate", -1): rig_obj.plate_joint_id}
     for i, ids in enumerate(rig_obj.leg_joint_ids):
         joint[("cylinder", i)], joint[("stem", i)] = ids["cylinder"], ids["stem"]
+    with data_pool.borrowed(rig_obj.model) as data:
+        pin.forwardKinematics(rig_obj.model, data, rig_obj.configuration_at(h_ref))
+        o_m_i = {j: data.oMi[j].copy() for j in set(joint.values())}  # the carriers' joints at the reference
     gm = pin.GeometryModel()
     index: dict[str, list[int]] = {}
     for s in shapes:
         j = joint[s.carrier]
-        placement = data.oMi[j].actInv(world[s.carrier] * s.local)
+        placement = o_m_i[j].actInv(world[s.carrier] * s.local)
         index.setdefault(s.body, []).append(gm.addGeometryObject(pin.GeometryObject(s.name, j, placement, s.geometry)))
     starts = []
     for p in pairs:
@@ -413,7 +414,7 @@ class _Evaluator:
 
     def __init__(self, im: InterferenceModel) -> None:
         self.im = im
-        self.data = im.rig.model.createData()
+        self.data = data_pool.lend(im.rig.model, self)
         self.gdata = pin.GeometryData(im.geometry_model)
         self.results = list(self.gdata.distanceResults)
         self.n = len(self.results)

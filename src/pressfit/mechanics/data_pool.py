@@ -70,11 +70,13 @@ def _give_back(key: tuple | None, data: pin.Data) -> None:
                 break
 
 
-def lend(model: pin.Model) -> pin.Data:
-    """A Data for ``model``, this model object's alone until it is garbage collected (then idle again): the
-    pairing every holder of a model and its Data has (a solver's model copy, a flexible machine's model)."""
+def lend(model: pin.Model, owner: object | None = None) -> pin.Data:
+    """A Data for ``model``, ``owner``'s alone until ``owner`` is garbage collected (then idle again); by default
+    the model object's own: the pairing every holder of a model and its Data has (a solver's model copy, a flexible
+    machine's model). A holder of a model it shares with others (an evaluator of an interference model) is the
+    owner itself."""
     key, data = _take(model)
-    weakref.finalize(model, _give_back, key, data).atexit = False
+    weakref.finalize(model if owner is None else owner, _give_back, key, data).atexit = False
     return data
 
 
