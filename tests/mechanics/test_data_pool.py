@@ -131,3 +131,42 @@ def test_a_holder_of_a_shared_model_is_the_owner(machine, empty_pool):
     del second
     assert [d for _, d in empty_pool] == [a, b]
     assert model.nv == 122  # the shared model still alive
+
+
+def test_a_data_given_back_while_the_lock_is_held_waits_and_is_lent_next(machine, empty_pool):
+    """A holder collected while the pool's lock is held (a garbage collection started by an allocation inside a
+    locked region runs its finalizer there): the Data waits in the returned queue, no deadlock, and the next take
+    settles and lends it."""
+    model = build_model(machine, POSE_A).model
+    lent = data_pool.lend(model)
+    with data_pool._IDLE.lock:
+        del model
+        assert not empty_pool and list(data_pool._IDLE.returned) == [(data_pool.structure(
+            build_model(machine, POSE_A).model), lent)]
+    assert data_pool.lend(build_model(machine, POSE_B).model) is lent
+    assert not data_pool._IDLE.returned
+
+
+def test_threads_share_the_idle_data_and_a_forked_child_starts_empty(machine, empty_pool):
+    """A Data given back on one thread is lent on another (one pool per process: its memory bounded whatever the
+    number of a Dask worker's threads); a child forked with idle Data in the parent starts with none."""
+    import multiprocessing
+    import threading
+
+    model = build_model(machine, POSE_A).model
+    lent = data_pool.lend(model)
+    del model
+    assert [d for _, d in empty_pool] == [lent]
+    got = []
+    thread = threading.Thread(target=lambda: got.append(data_pool.lend(build_model(machine, POSE_B).model)))
+    thread.start()
+    thread.join()
+    assert got == [lent]
+    got.clear()  # its model died with the thread's lambda: the Data is idle again
+    assert [d for _, d in empty_pool] == [lent]
+    with multiprocessing.get_context("fork").Pool(1) as pool:
+        assert pool.apply(_idle_count) == 0
+
+
+def _idle_count() -> int:
+    return len(data_pool._IDLE.data) + len(data_pool._IDLE.returned)

@@ -11,13 +11,16 @@ collected (``weakref.finalize``), so no two holders use one Data at once; :func:
 ``with`` block. A Data is only lent for a model of the same structure as the one it was made for (the joints'
 types and parents, nq, nv and the frames: all a Data's layout depends on), and every algorithm writes what it
 computes before it is read, so a lent Data gives the same results, bit for bit, as a fresh one
-(tests/mechanics/test_data_pool.py). Idle Data are kept per thread, the most recently returned first, up to
-``IDLE_BYTES`` in all (four of the elastic model's); a model with fewer than ``POOLED_NV`` velocities creates its
-own (microseconds).
+(tests/mechanics/test_data_pool.py). Idle Data are kept per process (under a lock: a Dask worker's threads share
+them, and its memory is bounded whatever their number), the most recently returned first, up to ``IDLE_BYTES`` in
+all (four of the elastic model's); a forked child starts with none. A model with fewer than ``POOLED_NV``
+velocities creates its own (microseconds).
 """
 
 from __future__ import annotations
 
+import collections
+import os
 import threading
 import weakref
 from collections.abc import Iterator
@@ -25,16 +28,32 @@ from contextlib import contextmanager
 
 import pinocchio as pin
 
-IDLE_BYTES = 300e6  # idle Data kept per thread, at most this much in all (estimated by data_bytes)
+IDLE_BYTES = 300e6  # idle Data kept per process, at most this much in all (estimated by data_bytes)
 POOLED_NV = 40  # models with fewer velocities (the rigid-leg model: 26) create their own Data
 
 
-class _Idle(threading.local):
+class _Idle:
     def __init__(self) -> None:
-        self.data: list[tuple[tuple, pin.Data]] = []  # (structure, Data), the most recently returned last
+        self.data: list[tuple[tuple, pin.Data]] = []  # (structure, Data), the most recently returned last; locked
+        # given back without the lock (a finalizer may run inside a locked region, where an allocation started a
+        # garbage collection): moved into ``data`` by whoever holds the lock next
+        self.returned: collections.deque[tuple[tuple, pin.Data]] = collections.deque()
+        self.lock = threading.Lock()
+
+    def settle(self) -> None:
+        """The returned Data into the idle list, the oldest beyond IDLE_BYTES dropped (the lock held)."""
+        while self.returned:
+            self.data.append(self.returned.popleft())
+        total = 0.0
+        for k in range(len(self.data) - 1, -1, -1):  # the most recently returned first
+            total += data_bytes(self.data[k][0][1])
+            if total > IDLE_BYTES:
+                del self.data[: k + 1]
+                break
 
 
 _IDLE = _Idle()
+os.register_at_fork(after_in_child=_IDLE.__init__)  # a child's own empty pool and a lock no thread holds
 
 
 def structure(model: pin.Model) -> tuple:
@@ -46,9 +65,11 @@ def _take(model: pin.Model) -> tuple[tuple | None, pin.Data]:
     if model.nv < POOLED_NV:
         return None, model.createData()
     key, idle = structure(model), _IDLE.data
-    for i in range(len(idle) - 1, -1, -1):
-        if idle[i][0] == key:
-            return key, idle.pop(i)[1]
+    with _IDLE.lock:
+        _IDLE.settle()
+        for i in range(len(idle) - 1, -1, -1):
+            if idle[i][0] == key:
+                return key, idle.pop(i)[1]
     return key, model.createData()
 
 
@@ -60,14 +81,12 @@ def data_bytes(nv: int) -> float:
 
 def _give_back(key: tuple | None, data: pin.Data) -> None:
     if key is not None:
-        idle = _IDLE.data
-        idle.append((key, data))
-        total = 0.0
-        for k in range(len(idle) - 1, -1, -1):  # the most recently returned first
-            total += data_bytes(idle[k][0][1])
-            if total > IDLE_BYTES:
-                del idle[: k + 1]
-                break
+        _IDLE.returned.append((key, data))
+        if _IDLE.lock.acquire(blocking=False):  # held (here, by a collection inside _take): the holder settles it
+            try:
+                _IDLE.settle()
+            finally:
+                _IDLE.lock.release()
 
 
 def lend(model: pin.Model, owner: object | None = None) -> pin.Data:
