@@ -9,7 +9,9 @@
 * the physics subpackages (kinematics, mechanics, geometry, dynamics) import neither matplotlib nor
   pressfit.output, and never open files for writing;
 * no module-level mutable state in the library: no module-level dict/list/set that a function mutates
-  (``global`` statements and module-level caches are refused);
+  (``global`` statements and module-level caches, ``functools.cache`` and ``lru_cache`` among them, are refused);
+  the one exception is a resource, not results: mechanics/data_pool.py's pool of Pinocchio Data, whose lent Data
+  give a fresh one's results bit for bit (tests/mechanics/test_data_pool.py);
 * no import circle between modules, counting every import (module level, inside functions, under
   TYPE_CHECKING): the clearance law lives apart from the clearance solvers for this
   (mechanics/clearance_law.py; the circle was clearance -> statics -> preload -> clearance);
@@ -176,6 +178,9 @@ def test_no_global_mutable_state(layer, path):
     tree = _tree(path)
     for node in ast.walk(tree):
         assert not isinstance(node, ast.Global), f"{path}:{node.lineno}: global statement"
+        for decorator in getattr(node, "decorator_list", []):
+            name = ast.unparse(decorator)
+            assert not re.search(r"\b(lru_cache|cache)\b", name), f"{path}:{node.lineno}: a module-level cache ({name})"
     mutable = set()
     for node in tree.body:  # module level: names bound to a mutable container
         if isinstance(node, (ast.Assign, ast.AnnAssign)) and isinstance(node.value, (ast.Dict, ast.List, ast.Set,
@@ -265,6 +270,10 @@ def test_the_rules_catch_a_violation(tmp_path):
     bad.write_text("import matplotlib\nfrom pressfit.output import files\n_CACHE = {}\n"
                    "def f(k):\n    _CACHE[k] = 1\n    open('x', 'w')\n"
                    "class SolverError(errors.PressfitError):\n    pass\n")
+    cached = tmp_path / "cached.py"
+    cached.write_text("import functools\n@functools.lru_cache(maxsize=8)\ndef table(x):\n    return x\n")
+    with pytest.raises(AssertionError, match=r"a module-level cache \(functools.lru_cache\(maxsize=8\)\)"):
+        test_no_global_mutable_state("mechanics", cached)
     with pytest.raises(AssertionError, match="exception SolverError is defined outside errors.py"):
         test_exceptions_live_in_errors_py("mechanics", bad)
     with pytest.raises(AssertionError, match="imports matplotlib"):
