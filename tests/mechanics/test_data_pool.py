@@ -66,9 +66,17 @@ def test_idle_data_are_kept_up_to_their_byte_budget(machine, empty_pool, monkeyp
 
 def test_a_lent_data_gives_a_fresh_ones_results_bit_for_bit(machine, empty_pool, monkeypatch):
     """A solve and the natural modes at pose A on Data that served a solve at pose B (another stem placement, another
-    load) equal those on fresh Data (the pool bypassed: every model below its threshold), bit for bit."""
+    load) and the electric machine's modes (other masses, the drives' armature on the actuators) equal those on
+    fresh Data (the pool bypassed: every model below its threshold), bit for bit."""
+    from pathlib import Path
+
+    from pressfit.description.machine import load_machine
+
+    electric = load_machine(Path(__file__).resolve().parents[2] / "models" / "pressfit_4upu_electric.toml")
+    assert data_pool.structure(build_model(electric, POSE_B).model) == data_pool.structure(
+        build_model(machine, POSE_A).model)
     solve_equilibrium(machine, POSE_B, -LOAD)
-    natural_modes(machine, POSE_B)
+    natural_modes(electric, POSE_B)  # the same structure with other masses and the drives' armature
     assert empty_pool  # the next solve and modes are lent what those used
     lent = solve_equilibrium(machine, POSE_A, LOAD), natural_modes(machine, POSE_A)
     monkeypatch.setattr(data_pool, "POOLED_NV", 10**9)
