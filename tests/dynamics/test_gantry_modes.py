@@ -124,3 +124,20 @@ def test_shipped_gantry_meets_its_sizing_criterion():
 def test_metrics_refuse_bad_input(poses, load):
     with pytest.raises(PressfitError, match="must be"):
         gantry_metrics(GANTRY, poses, load)
+
+
+def test_an_eigen_residual_over_its_tolerance_is_refused(monkeypatch):
+    """The modes' relative eigen-residual |K_r x - w^2 M_r x| / |K_r x| is held to EIGEN_TOL (1e-8; achieved 5e-13
+    at the shipped gantry's pose): with the tolerance 0.1% under what is achieved the modes are refused
+    (ResidualError naming the check), 0.1% over they are returned."""
+    from pressfit.dynamics import gantry_modes as gm_module
+    from pressfit.errors import ResidualError
+
+    pose = np.array([0.0, 0.6, 0.0])
+    achieved = gantry_modes(GANTRY, pose).eigen_residual
+    assert 0 < achieved < 1e-10
+    monkeypatch.setattr(gm_module, "EIGEN_TOL", 1.001 * achieved)
+    assert gantry_modes(GANTRY, pose).eigen_residual == achieved
+    monkeypatch.setattr(gm_module, "EIGEN_TOL", 0.999 * achieved)
+    with pytest.raises(ResidualError, match="gantry modes"):
+        gantry_modes(GANTRY, pose)
