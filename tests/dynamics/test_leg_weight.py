@@ -291,13 +291,3 @@ def test_the_weight_at_an_unreachable_pose_is_refused_naming_the_leg(machine):
     with pytest.raises(UnreachablePoseError):
         leg_weight_loads(machine, [0.0, 0.6, np.nan])
 
-
-def test_the_cross_product_helper_is_numpys_cross():
-    """``leg_weight._cross`` (np.cross's products without its axis handling) against ``np.cross`` on random
-    batches (the shipped machine's gravity and plate offsets zero some components, so this is its only check of
-    every term): equal bit for bit."""
-    from pressfit.dynamics.leg_weight import _cross
-
-    rng = np.random.default_rng(7)
-    a, b = rng.normal(size=(5, 4, 3)), rng.normal(size=(4, 3))
-    assert np.array_equal(_cross(a, b), np.cross(a, b))

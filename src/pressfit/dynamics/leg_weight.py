@@ -50,16 +50,10 @@ from pressfit.description.machine import Machine
 from pressfit.dynamics.inertia import GRAVITY_M_PER_S2
 from pressfit.kinematics import is_reachable, leg_vectors, require_reachable
 from pressfit.mechanics.condensed import condensed_plate_compliance, rotational_compliances
+from pressfit.spatial import cross
 
 _GAUSS = np.polynomial.legendre.leggauss(3)  # exact for m(s), piecewise quadratic in s
 _IN_CYLINDER = np.array([True, True, False, False])  # leg_weight_loads' four pieces: the first two in the cylinder
-
-
-def _cross(a: np.ndarray, b: np.ndarray) -> np.ndarray:
-    """a x b over the last axis (3) (``np.cross``'s products without its axis handling: the deflection's refresh
-    calls this per controller update)."""
-    a0, a1, a2, b0, b1, b2 = a[..., 0], a[..., 1], a[..., 2], b[..., 0], b[..., 1], b[..., 2]
-    return np.stack([a1 * b2 - a2 * b1, a2 * b0 - a0 * b2, a0 * b1 - a1 * b0], -1)
 
 
 def _first_moment(pieces: list, points: list, s: np.ndarray, lower: np.ndarray) -> np.ndarray:
@@ -110,7 +104,7 @@ def leg_weight_loads(machine: Machine, pose_m: np.ndarray) -> tuple[np.ndarray, 
     c = (e - sin_beta * machine.cardan_axes) / np.sqrt(1.0 - sin_beta**2)
     c_t, c_m = rotational_compliances(machine, lengths)
     k_r = 1.0 / ((1.0 - sin_beta**2) * c_t + sin_beta**2 * c_m)
-    moments = k_r * (c * _cross(e, g)).sum(-1, keepdims=True) * integral * c
+    moments = k_r * (c * cross(e, g)).sum(-1, keepdims=True) * integral * c
     return forces, moments
 
 
@@ -130,8 +124,7 @@ def _cardan_forces(machine: Machine, pose_m: np.ndarray, gravity_m_per_s2: np.nd
     q0 = (mu_cyl * lc * lc / 2
           + mu_rod * (lengths**2 - inner**2) / 2 + mass.actuator_moving_mass_kg * inner
           + mass.cardan_spider_mass_kg * lengths)
-    ge = e @ gravity_m_per_s2
-    ge = ge[..., None]
+    ge = (e @ gravity_m_per_s2)[..., None]
     axial = machine.stem_mass_kg + mass.actuator_moving_mass_kg + mass.cardan_spider_mass_kg
     return axial * ge * e + q0 / lengths * (gravity_m_per_s2 - ge * e), lengths, e, q0
 
@@ -167,7 +160,7 @@ def weight_wrench_n(machine: Machine, pose_m: np.ndarray) -> np.ndarray:
     forces, moments = leg_weight_loads(machine, pose_m)
     plate = (machine.mass.plate_mass_kg + machine.mass.tool_mass_kg) * np.array([0.0, -GRAVITY_M_PER_S2, 0.0])
     return np.concatenate([plate + forces.sum(-2),
-                           _cross(machine.plate_offsets_m, forces).sum(-2) + moments.sum(-2)], axis=-1)
+                           cross(machine.plate_offsets_m, forces).sum(-2) + moments.sum(-2)], axis=-1)
 
 
 def weight_sag_m(machine: Machine, poses_m: np.ndarray, compliance: np.ndarray | None = None) -> np.ndarray:
