@@ -80,21 +80,20 @@ def leg_weight_loads(machine: Machine, pose_m: np.ndarray) -> tuple[np.ndarray, 
     forces, lengths, e, q0 = _cardan_forces(machine, h, g)
     mass, lc, rod = machine.mass, machine.cylinder.length_m, machine.stem.length_m
     e_mod, spider = machine.material.youngs_modulus_pa, mass.cardan_spider_mass_kg
-    mu_cyl = (machine.cylinder_tube_mass_kg + mass.actuator_housing_mass_kg) / lc
-    mu_rod = mass.density_kg_per_m3 * machine.stem_section.area_m2
-    inner = lengths - rod  # the rod's inner end and the moving parts, s
+    mu_cyl, mu_rod = _line_masses(machine)
     cylinder = (mu_cyl, 0.0, lc)
     # the four pieces between the breaks 0, L_c, l and l - L_r on axis -1: cylinder (0, split), (split, L_c) and stem
     # (L_c, split'), (split', l); s (..., n, 4, 3) the Gauss nodes on each
     ends = lengths[..., 0]
-    split_c, split_s = np.clip(ends - rod, 0.0, lc), np.clip(ends - rod, lc, ends)
+    inner = ends - rod  # the rod's inner end and the moving parts, s
+    split_c, split_s = np.clip(inner, 0.0, lc), np.clip(inner, lc, ends)
     a = np.stack([np.zeros_like(ends), split_c, np.full_like(ends, lc), split_s], -1)
     b = np.stack([split_c, np.full_like(ends, lc), split_s, ends], -1)
     nodes, weights = _GAUSS
     s = ((a + b) / 2)[..., None] + ((b - a) / 2)[..., None] * nodes
     # a cylinder section carries the whole rod (it rides on the actuator) and the cylinder beyond s
     lower = np.where(_IN_CYLINDER[:, None], -np.inf, s)
-    at = (lengths[..., None], inner[..., None], q0[..., None])  # (..., n, 1, 1): broadcast over pieces and nodes
+    at = (lengths[..., None], inner[..., None, None], q0[..., None])  # (..., n, 1, 1): broadcast over pieces and nodes
     q = (_first_moment([cylinder], [], s, s)
          + _first_moment([(mu_rod, at[1], at[0])], [(mass.actuator_moving_mass_kg, at[1]), (spider, at[0])], s, lower))
     stiffness = e_mod * np.array([machine.cylinder_section.second_moment_m4] * 2
@@ -108,6 +107,13 @@ def leg_weight_loads(machine: Machine, pose_m: np.ndarray) -> tuple[np.ndarray, 
     return forces, moments
 
 
+def _line_masses(machine: Machine) -> tuple[float, float]:
+    """Mass per length (kg/m) of the cylinder (tube and housing over L_c) and of the stem rod."""
+    mass = machine.mass
+    return ((machine.cylinder_tube_mass_kg + mass.actuator_housing_mass_kg) / machine.cylinder.length_m,
+            mass.density_kg_per_m3 * machine.stem_section.area_m2)
+
+
 def _cardan_forces(machine: Machine, pose_m: np.ndarray, gravity_m_per_s2: np.ndarray
                    ) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray]:
     """The force (..., n, 3), N, each leg's weight puts on the plate at its plate cardan under the gravity vector
@@ -119,8 +125,7 @@ def _cardan_forces(machine: Machine, pose_m: np.ndarray, gravity_m_per_s2: np.nd
     lengths = np.sqrt((u * u).sum(-1))[..., None]  # (..., n, 1)
     e = u / lengths
     inner = lengths - rod  # the rod's inner end and the moving parts, s
-    mu_rod = mass.density_kg_per_m3 * machine.stem_section.area_m2
-    mu_cyl = (machine.cylinder_tube_mass_kg + mass.actuator_housing_mass_kg) / lc
+    mu_cyl, mu_rod = _line_masses(machine)
     q0 = (mu_cyl * lc * lc / 2
           + mu_rod * (lengths**2 - inner**2) / 2 + mass.actuator_moving_mass_kg * inner
           + mass.cardan_spider_mass_kg * lengths)
