@@ -177,7 +177,8 @@ def test_compiled_controller_is_figure_12(machine, rigid, limiter, compensation)
         deflection = np.zeros((3, 2))
         if compensation:
             assert np.abs(ctrl.deflection.pose_m - ctrl.estimate_m).max() <= DEFLECTION_UPDATE_M
-            deflection = ctrl.deflection.value.T  # the columns the kernel was given, (3, 2), at the estimate
+            cache = ctrl.deflection  # the rows the kernel was given, extrapolated to the estimate here in numpy
+            deflection = (cache.rows + cache.gradient @ (ctrl.estimate_m - cache.pose_m)).T  # (3, 2)
             exact = static_deflection_columns(machine, rigid, ctrl.estimate_m)  # G at the estimate
             # extrapolated over <= DEFLECTION_UPDATE_M (1.5e-4 of C) with G from the controller's gravity cache
             # (within GRAVITY_UPDATE_M: 0.06% of each column)

@@ -44,7 +44,7 @@ from pressfit.description.machine import Machine
 from pressfit.dynamics import kernels
 from pressfit.dynamics.actuators import singular_error
 from pressfit.dynamics.leg_weight import weight_force_n, weight_sag_m
-from pressfit.dynamics.multibody import PoseCache, RigidLegModel
+from pressfit.dynamics.multibody import PoseCache, RigidLegModel, path_nodes
 from pressfit.errors import PreloadError
 from pressfit.kinematics.profiles import quintic as _quintic
 from pressfit.mechanics.condensed import condensed_plate_compliance
@@ -75,13 +75,14 @@ def _offsets(machine: Machine) -> np.ndarray:
     return np.ascontiguousarray(machine.plate_offsets_m - machine.base_points_m, dtype=float)
 
 
-def gravity_feedforward_n(rigid: RigidLegModel, pose_m: np.ndarray) -> np.ndarray:
-    """G (3,), N: the Cartesian force the actuators must exert to hold the moving parts at a reachable ``pose_m``
-    (m) under the rigid-leg model's gravity: minus the machine's weight as a plate force in closed form
-    (:func:`pressfit.dynamics.leg_weight.weight_force_n`), which by virtual work is V^T g(q) of the model (module
+def gravity_feedforward_n(rigid: RigidLegModel, pose_m: np.ndarray, check_reach: bool = True) -> np.ndarray:
+    """G (..., 3), N: the Cartesian force the actuators must exert to hold the moving parts at reachable poses
+    ``pose_m`` (..., 3), m, under the rigid-leg model's gravity: minus the machine's weight as a plate force in closed
+    form (:func:`pressfit.dynamics.leg_weight.weight_force_n`), which by virtual work is V^T g(q) of the model (module
     doc; equal to Pinocchio's generalised gravity projected on the plate translations to 1e-15 relative,
-    tests/dynamics/test_leg_weight.py)."""
-    h = kinematics.require_reachable(rigid.machine, pose_m)
+    tests/dynamics/test_leg_weight.py). ``check_reach`` False: the poses are not checked (a running controller's
+    estimate, whose plate pose the run's guard checks)."""
+    h = kinematics.require_all_reachable(rigid.machine, pose_m) if check_reach else np.asarray(pose_m, dtype=float)
     return -weight_force_n(rigid.machine, h, np.asarray(rigid.model.gravity.linear))
 
 
@@ -111,38 +112,61 @@ def static_deflection_columns(machine: Machine, rigid: RigidLegModel, pose_m: np
     return np.column_stack([compliance[:3, 1], sag])
 
 
-def _linearised_columns(machine: Machine, pose_m: np.ndarray, gravity: bool) -> tuple[np.ndarray, np.ndarray]:
-    """The deflection rows (c0, c1) (2, 3) at ``pose_m`` (m) and their gradient (2, 3, 3) in the pose, per m
-    (central differences, one batched call of the closed forms at seven poses)."""
+def linearised_columns(machine: Machine, poses_m: np.ndarray, gravity: bool) -> tuple[np.ndarray, np.ndarray]:
+    """The deflection rows (c0, c1) (k, 2, 3) at poses (k, 3), m, and their gradient (k, 2, 3, 3) in the pose, per m
+    (central differences, one batched call of the closed forms at seven poses each)."""
     h = DEFLECTION_GRADIENT_STEP_M * np.eye(3)
-    poses = np.vstack([pose_m, pose_m + h, pose_m - h])
-    compliance = condensed_plate_compliance(machine.sensed_view, poses)
+    poses = np.asarray(poses_m, dtype=float)[:, None, :] + np.vstack([np.zeros((1, 3)), h, -h])  # (k, 7, 3)
+    flat = poses.reshape(-1, 3)
+    compliance = condensed_plate_compliance(machine.sensed_view, flat)
     c0 = compliance[:, :3, 1]
-    c1 = weight_sag_m(machine, poses, compliance) if gravity else np.zeros((7, 3))
-    rows = np.stack([c0, c1], axis=1)  # (7, 2, 3)
-    return rows[0], np.moveaxis((rows[1:4] - rows[4:7]) / (2.0 * DEFLECTION_GRADIENT_STEP_M), 0, -1)
+    c1 = weight_sag_m(machine, flat, compliance) if gravity else np.zeros_like(c0)
+    rows = np.stack([c0, c1], axis=1).reshape(len(poses), 7, 2, 3)
+    return rows[:, 0], np.moveaxis((rows[:, 1:4] - rows[:, 4:7]) / (2.0 * DEFLECTION_GRADIENT_STEP_M), 1, -1)
 
 
 @dataclass(kw_only=True)
 class DeflectionCache:
-    """The deflection columns as rows (c0, c1) (2, 3) at a pose (m) (:func:`static_deflection_columns`): computed
-    with their pose gradient where the pose moved more than ``DEFLECTION_UPDATE_M`` (infinity norm) from
-    ``pose_m``, and extrapolated to first order in between; ``value`` holds the rows at the last pose asked;
-    ``gravity`` False: no weight (c1 = 0)."""
+    """The deflection columns as rows (c0, c1) (2, 3) at a pose (m) (:func:`static_deflection_columns`): ``rows``
+    and their pose ``gradient`` (2, 3, 3), per m, computed at ``pose_m`` and refreshed (:meth:`refresh`) where the
+    pose moved more than ``DEFLECTION_UPDATE_M`` (infinity norm) from it; a call extrapolates them to first order
+    to the pose asked (:func:`pressfit.dynamics.kernels.extrapolated`, which the compiled controller and rigid step
+    call themselves) and leaves them in ``value``. ``gravity`` False: no weight (c1 = 0). ``nodes_m`` (k, 3): poses
+    where the rows and gradients are computed beforehand in one batched call (a planned path's,
+    :func:`pressfit.dynamics.multibody.path_nodes`): a stale cache takes the nearest node within
+    ``DEFLECTION_UPDATE_M`` (the same bound), and computes at the pose only where there is none."""
 
     machine: Machine
     gravity: bool = True
+    nodes_m: np.ndarray | None = None
     pose_m: np.ndarray | None = None
+    rows: np.ndarray | None = None
+    gradient: np.ndarray | None = None
     value: np.ndarray | None = None
-    _rows: np.ndarray | None = field(default=None, repr=False)  # (2, 3) at pose_m
-    _gradient: np.ndarray | None = field(default=None, repr=False)  # (2, 3, 3): d rows / d pose
+    _nodes: tuple[np.ndarray, np.ndarray] | None = field(default=None, repr=False)  # rows, gradients at nodes_m
+
+    def __post_init__(self) -> None:
+        if self.nodes_m is not None:
+            self.nodes_m = np.ascontiguousarray(self.nodes_m, dtype=float)
+            rows, gradients = linearised_columns(self.machine, self.nodes_m, self.gravity)
+            self._nodes = (rows, np.ascontiguousarray(gradients))
+
+    def refresh(self, pose_m: np.ndarray) -> None:
+        """Rows and gradient for ``pose_m`` (m): kept while it is within ``DEFLECTION_UPDATE_M`` of ``pose_m``."""
+        if self.pose_m is not None and not kernels.moved(pose_m, self.pose_m, DEFLECTION_UPDATE_M):
+            return
+        node = -1 if self.nodes_m is None else kernels.nearest(self.nodes_m, pose_m, DEFLECTION_UPDATE_M)
+        if node >= 0:
+            self.pose_m, self.rows, self.gradient = self.nodes_m[node], *(a[node] for a in self._nodes)
+        else:
+            self.pose_m = np.array(pose_m, dtype=float)
+            rows, gradient = linearised_columns(self.machine, self.pose_m[None], self.gravity)
+            self.rows, self.gradient = rows[0], np.ascontiguousarray(gradient[0])
 
     def __call__(self, pose_m: np.ndarray) -> np.ndarray:
-        if self.pose_m is None or kernels.moved(pose_m, self.pose_m, DEFLECTION_UPDATE_M):
-            self.pose_m = np.array(pose_m, dtype=float)
-            rows, gradient = _linearised_columns(self.machine, self.pose_m, self.gravity)
-            self._rows, self._gradient = rows, np.ascontiguousarray(gradient)
-        self.value = self._rows + self._gradient @ (pose_m - self.pose_m)
+        self.refresh(pose_m)
+        self.value = np.empty((2, 3))
+        kernels.extrapolated(np.asarray(pose_m, dtype=float), self.pose_m, self.rows, self.gradient, self.value)
         return self.value
 
 
@@ -225,6 +249,8 @@ class ForceLimitedController:
     limiter: bool
     estimate_m: np.ndarray
     preload_n: np.ndarray | None = None  # a (n - 3,), N; None: no preload
+    path_m: np.ndarray | None = None  # (k, 3), m: the planned path, whose feed-forward and deflection are computed
+    # beforehand at nodes GRAVITY_UPDATE_M and DEFLECTION_UPDATE_M apart (PoseCache, DeflectionCache); None: on demand
     integral_m_s: np.ndarray = field(default_factory=lambda: np.zeros(3))
     lift_m: float = 0.0
     clamped: bool = False
@@ -243,9 +269,11 @@ class ForceLimitedController:
 
     def __post_init__(self) -> None:
         self.force_limit_n = self.gains.force_limit_n
-        self.gravity = PoseCache(function=lambda pose: gravity_feedforward_n(self.rigid, pose),
+        self.gravity = PoseCache(function=lambda pose: gravity_feedforward_n(self.rigid, pose, check_reach=False),
                                  tolerance_m=GRAVITY_UPDATE_M)
-        self.deflection = DeflectionCache(machine=self.machine, gravity=_gravity_on(self.rigid))
+        self.deflection = DeflectionCache(machine=self.machine, gravity=_gravity_on(self.rigid),
+                                          nodes_m=None if self.path_m is None else path_nodes(self.path_m,
+                                                                                               DEFLECTION_UPDATE_M))
         self.estimate_m = np.array(self.estimate_m, dtype=float)
         self.offsets_m = _offsets(self.machine)
         legs = len(self.offsets_m)
@@ -283,17 +311,19 @@ class ForceLimitedController:
         if self.gains.gravity_compensation and gravity.value is None:
             gravity(self.estimate_m)
         if self.gains.deflection_compensation:
-            deflection(self.estimate_m)  # extrapolated to the estimate (refreshed beyond DEFLECTION_UPDATE_M)
+            deflection.refresh(self.estimate_m)  # extrapolated to the estimate by the kernel
         while True:
             status, self.lift_m, self.clamped, sigma = kernels.control(
                 self._params, self.estimate_m, self.units, rates_m_per_s, reference[0], reference[1],
                 float(contact_force_n), float(dt_s), self.integral_m_s, float(self.lift_m),
-                *_held(gravity, _ZERO3), *_held(deflection, _ZERO23), self.pinv, self.null, self._force,
-                self.tension_n, self.preload_n)
+                *((gravity.pose_m, gravity.value) if gravity.value is not None else (_ZERO3, _ZERO3)),
+                *((deflection.pose_m, deflection.rows, deflection.gradient) if deflection.rows is not None else
+                  (_ZERO3, _ZERO23, _ZERO233)),
+                self.pinv, self.null, self._force, self.tension_n, self.preload_n)
             if status == 1:  # the estimate moved past GRAVITY_UPDATE_M: refresh the feed-forward
                 gravity(self.estimate_m)
             elif status == 3:  # past DEFLECTION_UPDATE_M: refresh the static deflection
-                deflection(self.estimate_m)
+                deflection.refresh(self.estimate_m)
             else:
                 break
         if status == 2:
@@ -301,11 +331,6 @@ class ForceLimitedController:
         return self._force.copy()
 
 
-def _held(cache: PoseCache | DeflectionCache, empty: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
-    """A cache's pose and value as the kernel takes them (``empty`` for both before its first value: unused)."""
-    return (cache.pose_m, cache.value) if cache.value is not None else (_ZERO3, empty)
-
-
 _PARAMS = (kernels.KP, kernels.KD, kernels.KI, kernels.FORCE_LIMIT, kernels.BACKOFF, kernels.LIMITER, kernels.GRAVITY,
            kernels.GRAVITY_TOL, kernels.DEFLECTION, kernels.DEFLECTION_TOL)
-_ZERO3, _ZERO23 = np.zeros(3), np.zeros((2, 3))
+_ZERO3, _ZERO23, _ZERO233 = np.zeros(3), np.zeros((2, 3)), np.zeros((2, 3, 3))

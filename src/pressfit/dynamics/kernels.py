@@ -11,12 +11,14 @@ quantity; the Python functions of :mod:`pressfit.dynamics.control`, :mod:`pressf
   N = E^T E = A A^T, and A's smallest singular value sqrt(lambda_min(N)) (the closed-form eigenvalues of a
   symmetric 3 x 3 matrix); :func:`internal_forces`: the preload amplitudes a set of tensions carries;
 * :func:`control`: Figure 12's PID with the force limiter (:mod:`pressfit.dynamics.control`);
-* :func:`moved`: the pose caches' test (:class:`pressfit.dynamics.multibody.PoseCache`);
+* :func:`moved`, :func:`nearest`: the pose caches' test and their search of precomputed nodes
+  (:class:`pressfit.dynamics.multibody.PoseCache`);
 * :func:`first_order`: the ideal force drive's step (:mod:`pressfit.dynamics.actuators`);
 * :func:`contact_law`, :func:`solve_contact`: the contact law and the bisection of the series compliance
   (:mod:`pressfit.dynamics.contact`);
 * :func:`axial_forces`: the legs' axial forces from the closure forces and the plate cardan angles;
-* :func:`rigid_post_step`: after one rigid-leg step, all of the above that the step's row needs.
+* :func:`rigid_post_step`: after one rigid-leg step, all of the above that the step's row needs;
+  :func:`within_limits`: its joints against Table 3's limits, every step (the run's guard);
 * :func:`hydraulic_substeps`: the servo-valve cylinders' pressure substeps (:mod:`pressfit.dynamics.drives.hydraulic`),
   called in every Newton iteration of a flexible step with a hydraulic drive;
 * :func:`play_iteration`: one iteration of the cardan plays' safeguarded Newton (:mod:`pressfit.dynamics.play`), on
@@ -173,14 +175,59 @@ def moved(pose, reference, tolerance):
 
 
 @compiled
+def nearest(nodes, pose, tolerance):
+    """The index of the row of ``nodes`` (k, 3) nearest to ``pose`` (3,) in the infinity norm if it is within
+    ``tolerance`` of it (same units), else -1."""
+    best, index = tolerance, -1
+    for i in range(nodes.shape[0]):
+        d = max(abs(nodes[i, 0] - pose[0]), abs(nodes[i, 1] - pose[1]), abs(nodes[i, 2] - pose[2]))
+        if d <= best:
+            best, index = d, i
+    return index
+
+
+# within_limits' ``limits``: Table 3's (leg length m, alpha rad, beta rad), each min then max
+LENGTH_MIN, LENGTH_MAX, ALPHA_MIN, ALPHA_MAX, BETA_MIN, BETA_MAX = range(6)
+
+
+@compiled
+def within_limits(q, actuator_q, sigma, limits):
+    """Whether the rigid-leg configuration ``q`` (:class:`pressfit.dynamics.multibody.RigidLegModel`: per leg
+    alpha, sigma beta, l at actuator_q - 2, - 1 and actuator_q, sigma (n,) the b-revolutes' signs) has every leg's
+    length and base cardan angles within ``limits`` and the plate above the base (y_h > 0): Table 3's check on the
+    joints the model integrates, which :func:`pressfit.kinematics.violations` makes on the plate pose's inverse
+    kinematics (the two agree to the closures' drift)."""
+    for i in range(actuator_q.shape[0]):
+        j = actuator_q[i]
+        length, alpha, beta = q[j], q[j - 2], sigma[i] * q[j - 1]
+        if not (limits[LENGTH_MIN] <= length <= limits[LENGTH_MAX] and limits[ALPHA_MIN] <= alpha <= limits[ALPHA_MAX]
+                and limits[BETA_MIN] <= beta <= limits[BETA_MAX]):
+            return False
+    return q[1] > 0.0
+
+
+@compiled
+def extrapolated(pose, at, rows, gradient, out):
+    """``rows`` (r, 3) computed at the pose ``at`` (3,), m, extrapolated to first order to ``pose`` (3,) with their
+    ``gradient`` (r, 3, 3), per m, into ``out`` (r, 3): the deflection caches' columns
+    (:class:`pressfit.dynamics.control.DeflectionCache`)."""
+    d0, d1, d2 = pose[0] - at[0], pose[1] - at[1], pose[2] - at[2]
+    for a in range(rows.shape[0]):
+        for j in range(3):
+            out[a, j] = rows[a, j] + (gradient[a, j, 0] * d0 + gradient[a, j, 1] * d1 + gradient[a, j, 2] * d2)
+
+
+@compiled
 def control(params, estimate, units, rates, target, target_velocity, contact_force, dt, integral, lift,
-            gravity_pose, gravity, deflection_pose, deflection, pinv, null, force, tension, preload):
+            gravity_pose, gravity, deflection_pose, deflection_rows, deflection_gradient, pinv, null, force, tension,
+            preload):
     """Figure 12's loop at the estimate (m) with leg unit vectors ``units`` (:mod:`pressfit.dynamics.control`):
     fills ``pinv``, ``null`` (:func:`distribution`), the Cartesian force W (3,), N, into ``force`` and the tensions
     -A^+ W + V a (n,), N, into ``tension`` (a = ``preload`` (n - 3,), N: a4 v_p on the 4-UPU); updates
     ``integral`` (m s) in place. With params[DEFLECTION] the error is taken against the estimate plus the
-    predicted static deflection ``deflection`` (2, 3): row 0 per
-    newton of ``contact_force`` (m/N), row 1 the weight's sag (m), computed at ``deflection_pose``. Returns
+    predicted static deflection (2, 3): row 0 per newton of ``contact_force`` (m/N), row 1 the weight's sag (m),
+    ``deflection_rows`` computed at ``deflection_pose`` and extrapolated to the estimate with their
+    ``deflection_gradient`` (:func:`extrapolated`). Returns
     (status, lift m, clamped, smallest singular value of A): status 1 when the gravity feed-forward ``gravity``
     (computed at ``gravity_pose``) is stale (the estimate moved more than params[GRAVITY_TOL] from it; nothing else
     is done, the caller refreshes it and calls again), 3 when the deflection is stale (params[DEFLECTION_TOL]:
@@ -193,6 +240,9 @@ def control(params, estimate, units, rates, target, target_velocity, contact_for
     sigma = distribution(units, pinv, null)
     if sigma < SINGULAR_SIGMA:
         return 2, lift, False, sigma
+    deflection = np.zeros((2, 3))
+    if compensate:
+        extrapolated(estimate, deflection_pose, deflection_rows, deflection_gradient, deflection)
     kp, kd, ki, limit = params[KP], params[KD], params[KI], params[FORCE_LIMIT]
     limiter = params[LIMITER] != 0.0
     error = np.empty(3)
@@ -369,8 +419,8 @@ def rigid_pre_step(row, t, reference, lift, estimate, command, tension, null, ta
 
 @compiled
 def rigid_post_step(row, previous_q, q, v, closure_forces, actuator_q, actuator_v, contact, previous_depth, dt,
-                    column, sag, loads, disp, offsets, estimate, units, iterations, kinematic_iterations, tau, layout,
-                    lengths, rates):
+                    deflection_pose, deflection_rows, deflection_gradient, column_scale, loads, disp, offsets, estimate,
+                    units, iterations, kinematic_iterations, tau, layout, lengths, rates):
     """After one rigid-leg step from ``previous_q`` to (q, v): returns (False, ...) and does nothing else if the
     state is not finite. Else fills the step's row at the columns ``layout`` names (ROW_*: the caller fills the
     rest): the rigid pose and the tool tip (rigid + deflection) (m), the contact force (N) and interference (m) at
@@ -381,15 +431,21 @@ def rigid_post_step(row, previous_q, q, v, closure_forces, actuator_q, actuator_
     place, with its unit vectors in ``units``, then continued to ``kinematic_iterations`` in all), the lengths
     (m) and rates (m/s), also into ``lengths`` and ``rates``; and the contact force for the next step into
     ``tau`` (the plate's local frame, R^T (0, F, 0)). Returns (True, F, interference, the estimate's largest
-    length residual m)."""
+    length residual m). The tool's deflection at the new rigid pose: the rows (c0 m/N, c1 m) ``deflection_rows``
+    computed at ``deflection_pose`` extrapolated there (:func:`extrapolated`), c0 times ``column_scale`` (0: the
+    contact's compliance is the load-deflection table ``loads``, ``disp`` instead)."""
     for x in q:
         if not math.isfinite(x):
             return False, 0.0, 0.0, 0.0
     for x in v:
         if not math.isfinite(x):
             return False, 0.0, 0.0, 0.0
-    u = np.empty(3)
-    force, depth = solve_contact(contact, contact[BOARD] - q[1], previous_depth, dt, column, sag, loads, disp, u)
+    u, deflection = np.empty(3), np.empty((2, 3))
+    extrapolated(q, deflection_pose, deflection_rows, deflection_gradient, deflection)
+    for k in range(3):
+        deflection[0, k] *= column_scale
+    force, depth = solve_contact(contact, contact[BOARD] - q[1], previous_depth, dt, deflection[0], deflection[1],
+                                 loads, disp, u)
     contact_advance(contact, depth)
     for k in range(3):
         row[layout[ROW_PLATE] + k] = q[k]

@@ -48,7 +48,7 @@ import numpy as np
 
 from pressfit.description.machine import Machine
 from pressfit.dynamics.inertia import GRAVITY_M_PER_S2
-from pressfit.kinematics import is_reachable, leg_vectors, require_reachable
+from pressfit.kinematics import leg_vectors, require_all_reachable
 from pressfit.mechanics.condensed import condensed_plate_compliance, rotational_compliances
 from pressfit.spatial import cross
 
@@ -75,7 +75,7 @@ def leg_weight_loads(machine: Machine, pose_m: np.ndarray) -> tuple[np.ndarray, 
     masses along s (``[mass]``) are the cylinder tube and housing over [0, L_c], the rod over [l - L_r, l], the
     moving parts at l - L_r and the spiders at 0 and l; the integral of m(s) / EI(s) is 3-point Gauss on each
     piece between the breaks 0, L_c, l and l - L_r (a piece of zero length adds nothing)."""
-    h = _reachable(machine, pose_m)
+    h = require_all_reachable(machine, pose_m)
     g = np.array([0.0, -GRAVITY_M_PER_S2, 0.0])
     forces, lengths, e, q0 = _cardan_forces(machine, h, g)
     mass, lc, rod = machine.mass, machine.cylinder.length_m, machine.stem.length_m
@@ -144,18 +144,6 @@ def weight_force_n(machine: Machine, pose_m: np.ndarray, gravity_m_per_s2: np.nd
     g = np.array([0.0, -GRAVITY_M_PER_S2, 0.0]) if gravity_m_per_s2 is None else np.asarray(gravity_m_per_s2, float)
     forces = _cardan_forces(machine, np.asarray(pose_m, dtype=float), g)[0]
     return (machine.mass.plate_mass_kg + machine.mass.tool_mass_kg) * g + forces.sum(-2)
-
-
-def _reachable(machine: Machine, pose_m: np.ndarray) -> np.ndarray:
-    """The poses (..., 3) as floats, or the first unreachable one refused (UnreachablePoseError naming leg and
-    limit)."""
-    h = np.asarray(pose_m, dtype=float)
-    flat = h.reshape(-1, 3)
-    ok = np.all(np.isfinite(flat), axis=-1)
-    ok[ok] = is_reachable(machine, flat[ok])
-    if not np.all(ok):
-        require_reachable(machine, flat[np.argmin(ok)])
-    return h
 
 
 def weight_wrench_n(machine: Machine, pose_m: np.ndarray) -> np.ndarray:

@@ -60,17 +60,36 @@ SELF_STRESS_UPDATE_M = 1e-3  # the closures' self-stress direction is recomputed
 @dataclass(kw_only=True)
 class PoseCache:
     """``function(pose)`` recomputed only when the pose (m) moved more than ``tolerance_m`` from the pose of
-    the cached value (infinity norm); the caller states the error bound (|d function / d pose| tolerance)."""
+    the cached value (infinity norm); the caller states the error bound (|d function / d pose| tolerance).
+    ``nodes_m`` (k, 3) and ``node_values`` (k, ...): the function's values at those poses computed beforehand (a
+    planned path's, in one batched call: :func:`path_nodes`); a stale cache takes the nearest node within
+    ``tolerance_m`` of the pose (the same bound) and calls the function only where there is none."""
 
     function: Callable[[np.ndarray], np.ndarray]
     tolerance_m: float
     pose_m: np.ndarray | None = None
     value: np.ndarray | None = None
+    nodes_m: np.ndarray | None = None
+    node_values: np.ndarray | None = None
 
     def __call__(self, pose_m: np.ndarray) -> np.ndarray:
         if self.value is None or kernels.moved(pose_m, self.pose_m, self.tolerance_m):
-            self.pose_m, self.value = np.array(pose_m, dtype=float), self.function(pose_m)
+            node = -1 if self.nodes_m is None else kernels.nearest(self.nodes_m, pose_m, self.tolerance_m)
+            if node >= 0:
+                self.pose_m, self.value = self.nodes_m[node], self.node_values[node]
+            else:
+                self.pose_m, self.value = np.array(pose_m, dtype=float), self.function(pose_m)
         return self.value
+
+
+def path_nodes(path_m: np.ndarray, spacing_m: float) -> np.ndarray:
+    """Poses (k, 3), m, along a sampled path (n, 3), m: every s-th sample and the last, s the most samples that
+    span at most ``spacing_m`` (infinity norm) at the path's largest sample step, so a pose on the path is within
+    half the spacing of one (the caches' nodes, :class:`PoseCache`)."""
+    path = np.asarray(path_m, dtype=float)
+    step = float(np.abs(np.diff(path, axis=0)).max(initial=0.0))
+    stride = max(1, int(spacing_m // step)) if step > 0.0 else len(path)
+    return np.ascontiguousarray(np.vstack([path[::stride], path[-1:]]))
 
 
 @dataclass(kw_only=True)
@@ -151,9 +170,9 @@ class RigidLegModel:
         return out
 
     def energy_j(self, q: np.ndarray, v: np.ndarray) -> tuple[float, float]:
-        """Kinetic and gravitational potential energy (J) at (q, v)."""
-        return (float(pin.computeKineticEnergy(self.model, self.data, q, v)),
-                float(pin.computePotentialEnergy(self.model, self.data, q)))
+        """Kinetic and gravitational potential energy (J) at (q, v) (one Pinocchio pass for both)."""
+        pin.computeMechanicalEnergy(self.model, self.data, q, v)
+        return float(self.data.kinetic_energy), float(self.data.potential_energy)
 
     def closure_jacobian(self, q: np.ndarray, scratch: bool = False) -> np.ndarray:
         """The (6n, nv) Jacobian of the n loop closures at q (``scratch``: in fresh Pinocchio datas, leaving

@@ -145,9 +145,9 @@ class Guard:
         if not ok:
             raise self.diverged(t, "the state is not finite")
 
-    def pose(self, k: int, t: float, pose: np.ndarray) -> None:
-        """The plate (or tool) pose (m) within the joint limits, every ``REACH_CHECK_STEPS`` steps and at the last."""
-        bad = [] if k % REACH_CHECK_STEPS and k != self.plan.steps - 1 else kinematics.violations(self.machine, pose) \
+    def pose(self, k: int, t: float, pose: np.ndarray, every: int = REACH_CHECK_STEPS) -> None:
+        """The plate (or tool) pose (m) within the joint limits, every ``every`` steps and at the last."""
+        bad = [] if k % every and k != self.plan.steps - 1 else kinematics.violations(self.machine, pose) \
             if pose[1] > 0 else [(0, "y_h [m]", pose[1], "minimum 0")]
         if bad:
             raise self.diverged(t, f"the plate left the reachable set at ({', '.join(f'{c:.4g}' for c in pose)})"

@@ -19,6 +19,7 @@ from pressfit.kinematics.closed_form import (
     preload_vector,
     pseudo_inverse,
     reference_pose_m,
+    require_all_reachable,
     require_reachable,
     static_matrix,
     unreachable_reason,
@@ -28,4 +29,5 @@ from pressfit.kinematics.closed_form import (
 __all__ = ["Indices", "LegKinematics", "actuator_forces_min_norm", "concurrency_point", "dexterity",
            "force_indices", "indices", "inverse_kinematics", "is_reachable", "jacobian", "leg_frames",
            "leg_vectors", "limit_margins", "pose_report", "preload_basis", "preload_vector", "pseudo_inverse",
-           "reference_pose_m", "require_reachable", "static_matrix", "unreachable_reason", "violations"]
+           "reference_pose_m", "require_all_reachable", "require_reachable", "static_matrix", "unreachable_reason",
+           "violations"]

@@ -142,6 +142,18 @@ def require_reachable(machine: Machine, pose_m: np.ndarray, ik: LegKinematics | 
     return h
 
 
+def require_all_reachable(machine: Machine, poses_m: np.ndarray) -> np.ndarray:
+    """The poses (..., 3) as floats, or the first unreachable one refused as :func:`require_reachable` refuses it
+    (:class:`UnreachablePoseError` naming leg and limit)."""
+    h = np.asarray(poses_m, dtype=float)
+    flat = h.reshape(-1, 3)
+    ok = np.all(np.isfinite(flat), axis=-1)
+    ok[ok] = is_reachable(machine, flat[ok])
+    if not np.all(ok):
+        require_reachable(machine, flat[np.argmin(ok)])
+    return h
+
+
 def static_matrix(machine: Machine, pose_m: np.ndarray) -> np.ndarray:
     """Equation 5's A, shape (..., 3, n): columns are the leg unit vectors e_i (A = J^T).
 

@@ -15,8 +15,6 @@ row's kinematic pose) and the row; the energies (``ENERGY_COLUMNS``) from the ri
 
 from __future__ import annotations
 
-from collections.abc import Callable
-
 import numpy as np
 import pinocchio as pin
 
@@ -25,7 +23,7 @@ from pressfit.description.machine import Machine
 from pressfit.dynamics import drives as drive_kinds
 from pressfit.dynamics import kernels
 from pressfit.dynamics.contact import NO_TABLE, contact_force_n, contact_parameters
-from pressfit.dynamics.control import ForceLimitedController, PoseCache
+from pressfit.dynamics.control import ForceLimitedController
 from pressfit.dynamics.machine.base import DriveInput, Energy, MachineState, SectionLoads
 from pressfit.dynamics.multibody import RigidLegModel
 from pressfit.dynamics.series import (
@@ -88,19 +86,18 @@ class RigidMachine:
         return Energy(kinetic_j=kinetic, elastic_j=0.0, potential_j=potential)
 
 
-def _deflection(machine: Machine, case: Case, sim: Simulation, pin_pose: np.ndarray, columns: PoseCache
-                ) -> Callable[[np.ndarray], tuple[np.ndarray, np.ndarray, tuple[np.ndarray, np.ndarray]]]:
-    """pose -> the tool's quasi-static deflection at the rigid pose as
-    :func:`pressfit.dynamics.kernels.solve_contact` takes it: u = column F + sag under the contact force F (N, +y)
-    and the moving parts' weight (column m/N and sag m, (3,) each:
-    :func:`pressfit.dynamics.control.static_deflection_columns`), or, with ``clearance``, sag + the clearance
-    model's load-deflection table at the pin (loads (n,), N; displacements (n, 3), m) for the contact force, of the
-    machine as its sensors see it (``Machine.sensed_view``: a hydraulic oil column rigid).
-    ``columns``: the controller's cache of the columns (``ForceLimitedController.deflection``, rows c0, c1,
-    extrapolated to first order from the pose where they were last computed, within ``DEFLECTION_UPDATE_M``),
-    shared: the estimate and the rigid pose differ by the closure drift, so one update serves both."""
+def _hidden_compliance(machine: Machine, case: Case, sim: Simulation, pin_pose: np.ndarray
+                       ) -> tuple[float, tuple[np.ndarray, np.ndarray]]:
+    """How the tool's quasi-static deflection at the rigid pose enters
+    :func:`pressfit.dynamics.kernels.solve_contact`: u = c0 F + c1 under the contact force F (N, +y) and the moving
+    parts' weight (c0 m/N and the sag c1 m, the rows of the controller's cache ``ForceLimitedController.deflection``
+    at the rigid pose, :func:`pressfit.dynamics.control.static_deflection_columns`; the estimate and the rigid pose
+    differ by the closure drift, so one refresh serves both): (1, no table); or, with ``clearance``, c1 + the
+    clearance model's load-deflection table at the pin (loads (n,), N; displacements (n, 3), m) for the contact
+    force, of the machine as its sensors see it (``Machine.sensed_view``: a hydraulic oil column rigid): (0, the
+    table)."""
     if not sim.clearance:
-        return lambda pose: (*columns(pose), NO_TABLE)
+        return 1.0, NO_TABLE
     params = contact_parameters(sim.contact)
     law_force = (contact_force_n(params, sim.interference_m) if params[kernels.LAW] == kernels.TABLE
                  else sim.contact.stiffness_n_per_m * sim.interference_m)
@@ -108,10 +105,8 @@ def _deflection(machine: Machine, case: Case, sim: Simulation, pin_pose: np.ndar
     curve = load_deflection(machine.sensed_view, pin_pose, [0.0, 1.0, 0.0], np.linspace(0.0, limit, CURVE_POINTS),
                             clearance_from_case(case, machine), ActuatorPreload.from_case(case.preload).a4,
                             unload=False)
-    table = (np.ascontiguousarray(curve.loads_n, dtype=float),
-             np.ascontiguousarray(curve.loading.displacement_m - curve.loading.displacement_m[0], dtype=float))
-    zero = np.zeros(3)
-    return lambda pose: (zero, columns(pose)[1], table)
+    return 0.0, (np.ascontiguousarray(curve.loads_n, dtype=float),
+                 np.ascontiguousarray(curve.loading.displacement_m - curve.loading.displacement_m[0], dtype=float))
 
 
 class RigidScenario:
@@ -132,8 +127,9 @@ class RigidScenario:
         self.q, self.v = rigid.reference_q.copy(), np.zeros(rigid.model.nv)
         self.ctrl = ctrl = ForceLimitedController(machine=machine, rigid=rigid, gains=sim.controller, limiter=limiter,
                                                   estimate_m=np.asarray(sim.start_m, float).copy(),
-                                                  preload_n=preload_amplitudes_n(case, machine))
-        self.deflection = _deflection(machine, case, sim, plan.trajectory.waypoints_m[2], ctrl.deflection)
+                                                  preload_n=preload_amplitudes_n(case, machine),
+                                                  path_m=plan.path_m)
+        self.column_scale, self.table = _hidden_compliance(machine, case, sim, plan.trajectory.waypoints_m[2])
         act_q, act_v = rigid.actuator_q, rigid.actuator_v
         ctrl.command(self.q[act_q], self.v[act_v], plan.trajectory.at(0.0), 0.0, 0.0)
         self.drive = drives.initial_state(ctrl.tension_n.copy(), self.q[act_q])
@@ -148,10 +144,13 @@ class RigidScenario:
         self.drift_column = columns.index("closure_drift_m")
         self.energy = slice(columns.index(ENERGY_COLUMNS[0]), columns.index(ENERGY_COLUMNS[-1]) + 1)
         self.series = Series(machine, plan.steps, sim.start_m)
+        lim = machine.limits
+        self.limits = np.array([lim.leg_length_min_m, lim.leg_length_max_m, lim.alpha_min_rad, lim.alpha_max_rad,
+                                lim.beta_min_rad, lim.beta_max_rad])  # kernels.within_limits'
         self.tau, self.contact_tau, self.u = np.zeros(rigid.model.nv), np.zeros(3), np.empty(3)
-        column, sag, table = self.deflection(self.q[0:3])
+        column, sag = self.column_scale * ctrl.deflection(self.q[0:3])[0], ctrl.deflection.value[1]
         self.force, self.depth = kernels.solve_contact(self.params, sim.contact.board_height_m - self.q[1], 0.0,
-                                                       self.dt, column, sag, *table, self.u)
+                                                       self.dt, column, sag, *self.table, self.u)
         self.contact_tau[:] = pin.Quaternion(self.q[3:7]).matrix().T @ np.array([0.0, self.force, 0.0])  # local frame
         self.lengths, self.rates = self.q[act_q], self.v[act_v]
 
@@ -166,16 +165,19 @@ class RigidScenario:
                                self.tau, rigid.actuator_v, self.contact_tau, self.pre)
         previous = self.q
         self.q, self.v = q, v = rigid.step(previous, self.v, self.tau, dt)
-        column, sag, table = self.deflection(q[0:3])
+        deflection = ctrl.deflection
+        deflection.refresh(q[0:3])
         finite, self.force, self.depth, ctrl.estimate_residual_m = kernels.rigid_post_step(
             row, previous, q, v, rigid.data.lambda_c, rigid.actuator_q, rigid.actuator_v, self.params, self.depth,
-            dt, column, sag, *table, ctrl.offsets_m, ctrl.estimate_m, ctrl.units, ctrl.gains.estimator_iterations,
-            KINEMATIC_ITERATIONS, self.contact_tau, self.post, self.lengths, self.rates)
+            dt, deflection.pose_m, deflection.rows, deflection.gradient, self.column_scale, *self.table, ctrl.offsets_m,
+            ctrl.estimate_m, ctrl.units, ctrl.gains.estimator_iterations, KINEMATIC_ITERATIONS, self.contact_tau,
+            self.post, self.lengths, self.rates)
         guard.finite(finite, t)
         guard.depth(self.depth, t)
         row[self.drift_column] = drift = rigid.closure_error_m()
         guard.drift(drift, t)
-        guard.pose(k, t, q[0:3])
+        if not kernels.within_limits(q, rigid.actuator_q, rigid.sigma, self.limits):  # its joints, every step
+            guard.pose(k, t, q[0:3], every=1)  # the plate pose's limits, named
         row[self.energy] = (*rigid.energy_j(q, v), 0.0, 0.0, 0.0, 0.0, 0.0, 0.0)
 
     def rows(self) -> tuple[np.ndarray, None]:
