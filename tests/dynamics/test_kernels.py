@@ -202,3 +202,68 @@ def test_first_order_drive_step_is_the_closed_form():
     kernels.first_order(force, command, 300.0, math.exp(-0.25), out)
     target = np.array([300.0, -20.0, -300.0, 100.0])
     assert np.array_equal(out, target + (force - target) * math.exp(-0.25))
+
+
+def test_nearest_node_is_numpys_argmin_of_the_infinity_norm_within_the_tolerance():
+    """``nearest``: the row of the nodes nearest to the pose in the infinity norm (numpy's argmin), -1 when even that
+    one is beyond the tolerance; a node at 0.999 of the tolerance is taken, one at 1.001 is not."""
+    nodes = RNG.uniform(-0.1, 0.1, (200, 3))
+    for pose in RNG.uniform(-0.12, 0.12, (50, 3)):
+        distances = np.abs(nodes - pose).max(axis=1)
+        best = int(np.argmin(distances))
+        assert kernels.nearest(nodes, pose, 1.0) == best
+        assert kernels.nearest(nodes, pose, 0.999 * distances[best]) == -1
+        assert kernels.nearest(nodes, pose, 1.001 * distances[best]) == best
+
+
+def test_extrapolated_rows_are_the_first_order_taylor_series():
+    """``extrapolated``: rows + gradient (pose - at), numpy's matmul, to 1e-15 relative."""
+    rows, gradient = RNG.normal(size=(2, 3)), RNG.normal(size=(2, 3, 3))
+    at, pose, out = RNG.normal(size=3), RNG.normal(size=3), np.empty((2, 3))
+    kernels.extrapolated(pose, at, rows, gradient, out)
+    assert np.abs(out - (rows + gradient @ (pose - at))).max() < 1e-15 * np.abs(out).max() * 10
+
+
+def _configuration(rigid, pose, monkeypatch):
+    """The rigid model's closed configuration at any pose, inside the joint limits or not (configuration_at's own
+    reach check lifted: the loops close geometrically beyond the limits too)."""
+    with monkeypatch.context() as m:
+        m.setattr("pressfit.dynamics.multibody.kinematics.require_reachable", lambda machine, h, ik=None: h)
+        return rigid.configuration_at(pose)
+
+
+def _limits(machine):
+    lim = machine.limits
+    return np.array([lim.leg_length_min_m, lim.leg_length_max_m, lim.alpha_min_rad, lim.alpha_max_rad,
+                     lim.beta_min_rad, lim.beta_max_rad])
+
+
+def test_within_limits_on_the_joints_is_the_inverse_kinematics_check(machine, monkeypatch):
+    """The run's reach guard on the rigid configuration's joints (``within_limits``) against Table 3's check on the
+    plate pose's inverse kinematics (``kinematics.violations``): the same verdict at 300 poses around and beyond the
+    workspace, and at poses just (1e-7 m) either side of the limit a leg meets first on lines through the workspace
+    (both verdicts flip there), on the shipped machine (its lengths and alpha bind first) and on one with
+    beta within +-0.25 rad (beta binds first, both signs)."""
+    narrow = machine.with_overrides({"limits": {"beta_min_rad": -0.25, "beta_max_rad": 0.25}})
+    crossings = set()
+    for m in (machine, narrow):
+        rigid, limits = rigid_leg_model(m, np.array([0.0, 0.62, 0.0])), _limits(m)
+        for pose in RNG.uniform([-0.35, 0.35, -0.35], [0.35, 0.85, 0.35], (150, 3)):
+            q = _configuration(rigid, pose, monkeypatch)
+            assert kernels.within_limits(q, rigid.actuator_q, rigid.sigma, limits) == (not kinematics.violations(m, pose))
+        for direction in ([0.0, 1.0, 0.0], [0.0, -1.0, 0.0], [1.0, -0.3, 1.0], [1.0, 0.0, 0.0], [-1.0, 0.0, 0.0],
+                          [0.0, 0.0, 1.0]):
+            inside, step = np.array([0.0, 0.62, 0.0]), np.asarray(direction) / np.linalg.norm(direction)
+            lo, hi = 0.0, 1.0
+            for _ in range(60):  # the distance along the line where the pose leaves the limits
+                mid = 0.5 * (lo + hi)
+                lo, hi = (mid, hi) if not kinematics.violations(m, inside + mid * step) else (lo, mid)
+            for offset, ok in ((-1e-7, True), (1e-7, False)):
+                pose = inside + (hi + offset) * step
+                assert (not kinematics.violations(m, pose)) == ok
+                q = _configuration(rigid, pose, monkeypatch)
+                assert kernels.within_limits(q, rigid.actuator_q, rigid.sigma, limits) == ok, (direction, offset)
+            _, name, _, bound = kinematics.violations(m, inside + (hi + 1e-7) * step)[0]
+            crossings.add((name, bound.split()[0]))
+    assert {name for name, _ in crossings} == {"leg length l [m]", "alpha [rad]", "beta [rad]"}
+    assert {("beta [rad]", "minimum"), ("beta [rad]", "maximum")} <= crossings

@@ -153,10 +153,19 @@ def test_the_weight_wrench_force_is_pinocchios_generalised_gravity(legs, request
 
 
 def test_the_feed_forward_at_an_unreachable_pose_is_refused_naming_the_leg(machine):
-    """The controller's G at a pose beyond the joint limits is refused (UnreachablePoseError), not extrapolated."""
+    """The controller's G at a pose beyond the joint limits is refused (UnreachablePoseError), not extrapolated,
+    alone or in a batch (whose G are the poses' one by one); unchecked (a running controller's estimate, which the
+    run's guard checks on the plate) it is the closed form there."""
     rigid = rigid_leg_model(machine, POSES[0])
     with pytest.raises(UnreachablePoseError, match="leg"):
         gravity_feedforward_n(rigid, np.array([0.0, 0.25, 0.0]))
+    poses = np.array([p for p in POSES if is_reachable(machine, p)][:3])
+    batch = gravity_feedforward_n(rigid, poses)
+    assert all(np.array_equal(batch[k], gravity_feedforward_n(rigid, p)) for k, p in enumerate(poses))
+    with pytest.raises(UnreachablePoseError, match=r"leg \d: leg length l \[m\]"):
+        gravity_feedforward_n(rigid, np.vstack([poses, [[0.0, 0.25, 0.0]]]))
+    beyond = gravity_feedforward_n(rigid, np.array([0.0, 0.25, 0.0]), check_reach=False)
+    assert np.array_equal(beyond, -weight_force_n(machine, np.array([0.0, 0.25, 0.0])))
 
 
 def test_the_stem_is_one_rod_of_constant_mass_whose_centre_moves_with_the_extension(machine):

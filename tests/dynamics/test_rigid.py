@@ -3,6 +3,7 @@
 from __future__ import annotations
 
 import numpy as np
+import pytest
 
 from pressfit.description.cases import load_case
 from pressfit.dynamics.machine.rigid import _hidden_compliance
@@ -35,3 +36,43 @@ def test_the_clearance_table_of_a_hydraulic_machine_leaves_out_the_oil_column():
     assert np.abs(table - stiff).max() < 1e-5 * scale
     full = curve(machine)
     assert full[-1, 1] > 1.3 * stiff[-1, 1]
+
+
+def test_a_plate_that_leaves_the_joint_limits_stops_the_run_naming_the_leg_and_limit(monkeypatch):
+    """The guard of the rigid step (compiled on the joints every step, named from the plate pose's inverse
+    kinematics): the shipped scenario's state put 1e-5 m beyond the pose where a leg reaches its maximum length
+    (straight up from the start pose; bisected on ``kinematics.violations``) stops at the next step with the
+    divergence's line naming that leg's limit; 1e-5 m inside it, the step runs (one step at rest moves the plate
+    by about a dt^2 = 1e-7 m)."""
+    from pressfit import kinematics
+    from pressfit.dynamics import drives as drive_kinds
+    from pressfit.dynamics.insertion import plan_scenario
+    from pressfit.dynamics.machine.rigid import RigidScenario
+    from pressfit.dynamics.series import Guard
+    from pressfit.errors import PressfitError
+
+    case = load_case(cases_dir() / "paper" / "insertion.toml")
+    case = case.model_copy(update={"simulation": case.simulation.model_copy(update={"model": "rigid"})})
+    machine = case.machine()
+    plan = plan_scenario(case, machine)
+    start = np.asarray(case.simulation.start_m, float)
+    lo, hi = 0.0, 0.5
+    for _ in range(60):
+        mid = 0.5 * (lo + hi)
+        lo, hi = (mid, hi) if not kinematics.violations(machine, start + [0.0, mid, 0.0]) else (lo, mid)
+    leg, name, _, bound = kinematics.violations(machine, start + [0.0, hi + 1e-5, 0.0])[0]
+    assert name == "leg length l [m]" and bound.startswith("maximum")
+    reference = plan.trajectory.at(1e-4)
+    for offset, refused in ((-1e-5, False), (1e-5, True)):
+        scenario = RigidScenario(case, machine, plan, drive_kinds.of(machine), True, Guard(case, machine, plan))
+        with monkeypatch.context() as m:  # a closed configuration past the limit (configuration_at refuses one)
+            m.setattr("pressfit.dynamics.multibody.kinematics.require_reachable", lambda machine, h, ik=None: h)
+            scenario.q = plan.rigid.configuration_at(start + [0.0, hi + offset, 0.0])
+        if not refused:
+            scenario.step(0, 1e-4, reference, 30.0)
+            continue
+        with pytest.raises(PressfitError) as info:
+            scenario.step(0, 1e-4, reference, 30.0)
+        line = str(info.value)
+        assert "left the reachable set" in line and f"leg {leg}" in line and "leg length" in line, line
+        assert "at t = 0.0001 s" in line and "[simulation.controller]" in line

@@ -143,3 +143,63 @@ def test_compensation_puts_the_tool_on_the_pin(tmp_path):
                for c in (False, True))
     key = "tool_lateral_error_at_insertion_m"
     assert on[key] < 0.2 * off[key], (on[key], off[key])
+
+
+def test_a_cache_with_path_nodes_extrapolates_from_the_nearest_node_within_the_same_bound():
+    """The controller's cache given a planned path (``path_m``: nodes 2 mm apart along it, rows and gradients in one
+    batched call): each node's rows and gradient are those computed at that pose alone (1e-13 relative); a query
+    near the path is extrapolated from the nearest node (numpy's argmin of the infinity norm) and is within 3e-4 of
+    each column's largest entry of the columns computed afresh there (the bound of the cache without nodes); a
+    query 5 mm off the path is computed at itself."""
+    from pressfit.dynamics.control import DeflectionCache, linearised_columns
+    from pressfit.dynamics.multibody import path_nodes
+
+    machine, rng = load_machine(), np.random.default_rng(3)
+    rigid = rigid_leg_model(machine, np.array([0.0, 0.62, 0.0]))
+    a, b = np.array([-0.15, 0.66, 0.1]), np.array([0.1, 0.6, -0.05])
+    path = a + np.linspace(0.0, 1.0, 600)[:, None] * (b - a)
+    ctrl = ForceLimitedController(machine=machine, rigid=rigid, gains=Controller(deflection_compensation=True),
+                                  limiter=True, estimate_m=a.copy(), path_m=path)
+    cache = ctrl.deflection
+    assert np.array_equal(cache.nodes_m, path_nodes(path, DEFLECTION_UPDATE_M))
+    for node in rng.choice(len(cache.nodes_m), 5, replace=False):
+        rows, gradient = linearised_columns(machine, cache.nodes_m[node][None], True)
+        assert np.abs(cache._nodes[0][node] - rows[0]).max() <= 1e-13 * np.abs(rows).max()
+        assert np.abs(cache._nodes[1][node] - gradient[0]).max() <= 1e-13 * np.abs(gradient).max()
+    for t in rng.uniform(0.0, 1.0, 20):
+        query = a + t * (b - a) + rng.uniform(-5e-4, 5e-4, 3)
+        fresh = DeflectionCache(machine=machine, nodes_m=cache.nodes_m)
+        value = fresh(query)
+        nearest = int(np.argmin(np.abs(cache.nodes_m - query).max(axis=1)))
+        assert np.array_equal(fresh.pose_m, cache.nodes_m[nearest])
+        exact = static_deflection_columns(machine, rigid, query).T
+        scale = np.abs(exact).max(axis=1, keepdims=True)
+        assert np.all(np.abs(value - exact) <= 3e-4 * scale)
+    off = a + 0.5 * (b - a) + np.array([0.0, 0.0, 5e-3])
+    fresh = DeflectionCache(machine=machine, nodes_m=cache.nodes_m)
+    fresh(off)
+    assert np.array_equal(fresh.pose_m, off)
+
+
+def test_a_pose_just_inside_a_joint_limit_has_its_columns_and_gradient():
+    """The gradient's difference stencil (0.1 mm about the pose) may reach past a joint limit the pose is within
+    0.1 mm of: the closed forms hold there, so the pose's columns are computed (before, the stencil's reach check
+    refused a pose the plate may visit): its rows are the columns at the pose (1e-12 relative), its gradient the
+    one-sided difference from inside to 1e-2 of its largest entry (an O(h) difference)."""
+    from pressfit import kinematics
+    from pressfit.dynamics.control import DEFLECTION_GRADIENT_STEP_M, linearised_columns
+
+    machine = load_machine()
+    rigid = rigid_leg_model(machine, np.array([0.0, 0.62, 0.0]))
+    start, lo, hi = np.array([0.0, 0.62, 0.0]), 0.0, 0.5
+    for _ in range(60):
+        mid = 0.5 * (lo + hi)
+        lo, hi = (mid, hi) if not kinematics.violations(machine, start + [0.0, mid, 0.0]) else (lo, mid)
+    pose = start + [0.0, lo - 5e-5, 0.0]  # 50 um below the pose where a leg reaches its maximum length
+    assert not kinematics.violations(machine, pose) and kinematics.violations(machine, pose + [0, 1e-4, 0])
+    rows, gradient = linearised_columns(machine, pose[None], True)
+    exact = static_deflection_columns(machine, rigid, pose).T
+    assert np.abs(rows[0] - exact).max() <= 1e-12 * np.abs(exact).max()
+    h = DEFLECTION_GRADIENT_STEP_M
+    below = static_deflection_columns(machine, rigid, pose - [0.0, h, 0.0]).T
+    assert np.abs(gradient[0][:, :, 1] - (exact - below) / h).max() <= 1e-2 * np.abs(gradient[0][:, :, 1]).max()

@@ -98,12 +98,13 @@ class ForceActuators:
 
     def step(self, force_n: np.ndarray, command_n: np.ndarray, dt_s: float) -> np.ndarray:
         """The actuator forces (N) after ``dt_s`` (s) from ``force_n`` under the held command ``command_n`` (N)."""
-        force, command = np.asarray(force_n, dtype=float), np.asarray(command_n, dtype=float)
-        if force.shape != command.shape or force.ndim != 1:  # the kernel takes two vectors of one length
-            force, command = (np.ascontiguousarray(x).ravel() for x in np.broadcast_arrays(force, command))
-            shape = np.broadcast_shapes(np.shape(force_n), np.shape(command_n))
-        else:
-            shape = force.shape
+        decay = math.exp(-dt_s / self.time_constant_s)
+        if type(force_n) is np.ndarray and type(command_n) is np.ndarray and force_n.ndim == 1 \
+                and force_n.shape == command_n.shape and force_n.dtype == command_n.dtype == np.float64:
+            out = np.empty(force_n.size)  # a run's step: two vectors of one length, as the kernel takes them
+            kernels.first_order(force_n, command_n, float(self.force_limit_n), decay, out)
+            return out
+        force, command = (np.ascontiguousarray(x, dtype=float).ravel() for x in np.broadcast_arrays(force_n, command_n))
         out = np.empty(force.size)
-        kernels.first_order(force, command, float(self.force_limit_n), math.exp(-dt_s / self.time_constant_s), out)
-        return out if out.shape == shape else out.reshape(shape)
+        kernels.first_order(force, command, float(self.force_limit_n), decay, out)
+        return out.reshape(np.broadcast_shapes(np.shape(force_n), np.shape(command_n)))

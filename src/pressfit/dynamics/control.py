@@ -113,14 +113,16 @@ def static_deflection_columns(machine: Machine, rigid: RigidLegModel, pose_m: np
 
 
 def linearised_columns(machine: Machine, poses_m: np.ndarray, gravity: bool) -> tuple[np.ndarray, np.ndarray]:
-    """The deflection rows (c0, c1) (k, 2, 3) at poses (k, 3), m, and their gradient (k, 2, 3, 3) in the pose, per m
-    (central differences, one batched call of the closed forms at seven poses each)."""
+    """The deflection rows (c0, c1) (k, 2, 3) at reachable poses (k, 3), m, and their gradient (k, 2, 3, 3) in the
+    pose, per m (central differences, one batched call of the closed forms at seven poses each; the six about a
+    pose need not be reachable: a pose within the step of a joint limit has its gradient too)."""
     h = DEFLECTION_GRADIENT_STEP_M * np.eye(3)
-    poses = np.asarray(poses_m, dtype=float)[:, None, :] + np.vstack([np.zeros((1, 3)), h, -h])  # (k, 7, 3)
+    centres = kinematics.require_all_reachable(machine, poses_m)
+    poses = centres[:, None, :] + np.vstack([np.zeros((1, 3)), h, -h])  # (k, 7, 3)
     flat = poses.reshape(-1, 3)
     compliance = condensed_plate_compliance(machine.sensed_view, flat)
     c0 = compliance[:, :3, 1]
-    c1 = weight_sag_m(machine, flat, compliance) if gravity else np.zeros_like(c0)
+    c1 = weight_sag_m(machine, flat, compliance, check_reach=False) if gravity else np.zeros_like(c0)
     rows = np.stack([c0, c1], axis=1).reshape(len(poses), 7, 2, 3)
     return rows[:, 0], np.moveaxis((rows[:, 1:4] - rows[:, 4:7]) / (2.0 * DEFLECTION_GRADIENT_STEP_M), 1, -1)
 

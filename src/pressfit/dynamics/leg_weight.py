@@ -68,14 +68,16 @@ def _first_moment(pieces: list, points: list, s: np.ndarray, lower: np.ndarray) 
     return q
 
 
-def leg_weight_loads(machine: Machine, pose_m: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+def leg_weight_loads(machine: Machine, pose_m: np.ndarray, check_reach: bool = True) -> tuple[np.ndarray, np.ndarray]:
     """Per leg at reachable poses (..., 3) (m): the force (..., n, 3), N, the leg's weight puts on the plate at its
     plate cardan (module doc: axial share of the rod body, simply supported transverse share) and the plate moment
     (..., n, 3), N m, of its clamped bending k_r Delta phi_0 c_i (world axes). Batched over poses and legs: the leg's
     masses along s (``[mass]``) are the cylinder tube and housing over [0, L_c], the rod over [l - L_r, l], the
     moving parts at l - L_r and the spiders at 0 and l; the integral of m(s) / EI(s) is 3-point Gauss on each
-    piece between the breaks 0, L_c, l and l - L_r (a piece of zero length adds nothing)."""
-    h = require_all_reachable(machine, pose_m)
+    piece between the breaks 0, L_c, l and l - L_r (a piece of zero length adds nothing). ``check_reach`` False:
+    the poses are not checked against the joint limits (a difference stencil about a reachable pose: the closed
+    forms hold beyond Table 3's limits)."""
+    h = require_all_reachable(machine, pose_m) if check_reach else np.asarray(pose_m, dtype=float)
     g = np.array([0.0, -GRAVITY_M_PER_S2, 0.0])
     forces, lengths, e, q0 = _cardan_forces(machine, h, g)
     mass, lc, rod = machine.mass, machine.cylinder.length_m, machine.stem.length_m
@@ -146,22 +148,23 @@ def weight_force_n(machine: Machine, pose_m: np.ndarray, gravity_m_per_s2: np.nd
     return (machine.mass.plate_mass_kg + machine.mass.tool_mass_kg) * g + forces.sum(-2)
 
 
-def weight_wrench_n(machine: Machine, pose_m: np.ndarray) -> np.ndarray:
+def weight_wrench_n(machine: Machine, pose_m: np.ndarray, check_reach: bool = True) -> np.ndarray:
     """The machine's weight as a plate wrench (..., 6) at reachable poses (..., 3) (m): force N, moment N m about the
     plate centre, world axes (plate and tool at the centre, the legs' cardan forces and clamped bending: module
-    doc)."""
-    forces, moments = leg_weight_loads(machine, pose_m)
+    doc; ``check_reach``: as :func:`leg_weight_loads`)."""
+    forces, moments = leg_weight_loads(machine, pose_m, check_reach)
     plate = (machine.mass.plate_mass_kg + machine.mass.tool_mass_kg) * np.array([0.0, -GRAVITY_M_PER_S2, 0.0])
     return np.concatenate([plate + forces.sum(-2),
                            cross(machine.plate_offsets_m, forces).sum(-2) + moments.sum(-2)], axis=-1)
 
 
-def weight_sag_m(machine: Machine, poses_m: np.ndarray, compliance: np.ndarray | None = None) -> np.ndarray:
+def weight_sag_m(machine: Machine, poses_m: np.ndarray, compliance: np.ndarray | None = None,
+                 check_reach: bool = True) -> np.ndarray:
     """The tool's static deflection (..., 3), m, under the machine's own weight at reachable poses (..., 3), m: the
     condensed plate compliance times :func:`weight_wrench_n` (module doc); ``compliance`` (..., 6, 6): the condensed
-    compliance at those poses where the caller has it already."""
+    compliance at those poses where the caller has it already; ``check_reach``: as :func:`leg_weight_loads`."""
     h = np.asarray(poses_m, dtype=float)
     flat = h.reshape(-1, 3)
-    wrenches = weight_wrench_n(machine, flat)
+    wrenches = weight_wrench_n(machine, flat, check_reach)
     compliance = (condensed_plate_compliance(machine, flat) if compliance is None else compliance).reshape(-1, 6, 6)
     return np.einsum("kij,kj->ki", compliance[:, :3], wrenches).reshape(h.shape)

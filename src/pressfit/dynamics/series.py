@@ -112,16 +112,17 @@ class Series:
     def __init__(self, machine: Machine, steps: int, start_m: np.ndarray) -> None:
         self.machine, self.steps, self.kinematic = machine, steps, np.asarray(start_m, float).copy()
         self.width = len(series_columns(len(machine.legs)))
-        self.chunks = [np.empty((min(steps, CHUNK_ROWS), self.width))]
+        self.chunks = [np.zeros((min(steps, CHUNK_ROWS), self.width))]
 
     def add(self, k: int, row: tuple, lengths: np.ndarray, rates: np.ndarray, energy: tuple) -> None:
         self.kinematic = estimate_pose(self.machine, lengths, self.kinematic, KINEMATIC_ITERATIONS)[0]
         self.row(k)[:] = (*row, *self.kinematic, *lengths, *rates, *energy)
 
     def row(self, k: int) -> np.ndarray:
-        """Row k (the rows are filled in order) to fill in place; the kinematic pose is the caller's."""
+        """Row k (the rows are filled in order) to fill in place, zeros where the caller writes nothing; the kinematic
+        pose is the caller's."""
         if k // CHUNK_ROWS == len(self.chunks):
-            self.chunks.append(np.empty((min(self.steps - k, CHUNK_ROWS), self.width)))
+            self.chunks.append(np.zeros((min(self.steps - k, CHUNK_ROWS), self.width)))
         return self.chunks[-1][k % CHUNK_ROWS]
 
     def rows(self) -> np.ndarray:

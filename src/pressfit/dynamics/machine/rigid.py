@@ -142,7 +142,7 @@ class RigidScenario:
                                                         "reference_lift_m")]
                             + [columns.index("axial_n1") + len(machine.legs)])  # the internal forces follow the axial
         self.drift_column = columns.index("closure_drift_m")
-        self.energy = slice(columns.index(ENERGY_COLUMNS[0]), columns.index(ENERGY_COLUMNS[-1]) + 1)
+        self.kinetic = columns.index(ENERGY_COLUMNS[0])  # then the potential energy
         self.series = Series(machine, plan.steps, sim.start_m)
         lim = machine.limits
         self.limits = np.array([lim.leg_length_min_m, lim.leg_length_max_m, lim.alpha_min_rad, lim.alpha_max_rad,
@@ -165,6 +165,9 @@ class RigidScenario:
                                self.tau, rigid.actuator_v, self.contact_tau, self.pre)
         previous = self.q
         self.q, self.v = q, v = rigid.step(previous, self.v, self.tau, dt)
+        if not kernels.within_limits(q, rigid.actuator_q, rigid.sigma, self.limits):  # its joints, every step
+            guard.finite(bool(np.isfinite(q).all() and np.isfinite(v).all()), t)
+            guard.pose(k, t, q[0:3], every=1)  # the plate pose's limits, named
         deflection = ctrl.deflection
         deflection.refresh(q[0:3])
         finite, self.force, self.depth, ctrl.estimate_residual_m = kernels.rigid_post_step(
@@ -176,9 +179,7 @@ class RigidScenario:
         guard.depth(self.depth, t)
         row[self.drift_column] = drift = rigid.closure_error_m()
         guard.drift(drift, t)
-        if not kernels.within_limits(q, rigid.actuator_q, rigid.sigma, self.limits):  # its joints, every step
-            guard.pose(k, t, q[0:3], every=1)  # the plate pose's limits, named
-        row[self.energy] = (*rigid.energy_j(q, v), 0.0, 0.0, 0.0, 0.0, 0.0, 0.0)
+        row[self.kinetic], row[self.kinetic + 1] = rigid.energy_j(q, v)  # no elastic energies: the row's zeros
 
     def rows(self) -> tuple[np.ndarray, None]:
         return self.series.rows(), None
