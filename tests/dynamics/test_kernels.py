@@ -250,7 +250,8 @@ def test_within_limits_on_the_joints_is_the_inverse_kinematics_check(machine, mo
         rigid, limits = rigid_leg_model(m, np.array([0.0, 0.62, 0.0])), _limits(m)
         for pose in RNG.uniform([-0.35, 0.35, -0.35], [0.35, 0.85, 0.35], (150, 3)):
             q = _configuration(rigid, pose, monkeypatch)
-            assert kernels.within_limits(q, rigid.actuator_q, rigid.sigma, limits) == (not kinematics.violations(m, pose))
+            inside = not kinematics.violations(m, pose)
+            assert kernels.within_limits(q, rigid.actuator_q, rigid.sigma, limits) == inside
         for direction in ([0.0, 1.0, 0.0], [0.0, -1.0, 0.0], [1.0, -0.3, 1.0], [1.0, 0.0, 0.0], [-1.0, 0.0, 0.0],
                           [0.0, 0.0, 1.0]):
             inside, step = np.array([0.0, 0.62, 0.0]), np.asarray(direction) / np.linalg.norm(direction)
@@ -267,3 +268,7 @@ def test_within_limits_on_the_joints_is_the_inverse_kinematics_check(machine, mo
             crossings.add((name, bound.split()[0]))
     assert {name for name, _ in crossings} == {"leg length l [m]", "alpha [rad]", "beta [rad]"}
     assert {("beta [rad]", "minimum"), ("beta [rad]", "maximum")} <= crossings
+    q = _configuration(rigid, np.array([0.0, 0.62, 0.0]), monkeypatch)
+    assert kernels.within_limits(q, rigid.actuator_q, rigid.sigma, limits)
+    q[1] = -1e-9  # the plate below the base, its legs' joints left within their limits: refused (y_h > 0)
+    assert not kernels.within_limits(q, rigid.actuator_q, rigid.sigma, limits)

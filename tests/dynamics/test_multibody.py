@@ -159,6 +159,7 @@ def test_a_pose_cache_with_nodes_takes_the_nearest_within_its_tolerance_and_comp
 
     nodes = np.array([[0.0, 0.0, 0.0], [1e-3, 0.0, 0.0], [2e-3, 0.0, 0.0]])
     cache = PoseCache(function=function, tolerance_m=1e-3, nodes_m=nodes, node_values=nodes * 2.0 + 5.0)
+    assert np.array_equal(cache(np.array([-4e-4, 1e-4, 0.0])), nodes[0] * 2.0 + 5.0) and not calls  # the first node
     assert np.array_equal(cache(np.array([1.4e-3, 2e-4, 0.0])), nodes[1] * 2.0 + 5.0) and not calls
     assert np.array_equal(cache.pose_m, nodes[1])
     assert np.array_equal(cache(np.array([1.9e-3, 0.0, 0.0])), nodes[1] * 2.0 + 5.0)  # within 1 mm of node 1: kept

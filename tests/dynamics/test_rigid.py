@@ -62,17 +62,17 @@ def test_a_plate_that_leaves_the_joint_limits_stops_the_run_naming_the_leg_and_l
         lo, hi = (mid, hi) if not kinematics.violations(machine, start + [0.0, mid, 0.0]) else (lo, mid)
     leg, name, _, bound = kinematics.violations(machine, start + [0.0, hi + 1e-5, 0.0])[0]
     assert name == "leg length l [m]" and bound.startswith("maximum")
-    reference = plan.trajectory.at(1e-4)
+    reference = plan.trajectory.at(4e-4)  # step 3 (the guard's inverse kinematics runs every 10 steps only)
     for offset, refused in ((-1e-5, False), (1e-5, True)):
         scenario = RigidScenario(case, machine, plan, drive_kinds.of(machine), True, Guard(case, machine, plan))
         with monkeypatch.context() as m:  # a closed configuration past the limit (configuration_at refuses one)
             m.setattr("pressfit.dynamics.multibody.kinematics.require_reachable", lambda machine, h, ik=None: h)
             scenario.q = plan.rigid.configuration_at(start + [0.0, hi + offset, 0.0])
         if not refused:
-            scenario.step(0, 1e-4, reference, 30.0)
+            scenario.step(3, 4e-4, reference, 30.0)
             continue
         with pytest.raises(PressfitError) as info:
-            scenario.step(0, 1e-4, reference, 30.0)
+            scenario.step(3, 4e-4, reference, 30.0)
         line = str(info.value)
         assert "left the reachable set" in line and f"leg {leg}" in line and "leg length" in line, line
-        assert "at t = 0.0001 s" in line and "[simulation.controller]" in line
+        assert "at t = 0.0004 s" in line and "[simulation.controller]" in line

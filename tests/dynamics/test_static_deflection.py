@@ -166,7 +166,7 @@ def test_a_cache_with_path_nodes_extrapolates_from_the_nearest_node_within_the_s
         rows, gradient = linearised_columns(machine, cache.nodes_m[node][None], True)
         assert np.abs(cache._nodes[0][node] - rows[0]).max() <= 1e-13 * np.abs(rows).max()
         assert np.abs(cache._nodes[1][node] - gradient[0]).max() <= 1e-13 * np.abs(gradient).max()
-    for t in rng.uniform(0.0, 1.0, 20):
+    for t in [0.0, 1.0, *rng.uniform(0.0, 1.0, 20)]:  # the first and last nodes too
         query = a + t * (b - a) + rng.uniform(-5e-4, 5e-4, 3)
         fresh = DeflectionCache(machine=machine, nodes_m=cache.nodes_m)
         value = fresh(query)
