@@ -243,8 +243,8 @@ def test_within_limits_on_the_joints_is_the_inverse_kinematics_check(machine, mo
     plate pose's inverse kinematics (``kinematics.violations``): the same verdict at 300 poses around and beyond the
     workspace, and at poses just (1e-7 m) either side of the limit a leg meets first on lines through the workspace
     (both verdicts flip there), on the shipped machine (its lengths and alpha bind first) and on one with
-    beta within +-0.25 rad (beta binds first, both signs)."""
-    narrow = machine.with_overrides({"limits": {"beta_min_rad": -0.25, "beta_max_rad": 0.25}})
+    beta within [-0.3, 0.2] rad (beta binds first, at both bounds, on legs whose b-revolutes turn either way)."""
+    narrow = machine.with_overrides({"limits": {"beta_min_rad": -0.3, "beta_max_rad": 0.2}})  # asymmetric: the sign
     crossings = set()
     for m in (machine, narrow):
         rigid, limits = rigid_leg_model(m, np.array([0.0, 0.62, 0.0])), _limits(m)
@@ -253,7 +253,7 @@ def test_within_limits_on_the_joints_is_the_inverse_kinematics_check(machine, mo
             inside = not kinematics.violations(m, pose)
             assert kernels.within_limits(q, rigid.actuator_q, rigid.sigma, limits) == inside
         for direction in ([0.0, 1.0, 0.0], [0.0, -1.0, 0.0], [1.0, -0.3, 1.0], [1.0, 0.0, 0.0], [-1.0, 0.0, 0.0],
-                          [0.0, 0.0, 1.0]):
+                          [0.0, 0.0, 1.0], [0.0, 0.0, -1.0]):
             inside, step = np.array([0.0, 0.62, 0.0]), np.asarray(direction) / np.linalg.norm(direction)
             lo, hi = 0.0, 1.0
             for _ in range(60):  # the distance along the line where the pose leaves the limits

@@ -65,6 +65,24 @@ def test_passive_undamped_motion_conserves_energy(rigid):
     assert max(drift1, drift2) < 1e-6
 
 
+def test_energies_are_the_mass_matrix_quadratic_form_and_the_centre_of_masss_height(rigid):
+    """``energy_j`` at a moving state against two other Pinocchio algorithms: kinetic 1/2 v^T M(q) v (the
+    composite-rigid-body mass matrix, armature included) and potential -m g . c(q) (the total mass at the centre of
+    mass), to 1e-12 relative."""
+    q = rigid.reference_q.copy()
+    v = rigid.admissible_velocity(q, [0.2, 0.1, -0.2])
+    for _ in range(20):
+        q, v = rigid.step(q, v, np.zeros(rigid.model.nv), 1e-3)
+    kinetic, potential = rigid.energy_j(q, v)
+    data = rigid.model.createData()
+    mass = pin.crba(rigid.model, data, q)
+    mass = np.triu(mass) + np.triu(mass, 1).T
+    assert kinetic == pytest.approx(0.5 * v @ mass @ v, rel=1e-12) and kinetic > 0.01
+    com = pin.centerOfMass(rigid.model, data, q)
+    expected = -pin.computeTotalMass(rigid.model) * float(np.asarray(rigid.model.gravity.linear) @ com)
+    assert potential == pytest.approx(expected, rel=1e-12) and potential != pytest.approx(kinetic, rel=0.5)
+
+
 def test_bad_baumgarte_rate(machine):
     with pytest.raises(PressfitError, match="baumgarte"):
         rigid_leg_model(machine, POSE, baumgarte_rad_per_s=0.0)

@@ -23,8 +23,7 @@ def test_the_clearance_table_of_a_hydraulic_machine_leaves_out_the_oil_column():
     case = case.model_copy(update={"simulation": sim})
     machine = case.machine()
     pin = np.array([sim.contact.pin_position_m[0], sim.contact.board_height_m, sim.contact.pin_position_m[1]])
-    column_scale, (loads, table) = _hidden_compliance(machine, case, sim, pin)
-    assert column_scale == 0.0  # the table replaces the compliance column (c0 F)
+    loads, table = _hidden_compliance(machine, case, sim, pin)
 
     def curve(m):
         c = load_deflection(m, pin, [0.0, 1.0, 0.0], loads, clearance_from_case(case, m),
@@ -76,3 +75,35 @@ def test_a_plate_that_leaves_the_joint_limits_stops_the_run_naming_the_leg_and_l
         line = str(info.value)
         assert "left the reachable set" in line and f"leg {leg}" in line and "leg length" in line, line
         assert "at t = 0.0004 s" in line and "[simulation.controller]" in line
+
+
+def test_with_clearance_the_tools_deflection_is_the_sag_plus_the_load_deflection_table():
+    """The shipped rigid insertion with ``clearance = true``: through the dwell, the tool's deflection from the rigid
+    pose (tool - plate) is the weight's sag at the plate pose (the columns computed afresh: the run extrapolates
+    them, 1.5e-4 of them) plus the clearance model's load-deflection table (at the descent's end) at the recorded
+    contact force, linearly interpolated, to 1e-9 m plus 2e-4 of the sag; the compliance column c0 F is not added on top (it is 30 N x c0,
+    microns, here)."""
+    from pressfit.dynamics.control import Trajectory, static_deflection_columns
+    from pressfit.dynamics.insertion import simulate_insertion
+    from pressfit.dynamics.multibody import rigid_leg_model
+
+    case = load_case(cases_dir() / "paper" / "insertion.toml")
+    sim = case.simulation.model_copy(update={"model": "rigid", "clearance": True})
+    case = case.model_copy(update={"simulation": sim})
+    machine = case.machine()
+    result = simulate_insertion(case)
+    bottom = Trajectory.insertion(sim).waypoints_m[2]  # the table's pose: the descent's end at the interference
+    loads, table = _hidden_compliance(machine, case, sim, bottom)
+    col = {name: k for k, name in enumerate(result.columns)}
+    rows = result.series[result.phases == result.phase_names.index("dwell")][::50]
+    rigid = rigid_leg_model(machine, bottom)
+    worst_c0 = 0.0
+    for row in rows:
+        plate = row[[col["plate_x_m"], col["plate_y_m"], col["plate_z_m"]]]
+        tool = row[[col["tool_x_m"], col["tool_y_m"], col["tool_z_m"]]]
+        force = row[col["contact_force_n"]]
+        columns = static_deflection_columns(machine, rigid, plate)
+        expected = columns[:, 1] + np.array([np.interp(force, loads, table[:, k]) for k in range(3)])
+        assert np.abs((tool - plate) - expected).max() <= 1e-9 + 2e-4 * np.abs(columns[:, 1]).max()
+        worst_c0 = max(worst_c0, float(np.abs(columns[:, 0] * force).max()))
+    assert force > 20.0 and worst_c0 > 1e-6  # a column term that the tolerance would catch

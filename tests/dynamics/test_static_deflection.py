@@ -203,3 +203,7 @@ def test_a_pose_just_inside_a_joint_limit_has_its_columns_and_gradient():
     h = DEFLECTION_GRADIENT_STEP_M
     below = static_deflection_columns(machine, rigid, pose - [0.0, h, 0.0]).T
     assert np.abs(gradient[0][:, :, 1] - (exact - below) / h).max() <= 1e-2 * np.abs(gradient[0][:, :, 1]).max()
+    from pressfit.errors import UnreachablePoseError
+
+    with pytest.raises(UnreachablePoseError, match=r"leg \d: leg length l \[m\] = [0-9.]+ breaks maximum"):
+        linearised_columns(machine, (pose + [0.0, 1e-4, 0.0])[None], True)  # the pose itself 50 um beyond: refused

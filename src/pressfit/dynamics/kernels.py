@@ -419,8 +419,8 @@ def rigid_pre_step(row, t, reference, lift, estimate, command, tension, null, ta
 
 @compiled
 def rigid_post_step(row, previous_q, q, v, closure_forces, actuator_q, actuator_v, contact, previous_depth, dt,
-                    deflection_pose, deflection_rows, deflection_gradient, column_scale, loads, disp, offsets, estimate,
-                    units, iterations, kinematic_iterations, tau, layout, lengths, rates):
+                    deflection_pose, deflection_rows, deflection_gradient, loads, disp, offsets, estimate, units,
+                    iterations, kinematic_iterations, tau, layout, lengths, rates):
     """After one rigid-leg step from ``previous_q`` to (q, v): returns (False, ...) and does nothing else if the
     state is not finite. Else fills the step's row at the columns ``layout`` names (ROW_*: the caller fills the
     rest): the rigid pose and the tool tip (rigid + deflection) (m), the contact force (N) and interference (m) at
@@ -432,8 +432,8 @@ def rigid_post_step(row, previous_q, q, v, closure_forces, actuator_q, actuator_
     (m) and rates (m/s), also into ``lengths`` and ``rates``; and the contact force for the next step into
     ``tau`` (the plate's local frame, R^T (0, F, 0)). Returns (True, F, interference, the estimate's largest
     length residual m). The tool's deflection at the new rigid pose: the rows (c0 m/N, c1 m) ``deflection_rows``
-    computed at ``deflection_pose`` extrapolated there (:func:`extrapolated`), c0 times ``column_scale`` (0: the
-    contact's compliance is the load-deflection table ``loads``, ``disp`` instead)."""
+    computed at ``deflection_pose`` extrapolated there (:func:`extrapolated`), c0 F + c1, or c1 + the load-deflection
+    table ``loads``, ``disp`` where it is not empty (:func:`solve_contact`)."""
     for x in q:
         if not math.isfinite(x):
             return False, 0.0, 0.0, 0.0
@@ -442,8 +442,6 @@ def rigid_post_step(row, previous_q, q, v, closure_forces, actuator_q, actuator_
             return False, 0.0, 0.0, 0.0
     u, deflection = np.empty(3), np.empty((2, 3))
     extrapolated(q, deflection_pose, deflection_rows, deflection_gradient, deflection)
-    for k in range(3):
-        deflection[0, k] *= column_scale
     force, depth = solve_contact(contact, contact[BOARD] - q[1], previous_depth, dt, deflection[0], deflection[1],
                                  loads, disp, u)
     contact_advance(contact, depth)

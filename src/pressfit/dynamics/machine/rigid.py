@@ -87,17 +87,16 @@ class RigidMachine:
 
 
 def _hidden_compliance(machine: Machine, case: Case, sim: Simulation, pin_pose: np.ndarray
-                       ) -> tuple[float, tuple[np.ndarray, np.ndarray]]:
+                       ) -> tuple[np.ndarray, np.ndarray]:
     """How the tool's quasi-static deflection at the rigid pose enters
     :func:`pressfit.dynamics.kernels.solve_contact`: u = c0 F + c1 under the contact force F (N, +y) and the moving
     parts' weight (c0 m/N and the sag c1 m, the rows of the controller's cache ``ForceLimitedController.deflection``
     at the rigid pose, :func:`pressfit.dynamics.control.static_deflection_columns`; the estimate and the rigid pose
-    differ by the closure drift, so one refresh serves both): (1, no table); or, with ``clearance``, c1 + the
-    clearance model's load-deflection table at the pin (loads (n,), N; displacements (n, 3), m) for the contact
-    force, of the machine as its sensors see it (``Machine.sensed_view``: a hydraulic oil column rigid): (0, the
-    table)."""
+    differ by the closure drift, so one refresh serves both): no table; or, with ``clearance``, c1 + the clearance
+    model's load-deflection table at the pin (loads (n,), N; displacements (n, 3), m) for the contact force, of the
+    machine as its sensors see it (``Machine.sensed_view``: a hydraulic oil column rigid)."""
     if not sim.clearance:
-        return 1.0, NO_TABLE
+        return NO_TABLE
     params = contact_parameters(sim.contact)
     law_force = (contact_force_n(params, sim.interference_m) if params[kernels.LAW] == kernels.TABLE
                  else sim.contact.stiffness_n_per_m * sim.interference_m)
@@ -105,8 +104,8 @@ def _hidden_compliance(machine: Machine, case: Case, sim: Simulation, pin_pose: 
     curve = load_deflection(machine.sensed_view, pin_pose, [0.0, 1.0, 0.0], np.linspace(0.0, limit, CURVE_POINTS),
                             clearance_from_case(case, machine), ActuatorPreload.from_case(case.preload).a4,
                             unload=False)
-    return 0.0, (np.ascontiguousarray(curve.loads_n, dtype=float),
-                 np.ascontiguousarray(curve.loading.displacement_m - curve.loading.displacement_m[0], dtype=float))
+    return (np.ascontiguousarray(curve.loads_n, dtype=float),
+            np.ascontiguousarray(curve.loading.displacement_m - curve.loading.displacement_m[0], dtype=float))
 
 
 class RigidScenario:
@@ -129,7 +128,7 @@ class RigidScenario:
                                                   estimate_m=np.asarray(sim.start_m, float).copy(),
                                                   preload_n=preload_amplitudes_n(case, machine),
                                                   path_m=plan.path_m)
-        self.column_scale, self.table = _hidden_compliance(machine, case, sim, plan.trajectory.waypoints_m[2])
+        self.table = _hidden_compliance(machine, case, sim, plan.trajectory.waypoints_m[2])
         act_q, act_v = rigid.actuator_q, rigid.actuator_v
         ctrl.command(self.q[act_q], self.v[act_v], plan.trajectory.at(0.0), 0.0, 0.0)
         self.drive = drives.initial_state(ctrl.tension_n.copy(), self.q[act_q])
@@ -148,7 +147,7 @@ class RigidScenario:
         self.limits = np.array([lim.leg_length_min_m, lim.leg_length_max_m, lim.alpha_min_rad, lim.alpha_max_rad,
                                 lim.beta_min_rad, lim.beta_max_rad])  # kernels.within_limits'
         self.tau, self.contact_tau, self.u = np.zeros(rigid.model.nv), np.zeros(3), np.empty(3)
-        column, sag = self.column_scale * ctrl.deflection(self.q[0:3])[0], ctrl.deflection.value[1]
+        column, sag = ctrl.deflection(self.q[0:3])
         self.force, self.depth = kernels.solve_contact(self.params, sim.contact.board_height_m - self.q[1], 0.0,
                                                        self.dt, column, sag, *self.table, self.u)
         self.contact_tau[:] = pin.Quaternion(self.q[3:7]).matrix().T @ np.array([0.0, self.force, 0.0])  # local frame
@@ -172,7 +171,7 @@ class RigidScenario:
         deflection.refresh(q[0:3])
         finite, self.force, self.depth, ctrl.estimate_residual_m = kernels.rigid_post_step(
             row, previous, q, v, rigid.data.lambda_c, rigid.actuator_q, rigid.actuator_v, self.params, self.depth,
-            dt, deflection.pose_m, deflection.rows, deflection.gradient, self.column_scale, *self.table, ctrl.offsets_m,
+            dt, deflection.pose_m, deflection.rows, deflection.gradient, *self.table, ctrl.offsets_m,
             ctrl.estimate_m, ctrl.units, ctrl.gains.estimator_iterations, KINEMATIC_ITERATIONS, self.contact_tau,
             self.post, self.lengths, self.rates)
         guard.finite(finite, t)
