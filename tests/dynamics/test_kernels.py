@@ -272,3 +272,43 @@ def test_within_limits_on_the_joints_is_the_inverse_kinematics_check(machine, mo
     assert kernels.within_limits(q, rigid.actuator_q, rigid.sigma, limits)
     q[1] = -1e-9  # the plate below the base, its legs' joints left within their limits: refused (y_h > 0)
     assert not kernels.within_limits(q, rigid.actuator_q, rigid.sigma, limits)
+
+
+def test_rigid_post_step_fills_the_row_from_the_new_pose(machine, rigid):
+    """``rigid_post_step`` after a step from a pose to one 5 mm away, the deflection rows computed 1.5 mm from the
+    new pose: the row's plate is the new pose, its tool the new pose plus c0 F + c1 with the rows extrapolated to
+    the new pose in numpy (not the previous one: the column moves by 4e-4 of itself over the 5 mm), F the elastic
+    law at the interference that deflection leaves, the lengths and rates the new state's, the estimate the
+    Gauss-Newton fit of the new lengths, and the next step's plate force R^T (0, F, 0)."""
+    from pressfit.dynamics.control import linearised_columns
+    from pressfit.dynamics.series import KINEMATIC_ITERATIONS, series_columns
+
+    new, old = np.array([0.05, 0.6001, -0.05]), np.array([0.053, 0.604, -0.05])
+    q, previous = rigid.configuration_at(new), rigid.configuration_at(old)
+    v = rigid.admissible_velocity(q, [0.0, -0.01, 0.0])
+    at = new + [1.5e-3, 0.0, -1e-3]
+    rows, gradient = linearised_columns(machine, at[None], True)
+    contact = contact_parameters(Contact(board_height_m=0.6003, pin_position_m=[0.05, -0.05], stiffness_n_per_m=2e5,
+                                         damping_n_s_per_m=0.0))
+    columns = series_columns(len(machine.legs))
+    layout = np.array([columns.index(c) for c in ("plate_x_m", "tool_x_m", "contact_force_n", "depth_m", "axial_n1",
+                                                  "kinematic_x_m", "length_m1", "rate_m_per_s1")])
+    row, estimate, units = np.zeros(len(columns)), old.copy(), np.empty((4, 3))
+    lengths, rates, tau = np.empty(4), np.empty(4), np.empty(3)
+    ok, force, depth, _ = kernels.rigid_post_step(
+        row, previous, q, v, np.zeros(24), rigid.actuator_q, rigid.actuator_v, contact, 0.0, 1e-3, at, rows[0],
+        gradient[0], np.empty(0), np.empty((0, 3)), np.ascontiguousarray(machine.plate_offsets_m -
+                                                                        machine.base_points_m), estimate, units, 3,
+        KINEMATIC_ITERATIONS, tau, layout, lengths, rates)
+    c0, c1 = rows[0] + gradient[0] @ (new - at)
+    deflection = c0 * force + c1
+    assert ok and force > 1.0 and depth == pytest.approx(0.6003 - new[1] - deflection[1], abs=1e-15)
+    assert force == pytest.approx(2e5 * depth, rel=1e-8)
+    assert np.abs(row[layout[1]:layout[1] + 3] - (new + deflection)).max() < 1e-15
+    assert np.array_equal(row[layout[0]:layout[0] + 3], q[0:3])
+    stale = rows[0] + gradient[0] @ (old - at)  # the columns at the previous pose: off by far more
+    assert np.abs(stale[0] * force + stale[1] - deflection).max() > 1e3 * 1e-15
+    assert np.array_equal(lengths, q[rigid.actuator_q]) and np.array_equal(rates, v[rigid.actuator_v])
+    assert np.abs(estimate - new).max() < 1e-12
+    rotation = pin.Quaternion(q[3:7]).matrix()
+    assert np.abs(tau - rotation.T @ [0.0, force, 0.0]).max() < 1e-12

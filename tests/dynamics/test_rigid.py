@@ -81,8 +81,8 @@ def test_with_clearance_the_tools_deflection_is_the_sag_plus_the_load_deflection
     """The shipped rigid insertion with ``clearance = true``: through the dwell, the tool's deflection from the rigid
     pose (tool - plate) is the weight's sag at the plate pose (the columns computed afresh: the run extrapolates
     them, 1.5e-4 of them) plus the clearance model's load-deflection table (at the descent's end) at the recorded
-    contact force, linearly interpolated, to 1e-9 m plus 2e-4 of the sag; the compliance column c0 F is not added on top (it is 30 N x c0,
-    microns, here)."""
+    contact force, linearly interpolated, to 1e-9 m plus 2e-4 of the sag; the compliance column c0 F is not added on
+    top (it is 30 N x c0, microns, here)."""
     from pressfit.dynamics.control import Trajectory, static_deflection_columns
     from pressfit.dynamics.insertion import simulate_insertion
     from pressfit.dynamics.multibody import rigid_leg_model
@@ -107,3 +107,23 @@ def test_with_clearance_the_tools_deflection_is_the_sag_plus_the_load_deflection
         assert np.abs((tool - plate) - expected).max() <= 1e-9 + 2e-4 * np.abs(columns[:, 1]).max()
         worst_c0 = max(worst_c0, float(np.abs(columns[:, 0] * force).max()))
     assert force > 20.0 and worst_c0 > 1e-6  # a column term that the tolerance would catch
+
+
+def test_a_state_that_is_not_finite_is_named_so_not_as_an_unreachable_pose():
+    """A NaN in the rigid state (a diverged step) fails the joints' reach check too (NaN compares false): the guard
+    names it as a state that is not finite at its time, not as a plate that left the reachable set at (nan, ...)."""
+    from pressfit.dynamics import drives as drive_kinds
+    from pressfit.dynamics.insertion import plan_scenario
+    from pressfit.dynamics.machine.rigid import RigidScenario
+    from pressfit.dynamics.series import Guard
+    from pressfit.errors import PressfitError
+
+    case = load_case(cases_dir() / "paper" / "insertion.toml")
+    case = case.model_copy(update={"simulation": case.simulation.model_copy(update={"model": "rigid"})})
+    machine = case.machine()
+    plan = plan_scenario(case, machine)
+    scenario = RigidScenario(case, machine, plan, drive_kinds.of(machine), True, Guard(case, machine, plan))
+    scenario.v = scenario.v.copy()
+    scenario.v[scenario.plan.rigid.actuator_v[1]] = np.nan
+    with pytest.raises(PressfitError, match=r"diverged at t = 0.0004 s \(the state is not finite\)"):
+        scenario.step(3, 4e-4, plan.trajectory.at(4e-4), 30.0)
