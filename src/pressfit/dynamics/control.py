@@ -312,8 +312,8 @@ class ForceLimitedController:
         gravity, deflection = self.gravity, self.deflection
         if self.gains.gravity_compensation and gravity.value is None:
             gravity(self.estimate_m)
-        if self.gains.deflection_compensation:
-            deflection.refresh(self.estimate_m)  # extrapolated to the estimate by the kernel
+        if self.gains.deflection_compensation and deflection.rows is None:
+            deflection.refresh(self.estimate_m)  # then kept while the kernel finds it fresh, extrapolated by it
         while True:
             status, self.lift_m, self.clamped, sigma = kernels.control(
                 self._params, self.estimate_m, self.units, rates_m_per_s, reference[0], reference[1],

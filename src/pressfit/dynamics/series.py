@@ -4,7 +4,9 @@ rows (:class:`Series`), the run's stop conditions and their messages (:class:`Gu
 step is (:class:`ScenarioStep`).
 
 A run stops with one line naming the time and the likely keys when the state is not finite, the plate leaves the
-reachable set (checked every ``REACH_CHECK_STEPS`` steps and at the last), the loop-closure drift exceeds
+reachable set (its pose's inverse kinematics checked every ``REACH_CHECK_STEPS`` steps and at the last; the rigid
+model checks its joints every step and the pose where they leave, :func:`pressfit.dynamics.kernels.within_limits`),
+the loop-closure drift exceeds
 ``MAX_CLOSURE_DRIFT_M``, the tool goes deeper than the plan's depth limit (``MAX_DEPTH_FACTOR`` times the
 commanded interference) or a drive cannot take its step.
 """

@@ -7,10 +7,14 @@ prismatic joints (-N_i, N_i > 0 tension), a plate force at the plate centre; no 
 rigid model's couples are not objective).
 
 :class:`RigidScenario` is the model in a scenario (:mod:`pressfit.dynamics.scenario`): the compliance in series
-at the tool, quasi-statically. Per step: the controller at the estimate, the drives, one Pinocchio step, then one
-compiled kernel (:func:`pressfit.dynamics.kernels.rigid_post_step`) for the contact, the axial forces, the pose
-estimate of the new lengths (the next step's controller estimate and, continued to ``KINEMATIC_ITERATIONS``, the
-row's kinematic pose) and the row; the energies (``ENERGY_COLUMNS``) from the rigid model.
+at the tool, quasi-statically. Per step: the controller at the estimate, the drives, one Pinocchio step, the joints
+against Table 3's limits (:func:`pressfit.dynamics.kernels.within_limits`: the guard names the plate pose's broken
+limit where they leave), the deflection cache's rows for the new pose (computed beforehand along the planned path,
+:class:`pressfit.dynamics.control.DeflectionCache`), then one compiled kernel
+(:func:`pressfit.dynamics.kernels.rigid_post_step`) for the deflection extrapolated to the new pose, the contact, the
+axial forces, the pose estimate of the new lengths (the next step's controller estimate and, continued to
+``KINEMATIC_ITERATIONS``, the row's kinematic pose) and the row; the energies (``ENERGY_COLUMNS``) from the rigid
+model.
 """
 
 from __future__ import annotations
