@@ -661,9 +661,9 @@ class FlexibleMachine:
             e[j] = float(law.energy(x[j]))
         if state.drive.kind == "force":
             e[self.act] = 0.0
-        kin = float(pin.computeKineticEnergy(self.model, self.data, state.q, state.v))
-        pot = float(pin.computePotentialEnergy(self.model, self.data, state.q))
-        return Energy(kinetic_j=kin, elastic_j=float(e.sum()), potential_j=pot)
+        pin.computeMechanicalEnergy(self.model, self.data, state.q, state.v)  # one pass for both
+        return Energy(kinetic_j=float(self.data.kinetic_energy), elastic_j=float(e.sum()),
+                      potential_j=float(self.data.potential_energy))
 
     def closure_wrenches(self, state: FlexibleState) -> np.ndarray:
         """(n, 6) the world wrench (force N, moment about the world origin N m) the plate exerts on each leg's
