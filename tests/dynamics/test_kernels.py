@@ -205,15 +205,24 @@ def test_first_order_drive_step_is_the_closed_form():
 
 
 def test_nearest_node_is_numpys_argmin_of_the_infinity_norm_within_the_tolerance():
-    """``nearest``: the row of the nodes nearest to the pose in the infinity norm (numpy's argmin), -1 when even that
-    one is beyond the tolerance; a node at 0.999 of the tolerance is taken, one at 1.001 is not."""
-    nodes = RNG.uniform(-0.1, 0.1, (200, 3))
+    """``nearest``: among nodes all within the hint's window, the row nearest to the pose in the infinity norm
+    (numpy's argmin), -1 when even that one is beyond the tolerance; a node at 0.999 of the tolerance is taken, one at
+    1.001 is not. Along a path's nodes (1 mm apart on a line) the nearest from any hint: in the window, just past
+    its edge (followed from the window's best, which is within the tolerance too) and far beyond it (the whole
+    list)."""
+    nodes = RNG.uniform(-0.1, 0.1, (2 * kernels.NEAREST_WINDOW, 3))
     for pose in RNG.uniform(-0.12, 0.12, (50, 3)):
         distances = np.abs(nodes - pose).max(axis=1)
         best = int(np.argmin(distances))
-        assert kernels.nearest(nodes, pose, 1.0) == best
-        assert kernels.nearest(nodes, pose, 0.999 * distances[best]) == -1
-        assert kernels.nearest(nodes, pose, 1.001 * distances[best]) == best
+        hint = kernels.NEAREST_WINDOW
+        assert kernels.nearest(nodes, pose, 1.0, hint) == best
+        assert kernels.nearest(nodes, pose, 0.999 * distances[best], hint) == -1
+        assert kernels.nearest(nodes, pose, 1.001 * distances[best], hint) == best
+    line = np.linspace(0.0, 1.0, 1001)[:, None] * np.array([1.0, 0.0, 0.0])
+    edge = 480 + kernels.NEAREST_WINDOW
+    for x, expected in ((0.5003, 500), ((edge + 1.2) / 1000, edge + 1), (0.9003, 900), (0.0004, 0)):
+        assert kernels.nearest(line, np.array([x, 0.0, 0.0]), 2e-3, 480) == expected, x
+    assert kernels.nearest(line, np.array([0.5, 0.0025, 0.0]), 2e-3, 480) == -1
 
 
 def test_extrapolated_rows_are_the_first_order_taylor_series():

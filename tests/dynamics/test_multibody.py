@@ -161,26 +161,3 @@ def test_path_nodes_are_at_most_the_spacing_apart_and_every_sample_is_near_one()
         length = np.abs(np.diff(waypoints, axis=0)).max(axis=1).sum()
         assert len(nodes) <= 2 * (length / spacing + len(waypoints))
     assert len(path_nodes(path[:1].repeat(3, axis=0), 2e-3)) == 2  # a path that does not move: its point, twice
-
-
-def test_a_pose_cache_with_nodes_takes_the_nearest_within_its_tolerance_and_computes_elsewhere():
-    """``PoseCache`` with values computed beforehand at nodes: a stale cache takes the nearest node within the
-    tolerance (infinity norm; the function is not called) and calls the function at the pose where there is none;
-    the cached pose is then within the tolerance of the pose asked, as without nodes."""
-    from pressfit.dynamics.multibody import PoseCache
-
-    calls = []
-
-    def function(pose):
-        calls.append(np.array(pose))
-        return pose * 2.0
-
-    nodes = np.array([[0.0, 0.0, 0.0], [1e-3, 0.0, 0.0], [2e-3, 0.0, 0.0]])
-    cache = PoseCache(function=function, tolerance_m=1e-3, nodes_m=nodes, node_values=nodes * 2.0 + 5.0)
-    assert np.array_equal(cache(np.array([-4e-4, 1e-4, 0.0])), nodes[0] * 2.0 + 5.0) and not calls  # the first node
-    assert np.array_equal(cache(np.array([1.4e-3, 2e-4, 0.0])), nodes[1] * 2.0 + 5.0) and not calls
-    assert np.array_equal(cache.pose_m, nodes[1])
-    assert np.array_equal(cache(np.array([1.9e-3, 0.0, 0.0])), nodes[1] * 2.0 + 5.0)  # within 1 mm of node 1: kept
-    assert np.array_equal(cache(np.array([2.6e-3, 0.0, 0.0])), nodes[2] * 2.0 + 5.0)  # stale: the nearest, node 2
-    far = np.array([2e-3, 1.5e-3, 0.0])  # 1.5 mm from every node
-    assert np.array_equal(cache(far), far * 2.0) and len(calls) == 1 and np.array_equal(cache.pose_m, far)

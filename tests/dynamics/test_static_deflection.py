@@ -181,6 +181,20 @@ def test_a_cache_with_path_nodes_extrapolates_from_the_nearest_node_within_the_s
     assert np.array_equal(fresh.pose_m, off)
 
 
+def test_the_columns_of_many_poses_are_computed_in_blocks_with_the_same_values(monkeypatch):
+    """``linearised_columns`` over 10 poses in blocks of 3 (the block size that bounds a long board's work arrays)
+    gives the one-block values to round-off (1e-13 of each array's largest entry)."""
+    from pressfit.dynamics import control
+
+    machine = load_machine()
+    poses = np.array([0.0, 0.6, 0.0]) + np.random.default_rng(5).uniform(-0.05, 0.05, (10, 3))
+    whole = control.linearised_columns(machine, poses, True)
+    monkeypatch.setattr(control, "COLUMNS_BLOCK", 3)
+    blocks = control.linearised_columns(machine, poses, True)
+    for a, b in zip(whole, blocks, strict=True):
+        assert a.shape == b.shape and np.abs(a - b).max() <= 1e-13 * np.abs(a).max()
+
+
 def test_a_pose_just_inside_a_joint_limit_has_its_columns_and_gradient():
     """The gradient's difference stencil (0.1 mm about the pose) may reach past a joint limit the pose is within
     0.1 mm of: the closed forms hold there, so the pose's columns are computed (before, the stencil's reach check

@@ -93,6 +93,7 @@ GRAVITY_UPDATE_M = 1e-3  # the gravity feed-forward is recomputed when the estim
 # 9e-4 at 0.1 mm, 1.9e-2 at 2 mm), tests/dynamics/test_static_deflection.py
 DEFLECTION_UPDATE_M = 2e-3
 DEFLECTION_GRADIENT_STEP_M = 1e-4  # central differences of the compliance (error ~ h^2: 1e-8 relative)
+COLUMNS_BLOCK = 1024  # poses per batched call of linearised_columns (7168 closed-form poses: bounded work arrays)
 
 
 def _gravity_on(rigid: RigidLegModel) -> bool:
@@ -114,17 +115,22 @@ def static_deflection_columns(machine: Machine, rigid: RigidLegModel, pose_m: np
 
 def linearised_columns(machine: Machine, poses_m: np.ndarray, gravity: bool) -> tuple[np.ndarray, np.ndarray]:
     """The deflection rows (c0, c1) (k, 2, 3) at reachable poses (k, 3), m, and their gradient (k, 2, 3, 3) in the
-    pose, per m (central differences, one batched call of the closed forms at seven poses each; the six about a
-    pose need not be reachable: a pose within the step of a joint limit has its gradient too)."""
+    pose, per m (central differences: batched calls of the closed forms at seven poses each, ``COLUMNS_BLOCK`` poses
+    at a time; the six about a pose need not be reachable: a pose within the step of a joint limit has its gradient
+    too)."""
     h = DEFLECTION_GRADIENT_STEP_M * np.eye(3)
-    centres = kinematics.require_all_reachable(machine, poses_m)
-    poses = centres[:, None, :] + np.vstack([np.zeros((1, 3)), h, -h])  # (k, 7, 3)
-    flat = poses.reshape(-1, 3)
-    compliance = condensed_plate_compliance(machine.sensed_view, flat)
-    c0 = compliance[:, :3, 1]
-    c1 = weight_sag_m(machine, flat, compliance, check_reach=False) if gravity else np.zeros_like(c0)
-    rows = np.stack([c0, c1], axis=1).reshape(len(poses), 7, 2, 3)
-    return rows[:, 0], np.moveaxis((rows[:, 1:4] - rows[:, 4:7]) / (2.0 * DEFLECTION_GRADIENT_STEP_M), 1, -1)
+    centres = kinematics.require_all_reachable(machine, np.reshape(poses_m, (-1, 3)))
+    rows, gradients = np.empty((len(centres), 2, 3)), np.empty((len(centres), 2, 3, 3))
+    for start in range(0, len(centres), COLUMNS_BLOCK):
+        block = slice(start, start + COLUMNS_BLOCK)
+        flat = (centres[block, None, :] + np.vstack([np.zeros((1, 3)), h, -h])).reshape(-1, 3)  # 7 per pose
+        compliance = condensed_plate_compliance(machine.sensed_view, flat)
+        c0 = compliance[:, :3, 1]
+        c1 = weight_sag_m(machine, flat, compliance, check_reach=False) if gravity else np.zeros_like(c0)
+        seven = np.stack([c0, c1], axis=1).reshape(-1, 7, 2, 3)
+        rows[block] = seven[:, 0]
+        gradients[block] = np.moveaxis((seven[:, 1:4] - seven[:, 4:7]) / (2.0 * DEFLECTION_GRADIENT_STEP_M), 1, -1)
+    return rows, gradients
 
 
 @dataclass(kw_only=True)
@@ -146,6 +152,7 @@ class DeflectionCache:
     gradient: np.ndarray | None = None
     value: np.ndarray | None = None
     _nodes: tuple[np.ndarray, np.ndarray] | None = field(default=None, repr=False)  # rows, gradients at nodes_m
+    _node: int = field(default=0, repr=False)  # the last node taken: where the next search starts
 
     def __post_init__(self) -> None:
         if self.nodes_m is not None:
@@ -157,8 +164,9 @@ class DeflectionCache:
         """Rows and gradient for ``pose_m`` (m): kept while it is within ``DEFLECTION_UPDATE_M`` of ``pose_m``."""
         if self.pose_m is not None and not kernels.moved(pose_m, self.pose_m, DEFLECTION_UPDATE_M):
             return
-        node = -1 if self.nodes_m is None else kernels.nearest(self.nodes_m, pose_m, DEFLECTION_UPDATE_M)
+        node = -1 if self.nodes_m is None else kernels.nearest(self.nodes_m, pose_m, DEFLECTION_UPDATE_M, self._node)
         if node >= 0:
+            self._node = node
             self.pose_m, self.rows, self.gradient = self.nodes_m[node], *(a[node] for a in self._nodes)
         else:
             self.pose_m = np.array(pose_m, dtype=float)

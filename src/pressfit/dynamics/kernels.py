@@ -174,16 +174,35 @@ def moved(pose, reference, tolerance):
     return False
 
 
+NEAREST_WINDOW = 64  # nodes searched either side of the hint before the whole list
+
+
 @compiled
-def nearest(nodes, pose, tolerance):
-    """The index of the row of ``nodes`` (k, 3) nearest to ``pose`` (3,) in the infinity norm if it is within
-    ``tolerance`` of it (same units), else -1."""
+def _nearest_in(nodes, pose, tolerance, lo, hi):
     best, index = tolerance, -1
-    for i in range(nodes.shape[0]):
+    for i in range(lo, hi):
         d = max(abs(nodes[i, 0] - pose[0]), abs(nodes[i, 1] - pose[1]), abs(nodes[i, 2] - pose[2]))
         if d <= best:
             best, index = d, i
     return index
+
+
+@compiled
+def nearest(nodes, pose, tolerance, hint):
+    """The index of the row of ``nodes`` (k, 3) nearest to ``pose`` (3,) in the infinity norm among those within
+    ``tolerance`` of it (same units), else -1: the nearest within ``NEAREST_WINDOW`` rows of ``hint`` (the last
+    node taken: a path's nodes are in its order and the pose moves along it), followed row by row while a neighbour
+    is nearer, or, where none of those rows is within the tolerance, the nearest of all rows (a pose that came back
+    to an earlier part of the path)."""
+    k = nodes.shape[0]
+    index = _nearest_in(nodes, pose, tolerance, max(hint - NEAREST_WINDOW, 0), min(hint + NEAREST_WINDOW + 1, k))
+    if index < 0:
+        return _nearest_in(nodes, pose, tolerance, 0, k)
+    while True:  # on along the path while a neighbour is nearer (the window's best may sit at its edge)
+        best = _nearest_in(nodes, pose, tolerance, max(index - 1, 0), min(index + 2, k))
+        if best == index:
+            return index
+        index = best
 
 
 # within_limits' ``limits``: Table 3's (leg length m, alpha rad, beta rad), each min then max

@@ -60,32 +60,24 @@ SELF_STRESS_UPDATE_M = 1e-3  # the closures' self-stress direction is recomputed
 @dataclass(kw_only=True)
 class PoseCache:
     """``function(pose)`` recomputed only when the pose (m) moved more than ``tolerance_m`` from the pose of
-    the cached value (infinity norm); the caller states the error bound (|d function / d pose| tolerance).
-    ``nodes_m`` (k, 3) and ``node_values`` (k, ...): the function's values at those poses computed beforehand (a
-    planned path's, in one batched call: :func:`path_nodes`); a stale cache takes the nearest node within
-    ``tolerance_m`` of the pose (the same bound) and calls the function only where there is none."""
+    the cached value (infinity norm); the caller states the error bound (|d function / d pose| tolerance)."""
 
     function: Callable[[np.ndarray], np.ndarray]
     tolerance_m: float
     pose_m: np.ndarray | None = None
     value: np.ndarray | None = None
-    nodes_m: np.ndarray | None = None
-    node_values: np.ndarray | None = None
 
     def __call__(self, pose_m: np.ndarray) -> np.ndarray:
         if self.value is None or kernels.moved(pose_m, self.pose_m, self.tolerance_m):
-            node = -1 if self.nodes_m is None else kernels.nearest(self.nodes_m, pose_m, self.tolerance_m)
-            if node >= 0:
-                self.pose_m, self.value = self.nodes_m[node], self.node_values[node]
-            else:
-                self.pose_m, self.value = np.array(pose_m, dtype=float), self.function(pose_m)
+            self.pose_m, self.value = np.array(pose_m, dtype=float), self.function(pose_m)
         return self.value
 
 
 def path_nodes(path_m: np.ndarray, spacing_m: float) -> np.ndarray:
     """Poses (k, 3), m, along a sampled path (n, 3), m: every s-th sample and the last, s the most samples that
     span at most ``spacing_m`` (infinity norm) at the path's largest sample step, so a pose on the path is within
-    half the spacing of one (the caches' nodes, :class:`PoseCache`)."""
+    half the spacing of one, in the path's order (the deflection cache's nodes,
+    :class:`pressfit.dynamics.control.DeflectionCache`)."""
     path = np.asarray(path_m, dtype=float)
     step = float(np.abs(np.diff(path, axis=0)).max(initial=0.0))
     stride = max(1, int(spacing_m // step)) if step > 0.0 else len(path)
