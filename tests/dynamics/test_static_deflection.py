@@ -171,7 +171,7 @@ def test_a_cache_with_path_nodes_extrapolates_from_the_nearest_node_within_the_s
         fresh = DeflectionCache(machine=machine, nodes_m=cache.nodes_m)
         value = fresh(query)
         nearest = int(np.argmin(np.abs(cache.nodes_m - query).max(axis=1)))
-        assert np.array_equal(fresh.pose_m, cache.nodes_m[nearest])
+        assert np.array_equal(fresh.pose_m, cache.nodes_m[nearest]) and fresh._node == nearest  # the next hint
         exact = static_deflection_columns(machine, rigid, query).T
         scale = np.abs(exact).max(axis=1, keepdims=True)
         assert np.all(np.abs(value - exact) <= 3e-4 * scale)
