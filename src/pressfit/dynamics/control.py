@@ -259,8 +259,8 @@ class ForceLimitedController:
     limiter: bool
     estimate_m: np.ndarray
     preload_n: np.ndarray | None = None  # a (n - 3,), N; None: no preload
-    path_m: np.ndarray | None = None  # (k, 3), m: the planned path, whose feed-forward and deflection are computed
-    # beforehand at nodes GRAVITY_UPDATE_M and DEFLECTION_UPDATE_M apart (PoseCache, DeflectionCache); None: on demand
+    path_m: np.ndarray | None = None  # (k, 3), m: the planned path, whose deflection columns are computed beforehand
+    # at nodes DEFLECTION_UPDATE_M apart (DeflectionCache; the rigid scenario's); None: at the estimate, on demand
     integral_m_s: np.ndarray = field(default_factory=lambda: np.zeros(3))
     lift_m: float = 0.0
     clamped: bool = False

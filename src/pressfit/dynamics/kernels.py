@@ -11,8 +11,9 @@ quantity; the Python functions of :mod:`pressfit.dynamics.control`, :mod:`pressf
   N = E^T E = A A^T, and A's smallest singular value sqrt(lambda_min(N)) (the closed-form eigenvalues of a
   symmetric 3 x 3 matrix); :func:`internal_forces`: the preload amplitudes a set of tensions carries;
 * :func:`control`: Figure 12's PID with the force limiter (:mod:`pressfit.dynamics.control`);
-* :func:`moved`, :func:`nearest`: the pose caches' test and their search of precomputed nodes
-  (:class:`pressfit.dynamics.multibody.PoseCache`);
+* :func:`moved`: the pose caches' test (:class:`pressfit.dynamics.multibody.PoseCache`,
+  :class:`pressfit.dynamics.control.DeflectionCache`); :func:`nearest`: the deflection cache's search of the nodes
+  computed beforehand along the planned path; :func:`extrapolated`: its rows extrapolated to a pose;
 * :func:`first_order`: the ideal force drive's step (:mod:`pressfit.dynamics.actuators`);
 * :func:`contact_law`, :func:`solve_contact`: the contact law and the bisection of the series compliance
   (:mod:`pressfit.dynamics.contact`);
