@@ -103,6 +103,7 @@ from scipy.linalg.lapack import dgetrs as _getrs
 from scipy.linalg.lapack import dposv as _posv
 
 from pressfit.description.machine import Damping, Machine
+from pressfit.dynamics import kernels
 from pressfit.dynamics.inertia import inertial_model, set_stem_inertias
 from pressfit.dynamics.machine.base import SECTIONS, DriveInput, Energy, MachineState, SectionLoads
 from pressfit.errors import ConvergenceError, PressfitError
@@ -626,10 +627,8 @@ class FlexibleMachine:
         """The stem lengths (n,), m, the next step from ``state`` places the stems at: the state's, or its leg
         lengths less the cylinders' where a stem changed by more than STEM_UPDATE_M (module doc)."""
         stem = state.stem_lengths_m
-        lengths = state.q[self.act_q]
-        if np.max(np.abs(lengths - self.machine.cylinder.length_m - stem)) > STEM_UPDATE_M:
-            stem = lengths - self.machine.cylinder.length_m
-        return stem
+        exposed = state.q[self.act_q] - self.machine.cylinder.length_m
+        return exposed if kernels.moved(exposed, stem, STEM_UPDATE_M) else stem
 
     def replacement_energy_j(self, state: FlexibleState) -> float:
         """The change of the machine's energy (kinetic + elastic + potential, J) when the next step from ``state``
