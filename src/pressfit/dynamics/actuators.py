@@ -98,13 +98,11 @@ class ForceActuators:
 
     def step(self, force_n: np.ndarray, command_n: np.ndarray, dt_s: float) -> np.ndarray:
         """The actuator forces (N) after ``dt_s`` (s) from ``force_n`` under the held command ``command_n`` (N)."""
-        decay = math.exp(-dt_s / self.time_constant_s)
-        if type(force_n) is np.ndarray and type(command_n) is np.ndarray and force_n.ndim == 1 \
-                and force_n.shape == command_n.shape and force_n.dtype == command_n.dtype == np.float64:
-            out = np.empty(force_n.size)  # a run's step: two vectors of one length, as the kernel takes them
-            kernels.first_order(force_n, command_n, float(self.force_limit_n), decay, out)
-            return out
-        force, command = (np.ascontiguousarray(x, dtype=float).ravel() for x in np.broadcast_arrays(force_n, command_n))
+        force, command, shape = force_n, command_n, None  # a run's step: two float vectors of one length
+        if not (type(force) is np.ndarray and type(command) is np.ndarray and force.ndim == 1
+                and force.shape == command.shape and force.dtype == command.dtype == np.float64):
+            shape = np.broadcast_shapes(np.shape(force_n), np.shape(command_n))  # anything else, as the kernel takes it
+            force, command = (np.ascontiguousarray(x, dtype=float).ravel() for x in np.broadcast_arrays(force, command))
         out = np.empty(force.size)
-        kernels.first_order(force, command, float(self.force_limit_n), decay, out)
-        return out.reshape(np.broadcast_shapes(np.shape(force_n), np.shape(command_n)))
+        kernels.first_order(force, command, float(self.force_limit_n), math.exp(-dt_s / self.time_constant_s), out)
+        return out if shape is None else out.reshape(shape)

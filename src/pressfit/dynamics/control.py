@@ -157,8 +157,7 @@ class DeflectionCache:
     def __post_init__(self) -> None:
         if self.nodes_m is not None:
             self.nodes_m = np.ascontiguousarray(self.nodes_m, dtype=float)
-            rows, gradients = linearised_columns(self.machine, self.nodes_m, self.gravity)
-            self._nodes = (rows, np.ascontiguousarray(gradients))
+            self._nodes = linearised_columns(self.machine, self.nodes_m, self.gravity)
 
     def refresh(self, pose_m: np.ndarray) -> None:
         """Rows and gradient for ``pose_m`` (m): kept while it is within ``DEFLECTION_UPDATE_M`` of ``pose_m``."""
@@ -171,7 +170,7 @@ class DeflectionCache:
         else:
             self.pose_m = np.array(pose_m, dtype=float)
             rows, gradient = linearised_columns(self.machine, self.pose_m[None], self.gravity)
-            self.rows, self.gradient = rows[0], np.ascontiguousarray(gradient[0])
+            self.rows, self.gradient = rows[0], gradient[0]
 
     def __call__(self, pose_m: np.ndarray) -> np.ndarray:
         self.refresh(pose_m)
