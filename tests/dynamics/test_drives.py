@@ -20,6 +20,7 @@ from readme import assert_printed, readme_fragment
 from pressfit.cli import main
 from pressfit.description.cases import load_case
 from pressfit.description.machine import Machine, load_machine, read_toml
+from pressfit.dynamics.actuators import ForceActuators
 from pressfit.dynamics import drives
 from pressfit.dynamics.inertia import inertial_model
 from pressfit.errors import DriveStepError, ModelFileError
@@ -250,6 +251,14 @@ def test_force_kind_is_the_first_order_lag_in_closed_form(machine):
         elapsed += dt
         np.testing.assert_allclose(force, target + (n0 - target) * math.exp(-elapsed / tau), rtol=1e-12, atol=1e-9)
     np.testing.assert_array_equal(drive.saturated(command), np.abs(command) > limit)
+    lag = ForceActuators.of(machine)  # any shapes the closed form broadcasts over: its shape, the same values
+    decay = math.exp(-1e-3 / tau)
+    grid = np.array([[-200.0, 0.0, 150.0], [400.0, -50.0, 10.0]])
+    for force, cmd in ((grid, 3.0 * limit), (np.float64(-200.0), np.array(0.5 * limit)), ([1.0, 2.0], [3.0, 4.0])):
+        expected = np.clip(cmd, -limit, limit) + (np.asarray(force) - np.clip(cmd, -limit, limit)) * decay
+        out = lag.step(force, cmd, 1e-3)
+        assert out.shape == np.broadcast_shapes(np.shape(force), np.shape(cmd))
+        np.testing.assert_allclose(out, expected, rtol=1e-14)
 
 
 # --- electric --------------------------------------------------------------------------------------------------

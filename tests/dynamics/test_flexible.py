@@ -116,6 +116,26 @@ def test_passive_undamped_run_conserves_energy(machine):
     assert _energy_drift(machine, 1e-3, rho_inf=0.8) > 100 * d1
 
 
+def test_energies_are_the_mass_matrix_quadratic_form_and_the_centre_of_masss_height(machine):
+    """``energy`` of a moving state against other Pinocchio algorithms: kinetic 1/2 v^T M(q) v (``crba``, armature
+    included) and potential -m g . c(q) (the total mass at the centre of mass), to 1e-12 relative (the energy
+    balance sums the two, so only a test of each tells them apart)."""
+    fm = FlexibleMachine(machine, POSE_A, springs_per_segment=2)
+    s = fm.rest_state()
+    s = fm.with_velocity(s, 1e-3 * np.random.default_rng(2).normal(size=fm.nv))
+    for _ in range(5):
+        s = fm.step(s, s.drive, np.zeros(6), 1e-3)
+    e = fm.energy(s)
+    data = fm.model.createData()
+    mass = pin.crba(fm.model, data, s.q)
+    mass = np.triu(mass) + np.triu(mass, 1).T
+    assert e.kinetic_j == pytest.approx(0.5 * s.v @ mass @ s.v, rel=1e-12) and e.kinetic_j > 1e-9
+    com = pin.centerOfMass(fm.model, data, s.q)
+    expected = -pin.computeTotalMass(fm.model) * float(np.asarray(fm.model.gravity.linear) @ com)
+    assert e.potential_j == pytest.approx(expected, rel=1e-12)
+    assert abs(e.potential_j - e.kinetic_j) > 0.5 * abs(e.potential_j)
+
+
 def _section_array(eq):
     return np.array([[[sw.N, sw.V_x, sw.V_y, sw.M_x, sw.M_y, sw.T] for sw in (leg.sections[k] for k in SECTIONS)]
                      for leg in eq.legs])
