@@ -20,8 +20,8 @@ from readme import assert_printed, readme_fragment
 from pressfit.cli import main
 from pressfit.description.cases import load_case
 from pressfit.description.machine import Machine, load_machine, read_toml
-from pressfit.dynamics.actuators import ForceActuators
 from pressfit.dynamics import drives
+from pressfit.dynamics.actuators import ForceActuators
 from pressfit.dynamics.inertia import inertial_model
 from pressfit.errors import DriveStepError, ModelFileError
 from pressfit.kinematics.closed_form import leg_vectors
