@@ -122,32 +122,56 @@ def stem_pieces(machine: Machine, springs_per_segment: int, stem_length_m: float
     z = -L_r) and the body of each stem spring k (origin at the spring, L_c + (k + 1/2) L_s / n from the base
     cardan: the exposed rod up to the next spring or the plate cardan), for an exposed stem length L_s (m);
     kg, m, kg m^2. Their masses sum to the rod's and the moving parts' at every L_s."""
-    n, rod = springs_per_segment, machine.stem.length_m
-    ls = float(stem_length_m)
-    mu = mass_scale * machine.mass.density_kg_per_m3 * machine.stem_section.area_m2  # kg/m
-    radius = machine.stem.diameter_m / 2
-    # (z0, z1) of each piece in its body's frame: actuator, then springs 0 .. n-1
-    spans = [(-rod, -ls + ls / (2 * n))] + [(0.0, ls / n if k < n - 1 else ls / (2 * n)) for k in range(n)]
-    pieces = []
-    for z0, z1 in spans:  # a solid rod along z about its centre (the tube of _tube without a bore), moved there
-        piece = pin.Inertia.FromCylinder(mu * (z1 - z0), radius, z1 - z0)
-        piece.lever = np.array([0.0, 0.0, (z0 + z1) / 2])
-        pieces.append(piece)
-    moving = mass_scale * machine.mass.actuator_moving_mass_kg
-    if moving > 0.0:
-        pieces[0] = pieces[0] + pin.Inertia(moving, np.array([0.0, 0.0, -rod]), np.zeros((3, 3)))
-    return pieces
+    return _StemRod(machine, springs_per_segment, mass_scale).pieces(float(stem_length_m))
+
+
+class _StemRod:
+    """:func:`stem_pieces` with what does not depend on the stem length computed once (a flexible run re-writes
+    the pieces on many of its steps)."""
+
+    def __init__(self, machine: Machine, springs_per_segment: int, mass_scale: float) -> None:
+        self.n, self.rod = springs_per_segment, machine.stem.length_m
+        self.mu = mass_scale * machine.mass.density_kg_per_m3 * machine.stem_section.area_m2  # kg/m
+        self.radius = machine.stem.diameter_m / 2
+        moving = mass_scale * machine.mass.actuator_moving_mass_kg
+        self.moving = pin.Inertia(moving, np.array([0.0, 0.0, -self.rod]), np.zeros((3, 3))) if moving > 0.0 else None
+
+    def pieces(self, ls: float) -> list[pin.Inertia]:
+        n, mu, radius = self.n, self.mu, self.radius
+        # (z0, z1) of each piece in its body's frame: actuator, then springs 0 .. n-1
+        spans = [(-self.rod, -ls + ls / (2 * n))] + [(0.0, ls / n if k < n - 1 else ls / (2 * n)) for k in range(n)]
+        pieces = []
+        for z0, z1 in spans:  # a solid rod along z about its centre (the tube of _tube without a bore), moved there
+            piece = pin.Inertia.FromCylinder(mu * (z1 - z0), radius, z1 - z0)
+            piece.lever = np.array([0.0, 0.0, (z0 + z1) / 2])
+            pieces.append(piece)
+        if self.moving is not None:
+            pieces[0] = pieces[0] + self.moving
+        return pieces
+
+
+class StemInertias:
+    """Writes the stem pieces (:func:`stem_pieces`) of exposed stem lengths into a model's actuator and stem-spring
+    bodies (a copy of ``mm.model`` with :meth:`MachineModel.place_stem` at the same lengths; those bodies carry
+    nothing else), the bodies and the rod's constants found once."""
+
+    def __init__(self, mm: MachineModel, mass_scale: float = 1.0) -> None:
+        self.rod = _StemRod(mm.machine, mm.springs_per_segment, mass_scale)
+        self.bodies = [_chain(mm, i, ids["actuator"], "stem") for i, ids in enumerate(mm.leg_joint_ids)]
+
+    def write(self, model: pin.Model, stem_lengths_m: np.ndarray) -> None:
+        """Write the pieces for exposed stem lengths (n,), m."""
+        inertias = model.inertias
+        for bodies, ls in zip(self.bodies, np.asarray(stem_lengths_m, dtype=float).tolist(), strict=True):
+            for j, piece in zip(bodies, self.rod.pieces(ls), strict=True):
+                inertias[j] = piece
 
 
 def set_stem_inertias(mm: MachineModel, model: pin.Model, stem_lengths_m: np.ndarray, mass_scale: float = 1.0
                       ) -> None:
     """Write the stem pieces (:func:`stem_pieces`) of exposed stem lengths (n,) (m) into ``model``'s actuator and
-    stem-spring bodies (a copy of ``mm.model`` with :meth:`MachineModel.place_stem` at the same lengths; those
-    bodies carry nothing else)."""
-    for i, ids in enumerate(mm.leg_joint_ids):
-        pieces = stem_pieces(mm.machine, mm.springs_per_segment, float(stem_lengths_m[i]), mass_scale)
-        for j, piece in zip(_chain(mm, i, ids["actuator"], "stem"), pieces, strict=True):
-            model.inertias[j] = piece
+    stem-spring bodies (:class:`StemInertias`, once)."""
+    StemInertias(mm, mass_scale).write(model, stem_lengths_m)
 
 
 def total_mass_kg(model: pin.Model) -> float:

@@ -17,7 +17,7 @@ axial compliance, ``MachineModel.spring_stiffness``). The stem springs' placemen
 leg length (re-placed when a stem changed by STEM_UPDATE_M: the stiffness n E I_s / L_s then moves by at most
 2e-4 relative at the shortest 50 mm stem), and so does the stem's mass: a rod of fixed length whose exposed part
 is spread over the stem springs' bodies and whose inner part rides on the actuator body
-(:func:`pressfit.dynamics.inertia.set_stem_inertias`, re-written with the placements), so a state sees the weight
+(:class:`pressfit.dynamics.inertia.StemInertias`, re-written with the placements), so a state sees the weight
 and inertia of the pose it stands at, not the build pose's.
 Cardan play: ``cardan_compliance`` (:class:`pressfit.mechanics.model.CardanCompliance`, e.g. the dead zones
 of :meth:`pressfit.mechanics.clearance.Clearance.cardan_compliance`) adds its virtual joints and laws.
@@ -104,7 +104,7 @@ from scipy.linalg.lapack import dposv as _posv
 
 from pressfit.description.machine import Damping, Machine
 from pressfit.dynamics import kernels
-from pressfit.dynamics.inertia import inertial_model, set_stem_inertias
+from pressfit.dynamics.inertia import StemInertias, inertial_model
 from pressfit.dynamics.machine.base import SECTIONS, DriveInput, Energy, MachineState, SectionLoads
 from pressfit.errors import ConvergenceError, PressfitError
 from pressfit.mechanics import data_pool
@@ -117,6 +117,7 @@ TANGENT_REFRESH = 0.05  # and again when a drive's tangent (a function) moved by
 MAX_STEP_FRACTION = 0.05  # dt at most 1/20 of the first mode's period
 STEM_UPDATE_M = 1e-5  # stem placements and stiffnesses follow the leg length to this, m
 RHO_INF = 0.8  # default spectral radius at infinite frequency (numerical damping)
+_NO_GRAVITY = pin.Motion.Zero()
 
 
 @dataclass(frozen=True, kw_only=True)
@@ -179,6 +180,7 @@ class FlexibleMachine:
         if not gravity:
             self.model.gravity = pin.Motion.Zero()
         self.data = data_pool.lend(self.model)
+        self._gravity = pin.Motion(self.model.gravity)  # kept (the damping force turns it off for a pass)
         self.cms = mm.constraint_models
         self.cds = mm.constraint_datas()
         self.nv = self.model.nv
@@ -208,6 +210,7 @@ class FlexibleMachine:
         self.alpha_m, self.alpha_f, self.gamma, self.beta = generalized_alpha(rho_inf)
         self.rho_inf = float(rho_inf)
         self._placed = np.full(self.legs, np.nan)
+        self._stems = StemInertias(mm)
         self._placed_key = b""
         self._closure_key: bytes | None = None  # the q (bytes) of ``_closure`` (B, Phi), None: stale
         self._closure: tuple = ()
@@ -244,7 +247,7 @@ class FlexibleMachine:
             return
         self._placed_key = key
         self.mm.place_stem(self.model, stem_lengths_m)
-        set_stem_inertias(self.mm, self.model, np.asarray(stem_lengths_m, dtype=float))
+        self._stems.write(self.model, stem_lengths_m)
         self._closure_key = None
         self._k = self.mm.spring_stiffness(stem_lengths_m + self.machine.cylinder.length_m)
         if self._series is not None:  # a stiffness in series with each actuator spring (closed cardan plays)
@@ -280,10 +283,12 @@ class FlexibleMachine:
         key = q.tobytes()
         if key == self._closure_key:
             return self._closure
-        pin.computeJointJacobians(self.model, self.data, q)
-        for cm, cd in zip(self.cms, self.cds):
-            cm.calc(self.model, self.data, cd)
-        b = np.array(pin.getConstraintsJacobian(self.model, self.data, self.cms, self.cds))
+        model, data = self.model, self.data
+        pin.computeJointJacobians(model, data, q)
+        b = np.empty((6 * self.legs, self.nv))  # a new array: a caller may still hold the last one
+        for i, (cm, cd) in enumerate(zip(self.cms, self.cds)):  # one closure at a time: 1.6x getConstraintsJacobian
+            cm.calc(model, data, cd)
+            b[6 * i:6 * i + 6] = pin.getConstraintJacobian(model, data, cm, cd)
         phi = np.concatenate([cd.extract().constraint_position_error for cd in self.cds])
         self._closure, self._closure_key = (b, phi), key
         return b, phi
@@ -546,12 +551,16 @@ class FlexibleMachine:
     def _damping_force(self, q: np.ndarray, rel: np.ndarray, rest: np.ndarray, k: np.ndarray,
                        drive_input: DriveInput) -> np.ndarray:
         """The Rayleigh force alpha M (v - v_r) + beta K (v - v_r) (nv,) at the end of a step (``rel`` = v - v_r),
-        for the damping's work over the step: M rel by Pinocchio's rnea at zero velocity less the gravity term."""
+        for the damping's work over the step: M rel by Pinocchio's rnea at zero velocity with the gravity off."""
         alpha, beta = self.damping.alpha_per_s, self.damping.beta_s
         force = np.zeros(self.nv)
-        if alpha:
-            force += alpha * (pin.rnea(self.model, self.data, q, np.zeros(self.nv), rel)
-                              - pin.computeGeneralizedGravity(self.model, self.data, q))
+        if alpha:  # M rel: rnea at zero velocity with the gravity off
+            model, gravity = self.model, self._gravity
+            model.gravity = _NO_GRAVITY
+            try:
+                force += alpha * pin.rnea(model, self.data, q, np.zeros(self.nv), rel)
+            finally:
+                model.gravity = gravity
         if beta:
             kt = self._springs(q, rest, k, drive_input)[1] if self.nonlinear else k
             force[self.sv] += beta * kt * rel[self.sv]
