@@ -395,30 +395,30 @@ class FlexibleMachine:
     def _external(self, q: np.ndarray, wrench: np.ndarray, drive: DriveInput) -> np.ndarray:
         """Generalised forces (nv,) of the plate wrench and of force drives."""
         tau = np.zeros(self.nv)
-        rot = pin.Quaternion(q[3:7]).matrix()
-        tau[0:3], tau[3:6] = rot.T @ wrench[:3], rot.T @ wrench[3:]
+        if wrench.any():
+            rot = pin.Quaternion(q[3:7]).matrix()
+            tau[0:3], tau[3:6] = rot.T @ wrench[:3], rot.T @ wrench[3:]
         if drive.kind == "force":
             tau[self.act_v] -= drive.values
         return tau
 
     # --- the step ------------------------------------------------------------------------------------
-    def step(self, state: FlexibleState, drive_input: DriveInput, plate_wrench: np.ndarray, dt_s: float,
+    def step(self, state: FlexibleState, drive_input: DriveInput, plate_wrench: np.ndarray | None, dt_s: float,
              drive: Callable[[np.ndarray], np.ndarray] | None = None,
              drive_stiffness_n_per_m: np.ndarray | Callable[[], np.ndarray] | None = None,
              contact: Callable[[float], tuple[float, float]] | None = None) -> FlexibleState:
-        """One generalised-alpha step of ``dt_s`` (s) (module doc); the drive input and the plate wrench
-        (6,) (N, N m, world, plate centre) are held over the step. With force drives, ``drive`` (optional) gives
-        the delivered tensions (n,), N, as a function of the actuator lengths (n,), m, at the step's end (a drive
-        model stepped over the step at the mean rate they make): it is evaluated at every Newton iteration, so the
-        drive's own stiffness (an oil column) is implicit in the step like the legs' springs (module doc, "Drives
-        in the step"); ``drive_stiffness_n_per_m`` (n,) its tangent -dN/dl for the iteration matrix (default 0;
-        an approximate tangent only slows the modified Newton), or a function giving it where ``drive``'s last
-        call left it (asked again at each refactoring: a cardan play's tangent changes across its contact edge).
-        ``contact`` (optional): the force on the tool along world +y (N) and its stiffness -dF/dy (N/m) at the plate
-        centre's world y (m), evaluated at every iteration like ``drive`` (implicit; added to the plate wrench at the
-        start's orientation). The state records the tensions of the last iterate (``drive``'s last call).
-        Refuses (PressfitError) a step longer than MAX_STEP_FRACTION of the first mode's period or one whose
-        Newton does not converge."""
+        """One generalised-alpha step of ``dt_s`` (s) (module doc); the drive input and the plate wrench (6,) (N, N m,
+        world, plate centre; None: none) are held over the step. With force drives, ``drive`` (optional) gives the
+        delivered tensions (n,), N, as a function of the actuator lengths (n,), m, at the step's end (a drive model
+        stepped over the step at the mean rate they make): it is evaluated at every Newton iteration, so the drive's own
+        stiffness (an oil column) is implicit in the step like the legs' springs (module doc, "Drives in the step");
+        ``drive_stiffness_n_per_m`` (n,) its tangent -dN/dl for the iteration matrix (default 0; an approximate tangent
+        only slows the modified Newton), or a function giving it where ``drive``'s last call left it (asked again at
+        each refactoring: a cardan play's tangent changes across its contact edge). ``contact`` (optional): the force on
+        the tool along world +y (N) and its stiffness -dF/dy (N/m) at the plate centre's world y (m), evaluated at every
+        iteration like ``drive`` (implicit; added to the plate wrench at the start's orientation). The state records the
+        tensions of the last iterate (``drive``'s last call). Refuses (PressfitError) a step longer than
+        MAX_STEP_FRACTION of the first mode's period or one whose Newton does not converge."""
         h = self._step_length(dt_s)
         wrench = _wrench(plate_wrench)
         stem = self.stems_for(state)
@@ -431,7 +431,7 @@ class FlexibleMachine:
         q_n, v_n, acc_n, a_n = state.q, state.v, state.acceleration, state.pseudo_acceleration
         base_dq = h * v_n + h * h * (0.5 - b) * a_n
         base_v = v_n + h * (1 - g) * a_n
-        v_r = self._rigid_velocity(q_n, rates) if np.any(rates) else np.zeros(self.nv)
+        v_r = self._rigid_velocity(q_n, rates) if rates.any() else np.zeros(self.nv)
         key = (h, drive_input.kind, self._placed.tobytes())
         implicit = drive is not None and drive_input.kind == "force"
         self._set_drive_tangent(drive_stiffness_n_per_m if implicit else None)
@@ -447,10 +447,11 @@ class FlexibleMachine:
         scale, c_acc, c_old = 1.0 / (h * h * b * ca), (1 - af) / (1 - am), (af * acc_n - am * a_n) / (1 - am)
         rhs = np.empty(nv + 6 * self.legs)
         alpha, beta = self.damping.alpha_per_s, self.damping.beta_s
+        hhb, hg = h * h * b, h * g
         while True:
             a_ps = c_acc * acc + c_old
-            q = pin.integrate(self.model, q_n, base_dq + h * h * b * a_ps)
-            v = base_v + h * g * a_ps
+            q = pin.integrate(self.model, q_n, base_dq + hhb * a_ps)
+            v = base_v + hg * a_ps
             bj, phi = self._jacobian(q)
             rel = v - v_r  # M (acc + alpha rel) + h: the inertia and the mass-proportional damping in one rnea
             if implicit:
@@ -463,8 +464,9 @@ class FlexibleMachine:
             r[sv] += self._spring_residual(q, rest, k, drive_input, rel[sv], beta)
             rhs[:nv], rhs[nv:] = r, phi
             dx = self._solve(rhs)
-            size = float(np.abs(dx[:nv]).max())
-            acc -= scale * dx[:nv]
+            dq = dx[:nv]
+            size = max(float(dq.max()), -float(dq.min()))  # |dq|_inf
+            acc -= scale * dq
             lam -= dx[nv:]
             it += 1
             if size <= NEWTON_TOL:

@@ -95,7 +95,7 @@ class FlexibleScenario:
         self.series = Series(machine, steps, sim.start_m)
         placement, subtree = fm.section_state(state)  # per step; the section loads from them after the run (batched)
         self.placements, self.wrenches = np.empty((steps, *placement.shape)), np.empty((steps, *subtree.shape))
-        self.no_wrench, self.no_axial = np.zeros(6), (0.0,) * len(machine.legs)  # the contact is the step's
+        self.no_axial = (0.0,) * len(machine.legs)
         self.internal = np.empty(machine.redundancy)
 
     def _side_kinetic_j(self) -> float:
@@ -107,16 +107,17 @@ class FlexibleScenario:
         """One step of the machine and its drives under ``command`` (N): the drive stepped once and held (a force
         drive), or inside the step's Newton, behind the plays if any; returns what the drives act through."""
         fm, drives, dt, play = self.fm, self.drives, self.dt, self.play
+        # no plate wrench (None): the contact acts inside the step (``contact``)
         if not drives.follows_travel:  # its tension does not follow the travel: stepped once, held over the step
             self.drive, self.tension = drives.step(self.drive, command, self.lengths, self.rates, dt)
-            self.state = fm.step(self.state, DriveInput.forces(self.tension), self.no_wrench, dt, contact=self._contact)
+            self.state = fm.step(self.state, DriveInput.forces(self.tension), None, dt, contact=self._contact)
             return None
         stepped = DriveOverStep(drives, self.drive, command, self.lengths, dt)
         through, k_step = stepped, drives.step_stiffness_n_per_m(self.lengths)
         if play is not None:
             through = play.over_step(stepped, self.tool, self.tension, k_step, self.side, dt)
             k_step = through.tangent_n_per_m
-        self.state = fm.step(self.state, DriveInput.forces(self.tension), self.no_wrench, dt, through, k_step,
+        self.state = fm.step(self.state, DriveInput.forces(self.tension), None, dt, through, k_step,
                              contact=self._contact)
         self.drive, self.tension = stepped.result
         if play is not None:
@@ -147,7 +148,7 @@ class FlexibleScenario:
         replaced = fm.replacement_energy_j(self.state)  # the step re-places the stems first
         through = self._advance(command)
         state = self.state
-        guard.finite(bool(np.all(np.isfinite(state.q)) and np.all(np.isfinite(state.v))), t)
+        guard.finite(bool(np.isfinite(state.q).all() and np.isfinite(state.v).all()), t)
         drift = fm.closure_error(state)[0]
         guard.drift(drift, t)
         self.placements[k], self.wrenches[k] = fm.section_state(state)
