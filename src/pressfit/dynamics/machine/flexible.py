@@ -144,6 +144,19 @@ class FlexibleState(MachineState):
 
 
 @dataclass(frozen=True, kw_only=True)
+class _SectionViews:
+    """Numpy views into a FlexibleMachine's Pinocchio Data and external forces (they follow every pass): the
+    external forces (zero but on the plate ends) and the plate ends' entries, the closure frames' dual action
+    matrices (n, 6, 6) (c1.act of a force), the section joints' (rotation, translation) and the subtrees' wrenches."""
+
+    fext: pin.StdVec_Force
+    closures: list[np.ndarray]
+    closure_dual: np.ndarray
+    placements: list[tuple[np.ndarray, np.ndarray]]
+    forces: list[np.ndarray]
+
+
+@dataclass(frozen=True, kw_only=True)
 class _Modes:
     frequencies_hz: np.ndarray
     shapes: np.ndarray  # (k, nv) mass-normalised
@@ -183,6 +196,7 @@ class FlexibleMachine:
         self._gravity = pin.Motion(self.model.gravity)  # kept (the damping force turns it off for a pass)
         self.cms = mm.constraint_models
         self.cds = mm.constraint_datas()
+        self._phi = [cd.extract().constraint_position_error for cd in self.cds]  # views: follow each calc
         self.nv = self.model.nv
         sp = mm.springs
         self.sq = np.array([s.idx_q for s in sp])
@@ -233,7 +247,7 @@ class FlexibleMachine:
         self.refreshes = 0  # iteration-matrix factorisations so far (a diagnostic)
         self._factor: tuple | None = None
         self._factor_key: tuple | None = None
-        self._fext: pin.StdVec_Force | None = None  # section_loads' external forces
+        self._views: _SectionViews | None = None  # section_state's, made at its first call
         self._drive_k = np.zeros(len(self.act))  # implicit force drives' tangent -dN/dl in the iteration matrix, N/m
         self._drive_tangent: Callable[[], np.ndarray] | None = None
         self._contact_k, self._contact_dir = 0.0, np.zeros(3)  # an implicit contact's tangent (N/m) and R^T e_y
@@ -289,7 +303,7 @@ class FlexibleMachine:
         for i, (cm, cd) in enumerate(zip(self.cms, self.cds)):  # one closure at a time: 1.6x getConstraintsJacobian
             cm.calc(model, data, cd)
             b[6 * i:6 * i + 6] = pin.getConstraintJacobian(model, data, cm, cd)
-        phi = np.concatenate([cd.extract().constraint_position_error for cd in self.cds])
+        phi = np.concatenate(self._phi)
         self._closure, self._closure_key = (b, phi), key
         return b, phi
 
@@ -688,18 +702,29 @@ class FlexibleMachine:
         rest, batched): the placements (n, 3, 4) (rotation | translation, m) of the joints involved and the
         wrench (3n, 6) (force N, moment N m; local) each section's plate-side subtree receives from its parent."""
         self._place(state.stem_lengths_m)
-        if self._fext is None:  # external forces per joint: zero but on the plate ends (set below)
-            self._fext = pin.StdVec_Force()
-            for _ in range(self.model.njoints):
-                self._fext.append(pin.Force.Zero())
-        fext, lam = self._fext, state.multipliers.reshape(self.legs, 6)
-        for i, (j, c1) in enumerate(zip(self.plate_end, self._c1)):  # the closure force, in joint j's frame
-            fext[j] = c1.act(pin.Force(lam[i]))
+        views = self._views if self._views is not None else self._section_views()
+        loads = np.einsum("lij,lj->li", views.closure_dual, state.multipliers.reshape(self.legs, 6))  # c1.act(lambda)
+        for view, load in zip(views.closures, loads):  # the closure forces, in the plate-end joints' frames
+            view[:] = load
         pin.forwardKinematics(self.model, self.data, state.q)  # oMi: Pinocchio's rnea leaves them as they were
-        pin.rnea(self.model, self.data, state.q, state.v, state.acceleration, fext)
+        pin.rnea(self.model, self.data, state.q, state.v, state.acceleration, views.fext)
+        placements = np.empty((len(views.placements), 3, 4))
+        for k, (rotation, translation) in enumerate(views.placements):
+            placements[k, :, :3], placements[k, :, 3] = rotation, translation
+        return placements, np.array(views.forces)
+
+    def _section_views(self) -> _SectionViews:
+        """:meth:`section_state`'s views into the Data (read, or written, in place: no Pinocchio object a step)."""
+        fext = pin.StdVec_Force()
+        for _ in range(self.model.njoints):
+            fext.append(pin.Force.Zero())
         omi, f_sub = self.data.oMi, self.data.f
         joints, subs = self._sec_joints
-        return (np.array([omi[j].homogeneous[:3] for j in joints]), np.array([f_sub[j].vector for j in subs]))
+        self._views = _SectionViews(fext=fext, closures=[fext[j].vector for j in self.plate_end],
+                                    closure_dual=np.array([c1.toDualActionMatrix() for c1 in self._c1]),
+                                    placements=[(omi[j].rotation, omi[j].translation) for j in joints],
+                                    forces=[f_sub[j].vector for j in subs])
+        return self._views
 
     def section_wrenches_from(self, placements: np.ndarray, wrenches: np.ndarray) -> np.ndarray:
         """(..., n, 3, 9) per leg and section (module doc): the section point (m), the force (N) and the moment
