@@ -8,7 +8,7 @@ import pinocchio as pin
 import pytest
 
 from pressfit.dynamics.machine.base import DriveInput
-from pressfit.dynamics.machine.flexible import FlexibleMachine
+from pressfit.dynamics.machine.flexible import FlexibleMachine, Rayleigh
 
 OFF_CENTRE = np.array([0.05, 0.65, -0.08])
 WRENCH = np.array([40.0, -250.0, 25.0, 6.0, -4.0, 3.0])
@@ -39,7 +39,7 @@ def test_a_step_evaluates_the_closures_once_per_iteration_and_once_at_its_end(ma
     s = fm.rest_state()
     placements = []
     place = fm.mm.place_stem
-    monkeypatch.setattr(fm.mm, "place_stem", lambda model, stems: (placements.append(1), place(model, stems)))
+    monkeypatch.setattr(fm.mm, "place_stem", lambda *args: (placements.append(1), place(*args)))
     counts = _counting(monkeypatch, ["computeJointJacobians", "crba"])
     refreshes, iterations, steps = fm.refreshes, 0, 40
     lengths = s.drive.values.copy()
@@ -157,3 +157,89 @@ def test_the_flexible_run_keeps_blas_on_one_thread(monkeypatch):
         run_plan(case, None, plan, None, True, False)
         assert seen == [{1}]
         assert set(blas_threads()) == {2}
+
+
+def test_the_closures_read_through_views_equal_pinocchios_calls(machine):
+    """The closure Jacobian B (one closure at a time) and error Phi (numpy views of the constraint datas) on a state
+    1e-2 m / rad open, after the machine evaluated another configuration: equal to getConstraintsJacobian and the
+    constraint datas' own errors on a fresh Data, bit for bit."""
+    fm = FlexibleMachine(machine, OFF_CENTRE)
+    rest = fm.rest_state(WRENCH)
+    fm._jacobian(rest.q)
+    s = _opened(fm, rest)
+    b, phi = fm._jacobian(s.q)
+    model, data, cds = fm.model, fm.model.createData(), [cm.createData() for cm in fm.cms]
+    pin.computeJointJacobians(model, data, s.q)
+    for cm, cd in zip(fm.cms, cds):
+        cm.calc(model, data, cd)
+    assert np.array_equal(b, np.array(pin.getConstraintsJacobian(model, data, fm.cms, cds)))
+    expected = np.concatenate([cd.extract().constraint_position_error for cd in cds])
+    assert np.array_equal(phi, expected) and np.abs(expected).max() > 1e-3
+
+
+def test_the_section_state_read_through_views_equals_pinocchios_objects(machine):
+    """section_state (the closure forces written and the placements and subtree wrenches read through numpy views
+    of the Data) on a state 1e-3 m / rad open, after the machine stepped and re-placed its stems (the views must
+    follow): the direct computation on a fresh Data with Pinocchio's objects (c1.act of each closure force as an
+    external force, forwardKinematics, rnea, oMi and f), to 1e-13 of the largest value (the dual action matrix's
+    rounding against SE3.act)."""
+    fm = FlexibleMachine(machine, OFF_CENTRE)
+    s = fm.rest_state(WRENCH)
+    lengths = s.drive.values.copy()
+    for _ in range(3):
+        lengths = lengths + 2e-5  # 20 um a step: the stems re-placed every step
+        s = fm.step(s, DriveInput.positions(lengths), WRENCH, H)
+        fm.section_state(s)
+    s = _opened(fm, s, size=1e-3)
+    placements, wrenches = fm.section_state(s)
+    model, data = fm.model, fm.model.createData()
+    fext = pin.StdVec_Force()
+    for _ in range(model.njoints):
+        fext.append(pin.Force.Zero())
+    lam = s.multipliers.reshape(fm.legs, 6)
+    for i, (j, c1) in enumerate(zip(fm.plate_end, fm._c1)):
+        fext[j] = c1.act(pin.Force(lam[i]))
+    pin.forwardKinematics(model, data, s.q)
+    pin.rnea(model, data, s.q, s.v, s.acceleration, fext)
+    joints, subs = fm._sec_joints
+    expected_p = np.array([data.oMi[j].homogeneous[:3] for j in joints])
+    expected_w = np.array([data.f[j].vector for j in subs])
+    np.testing.assert_allclose(placements, expected_p, rtol=0, atol=1e-13 * np.abs(expected_p).max())
+    np.testing.assert_allclose(wrenches, expected_w, rtol=0, atol=1e-13 * np.abs(expected_w).max())
+    assert np.abs(expected_w).max() > 100.0
+
+
+def test_re_placed_stems_are_the_placements_and_pieces_of_a_fresh_model(machine):
+    """The stems re-placed through the held views of the placements and the stem inertias written once their
+    constants are known: the joint placements and body inertias of a fresh copy of the model placed by
+    MachineModel.place_stem (no views) and weighed by set_stem_inertias, bit for bit, at other stem lengths."""
+    from pressfit.dynamics.inertia import inertial_model, set_stem_inertias
+
+    fm = FlexibleMachine(machine, OFF_CENTRE)
+    stems = fm._placed + np.array([0.012, -0.007, 0.003, 0.021])
+    fm._place(stems)
+    fresh = inertial_model(fm.mm)
+    fm.mm.place_stem(fresh, stems)
+    set_stem_inertias(fm.mm, fresh, stems)
+    moved = [j for ids in fm.mm.stem_joint_ids() for j in ids]
+    z = fm.mm.stem_placements_z(stems).ravel()
+    for j, zj in zip(moved, z):
+        assert fm.model.jointPlacements[j].translation[2] == zj
+    for j in range(fm.model.njoints):
+        assert np.array_equal(fm.model.jointPlacements[j].homogeneous, fresh.jointPlacements[j].homogeneous)
+        assert np.array_equal(fm.model.inertias[j].toDynamicParameters(), fresh.inertias[j].toDynamicParameters())
+
+
+def test_the_damping_force_is_the_rayleigh_force_of_the_mass_matrix(machine):
+    """The damping force alpha M rel + beta K rel of a step's end (M rel by one rnea with the gravity off): equal to
+    alpha crba(q) rel + beta K rel to 1e-12 of its largest component, and the model's gravity is back after it."""
+    fm = FlexibleMachine(machine, OFF_CENTRE, damping=Rayleigh(alpha_per_s=3.0, beta_s=2e-4))
+    s = _opened(fm, fm.rest_state(WRENCH), size=1e-3)
+    rel = np.random.default_rng(1).standard_normal(fm.nv)
+    rest, k = fm._rest(s.drive)
+    gravity = fm.model.gravity.vector.copy()
+    got = fm._damping_force(s.q, rel, rest, k, s.drive)
+    expected = 3.0 * fm._mass(s.q) @ rel
+    expected[fm.sv] += 2e-4 * k * rel[fm.sv]
+    np.testing.assert_allclose(got, expected, rtol=0, atol=1e-12 * np.abs(expected).max())
+    assert np.array_equal(fm.model.gravity.vector, gravity) and gravity[1] < -9.0

@@ -289,13 +289,20 @@ class MachineModel:
         return ModelPose(pose_m=h, q0=q0, stem_lengths_m=ik.lengths_m - m.cylinder.length_m, spring_k=k,
                          spring_rest=rest)
 
-    def place_stem(self, model: pin.Model, stem_lengths_m: np.ndarray) -> None:
+    def place_stem(self, model: pin.Model, stem_lengths_m: np.ndarray,
+                   translations: list[np.ndarray] | None = None) -> None:
         """Write the stem joint placements for stem lengths (n,) (m) into ``model``: this model's
-        Pinocchio model or a copy of it (every pose-dependent placement is written)."""
+        Pinocchio model or a copy of it (every pose-dependent placement is written), through ``translations``
+        (:meth:`stem_translations` of that model, held by a caller that re-places often) or found here."""
+        views = self.stem_translations(model) if translations is None else translations
+        for view, z in zip(views, self.stem_placements_z(stem_lengths_m).ravel().tolist(), strict=True):
+            view[2] = z
+
+    def stem_translations(self, model: pin.Model) -> list[np.ndarray]:
+        """Numpy views of the translations of ``model``'s :meth:`stem_joint_ids` placements, legs then joints (what
+        :meth:`place_stem` writes; valid while the model lives)."""
         jp = model.jointPlacements
-        for ids, zs in zip(self.stem_joint_ids(), self.stem_placements_z(stem_lengths_m).tolist()):
-            for j, z in zip(ids, zs):
-                jp[j].translation[2] = z
+        return [jp[j].translation for ids in self.stem_joint_ids() for j in ids]
 
     def spring_stiffness(self, lengths_m: np.ndarray) -> np.ndarray:
         """Linear spring stiffnesses (..., n_springs) for leg lengths (..., n) (m), batched: the actuator

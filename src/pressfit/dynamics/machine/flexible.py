@@ -225,6 +225,7 @@ class FlexibleMachine:
         self.rho_inf = float(rho_inf)
         self._placed = np.full(self.legs, np.nan)
         self._stems = StemInertias(mm)
+        self._stem_translations = mm.stem_translations(self.model)
         self._placed_key = b""
         self._closure_key: bytes | None = None  # the q (bytes) of ``_closure`` (B, Phi), None: stale
         self._closure: tuple = ()
@@ -260,7 +261,7 @@ class FlexibleMachine:
         if key == self._placed_key:
             return
         self._placed_key = key
-        self.mm.place_stem(self.model, stem_lengths_m)
+        self.mm.place_stem(self.model, stem_lengths_m, self._stem_translations)
         self._stems.write(self.model, stem_lengths_m)
         self._closure_key = None
         self._k = self.mm.spring_stiffness(stem_lengths_m + self.machine.cylinder.length_m)
