@@ -461,8 +461,7 @@ class FlexibleMachine:
         nv, sv, last, it, since = self.nv, self.sv, np.inf, 0, 0  # since: iterations since the last factoring
         scale, c_acc, c_old = 1.0 / (h * h * b * ca), (1 - af) / (1 - am), (af * acc_n - am * a_n) / (1 - am)
         rhs = np.empty(nv + 6 * self.legs)
-        alpha, beta = self.damping.alpha_per_s, self.damping.beta_s
-        hhb, hg = h * h * b, h * g
+        alpha, beta, hhb, hg = self.damping.alpha_per_s, self.damping.beta_s, h * h * b, h * g
         while True:
             a_ps = c_acc * acc + c_old
             q = pin.integrate(self.model, q_n, base_dq + hhb * a_ps)
