@@ -225,6 +225,34 @@ def test_a_commanded_motion_is_not_damped_where_a_leg_stands_still(machine):
     assert abs(work) < 0.1 * naive
 
 
+def test_the_cardan_contacts_nonlinear_springs_settle_where_the_static_newton_holds(machine):
+    """The cardans' contacts as nonlinear virtual springs in the flexible machine (``cardan_compliance`` of
+    Clearance.uniform with no clearance: the contact stiffness at every cardan, a nonlinear law whose dead zone is
+    closed), no gravity, the drives holding, the plate wrench applied at t = 0 and held for 0.4 s heavily damped:
+    the step (the laws' force and tangent in its Newton residual and iteration matrix) settles where the machine's
+    own static Newton (rest_state: the KKT of the springs, a second formulation) holds the wrench, section
+    resultants to 1e-6 of the largest, and the plate moves more than on the machine without the contacts. (With
+    the plays open the massless play joints have no stiffness in their dead zones: the step's iteration matrix is
+    singular there and the step is refused.)"""
+    from pressfit.mechanics.clearance import Clearance
+
+    plays = Clearance.uniform(machine, 0.0).cardan_compliance()
+    wrench = np.array([40.0, -250.0, 25.0, 6.0, -4.0, 3.0])
+    fm = FlexibleMachine(machine, OFF_CENTRE, gravity=False, rho_inf=0.5, cardan_compliance=plays,
+                         damping=Damping(modes=[1, 3], ratios=[0.7, 0.7]))
+    assert fm.nonlinear  # the contacts' laws are the nonlinear springs
+    s = fm.rest_state()
+    for _ in range(400):
+        s = fm.step(s, s.drive, wrench, H)
+    static = fm.rest_state(wrench)
+    ref = fm.section_loads(static).values
+    np.testing.assert_allclose(fm.section_loads(s).values, ref, rtol=0, atol=1e-6 * np.abs(ref).max())
+    stiff = FlexibleMachine(machine, OFF_CENTRE, gravity=False)
+    moved, elastic = (np.linalg.norm(m.tool_point_m(x) - OFF_CENTRE) for m, x in
+                      ((fm, static), (stiff, stiff.rest_state(wrench))))
+    assert moved - elastic > 1e-7  # 0.23 um more (the contact stiffness in series)
+
+
 MIRRORS = {"x": (np.array([-1.0, 1.0, 1.0]), [0, 3, 2, 1]), "z": (np.array([1.0, 1.0, -1.0]), [2, 1, 0, 3])}
 
 

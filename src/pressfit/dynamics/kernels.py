@@ -22,6 +22,9 @@ quantity; the Python functions of :mod:`pressfit.dynamics.control`, :mod:`pressf
   :func:`within_limits`: its joints against Table 3's limits, every step (the run's guard);
 * :func:`hydraulic_substeps`: the servo-valve cylinders' pressure substeps (:mod:`pressfit.dynamics.drives.hydraulic`),
   called in every Newton iteration of a flexible step with a hydraulic drive;
+* :func:`newton_predict`, :func:`newton_residual`, :func:`newton_update`: the vector arithmetic around Pinocchio's
+  calls in each Newton iteration of the flexible step (:meth:`pressfit.dynamics.machine.flexible.FlexibleMachine.step`:
+  the generalised-alpha update, the residual and its springs, the correction);
 * :func:`play_iteration`: one iteration of the cardan plays' safeguarded Newton (:mod:`pressfit.dynamics.play`), on
   the compiled dead zone of :mod:`pressfit.mechanics.clearance_law`.
 
@@ -581,3 +584,53 @@ def play_iteration(x, tension, inertia, g, k, w, kd, trust, lo, hi, previous, to
         for i in range(x.shape[0]):
             x[i] += step[i]
     return done
+
+
+@compiled
+def newton_predict(acc, c_acc, c_old, base_dq, hhb, base_v, hg, v_r, alpha, dq, v, rel, acc_eff):
+    """The flexible step's iterate from the accelerations ``acc`` (nv,): the generalised-alpha pseudo-acceleration
+    a = c_acc acc + c_old, the configuration increment dq = base_dq + hhb a (m, rad), the velocity v = base_v + hg a,
+    the elastic velocity rel = v - v_r and the accelerations rnea takes, acc + alpha rel (the mass-proportional
+    damping folded in); written into dq, v, rel, acc_eff (nv,)."""
+    for i in range(acc.size):
+        a = c_acc * acc[i] + c_old[i]
+        dq[i] = base_dq[i] + hhb * a
+        v[i] = base_v[i] + hg * a
+        rel[i] = v[i] - v_r[i]
+        acc_eff[i] = acc[i] + alpha * rel[i]
+
+
+@compiled
+def newton_residual(inertial, closures, external, q, spring_q, spring_v, rest, k, force, tangent, linear, rel, beta,
+                    phi, rhs):
+    """The flexible step's Newton residual into rhs (nv + 6n,): inertial (rnea's M acc_eff + h) + closures (B^T lambda)
+    - external on every velocity, plus on the spring joints their forces and stiffness-proportional damping, k (x +
+    beta rel) for linear springs (x = q - rest) or force + beta tangent rel; then the closure errors phi (6n,)."""
+    nv = inertial.size
+    for i in range(nv):
+        rhs[i] = inertial[i] + closures[i] - external[i]
+    for j in range(spring_q.size):
+        sv = spring_v[j]
+        if linear:
+            rhs[sv] += k[j] * (q[spring_q[j]] - rest[j] + beta * rel[sv])
+        else:
+            rhs[sv] += force[j] + beta * tangent[j] * rel[sv]
+    for i in range(phi.size):
+        rhs[nv + i] = phi[i]
+
+
+@compiled
+def newton_update(dx, nv, scale, acc, lam):
+    """The correction dx (nv + 6n,) applied: acc -= scale dx[:nv], lam -= dx[nv:]; returns |dx[:nv]|_inf (m, rad),
+    NaN if a correction is."""
+    size, finite = 0.0, True
+    for i in range(nv):
+        a = abs(dx[i])
+        if a > size:
+            size = a
+        elif not a <= size:  # NaN
+            finite = False
+        acc[i] -= scale * dx[i]
+    for i in range(lam.size):
+        lam[i] -= dx[nv + i]
+    return size if finite else math.nan

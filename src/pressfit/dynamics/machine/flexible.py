@@ -118,6 +118,7 @@ MAX_STEP_FRACTION = 0.05  # dt at most 1/20 of the first mode's period
 STEM_UPDATE_M = 1e-5  # stem placements and stiffnesses follow the leg length to this, m
 RHO_INF = 0.8  # default spectral radius at infinite frequency (numerical damping)
 _NO_GRAVITY = pin.Motion.Zero()
+_NONE = np.empty(0)  # the linear springs' force and tangent in the Newton residual (computed there)
 
 
 @dataclass(frozen=True, kw_only=True)
@@ -460,28 +461,22 @@ class FlexibleMachine:
         acc, lam = acc_n.copy(), state.multipliers.copy()
         nv, sv, last, it, since = self.nv, self.sv, np.inf, 0, 0  # since: iterations since the last factoring
         scale, c_acc, c_old = 1.0 / (h * h * b * ca), (1 - af) / (1 - am), (af * acc_n - am * a_n) / (1 - am)
-        rhs = np.empty(nv + 6 * self.legs)
+        rhs, (dq, v, rel, acc_eff) = np.empty(nv + 6 * self.legs), np.empty((4, nv))
         alpha, beta, hhb, hg = self.damping.alpha_per_s, self.damping.beta_s, h * h * b, h * g
-        while True:
-            a_ps = c_acc * acc + c_old
-            q = pin.integrate(self.model, q_n, base_dq + hhb * a_ps)
-            v = base_v + hg * a_ps
+        while True:  # rnea at acc + alpha (v - v_r): the inertia and the mass-proportional damping in one pass
+            kernels.newton_predict(acc, c_acc, c_old, base_dq, hhb, base_v, hg, v_r, alpha, dq, v, rel, acc_eff)
+            q = pin.integrate(self.model, q_n, dq)
             bj, phi = self._jacobian(q)
-            rel = v - v_r  # M (acc + alpha rel) + h: the inertia and the mass-proportional damping in one rnea
             if implicit:
                 tension = drive(q[self.act_q])
                 tau_ext[self.act_v] = held - tension
             if contact is not None:
                 force_c, k_contact = contact(float(q[1]))
                 tau_ext[0:3] = plate + self._contact_dir * force_c
-            r = pin.rnea(self.model, self.data, q, v, acc + alpha * rel) + bj.T @ lam - tau_ext
-            r[sv] += self._spring_residual(q, rest, k, drive_input, rel[sv], beta)
-            rhs[:nv], rhs[nv:] = r, phi
-            dx = self._solve(rhs)
-            dq = dx[:nv]
-            size = max(float(dq.max()), -float(dq.min()))  # |dq|_inf
-            acc -= scale * dq
-            lam -= dx[nv:]
+            f, kt = self._springs(q, rest, k, drive_input) if self.nonlinear else (_NONE, _NONE)
+            kernels.newton_residual(pin.rnea(self.model, self.data, q, v, acc_eff), bj.T @ lam, tau_ext, q, self.sq,
+                                    sv, rest, k, f, kt, not self.nonlinear, rel, beta, phi, rhs)
+            size = kernels.newton_update(self._solve(rhs), nv, scale, acc, lam)  # |dq|_inf, m or rad
             it += 1
             if size <= NEWTON_TOL:
                 break
@@ -531,15 +526,6 @@ class FlexibleMachine:
         self._drive_tangent = stiffness if callable(stiffness) else None
         self._drive_k = np.zeros(len(self.act)) if stiffness is None else \
             np.asarray(stiffness() if self._drive_tangent else stiffness, dtype=float)
-
-    def _spring_residual(self, q: np.ndarray, rest: np.ndarray, k: np.ndarray, drive: DriveInput,
-                         rel_springs: np.ndarray, beta: float) -> np.ndarray:
-        """The springs' forces and their stiffness-proportional damping on the spring joints, at q with the elastic
-        velocities ``rel_springs`` (the Newton residual's spring part)."""
-        if self.nonlinear:
-            f, kt = self._springs(q, rest, k, drive)
-            return f + beta * kt * rel_springs
-        return k * (q[self.sq] - rest + beta * rel_springs)  # linear springs (force drives: k is 0 on the actuators)
 
     def _start_contact(self, contact: Callable[[float], tuple[float, float]] | None, q_n: np.ndarray) -> float:
         """An implicit contact's direction R^T e_y at the step's start (a world +y force on the free flyer's local
