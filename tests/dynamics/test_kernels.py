@@ -321,3 +321,39 @@ def test_rigid_post_step_fills_the_row_from_the_new_pose(machine, rigid):
     assert np.abs(estimate - new).max() < 1e-12
     rotation = pin.Quaternion(q[3:7]).matrix()
     assert np.abs(tau - rotation.T @ [0.0, force, 0.0]).max() < 1e-12
+
+
+def test_the_flexible_newton_kernels_are_the_generalised_alpha_formulas():
+    """newton_predict, newton_residual and newton_update (the vector arithmetic of a flexible step's Newton
+    iteration) against a numpy transcription of the formulas of pressfit.dynamics.machine.flexible's module doc on
+    random inputs, bit for bit (the same operations in the same order): the pseudo-acceleration a = c_acc acc +
+    c_old, dq = base_dq + h^2 beta a, v = base_v + h gamma a, rel = v - v_r, rnea's acc + alpha rel; the residual
+    inertial + B^T lambda - external plus the springs' k (x + beta rel) (linear) or f + beta k_t rel, then phi; the
+    update acc -= scale dx, lambda -= dx and |dx[:nv]|_inf, NaN when a correction is."""
+    rng = np.random.default_rng(7)
+    nv, nc, ns = 20, 6, 8
+    acc, c_old, base_dq, base_v, v_r = (rng.standard_normal(nv) for _ in range(5))
+    out = np.empty((4, nv))
+    kernels.newton_predict(acc, 0.7, c_old, base_dq, 1e-6, base_v, 2e-3, v_r, 3.0, *out)
+    a = 0.7 * acc + c_old
+    v = base_v + 2e-3 * a
+    for got, expected in zip(out, (base_dq + 1e-6 * a, v, v - v_r, acc + 3.0 * (v - v_r)), strict=True):
+        assert np.array_equal(got, expected)
+    inertial, closures, external, q, rel = (rng.standard_normal(nv) for _ in range(5))
+    sq, sv = rng.choice(nv, ns, replace=False), rng.choice(nv, ns, replace=False)
+    rest, k, f, kt, phi = (rng.standard_normal(n) for n in (ns, ns, ns, ns, nc))
+    for linear in (True, False):
+        rhs = np.empty(nv + nc)
+        kernels.newton_residual(inertial, closures, external, q, sq, sv, rest, k, f, kt, linear, rel, 0.3, phi, rhs)
+        r = inertial + closures - external
+        r[sv] += k * (q[sq] - rest + 0.3 * rel[sv]) if linear else f + 0.3 * kt * rel[sv]
+        assert np.array_equal(rhs, np.concatenate([r, phi]))
+    dx, acc1, lam1 = rng.standard_normal(nv + nc), rng.standard_normal(nv), rng.standard_normal(nc)
+    acc2, lam2 = acc1.copy(), lam1.copy()
+    size = kernels.newton_update(dx, nv, 5.0, acc2, lam2)
+    assert size == np.abs(dx[:nv]).max() and size > 0
+    assert np.array_equal(acc2, acc1 - 5.0 * dx[:nv]) and np.array_equal(lam2, lam1 - dx[nv:])
+    for where in (0, nv // 2, nv - 1):
+        bad = dx.copy()
+        bad[where] = np.nan
+        assert math.isnan(kernels.newton_update(bad, nv, 5.0, acc1.copy(), lam1.copy()))
