@@ -231,9 +231,7 @@ def test_the_cardan_contacts_nonlinear_springs_settle_where_the_static_newton_ho
     closed), no gravity, the drives holding, the plate wrench applied at t = 0 and held for 0.4 s heavily damped:
     the step (the laws' force and tangent in its Newton residual and iteration matrix) settles where the machine's
     own static Newton (rest_state: the KKT of the springs, a second formulation) holds the wrench, section
-    resultants to 1e-6 of the largest, and the plate moves more than on the machine without the contacts. (With
-    the plays open the massless play joints have no stiffness in their dead zones: the step's iteration matrix is
-    singular there and the step is refused.)"""
+    resultants to 1e-6 of the largest, and the plate moves more than on the machine without the contacts."""
     from pressfit.mechanics.clearance import Clearance
 
     plays = Clearance.uniform(machine, 0.0).cardan_compliance()
@@ -251,6 +249,18 @@ def test_the_cardan_contacts_nonlinear_springs_settle_where_the_static_newton_ho
     moved, elastic = (np.linalg.norm(m.tool_point_m(x) - OFF_CENTRE) for m, x in
                       ((fm, static), (stiff, stiff.rest_state(wrench))))
     assert moved - elastic > 1e-7  # 0.23 um more (the contact stiffness in series)
+
+
+def test_open_cardan_plays_are_refused_naming_the_law(machine):
+    """Open plays (20 um of clearance at every cardan) as the flexible machine's virtual springs: their joints are
+    massless and their dead zones have no stiffness, so every step would be refused as diverged; the machine refuses
+    them when built, naming the leg and the law (1 um of clearance too; with none, the contact laws alone, it builds:
+    test_the_cardan_contacts_...)."""
+    from pressfit.mechanics.clearance import Clearance
+
+    for gap in (20e-6, 1e-6):
+        with pytest.raises(PressfitError, match=r"leg 1's .* no stiffness at its rest .* \[simulation\] clearance"):
+            FlexibleMachine(machine, OFF_CENTRE, cardan_compliance=Clearance.uniform(machine, gap).cardan_compliance())
 
 
 MIRRORS = {"x": (np.array([-1.0, 1.0, 1.0]), [0, 3, 2, 1]), "z": (np.array([1.0, 1.0, -1.0]), [2, 1, 0, 3])}

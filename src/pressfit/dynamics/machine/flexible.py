@@ -19,8 +19,11 @@ leg length (re-placed when a stem changed by STEM_UPDATE_M: the stiffness n E I_
 is spread over the stem springs' bodies and whose inner part rides on the actuator body
 (:class:`pressfit.dynamics.inertia.StemInertias`, re-written with the placements), so a state sees the weight
 and inertia of the pose it stands at, not the build pose's.
-Cardan play: ``cardan_compliance`` (:class:`pressfit.mechanics.model.CardanCompliance`, e.g. the dead zones
-of :meth:`pressfit.mechanics.clearance.Clearance.cardan_compliance`) adds its virtual joints and laws.
+Cardan contacts: ``cardan_compliance`` (:class:`pressfit.mechanics.model.CardanCompliance`, e.g. the laws of
+:meth:`pressfit.mechanics.clearance.Clearance.cardan_compliance`) adds its virtual joints and laws. They are massless,
+so a law must be stiff at its rest: an open play's dead zone (no stiffness there) would make the step's iteration
+matrix singular and is refused (open plays belong to the scenario's ``clearance``, on the drives' side,
+:mod:`pressfit.dynamics.play`).
 
 Damping: Rayleigh, f_d = alpha M (v - v_r) + beta K (v - v_r), acting on the elastic motion only: v_r is the
 velocity of the rigid machine (springs frozen) at the commanded leg rates (a position drive's rest-length
@@ -93,7 +96,7 @@ from __future__ import annotations
 
 import dataclasses
 import math
-from collections.abc import Callable
+from collections.abc import Callable, Iterable
 from dataclasses import dataclass
 
 import numpy as np
@@ -108,13 +111,14 @@ from pressfit.dynamics.inertia import StemInertias, inertial_model
 from pressfit.dynamics.machine.base import SECTIONS, DriveInput, Energy, MachineState, SectionLoads
 from pressfit.errors import ConvergenceError, PressfitError
 from pressfit.mechanics import data_pool
-from pressfit.mechanics.model import CardanComplianceSpec, LinearSpring, build_model
+from pressfit.mechanics.model import CardanComplianceSpec, LinearSpring, Spring, build_model
 
 NEWTON_TOL = 1e-12  # m or rad: largest position correction of the last Newton iteration
 MAX_ITERATIONS = 12  # with a freshly factored iteration matrix
 REFRESH_RATIO = 0.1  # refactor when one iteration shrinks the correction by less than 10x
 TANGENT_REFRESH = 0.05  # and again when a drive's tangent (a function) moved by more than this since the factoring
 MAX_STEP_FRACTION = 0.05  # dt at most 1/20 of the first mode's period
+DEAD_ZONE_RATIO = 1e-6  # a nonlinear spring this much softer at its rest than out of it is an open play
 STEM_UPDATE_M = 1e-5  # stem placements and stiffnesses follow the leg length to this, m
 RHO_INF = 0.8  # default spectral radius at infinite frequency (numerical damping)
 _NO_GRAVITY = pin.Motion.Zero()
@@ -205,6 +209,7 @@ class FlexibleMachine:
         self.rest0 = mm.spring_rest.copy()
         self.linear = np.array([type(s.law) is LinearSpring for s in sp])
         self.nonlinear = [(k, s.law) for k, s in enumerate(sp) if type(s.law) is not LinearSpring]
+        _refuse_dead_zones(sp[k] for k, _ in self.nonlinear)
         self.act = np.array([k for k, s in enumerate(sp) if s.name == "actuator"])  # spring index per leg
         self.act_q, self.act_v = self.sq[self.act], self.sv[self.act]
         self.rigid = np.setdiff1d(np.arange(self.nv), self.sv)  # plate and cardan coordinates
@@ -732,6 +737,21 @@ class FlexibleMachine:
         """Leg section resultants at the three sections (module doc, :mod:`.base`)."""
         values, frames = leg_frame_loads(self.section_wrenches(state), self.machine.cardan_axes)
         return SectionLoads(values, frames)
+
+
+def _refuse_dead_zones(springs: Iterable[Spring]) -> None:
+    """PressfitError for a nonlinear spring with no stiffness at its rest (a cardan play's open dead zone: its tangent
+    there below DEAD_ZONE_RATIO of its largest within 1e-7..1e-2 of it): the play joints are massless, so the step's
+    iteration matrix would be singular there (each step refused as diverged)."""
+    probe = np.concatenate([-np.logspace(-7, -2, 11), np.logspace(-7, -2, 11)])
+    for spring in springs:
+        at_rest, out = float(spring.law.tangent(0.0)), max(float(spring.law.tangent(x)) for x in probe)
+        if not at_rest > DEAD_ZONE_RATIO * out:
+            raise PressfitError(
+                f"cardan_compliance: leg {spring.leg + 1}'s {spring.name} law has no stiffness at its rest (tangent "
+                f"{at_rest:.3g} against {out:.3g} out of it: an open play's dead zone); the flexible machine's play "
+                "joints are massless, so its step cannot integrate them -- model open cardan plays with the "
+                "scenario's [simulation] clearance (on the drives' side), or give the law its contact closed")
 
 
 def _refuse_iteration(time_s: float, size: float, iterations: int, since: int, fresh: bool) -> None:
