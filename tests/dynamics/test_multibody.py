@@ -161,3 +161,24 @@ def test_path_nodes_are_at_most_the_spacing_apart_and_every_sample_is_near_one()
         length = np.abs(np.diff(waypoints, axis=0)).max(axis=1).sum()
         assert len(nodes) <= 2 * (length / spacing + len(waypoints))
     assert len(path_nodes(path[:1].repeat(3, axis=0), 2e-3)) == 2  # a path that does not move: its point, twice
+
+
+def test_the_closure_error_is_the_largest_leg_gap_of_the_last_dynamics_call(rigid):
+    """closure_error_m (the constraint datas' errors read through held views) after constraintDynamics at a
+    configuration opened by a random change (every leg's closure open by a different amount), then again after a
+    second call at another one (the views follow): the largest distance between each closure's two anchor points,
+    from forwardKinematics and the constraint models' joint placements, to 1e-6 relative (Pinocchio's error is the
+    linear part of the relative placement's log, which differs from the gap at second order in the rotation:
+    1e-12 relative here)."""
+    rng = np.random.default_rng(3)
+    tau, v = np.zeros(rigid.model.nv), np.zeros(rigid.model.nv)
+    data = rigid.model.createData()
+    for size in (1e-4, 3e-5):
+        q = pin.integrate(rigid.model, rigid.reference_q, size * rng.standard_normal(rigid.model.nv))
+        rigid.accelerations(q, v, tau)
+        pin.forwardKinematics(rigid.model, data, q)
+        gaps = [np.linalg.norm(data.oMi[cm.joint1_id].act(cm.joint1_placement.translation)
+                               - data.oMi[cm.joint2_id].act(cm.joint2_placement.translation))
+                for cm in rigid.constraint_models]
+        assert max(gaps) > 1.5 * min(gaps) > 0.0  # the legs open differently
+        assert rigid.closure_error_m() == pytest.approx(max(gaps), rel=1e-6)
