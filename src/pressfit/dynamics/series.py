@@ -118,7 +118,8 @@ class Series:
 
     def add(self, k: int, row: tuple, lengths: np.ndarray, rates: np.ndarray, energy: tuple) -> None:
         self.kinematic = estimate_pose(self.machine, lengths, self.kinematic, KINEMATIC_ITERATIONS)[0]
-        self.row(k)[:] = (*row, *self.kinematic, *lengths, *rates, *energy)
+        self.row(k)[:] = (*row, *self.kinematic.tolist(), *np.asarray(lengths, dtype=float).tolist(),
+                          *np.asarray(rates, dtype=float).tolist(), *energy)
 
     def row(self, k: int) -> np.ndarray:
         """Row k (the rows are filled in order) to fill in place, zeros where the caller writes nothing; the kinematic

@@ -163,9 +163,11 @@ class FlexibleScenario:
         plays_j = self._measure(through, legs_m)
         series = self._sense()
         kernels.internal_forces(ctrl.null, self.tension, self.internal)
-        self.series.add(k, (t, *reference[0] + [0.0, ctrl.lift_m, 0.0], *ctrl.estimate_m, *tool, *tool,
-                            self.contact_force, self.depth, *command, *self.tension, ctrl.lift_m, drift,
-                            *self.no_axial, *self.internal), self.sensed, self.sensed_rates,
+        tool_xyz = tool.tolist()  # Python floats: a row of them fills faster than of numpy scalars
+        self.series.add(k, (t, *(reference[0] + [0.0, ctrl.lift_m, 0.0]).tolist(), *ctrl.estimate_m.tolist(),
+                            *tool_xyz, *tool_xyz, self.contact_force, self.depth, *command.tolist(),
+                            *self.tension.tolist(), ctrl.lift_m, drift, *self.no_axial, *self.internal.tolist()),
+                        self.sensed, self.sensed_rates,
                         (*_energies(fm.energy(state), state.damping_work_j, self._side_kinetic_j(), series[0]),
                          *plays_j, replaced, series[1]))
 
