@@ -60,3 +60,54 @@ def test_the_elastic_column_carries_the_series_springs_and_the_length_columns_th
         np.testing.assert_allclose(row[[columns.index(f"rate_m_per_s{i}") for i in "1234"]],
                                    scenario.fm.leg_rates_m_per_s(scenario.state) - (stretch - previous) / dt,
                                    rtol=0, atol=1e-12)
+
+
+def test_a_state_that_is_not_finite_is_named_so():
+    """A step that leaves the flexible machine's velocity not finite (its configuration finite) stops the run at that
+    step, named as a state that is not finite at its time (the guard reads q and v)."""
+    from pressfit.description.cases import load_case
+    from pressfit.dynamics import drives as drive_kinds
+    from pressfit.dynamics.insertion import plan_scenario
+    from pressfit.dynamics.series import Guard
+    from pressfit.errors import PressfitError
+    from pressfit.shipped import cases_dir
+
+    case = load_case(cases_dir() / "paper" / "insertion.toml")
+    case = case.model_copy(update={"simulation": case.simulation.model_copy(update={"model": "flexible"})})
+    machine = case.machine()
+    plan = plan_scenario(case, machine)
+    scenario = FlexibleScenario(case, machine, plan, drive_kinds.of(machine), True, Guard(case, machine, plan))
+    step = scenario.fm.step
+
+    def nan_velocity(*args, **kwargs):
+        state = step(*args, **kwargs)
+        v = state.v.copy()
+        v[7] = np.nan
+        return type(state)(**{**state.__dict__, "v": v})
+
+    scenario.fm.step = nan_velocity
+    with pytest.raises(PressfitError, match=r"diverged at t = 0.001 s \(the state is not finite\)"):
+        scenario.step(0, 1e-3, plan.trajectory.at(1e-3), 30.0)
+
+
+@pytest.mark.slow  # a flexible run, 3 s
+def test_the_reference_columns_are_the_planned_path_plus_the_limiters_lift():
+    """The flexible run's reference columns (ref_x/y/z_m) are the planned trajectory at each row's time plus the
+    force limiter's lift along +y (the reference_lift_m column), to 1e-12 m, on the shipped scenario shortened: the
+    lift is non-zero while the limiter holds the force."""
+    from pressfit.description.cases import load_case
+    from pressfit.dynamics.insertion import plan_scenario, simulate_insertion
+    from pressfit.dynamics.series import series_columns
+    from pressfit.shipped import cases_dir
+
+    case = load_case(cases_dir() / "paper" / "insertion.toml")
+    short = {"model": "flexible", "move_time_s": 0.25, "descent_time_s": 0.25, "dwell_s": 0.3, "settle_s": 0.25}
+    case = case.model_copy(update={"simulation": case.simulation.model_copy(update=short)})
+    rows = np.asarray(simulate_insertion(case).series, float)
+    col = {c: k for k, c in enumerate(series_columns(4))}
+    plan = plan_scenario(case, case.machine())
+    planned = np.array([plan.trajectory.at(t)[0] for t in rows[:, col["time_s"]]])
+    ref = rows[:, [col["ref_x_m"], col["ref_y_m"], col["ref_z_m"]]]
+    lift = rows[:, col["reference_lift_m"]]
+    np.testing.assert_allclose(ref - np.column_stack([0 * lift, lift, 0 * lift]), planned, rtol=0, atol=1e-12)
+    assert lift.max() > 1e-6
