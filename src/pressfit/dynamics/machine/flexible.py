@@ -207,7 +207,6 @@ class FlexibleMachine:
         self.sq = np.array([s.idx_q for s in sp])
         self.sv = np.array([s.idx_v for s in sp])
         self.rest0 = mm.spring_rest.copy()
-        self.linear = np.array([type(s.law) is LinearSpring for s in sp])
         self.nonlinear = [(k, s.law) for k, s in enumerate(sp) if type(s.law) is not LinearSpring]
         _refuse_dead_zones(sp[k] for k, _ in self.nonlinear)
         self.act = np.array([k for k, s in enumerate(sp) if s.name == "actuator"])  # spring index per leg
