@@ -33,3 +33,13 @@ def test_the_stem_pieces_are_solid_rods_of_the_rods_mass(machine, exposed_m):
         np.testing.assert_allclose(piece.lever, [0.0, 0.0, centre], rtol=0, atol=1e-15)
         np.testing.assert_allclose(piece.inertia, rod_inertia, rtol=1e-12, atol=1e-18)
     assert sum(p.mass for p in pieces) == pytest.approx(mu * rod + moving, rel=1e-12)
+
+
+def test_the_stem_pieces_are_distinct_objects(machine):
+    """The spring bodies' equal pieces are built once (the re-placement writes the same piece into several bodies,
+    each a copy): :func:`stem_pieces` hands out distinct objects, so a caller changing one changes no other."""
+    pieces = stem_pieces(machine, 4, 0.2)
+    assert len({id(p) for p in pieces}) == len(pieces)
+    before = pieces[2].mass
+    pieces[1].mass = 2 * pieces[1].mass
+    assert pieces[2].mass == before

@@ -357,3 +357,39 @@ def test_the_flexible_newton_kernels_are_the_generalised_alpha_formulas():
         bad = dx.copy()
         bad[where] = np.nan
         assert math.isnan(kernels.newton_update(bad, nv, 5.0, acc1.copy(), lam1.copy()))
+
+
+def test_the_flexible_step_end_is_the_generalised_alpha_update():
+    """newton_end (a flexible step's end state from its converged accelerations) against the numpy expressions of
+    the update (Chung and Hulbert's generalised-alpha: a_ps = ((1 - af) acc + af acc_n - am a_n) / (1 - am),
+    dq = base_dq + h^2 beta a_ps, v = base_v + h gamma a_ps), bit for bit, at rho_inf = 0.8's coefficients."""
+    from pressfit.dynamics.machine.flexible import generalized_alpha
+
+    am, af, gamma, beta = generalized_alpha(0.8)
+    rng = np.random.default_rng(11)
+    acc, acc_n, a_n, base_dq, base_v = (rng.standard_normal(30) for _ in range(5))
+    h = 2e-4
+    out = np.empty((3, 30))
+    kernels.newton_end(acc, acc_n, a_n, af, am, base_dq, h * h * beta, base_v, h * gamma, *out)
+    a_ps = ((1 - af) * acc + af * acc_n - am * a_n) / (1 - am)
+    for got, expected in zip(out, (a_ps, base_dq + h * h * beta * a_ps, base_v + h * gamma * a_ps), strict=True):
+        assert np.array_equal(got, expected)
+
+
+def test_the_closure_gaps_are_the_largest_norms_of_the_error_triples():
+    """closure_gaps: the largest translation and rotation error norm over the closures (each closure's six errors
+    a translation then a rotation triple), against numpy's norms of the reshaped errors bit for bit; a NaN error
+    anywhere is the answer for its part (numpy's max keeps it), never skipped."""
+    rng = np.random.default_rng(5)
+    for _ in range(50):
+        phi = rng.standard_normal(24) * 10.0 ** rng.integers(-12, 0)
+        norms = np.sqrt((phi.reshape(4, 2, 3) ** 2).sum(2)).max(0)
+        assert kernels.closure_gaps(phi) == (norms[0], norms[1])
+    phi = np.zeros(24)
+    phi[13] = 3e-6  # the third closure's translation: the largest wherever it sits
+    assert kernels.closure_gaps(phi) == (3e-6, 0.0)
+    for where, part in ((0, 0), (4, 1), (19, 0), (23, 1)):
+        bad = phi.copy()
+        bad[where] = np.nan
+        gaps = kernels.closure_gaps(bad)
+        assert math.isnan(gaps[part]) and not math.isnan(gaps[1 - part])

@@ -122,7 +122,8 @@ def stem_pieces(machine: Machine, springs_per_segment: int, stem_length_m: float
     z = -L_r) and the body of each stem spring k (origin at the spring, L_c + (k + 1/2) L_s / n from the base
     cardan: the exposed rod up to the next spring or the plate cardan), for an exposed stem length L_s (m);
     kg, m, kg m^2. Their masses sum to the rod's and the moving parts' at every L_s."""
-    return _StemRod(machine, springs_per_segment, mass_scale).pieces(float(stem_length_m))
+    return [pin.Inertia(piece) for piece in _StemRod(machine, springs_per_segment, mass_scale).pieces(
+        float(stem_length_m))]  # copies: the rod's spring pieces share one object where they are equal
 
 
 class _StemRod:
@@ -137,17 +138,17 @@ class _StemRod:
         self.moving = pin.Inertia(moving, np.array([0.0, 0.0, -self.rod]), np.zeros((3, 3))) if moving > 0.0 else None
 
     def pieces(self, ls: float) -> list[pin.Inertia]:
-        n, mu, radius = self.n, self.mu, self.radius
-        # (z0, z1) of each piece in its body's frame: actuator, then springs 0 .. n-1
-        spans = [(-self.rod, -ls + ls / (2 * n))] + [(0.0, ls / n if k < n - 1 else ls / (2 * n)) for k in range(n)]
-        pieces = []
-        for z0, z1 in spans:  # a solid rod along z about its centre (the tube of _tube without a bore), moved there
-            piece = pin.Inertia.FromCylinder(mu * (z1 - z0), radius, z1 - z0)
-            piece.lever = np.array([0.0, 0.0, (z0 + z1) / 2])
-            pieces.append(piece)
-        if self.moving is not None:
-            pieces[0] = pieces[0] + self.moving
-        return pieces
+        n = self.n
+        inner, spring, last = (self._rod(z0, z1) for z0, z1 in ((-self.rod, -ls + ls / (2 * n)), (0.0, ls / n),
+                                                                 (0.0, ls / (2 * n))))
+        # the spring bodies' pieces, the same object where the same (written into a model, each is copied)
+        return [inner if self.moving is None else inner + self.moving] + [spring] * (n - 1) + [last]
+
+    def _rod(self, z0: float, z1: float) -> pin.Inertia:
+        """A solid rod along z from z0 to z1 (m) about its centre (the tube of _tube without a bore), moved there."""
+        piece = pin.Inertia.FromCylinder(self.mu * (z1 - z0), self.radius, z1 - z0)
+        piece.lever = np.array([0.0, 0.0, (z0 + z1) / 2])
+        return piece
 
 
 class StemInertias:

@@ -601,6 +601,34 @@ def newton_predict(acc, c_acc, c_old, base_dq, hhb, base_v, hg, v_r, alpha, dq, 
 
 
 @compiled
+def closure_gaps(phi):
+    """The largest translation (m) and rotation (rad) error over the loop closures of errors ``phi`` (6n,): per
+    closure the norms of its (translation, rotation) triples; NaN if one is."""
+    translation = rotation = 0.0
+    for i in range(0, phi.size, 6):
+        t = math.sqrt(phi[i] * phi[i] + phi[i + 1] * phi[i + 1] + phi[i + 2] * phi[i + 2])
+        r = math.sqrt(phi[i + 3] * phi[i + 3] + phi[i + 4] * phi[i + 4] + phi[i + 5] * phi[i + 5])
+        if translation == translation and not t <= translation:  # a NaN kept, as numpy's max keeps it
+            translation = t
+        if rotation == rotation and not r <= rotation:
+            rotation = r
+    return translation, rotation
+
+
+@compiled
+def newton_end(acc, acc_n, a_n, af, am, base_dq, hhb, base_v, hg, a_ps, dq, v):
+    """The flexible step's end from its converged accelerations ``acc`` (nv,) and the start's ``acc_n`` and
+    pseudo-accelerations ``a_n``: the pseudo-acceleration a_ps = ((1 - af) acc + af acc_n - am a_n) / (1 - am), the
+    configuration increment dq = base_dq + hhb a_ps (m, rad) and the velocity v = base_v + hg a_ps; written into
+    a_ps, dq, v (nv,)."""
+    for i in range(acc.size):
+        a = ((1 - af) * acc[i] + af * acc_n[i] - am * a_n[i]) / (1 - am)
+        a_ps[i] = a
+        dq[i] = base_dq[i] + hhb * a
+        v[i] = base_v[i] + hg * a
+
+
+@compiled
 def newton_residual(inertial, closures, external, q, spring_q, spring_v, rest, k, force, tangent, linear, rel, beta,
                     phi, rhs):
     """The flexible step's Newton residual into rhs (nv + 6n,): inertial (rnea's M acc_eff + h) + closures (B^T lambda)

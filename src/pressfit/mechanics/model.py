@@ -311,9 +311,10 @@ class MachineModel:
         m, n, sec = self.machine, self.springs_per_segment, self.machine.stem_section
         lengths_m = np.asarray(lengths_m, dtype=float)
         ls = lengths_m - m.cylinder.length_m
-        per_kind = np.stack([1.0 / m.axial_compliance_m_per_n(lengths_m),  # actuator, stem bending, torsion
-                             n * (m.material.youngs_modulus_pa * sec.second_moment_m4) / ls,
-                             n * (m.material.shear_modulus_pa * sec.polar_moment_m4) / ls], -2)  # (..., 3, legs)
+        per_kind = np.empty(ls.shape[:-1] + (3, ls.shape[-1]))  # (..., 3, legs): actuator, stem bending, torsion
+        per_kind[..., 0, :] = 1.0 / m.axial_compliance_m_per_n(lengths_m)
+        per_kind[..., 1, :] = n * (m.material.youngs_modulus_pa * sec.second_moment_m4) / ls
+        per_kind[..., 2, :] = n * (m.material.shear_modulus_pa * sec.polar_moment_m4) / ls
         var, kind, leg = self._variable_springs
         k = np.empty(lengths_m.shape[:-1] + self.spring_k.shape)
         k[...] = self.spring_k  # broadcast (np.broadcast_to's copy costs 4 us more a call)

@@ -152,12 +152,14 @@ class FlexibleState(MachineState):
 class _SectionViews:
     """Numpy views into a FlexibleMachine's Pinocchio Data and external forces (they follow every pass): the
     external forces (zero but on the plate ends) and the plate ends' entries, the closure frames' dual action
-    matrices (n, 6, 6) (c1.act of a force), the section joints' (rotation, translation) and the subtrees' wrenches."""
+    matrices (n, 6, 6) (c1.act of a force), the section joints' rotations and translations and the subtrees'
+    wrenches."""
 
     fext: pin.StdVec_Force
     closures: list[np.ndarray]
     closure_dual: np.ndarray
-    placements: list[tuple[np.ndarray, np.ndarray]]
+    rotations: list[np.ndarray]
+    translations: list[np.ndarray]
     forces: list[np.ndarray]
 
 
@@ -504,11 +506,11 @@ class FlexibleMachine:
         """The state at the end of :meth:`step` from its converged accelerations ``acc`` and multipliers ``lam``
         (``base``: the step's predictor of the position increment and the velocity, and the rigid velocity v_r);
         the damping's work over the step under the drive input ``drive``; ``held``: the input the state records."""
-        am, af, g, b = self.alpha_m, self.alpha_f, self.gamma, self.beta
         base_dq, base_v, v_r = base
-        a_ps = ((1 - af) * acc + af * state.acceleration - am * state.pseudo_acceleration) / (1 - am)
-        q = pin.integrate(self.model, state.q, base_dq + h * h * b * a_ps)
-        v = base_v + h * g * a_ps
+        a_ps, dq, v = np.empty((3, self.nv))
+        kernels.newton_end(acc, state.acceleration, state.pseudo_acceleration, self.alpha_f, self.alpha_m, base_dq,
+                           h * h * self.beta, base_v, h * self.gamma, a_ps, dq, v)
+        q = pin.integrate(self.model, state.q, dq)
         work = float(self._damping_force(q, v - v_r, rest, k, drive) @ pin.difference(self.model, state.q, q))
         return FlexibleState(time_s=state.time_s + h, q=q, v=v, acceleration=acc, pseudo_acceleration=a_ps,
                              multipliers=lam, drive=held, stem_lengths_m=self._placed.copy(), iterations=iterations,
@@ -633,10 +635,7 @@ class FlexibleMachine:
 
     def closure_error(self, state: MachineState) -> tuple[float, float]:
         self._place(getattr(state, "stem_lengths_m", self._placed))
-        _, phi = self._jacobian(state.q)
-        e = phi.reshape(self.legs, 2, 3)
-        n = np.sqrt((e * e).sum(2)).max(0)
-        return float(n[0]), float(n[1])
+        return kernels.closure_gaps(self._jacobian(state.q)[1])
 
     def stems_for(self, state: FlexibleState) -> np.ndarray:
         """The stem lengths (n,), m, the next step from ``state`` places the stems at: the state's, or its leg
@@ -659,14 +658,15 @@ class FlexibleMachine:
         return self.energy(dataclasses.replace(state, stem_lengths_m=stem)).total_j - before
 
     def energy(self, state: FlexibleState) -> Energy:
-        key = (state.q.tobytes(), state.v.tobytes(), state.stem_lengths_m.tobytes(), state.drive.kind,
-               state.drive.values.tobytes())
+        key = _energy_key(state)
         if self._energy is not None and self._energy[0] == key:  # a state asked again (the series, the re-placement)
             return self._energy[1]
         self._energy = (key, self._energy_of(state))
         return self._energy[1]
 
-    def _energy_of(self, state: FlexibleState) -> Energy:
+    def _energy_of(self, state: FlexibleState, kinematics: bool = False) -> Energy:
+        """The state's energies; ``kinematics``: the Data already holds its placements and joint velocities (a
+        forward kinematics at q and an rnea at (q, v) just made: the same arithmetic as the energy's own pass)."""
         self._place(state.stem_lengths_m)
         rest, k = self._rest(state.drive)
         x = state.q[self.sq] - rest
@@ -675,7 +675,10 @@ class FlexibleMachine:
             e[j] = float(law.energy(x[j]))
         if state.drive.kind == "force":
             e[self.act] = 0.0
-        pin.computeMechanicalEnergy(self.model, self.data, state.q, state.v)  # one pass for both
+        if kinematics:
+            pin.computeMechanicalEnergy(self.model, self.data)
+        else:
+            pin.computeMechanicalEnergy(self.model, self.data, state.q, state.v)  # one pass for both
         return Energy(kinetic_j=float(self.data.kinetic_energy), elastic_j=float(e.sum()),
                       potential_j=float(self.data.potential_energy))
 
@@ -690,7 +693,8 @@ class FlexibleMachine:
     def section_state(self, state: FlexibleState) -> tuple[np.ndarray, np.ndarray]:
         """What the section resultants need of a state (the Pinocchio part; :meth:`section_wrenches_from` the
         rest, batched): the placements (n, 3, 4) (rotation | translation, m) of the joints involved and the
-        wrench (3n, 6) (force N, moment N m; local) each section's plate-side subtree receives from its parent."""
+        wrench (3n, 6) (force N, moment N m; local) each section's plate-side subtree receives from its parent.
+        The state's energies (:meth:`energy`) are kept from the same passes."""
         self._place(state.stem_lengths_m)
         views = self._views if self._views is not None else self._section_views()
         loads = np.einsum("lij,lj->li", views.closure_dual, state.multipliers.reshape(self.legs, 6))  # c1.act(lambda)
@@ -698,9 +702,9 @@ class FlexibleMachine:
             view[:] = load
         pin.forwardKinematics(self.model, self.data, state.q)  # oMi: Pinocchio's rnea leaves them as they were
         pin.rnea(self.model, self.data, state.q, state.v, state.acceleration, views.fext)
-        placements = np.empty((len(views.placements), 3, 4))
-        for k, (rotation, translation) in enumerate(views.placements):
-            placements[k, :, :3], placements[k, :, 3] = rotation, translation
+        self._energy = (_energy_key(state), self._energy_of(state, kinematics=True))  # the placements, rnea's v
+        placements = np.empty((len(views.rotations), 3, 4))
+        placements[:, :, :3], placements[:, :, 3] = np.array(views.rotations), np.array(views.translations)
         return placements, np.array(views.forces)
 
     def _section_views(self) -> _SectionViews:
@@ -712,7 +716,8 @@ class FlexibleMachine:
         joints, subs = self._sec_joints
         self._views = _SectionViews(fext=fext, closures=[fext[j].vector for j in self.plate_end],
                                     closure_dual=np.array([c1.toDualActionMatrix() for c1 in self._c1]),
-                                    placements=[(omi[j].rotation, omi[j].translation) for j in joints],
+                                    rotations=[omi[j].rotation for j in joints],
+                                    translations=[omi[j].translation for j in joints],
                                     forces=[f_sub[j].vector for j in subs])
         return self._views
 
@@ -736,6 +741,12 @@ class FlexibleMachine:
         """Leg section resultants at the three sections (module doc, :mod:`.base`)."""
         values, frames = leg_frame_loads(self.section_wrenches(state), self.machine.cardan_axes)
         return SectionLoads(values, frames)
+
+
+def _energy_key(state: FlexibleState) -> tuple:
+    """What a state's energies depend on (:meth:`FlexibleMachine.energy`'s cache)."""
+    return (state.q.tobytes(), state.v.tobytes(), state.stem_lengths_m.tobytes(), state.drive.kind,
+            state.drive.values.tobytes())
 
 
 def _refuse_dead_zones(springs: Iterable[Spring]) -> None:
