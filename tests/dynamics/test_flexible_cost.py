@@ -243,3 +243,27 @@ def test_the_damping_force_is_the_rayleigh_force_of_the_mass_matrix(machine):
     expected[fm.sv] += 2e-4 * k * rel[fm.sv]
     np.testing.assert_allclose(got, expected, rtol=0, atol=1e-12 * np.abs(expected).max())
     assert np.array_equal(fm.model.gravity.vector, gravity) and gravity[1] < -9.0
+
+
+def test_the_energies_kept_from_the_section_state_are_the_energy_pass(machine):
+    """section_state keeps the state's energies from its own passes (forward kinematics at q, rnea at q, v): on a
+    moving state after steps that re-placed the stems, energy() then equals Pinocchio's computeMechanicalEnergy on a
+    fresh Data at the state's q and v, bit for bit; and the energy of another state asked next is that state's, not
+    the kept one."""
+    fm = FlexibleMachine(machine, OFF_CENTRE)
+    s = fm.rest_state(WRENCH)
+    lengths = s.drive.values.copy()
+    states = []
+    for _ in range(3):
+        lengths = lengths + 2e-5
+        s = fm.step(s, DriveInput.positions(lengths), WRENCH, H)
+        states.append(s)
+    assert np.abs(s.v).max() > 1e-3  # moving: a kinetic energy to get right
+    for state in (states[-1], states[0]):
+        fm.section_state(states[-1])
+        got = fm.energy(state)
+        fm._place(state.stem_lengths_m)
+        data = fm.model.createData()
+        pin.computeMechanicalEnergy(fm.model, data, state.q, state.v)
+        assert got.kinetic_j == data.kinetic_energy and got.potential_j == data.potential_energy
+        assert got.kinetic_j > 1e-6
