@@ -248,8 +248,8 @@ def test_the_damping_force_is_the_rayleigh_force_of_the_mass_matrix(machine):
 def test_the_energies_kept_from_the_section_state_are_the_energy_pass(machine):
     """section_state keeps the state's energies from its own passes (forward kinematics at q, rnea at q, v): on a
     moving state after steps that re-placed the stems, energy() then equals Pinocchio's computeMechanicalEnergy on a
-    fresh Data at the state's q and v, bit for bit; and the energy of another state asked next is that state's, not
-    the kept one."""
+    fresh Data at the state's q and v, bit for bit; and the energy of another state asked next (another step's, or
+    the same velocity, drive and stems at another q) is that state's, not the kept one."""
     fm = FlexibleMachine(machine, OFF_CENTRE)
     s = fm.rest_state(WRENCH)
     lengths = s.drive.values.copy()
@@ -259,7 +259,8 @@ def test_the_energies_kept_from_the_section_state_are_the_energy_pass(machine):
         s = fm.step(s, DriveInput.positions(lengths), WRENCH, H)
         states.append(s)
     assert np.abs(s.v).max() > 1e-3  # moving: a kinetic energy to get right
-    for state in (states[-1], states[0]):
+    elsewhere = dataclasses.replace(states[-1], q=states[0].q)  # the same velocity, drive and stems at another q
+    for state in (states[-1], states[0], elsewhere):
         fm.section_state(states[-1])
         got = fm.energy(state)
         fm._place(state.stem_lengths_m)
