@@ -393,3 +393,16 @@ def test_the_closure_gaps_are_the_largest_norms_of_the_error_triples():
         bad[where] = np.nan
         gaps = kernels.closure_gaps(bad)
         assert math.isnan(gaps[part]) and not math.isnan(gaps[1 - part])
+
+
+def test_all_finite_is_numpys_isfinite_of_both_vectors():
+    """all_finite(q, v) (the flexible scenario's guard) is np.isfinite(q).all() and np.isfinite(v).all(): false for a
+    NaN, +inf or -inf anywhere in either vector, true otherwise."""
+    q, v = np.linspace(-1.0, 1.0, 13), np.linspace(-2.0, 3.0, 12)
+    assert kernels.all_finite(q, v)
+    for bad in (np.nan, np.inf, -np.inf):
+        for which in (0, 1):
+            for where in (0, 5, -1):
+                x = (q.copy(), v.copy())
+                x[which][where] = bad
+                assert not kernels.all_finite(*x)

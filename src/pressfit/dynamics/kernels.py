@@ -601,6 +601,18 @@ def newton_predict(acc, c_acc, c_old, base_dq, hhb, base_v, hg, v_r, alpha, dq, 
 
 
 @compiled
+def all_finite(q, v):
+    """Whether every entry of the configuration ``q`` and the velocity ``v`` is finite."""
+    for x in q:
+        if not math.isfinite(x):
+            return False
+    for x in v:  # noqa: SIM110 (numba compiles no generator into all())
+        if not math.isfinite(x):
+            return False
+    return True
+
+
+@compiled
 def closure_gaps(phi):
     """The largest translation (m) and rotation (rad) error over the loop closures of errors ``phi`` (6n,): per
     closure the norms of its (translation, rotation) triples; NaN if one is."""

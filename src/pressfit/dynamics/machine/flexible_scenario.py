@@ -148,7 +148,7 @@ class FlexibleScenario:
         replaced = fm.replacement_energy_j(self.state)  # the step re-places the stems first
         through = self._advance(command)
         state = self.state
-        guard.finite(bool(np.isfinite(state.q).all() and np.isfinite(state.v).all()), t)
+        guard.finite(kernels.all_finite(state.q, state.v), t)
         drift = fm.closure_error(state)[0]
         guard.drift(drift, t)
         self.placements[k], self.wrenches[k] = fm.section_state(state)
