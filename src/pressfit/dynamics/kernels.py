@@ -441,6 +441,18 @@ def rigid_pre_step(row, t, reference, lift, estimate, command, tension, null, ta
 
 
 @compiled
+def all_finite(q, v):
+    """Whether every entry of the configuration ``q`` and the velocity ``v`` is finite."""
+    for x in q:
+        if not math.isfinite(x):
+            return False
+    for x in v:  # noqa: SIM110 (numba compiles no generator into all())
+        if not math.isfinite(x):
+            return False
+    return True
+
+
+@compiled
 def rigid_post_step(row, previous_q, q, v, closure_forces, actuator_q, actuator_v, contact, previous_depth, dt,
                     deflection_pose, deflection_rows, deflection_gradient, loads, disp, offsets, estimate, units,
                     iterations, kinematic_iterations, tau, layout, lengths, rates):
@@ -457,12 +469,8 @@ def rigid_post_step(row, previous_q, q, v, closure_forces, actuator_q, actuator_
     length residual m). The tool's deflection at the new rigid pose: the rows (c0 m/N, c1 m) ``deflection_rows``
     computed at ``deflection_pose`` extrapolated there (:func:`extrapolated`), c0 F + c1, or c1 + the load-deflection
     table ``loads``, ``disp`` where it is not empty (:func:`solve_contact`)."""
-    for x in q:
-        if not math.isfinite(x):
-            return False, 0.0, 0.0, 0.0
-    for x in v:
-        if not math.isfinite(x):
-            return False, 0.0, 0.0, 0.0
+    if not all_finite(q, v):
+        return False, 0.0, 0.0, 0.0
     u, deflection = np.empty(3), np.empty((2, 3))
     extrapolated(q, deflection_pose, deflection_rows, deflection_gradient, deflection)
     force, depth = solve_contact(contact, contact[BOARD] - q[1], previous_depth, dt, deflection[0], deflection[1],
@@ -598,18 +606,6 @@ def newton_predict(acc, c_acc, c_old, base_dq, hhb, base_v, hg, v_r, alpha, dq, 
         v[i] = base_v[i] + hg * a
         rel[i] = v[i] - v_r[i]
         acc_eff[i] = acc[i] + alpha * rel[i]
-
-
-@compiled
-def all_finite(q, v):
-    """Whether every entry of the configuration ``q`` and the velocity ``v`` is finite."""
-    for x in q:
-        if not math.isfinite(x):
-            return False
-    for x in v:  # noqa: SIM110 (numba compiles no generator into all())
-        if not math.isfinite(x):
-            return False
-    return True
 
 
 @compiled

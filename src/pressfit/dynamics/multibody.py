@@ -101,7 +101,7 @@ class RigidLegModel:
     baumgarte_rad_per_s: float
     end_joints: tuple[int, ...] = ()  # the last joint of each leg (plate cardan a): joint1 of its closure
     self_stress: PoseCache = field(init=False)
-    _datas: tuple | None = field(default=None, init=False, repr=False)  # (constraint_datas, elements, error views)
+    _datas: tuple | None = field(default=None, init=False, repr=False)  # (constraint_datas, its error views)
 
     def __post_init__(self) -> None:
         self.self_stress = PoseCache(function=self._self_stress, tolerance_m=SELF_STRESS_UPDATE_M)
@@ -134,9 +134,8 @@ class RigidLegModel:
         """Largest loop-closure translation error (m) at the last :meth:`accelerations` call."""
         datas = self.constraint_datas
         if self._datas is None or self._datas[0] is not datas:  # held views of the errors (they follow each call)
-            held = [datas[i] for i in range(len(datas))]
-            self._datas = (datas, held, [cd.contact_placement_error.linear for cd in held])
-        errors = [e.tolist() for e in self._datas[2]]
+            self._datas = (datas, [datas[i].contact_placement_error.linear for i in range(len(datas))])
+        errors = [e.tolist() for e in self._datas[1]]
         return math.sqrt(max([x * x + y * y + z * z for x, y, z in errors]))
 
     def leg_loads(self) -> np.ndarray:

@@ -169,7 +169,7 @@ class RigidScenario:
         previous = self.q
         self.q, self.v = q, v = rigid.step(previous, self.v, self.tau, dt)
         if not kernels.within_limits(q, rigid.actuator_q, rigid.sigma, self.limits):  # its joints, every step
-            guard.finite(bool(np.isfinite(q).all() and np.isfinite(v).all()), t)
+            guard.finite(kernels.all_finite(q, v), t)
             guard.pose(k, t, q[0:3], every=1)  # the plate pose's limits, named
         deflection = ctrl.deflection
         deflection.refresh(q[0:3])
