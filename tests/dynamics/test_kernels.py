@@ -288,7 +288,8 @@ def test_rigid_post_step_fills_the_row_from_the_new_pose(machine, rigid):
     new pose: the row's plate is the new pose, its tool the new pose plus c0 F + c1 with the rows extrapolated to
     the new pose in numpy (not the previous one: the column moves by 4e-4 of itself over the 5 mm), F the elastic
     law at the interference that deflection leaves, the lengths and rates the new state's, the estimate the
-    Gauss-Newton fit of the new lengths, and the next step's plate force R^T (0, F, 0)."""
+    Gauss-Newton fit of the new lengths, and the next step's plate force R^T (0, F, 0). A NaN configuration or an
+    infinite velocity is refused (False) before anything is written."""
     from pressfit.dynamics.control import linearised_columns
     from pressfit.dynamics.series import KINEMATIC_ITERATIONS, series_columns
 
@@ -304,11 +305,15 @@ def test_rigid_post_step_fills_the_row_from_the_new_pose(machine, rigid):
                                                   "kinematic_x_m", "length_m1", "rate_m_per_s1")])
     row, estimate, units = np.zeros(len(columns)), old.copy(), np.empty((4, 3))
     lengths, rates, tau = np.empty(4), np.empty(4), np.empty(3)
-    ok, force, depth, _ = kernels.rigid_post_step(
-        row, previous, q, v, np.zeros(24), rigid.actuator_q, rigid.actuator_v, contact, 0.0, 1e-3, at, rows[0],
-        gradient[0], np.empty(0), np.empty((0, 3)), np.ascontiguousarray(machine.plate_offsets_m -
-                                                                        machine.base_points_m), estimate, units, 3,
-        KINEMATIC_ITERATIONS, tau, layout, lengths, rates)
+
+    def post(row, q, v):
+        return kernels.rigid_post_step(
+            row, previous, q, v, np.zeros(24), rigid.actuator_q, rigid.actuator_v, contact, 0.0, 1e-3, at, rows[0],
+            gradient[0], np.empty(0), np.empty((0, 3)), np.ascontiguousarray(machine.plate_offsets_m -
+                                                                            machine.base_points_m), estimate, units,
+            3, KINEMATIC_ITERATIONS, tau, layout, lengths, rates)
+
+    ok, force, depth, _ = post(row, q, v)
     c0, c1 = rows[0] + gradient[0] @ (new - at)
     deflection = c0 * force + c1
     assert ok and force > 1.0 and depth == pytest.approx(0.6003 - new[1] - deflection[1], abs=1e-15)
@@ -321,6 +326,11 @@ def test_rigid_post_step_fills_the_row_from_the_new_pose(machine, rigid):
     assert np.abs(estimate - new).max() < 1e-12
     rotation = pin.Quaternion(q[3:7]).matrix()
     assert np.abs(tau - rotation.T @ [0.0, force, 0.0]).max() < 1e-12
+    for which, bad in ((0, np.nan), (1, np.inf)):  # a state that is not finite: refused, the row left alone
+        state = [q.copy(), v.copy()]
+        state[which][-1] = bad
+        untouched = row.copy()
+        assert post(row, *state) == (False, 0.0, 0.0, 0.0) and np.array_equal(row, untouched)
 
 
 def test_the_flexible_newton_kernels_are_the_generalised_alpha_formulas():
